@@ -1,0 +1,117 @@
+#include "core/atomic_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "core/check.h"
+
+namespace candi {
+
+AtomicFile::AtomicFile(const std::string& path) : path_(path) {
+  if (path.empty()) throw InputError("output path is empty");
+  struct stat st;
+  if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
+    throw InputError(path, "", "is a directory, not an output file");
+  }
+  std::vector<char> pattern(path.begin(), path.end());
+  const std::string suffix = ".candi-tmp-XXXXXX";
+  pattern.insert(pattern.end(), suffix.begin(), suffix.end());
+  pattern.push_back('\0');
+  const int fd = mkstemp(pattern.data());
+  if (fd < 0) {
+    const int err = errno;
+    throw InputError(path, "", std::string("cannot create output: ") + std::strerror(err));
+  }
+  temp_path_ = pattern.data();
+  // mkstemp creates 0600; give the file the usual permissions (respecting umask).
+  const mode_t mask = umask(0);
+  umask(mask);
+  fchmod(fd, 0666 & ~mask);
+  file_ = fdopen(fd, "w+b");
+  if (file_ == nullptr) {
+    const int err = errno;
+    close(fd);
+    unlink(temp_path_.c_str());
+    throw InputError(path, "", std::string("cannot open output: ") + std::strerror(err));
+  }
+  setvbuf(file_, nullptr, _IOFBF, 1 << 20);
+}
+
+AtomicFile::~AtomicFile() {
+  if (!committed_) Discard();
+}
+
+void AtomicFile::Discard() {
+  if (file_ != nullptr) {
+    std::fclose(file_);
+    file_ = nullptr;
+  }
+  if (!temp_path_.empty()) unlink(temp_path_.c_str());
+}
+
+void AtomicFile::Fail(const std::string& what, int err) {
+  Discard();
+  committed_ = true;  // nothing left to clean up
+  throw InputError(path_, "", what + ": " + std::strerror(err) + " (the destination is unchanged)");
+}
+
+void AtomicFile::Write(const void* data, size_t size) {
+  CANDI_CHECK(file_ != nullptr) << "AtomicFile::Write after Commit or failure";
+  if (size == 0) return;
+  if (std::fwrite(data, 1, size, file_) != size) Fail("write failed", errno);
+  written_ += size;
+}
+
+void AtomicFile::WriteAt(uint64_t offset, const void* data, size_t size) {
+  CANDI_CHECK(file_ != nullptr) << "AtomicFile::WriteAt after Commit or failure";
+  CANDI_CHECK(offset + size <= written_) << "WriteAt beyond the written part";
+  if (std::fflush(file_) != 0) Fail("write failed", errno);
+  const ssize_t n = pwrite(fileno(file_), data, size, static_cast<off_t>(offset));
+  if (n != static_cast<ssize_t>(size)) Fail("write failed", n < 0 ? errno : ENOSPC);
+}
+
+void AtomicFile::Commit() {
+  CANDI_CHECK(file_ != nullptr) << "AtomicFile::Commit twice";
+  if (std::fflush(file_) != 0) Fail("write failed", errno);
+  if (std::ferror(file_)) Fail("write failed", EIO);
+  FILE* f = file_;
+  file_ = nullptr;
+  if (std::fclose(f) != 0) {
+    const int err = errno;
+    unlink(temp_path_.c_str());
+    committed_ = true;
+    throw InputError(path_, "", std::string("close failed: ") + std::strerror(err) +
+                                    " (the destination is unchanged)");
+  }
+  if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+    const int err = errno;
+    unlink(temp_path_.c_str());
+    committed_ = true;
+    throw InputError(path_, "", std::string("cannot rename into place: ") + std::strerror(err));
+  }
+  committed_ = true;
+}
+
+void WriteFileAtomic(const std::string& path, const std::string& contents) {
+  AtomicFile file(path);
+  file.Write(contents);
+  file.Commit();
+}
+
+std::string ReadFileToString(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw InputError(path, "", "read error");
+  return ss.str();
+}
+
+}  // namespace candi

@@ -1,0 +1,49 @@
+// AtomicFile: write a file so that the destination is either the old file or the complete new one.
+//
+// Data goes to a temporary file beside the destination ("<path>.candi-tmp-XXXXXX"); Commit()
+// flushes, checks every write, closes and renames it over the destination. If anything fails, or
+// the object is destroyed without Commit(), the temporary is removed and the destination is left
+// as it was. Errors throw InputError naming the path and the OS reason (disk full, permission).
+// Not thread-safe.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+namespace candi {
+
+class AtomicFile {
+ public:
+  explicit AtomicFile(const std::string& path);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  void Write(const void* data, size_t size);
+  void Write(const std::string& text) { Write(text.data(), text.size()); }
+  // Overwrites `size` bytes at absolute `offset` (header patching); the write position is kept.
+  void WriteAt(uint64_t offset, const void* data, size_t size);
+  uint64_t Tell() const { return written_; }
+  void Commit();
+
+  const std::string& path() const { return path_; }
+  const std::string& temp_path() const { return temp_path_; }
+
+ private:
+  void Fail(const std::string& what, int err);
+  void Discard();
+
+  std::string path_, temp_path_;
+  FILE* file_ = nullptr;
+  uint64_t written_ = 0;
+  bool committed_ = false;
+};
+
+// Writes `contents` to `path` atomically.
+void WriteFileAtomic(const std::string& path, const std::string& contents);
+
+// Reads a whole file; throws InputError naming the path.
+std::string ReadFileToString(const std::string& path);
+
+}  // namespace candi

@@ -1,0 +1,31 @@
+// Axis-aligned bounding box in double precision.
+#pragma once
+
+#include <Eigen/Core>
+#include <limits>
+
+namespace candi {
+
+struct Box3d {
+  Eigen::Vector3d min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d max = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+
+  bool IsEmpty() const { return !(min.x() <= max.x() && min.y() <= max.y() && min.z() <= max.z()); }
+  void Extend(const Eigen::Vector3d& p) {
+    min = min.cwiseMin(p);
+    max = max.cwiseMax(p);
+  }
+  void Extend(const Box3d& other) {
+    if (other.IsEmpty()) return;
+    Extend(other.min);
+    Extend(other.max);
+  }
+  Eigen::Vector3d Center() const { return 0.5 * (min + max); }
+  Eigen::Vector3d Extent() const { return max - min; }
+  Box3d Translated(const Eigen::Vector3d& t) const {
+    if (IsEmpty()) return *this;
+    return Box3d{min + t, max + t};
+  }
+};
+
+}  // namespace candi

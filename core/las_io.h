@@ -1,0 +1,42 @@
+// LAS 1.2-1.4 reading and writing (ASPRS LAS specification R15).
+//
+// Point formats 0-3 and 6-8. Positions are world coordinates X*scale + offset in double (frame
+// zero); scale, offset, version, point format, header fields and VLRs/EVLRs are kept in
+// meta.las so a rewrite preserves them. The standard attributes become scalar fields with the
+// names below (all exact in float except gps_time, which is double). Colour: 16-bit values are
+// reduced to 8 bits (v >> 8) unless every value in the file fits in 8 bits (files that store
+// 8-bit colour in the 16-bit fields), detected from the data and recorded in meta.las.color_16bit.
+// Extra bytes (LAS 1.4 "LASF_Spec" record 4) of numeric types become scalar fields; normals are
+// written and read as the extra-bytes fields "nx", "ny", "nz". LAZ is refused with a clear message.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "core/point_io.h"
+
+namespace candi {
+
+// Scalar field names used for the LAS standard attributes.
+namespace las_field {
+inline constexpr const char* kIntensity = "intensity";
+inline constexpr const char* kReturnNumber = "return_number";
+inline constexpr const char* kNumberOfReturns = "number_of_returns";
+inline constexpr const char* kScanDirection = "scan_direction_flag";
+inline constexpr const char* kEdgeOfFlightLine = "edge_of_flight_line";
+inline constexpr const char* kClassification = "classification";      // 0-255 (formats 0-3: 0-31)
+inline constexpr const char* kClassFlags = "classification_flags";     // synthetic/keypoint/withheld/overlap bits
+inline constexpr const char* kScannerChannel = "scanner_channel";      // formats 6-8
+inline constexpr const char* kUserData = "user_data";
+inline constexpr const char* kScanAngleRank = "scan_angle_rank";       // formats 0-3, degrees (int8)
+inline constexpr const char* kScanAngle = "scan_angle";                // formats 6-8, units of 0.006 deg (int16)
+inline constexpr const char* kPointSourceId = "point_source_id";
+inline constexpr const char* kGpsTime = "gps_time";                    // double
+inline constexpr const char* kNir = "nir";                             // format 8
+}  // namespace las_field
+
+std::unique_ptr<PointReader> OpenLasReader(const std::string& path);
+std::unique_ptr<PointWriter> OpenLasWriter(const std::string& path, const PointWriteSpec& spec,
+                                           const PointWriteOptions& options);
+
+}  // namespace candi

@@ -1,0 +1,162 @@
+#include "core/point_cloud.h"
+
+#include "core/check.h"
+
+namespace candi {
+
+int PointSchema::ScalarIndex(const std::string& name) const {
+  for (size_t i = 0; i < scalars.size(); ++i) {
+    if (scalars[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+bool PointSchema::operator==(const PointSchema& o) const {
+  return colors == o.colors && alphas == o.alphas && normals == o.normals && layers == o.layers &&
+         scalars == o.scalars && position_type == o.position_type;
+}
+
+void PointCloud::SetSchema(const PointSchema& new_schema) {
+  CANDI_CHECK(!new_schema.alphas || new_schema.colors) << "alphas need colors";
+  const size_t n = size();
+  std::vector<ScalarField> fields;
+  for (const ScalarFieldSpec& spec : new_schema.scalars) {
+    ScalarField* existing = FindScalar(spec.name);
+    if (existing != nullptr && existing->spec.type == spec.type) {
+      fields.push_back(std::move(*existing));
+    } else {
+      ScalarField field;
+      field.spec = spec;
+      field.Resize(n);
+      if (existing != nullptr) {
+        for (size_t i = 0; i < n; ++i) field.Set(i, existing->Get(i));
+      }
+      fields.push_back(std::move(field));
+    }
+  }
+  scalars = std::move(fields);
+  schema = new_schema;
+  if (!schema.colors) colors.clear();
+  if (!schema.alphas) alphas.clear();
+  if (!schema.normals) normals.clear();
+  if (!schema.layers) layers.clear();
+  Resize(n);
+}
+
+void PointCloud::Resize(size_t n) {
+  positions.resize(n);
+  if (schema.colors) colors.resize(n);
+  if (schema.alphas) alphas.resize(n, 255);
+  if (schema.normals) normals.resize(n, Eigen::Vector3f::Zero());
+  if (schema.layers) layers.resize(n);
+  for (ScalarField& f : scalars) f.Resize(n);
+}
+
+void PointCloud::Reserve(size_t n) {
+  positions.reserve(n);
+  if (schema.colors) colors.reserve(n);
+  if (schema.alphas) alphas.reserve(n);
+  if (schema.normals) normals.reserve(n);
+  if (schema.layers) layers.reserve(n);
+  for (ScalarField& f : scalars) {
+    if (f.spec.type == ScalarType::kFloat32) f.f32.reserve(n); else f.f64.reserve(n);
+  }
+}
+
+void PointCloud::Clear() { Resize(0); }
+
+int PointCloud::AddScalarField(const std::string& name, ScalarType type) {
+  CANDI_CHECK(!name.empty()) << "scalar field name is empty";
+  CANDI_CHECK(schema.ScalarIndex(name) < 0) << "scalar field '" << name << "' exists";
+  schema.scalars.push_back({name, type});
+  ScalarField field;
+  field.spec = {name, type};
+  field.Resize(size());
+  scalars.push_back(std::move(field));
+  return static_cast<int>(scalars.size()) - 1;
+}
+
+ScalarField* PointCloud::FindScalar(const std::string& name) {
+  for (ScalarField& f : scalars) {
+    if (f.spec.name == name) return &f;
+  }
+  return nullptr;
+}
+
+const ScalarField* PointCloud::FindScalar(const std::string& name) const {
+  return const_cast<PointCloud*>(this)->FindScalar(name);
+}
+
+void PointCloud::AppendFrom(const PointCloud& other, size_t i) {
+  CANDI_CHECK(other.schema.colors == schema.colors && other.schema.normals == schema.normals &&
+              other.schema.alphas == schema.alphas && other.schema.layers == schema.layers &&
+              other.schema.scalars == schema.scalars)
+      << "AppendFrom: schemas differ";
+  if (other.frame == frame) {
+    positions.push_back(other.positions[i]);
+  } else {
+    positions.push_back(frame.ToLocal(other.WorldPosition(i)));
+  }
+  if (schema.colors) colors.push_back(other.colors[i]);
+  if (schema.alphas) alphas.push_back(other.alphas[i]);
+  if (schema.normals) normals.push_back(other.normals[i]);
+  if (schema.layers) layers.push_back(other.layers[i]);
+  for (size_t k = 0; k < scalars.size(); ++k) {
+    if (scalars[k].spec.type == ScalarType::kFloat32) {
+      scalars[k].f32.push_back(other.scalars[k].f32[i]);
+    } else {
+      scalars[k].f64.push_back(other.scalars[k].f64[i]);
+    }
+  }
+}
+
+void PointCloud::Append(const PointCloud& other) {
+  CANDI_CHECK(other.schema.colors == schema.colors && other.schema.normals == schema.normals &&
+              other.schema.alphas == schema.alphas && other.schema.layers == schema.layers &&
+              other.schema.scalars == schema.scalars)
+      << "Append: schemas differ";
+  const size_t n = size();
+  if (other.frame == frame) {
+    positions.insert(positions.end(), other.positions.begin(), other.positions.end());
+  } else {
+    positions.reserve(n + other.size());
+    for (size_t i = 0; i < other.size(); ++i) positions.push_back(frame.ToLocal(other.WorldPosition(i)));
+  }
+  auto append = [](auto& dst, const auto& src) { dst.insert(dst.end(), src.begin(), src.end()); };
+  if (schema.colors) append(colors, other.colors);
+  if (schema.alphas) append(alphas, other.alphas);
+  if (schema.normals) append(normals, other.normals);
+  if (schema.layers) append(layers, other.layers);
+  for (size_t k = 0; k < scalars.size(); ++k) {
+    append(scalars[k].f32, other.scalars[k].f32);
+    append(scalars[k].f64, other.scalars[k].f64);
+  }
+}
+
+Box3d PointCloud::LocalBounds() const {
+  Box3d box;
+  for (const Eigen::Vector3d& p : positions) box.Extend(p);
+  return box;
+}
+
+void PointCloud::Rebase(const LocalFrame& new_frame) {
+  if (new_frame == frame) return;
+  // (local + old) - new, evaluated as world then local so integer shifts stay exact.
+  for (Eigen::Vector3d& p : positions) p = (p + frame.origin) - new_frame.origin;
+  frame = new_frame;
+}
+
+void PointCloud::CheckConsistent() const {
+  const size_t n = size();
+  CANDI_CHECK(!schema.colors || colors.size() == n) << "colors " << colors.size() << " != " << n;
+  CANDI_CHECK(!schema.alphas || alphas.size() == n) << "alphas " << alphas.size() << " != " << n;
+  CANDI_CHECK(!schema.normals || normals.size() == n) << "normals " << normals.size() << " != " << n;
+  CANDI_CHECK(!schema.layers || layers.size() == n) << "layers " << layers.size() << " != " << n;
+  CANDI_CHECK(scalars.size() == schema.scalars.size()) << "scalar fields differ from schema";
+  for (size_t k = 0; k < scalars.size(); ++k) {
+    CANDI_CHECK(scalars[k].spec == schema.scalars[k]) << "scalar field " << k << " differs";
+    CANDI_CHECK(scalars[k].size() == n) << "scalar field '" << scalars[k].spec.name << "' size";
+  }
+}
+
+}  // namespace candi

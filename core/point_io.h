@@ -1,0 +1,130 @@
+// Point-file I/O: format detection and streaming readers and writers.
+//
+// Formats: PLY (ascii, binary little/big endian), LAS 1.2-1.4 (point formats 0-3, 6-8), XYZ and
+// PTS text. The format is chosen by extension and confirmed by the content; a mismatch, LAZ and
+// DXF are errors, not guesses. Readers and writers stream: a file larger than memory is processed
+// chunk by chunk, counts are 64-bit. Writers are atomic (temporary file, then rename on Close()).
+// Bad input throws InputError("<path>: <position>: <what>").
+//
+// Frames: a reader reports the shift recorded with the file (PLY comment "candi_shift x y z", or
+// the sidecar "<path>.shift.json" written beside shifted non-LAS outputs); LAS positions are read
+// as world coordinates (frame zero) with scale/offset kept in meta.las. A writer writes points in
+// the frame of its PointWriteSpec (chunks in another frame are re-expressed, exactly for integer
+// shifts); LAS always stores world coordinates.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "core/point_cloud.h"
+
+namespace candi {
+
+enum class PointFormat { kPly, kLas, kXyz, kPts };
+std::string PointFormatName(PointFormat format);  // "PLY", "LAS", "XYZ", "PTS"
+
+constexpr uint64_t kUnknownCount = std::numeric_limits<uint64_t>::max();
+
+struct PointFileInfo {
+  PointFormat format = PointFormat::kPly;
+  std::string description;     // e.g. "PLY binary_little_endian 1.0", "LAS 1.4 point format 7"
+  uint64_t count = kUnknownCount;  // points in the file (kUnknownCount for text until read)
+  PointSchema schema;          // attributes of each point
+  LocalFrame frame;            // shift recorded with the file
+  PointCloudMeta meta;         // comments, LAS metadata
+  std::optional<Box3d> header_bounds;  // world bounds stated in the header (LAS)
+  uint64_t face_count = 0;     // PLY faces (the point reader skips them)
+};
+
+struct PointReadOptions {
+  // XYZ/PTS column spec, comma separated: x y z (required), r g b (0-255), nx ny nz, i
+  // (intensity), a name (a float scalar field of that name) or _ (skip). Empty: guessed from the
+  // first data line and logged.
+  std::string columns;
+};
+
+class PointReader {
+ public:
+  virtual ~PointReader() = default;
+  const PointFileInfo& info() const { return info_; }
+  const std::string& path() const { return path_; }
+  // Reads up to max_points (> 0) next points into *chunk, replacing its points; chunk's schema,
+  // frame and meta are set from info(). Returns the number read, 0 at the end of the points.
+  virtual size_t Read(size_t max_points, PointCloud* chunk) = 0;
+  uint64_t points_read() const { return points_read_; }
+
+ protected:
+  PointReader(std::string path) : path_(std::move(path)) {}
+  // Prepares *chunk for refilling with the file's schema.
+  void PrepareChunk(PointCloud* chunk) const;
+  std::string path_;
+  PointFileInfo info_;
+  uint64_t points_read_ = 0;
+};
+
+enum class PlyEncoding { kBinaryLittleEndian, kBinaryBigEndian, kAscii };
+enum class PositionPrecision { kAuto, kFloat32, kFloat64 };
+
+struct PointWriteOptions {
+  PlyEncoding ply_encoding = PlyEncoding::kBinaryLittleEndian;
+  // PLY/XYZ position precision. kAuto: double when the spec's frame has a shift or the schema's
+  // position_type is double, float otherwise (so nothing is lost).
+  PositionPrecision precision = PositionPrecision::kAuto;
+  // LAS: -1 = keep meta.las when present, else choose (1.2, format 0/2 or 1/3; 1.4 when needed).
+  int las_version_minor = -1;   // 2, 3 or 4
+  int las_point_format = -1;    // 0-3, 6-8
+  std::optional<Eigen::Vector3d> las_scale;   // default: meta.las.scale if present, else 0.001 m
+  std::optional<Eigen::Vector3d> las_offset;  // default: meta.las.offset if present, else frame origin
+  // XYZ/PTS: column spec as in PointReadOptions; empty = all of the schema (x,y,z[,r,g,b][,nx,ny,nz][,scalars]).
+  std::string columns;
+  void Check() const;
+};
+
+struct PointWriteSpec {
+  PointSchema schema;
+  LocalFrame frame;       // the frame the output is written in
+  PointCloudMeta meta;
+  uint64_t count = kUnknownCount;  // number of points that will be written, if known
+};
+
+class PointWriter {
+ public:
+  // Destroying a writer without Close() discards the output: the destination stays as it was.
+  virtual ~PointWriter() = default;
+  // Appends chunk (its schema must equal the spec's; its frame may differ).
+  virtual void Write(const PointCloud& chunk) = 0;
+  // Completes the file (patches counts and bounds) and renames it into place.
+  virtual void Close() = 0;
+  uint64_t points_written() const { return points_written_; }
+
+ protected:
+  uint64_t points_written_ = 0;
+};
+
+// Format from the extension (.ply, .las, .xyz/.txt/.asc/.csv, .pts), confirmed by the first bytes.
+// Throws InputError for .laz (not supported), .dxf (a drawing, not a point file), unknown
+// extensions, and content that contradicts the extension.
+PointFormat DetectPointFormat(const std::string& path);
+// Format from the extension only, for outputs. Throws InputError for unknown extensions.
+PointFormat OutputPointFormat(const std::string& path);
+
+std::unique_ptr<PointReader> OpenPointReader(const std::string& path,
+                                             const PointReadOptions& options = {});
+std::unique_ptr<PointWriter> OpenPointWriter(const std::string& path, const PointWriteSpec& spec,
+                                             const PointWriteOptions& options = {});
+
+// Whole-file conveniences.
+PointCloud ReadPointCloud(const std::string& path, const PointReadOptions& options = {});
+void WritePointCloud(const std::string& path, const PointCloud& cloud,
+                     const PointWriteOptions& options = {});
+
+// The shift sidecar "<path>.shift.json" (written for shifted PLY/XYZ/PTS outputs).
+std::string ShiftSidecarPath(const std::string& path);
+void WriteShiftSidecar(const std::string& path, const LocalFrame& frame);
+// Returns the sidecar's shift when it exists and was written for a file of the current size.
+std::optional<LocalFrame> ReadShiftSidecar(const std::string& path);
+
+}  // namespace candi

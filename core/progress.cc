@@ -1,0 +1,103 @@
+#include "core/progress.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <stdexcept>
+
+namespace candi {
+
+void ConsoleProgressOptions::Check() const {
+  if (!(min_interval_s >= 0.0)) {
+    throw std::invalid_argument("ConsoleProgressOptions::min_interval_s = " +
+                                std::to_string(min_interval_s) + "; must be >= 0");
+  }
+  if (!(line_interval_s >= 0.0)) {
+    throw std::invalid_argument("ConsoleProgressOptions::line_interval_s = " +
+                                std::to_string(line_interval_s) + "; must be >= 0");
+  }
+}
+
+ConsoleProgress::ConsoleProgress(std::string label, ConsoleProgressOptions options,
+                                 std::function<void(const std::string&)> sink)
+    : label_(std::move(label)), options_(std::move(options)), sink_(std::move(sink)) {
+  options_.Check();
+  tty_ = options_.force_tty >= 0 ? options_.force_tty == 1 : isatty(STDERR_FILENO) == 1;
+  start_ = last_ = std::chrono::steady_clock::now();
+}
+
+ConsoleProgress::~ConsoleProgress() {
+  try {
+    Finish();
+  } catch (...) {
+  }
+}
+
+ProgressCallback ConsoleProgress::Callback() {
+  return [this](uint64_t done, uint64_t total) { Update(done, total); };
+}
+
+std::string ConsoleProgress::Render(uint64_t done, uint64_t total, bool final) const {
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double rate = elapsed > 0 ? static_cast<double>(done) / elapsed : 0.0;
+  char tail[128];
+  std::snprintf(tail, sizeof(tail), " %llu %s, %.1f s, %.3g %s/s",
+                static_cast<unsigned long long>(done), options_.unit.c_str(), elapsed, rate,
+                options_.unit.c_str());
+  std::string text = label_ + ":";
+  if (total > 0) {
+    const double fraction = std::min(1.0, static_cast<double>(done) / static_cast<double>(total));
+    char pct[16];
+    std::snprintf(pct, sizeof(pct), " %5.1f%%", 100.0 * fraction);
+    if (tty_) {
+      constexpr int kWidth = 30;
+      const int filled = static_cast<int>(fraction * kWidth);
+      text += " [" + std::string(filled, '#') + std::string(kWidth - filled, '.') + "]";
+    }
+    text += pct;
+  }
+  text += tail;
+  if (final) text += " done";
+  return text;
+}
+
+void ConsoleProgress::Emit(const std::string& text) {
+  if (sink_) {
+    sink_(text);
+    return;
+  }
+  if (tty_) {
+    std::fprintf(stderr, "\r%s\x1b[K", text.c_str());
+  } else {
+    std::fprintf(stderr, "%s\n", text.c_str());
+  }
+  std::fflush(stderr);
+}
+
+void ConsoleProgress::Update(uint64_t done, uint64_t total) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (finished_) return;
+  done_ = done;
+  total_ = total;
+  const auto now = std::chrono::steady_clock::now();
+  const double since = std::chrono::duration<double>(now - last_).count();
+  const double interval = tty_ ? options_.min_interval_s : options_.line_interval_s;
+  if (drawn_ && since < interval) return;
+  last_ = now;
+  drawn_ = true;
+  Emit(Render(done, total, false));
+}
+
+void ConsoleProgress::Finish() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (finished_) return;
+  finished_ = true;
+  Emit(Render(done_, total_, true));
+  if (tty_ && !sink_) {
+    std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  }
+}
+
+}  // namespace candi

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages candi builds and tests with, skipping those already present.
+# Idempotent and quiet; works as root or through sudo. Usage: scripts/deps.sh [--with-oracles]
+set -euo pipefail
+
+packages=(
+  # toolchain
+  g++ cmake ninja-build pkg-config make git ca-certificates
+  # core
+  libeigen3-dev libpng-dev libtbb-dev
+  # mesh
+  libcgal-dev libopenmesh-dev libdxflib-dev
+  # sampling
+  libnanoflann-dev
+  # reconstruction
+  colmap libceres-dev libpcl-dev libtorch-dev libopencv-dev
+  # render scale-out
+  libopenmpi-dev openmpi-bin
+  # apps
+  libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev
+)
+if [[ "${1:-}" == "--with-oracles" ]]; then
+  # Interoperability oracles (MeshLab, CloudCompare) used by optional tests only.
+  packages+=(meshlab cloudcompare xvfb xauth)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if [[ ${#missing[@]} -eq 0 ]]; then
+  echo "deps: all ${#packages[@]} packages present" >&2
+  exit 0
+fi
+
+sudo_cmd=()
+if [[ $(id -u) -ne 0 ]]; then
+  command -v sudo >/dev/null || { echo "deps: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+  sudo_cmd=(sudo)
+fi
+echo "deps: installing ${#missing[@]} packages: ${missing[*]}" >&2
+start=$(date +%s)
+"${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get -qq -o DPkg::Lock::Timeout=600 update >/dev/null
+"${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get -qq -y --no-install-recommends \
+  -o DPkg::Lock::Timeout=600 install "${missing[@]}" >/dev/null
+echo "deps: installed in $(( $(date +%s) - start )) s" >&2

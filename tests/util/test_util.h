@@ -1,0 +1,43 @@
+// Shared helpers for candi's tests: paths to the repository, to ../shared/data, and temporary
+// directories that clean up after themselves.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace candi::testing {
+
+// The repository root (tests run from it; the path is also compiled in).
+std::string SourceDir();
+// ../shared/data/<relative> beside the repository, or "" when it is absent.
+std::string SharedDataPath(const std::string& relative);
+
+// A fresh directory under $TMPDIR, removed with its contents on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::string& path() const { return path_; }
+  std::string File(const std::string& name) const { return path_ + "/" + name; }
+
+ private:
+  std::string path_;
+};
+
+// Writes bytes to a file (not atomic; for building test inputs).
+void WriteBytes(const std::string& path, const std::string& bytes);
+std::string ReadBytes(const std::string& path);
+bool FileExists(const std::string& path);
+
+}  // namespace candi::testing
+
+// Skips the current test, naming the missing file, when ../shared/data/<relative> is absent.
+#define CANDI_REQUIRE_SHARED_DATA(var, relative)                                          \
+  const std::string var = ::candi::testing::SharedDataPath(relative);                     \
+  if (var.empty()) {                                                                      \
+    GTEST_SKIP() << "../shared/data/" << (relative) << " is absent (real data beside the " \
+                 << "repository); skipping";                                              \
+  }
