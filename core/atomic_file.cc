@@ -69,6 +69,15 @@ void AtomicFile::Write(const void* data, size_t size) {
   written_ += size;
 }
 
+void AtomicFile::Reserve(uint64_t bytes) {
+  CANDI_CHECK(file_ != nullptr) << "AtomicFile::Reserve after Commit or failure";
+  if (bytes == 0) return;
+  // FALLOC_FL_KEEP_SIZE: blocks are allocated, the size still grows only as data is written.
+  if (fallocate(fileno(file_), FALLOC_FL_KEEP_SIZE, 0, static_cast<off_t>(bytes)) != 0) {
+    if (errno == ENOSPC || errno == EFBIG) Fail("cannot reserve " + std::to_string(bytes) + " bytes", errno);
+  }
+}
+
 void AtomicFile::WriteAt(uint64_t offset, const void* data, size_t size) {
   CANDI_CHECK(file_ != nullptr) << "AtomicFile::WriteAt after Commit or failure";
   CANDI_CHECK(offset + size <= written_) << "WriteAt beyond the written part";

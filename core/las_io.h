@@ -8,6 +8,23 @@
 // 8-bit colour in the 16-bit fields), detected from the data and recorded in meta.las.color_16bit.
 // Extra bytes (LAS 1.4 "LASF_Spec" record 4) of numeric types become scalar fields; normals are
 // written and read as the extra-bytes fields "nx", "ny", "nz". LAZ is refused with a clear message.
+//
+// Reading: the whole header, VLRs and EVLRs are parsed and validated at open (a truncated file,
+// bad signature, unsupported point format, short record length or zero scale throws InputError
+// naming the byte); files with colour are scanned once at open for the 8/16-bit test. Extra-bytes
+// fields become float, or double for 32/64-bit integers, doubles and scaled values; undocumented
+// bytes and arrays are skipped. Read() decodes column by column (one strided loop per attribute).
+//
+// Writing: the version and point format are PointWriteOptions::las_version_minor/las_point_format
+// when set (std::invalid_argument when the format cannot hold the points' colours, gps_time, nir
+// or scanner_channel, or needs LAS 1.4); else meta.las's when they hold exactly the points'
+// attributes; else LAS 1.2 format 0-3, or 1.4 format 6-8 for scanner_channel, nir or more than
+// 2^32-1 points. Scale: option, meta.las, else 0.001 m; offset: option, meta.las, the spec's
+// frame origin (rounded), else LocalFrame::Auto of the first chunk. Standard attributes are
+// rounded and clamped into their fields (missing: 0, one return); scan_angle and scan_angle_rank
+// are converted between formats; other scalar fields and normals become float/double extra bytes.
+// EVLRs stay EVLRs in 1.4 and become VLRs before 1.4 when they fit (else dropped with a warning).
+// A coordinate outside int32 after scale/offset throws InputError naming the point.
 #pragma once
 
 #include <memory>

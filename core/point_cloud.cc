@@ -1,5 +1,7 @@
 #include "core/point_cloud.h"
 
+#include <limits>
+
 #include "core/check.h"
 
 namespace candi {
@@ -134,8 +136,21 @@ void PointCloud::Append(const PointCloud& other) {
 }
 
 Box3d PointCloud::LocalBounds() const {
+  // Local accumulators: the compiler keeps them in registers (Box3d members may alias the data).
+  double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                  std::numeric_limits<double>::infinity()};
+  double hi[3] = {-lo[0], -lo[1], -lo[2]};
+  for (const Eigen::Vector3d& p : positions) {
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+      hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+    }
+  }
   Box3d box;
-  for (const Eigen::Vector3d& p : positions) box.Extend(p);
+  if (!positions.empty()) {
+    box.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
+    box.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  }
   return box;
 }
 

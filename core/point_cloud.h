@@ -17,10 +17,12 @@
 
 namespace candi {
 
-struct Rgb8 {
+struct Rgb8 {  // packed: three bytes (static_assert below)
   uint8_t r = 0, g = 0, b = 0;
   bool operator==(const Rgb8& o) const { return r == o.r && g == o.g && b == o.b; }
 };
+
+static_assert(sizeof(Rgb8) == 3, "Rgb8 must be three packed bytes");
 
 enum class ScalarType : uint8_t { kFloat32, kFloat64 };
 

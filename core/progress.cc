@@ -2,10 +2,17 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
 #include <stdexcept>
 
 namespace candi {
+
+namespace {
+std::atomic<bool> g_enabled{true};
+}  // namespace
+
+void SetConsoleProgressEnabled(bool enabled) { g_enabled = enabled; }
 
 void ConsoleProgressOptions::Check() const {
   if (!(min_interval_s >= 0.0)) {
@@ -67,6 +74,7 @@ void ConsoleProgress::Emit(const std::string& text) {
     sink_(text);
     return;
   }
+  if (!g_enabled) return;
   if (tty_) {
     std::fprintf(stderr, "\r%s\x1b[K", text.c_str());
   } else {
@@ -86,6 +94,7 @@ void ConsoleProgress::Update(uint64_t done, uint64_t total) {
   if (drawn_ && since < interval) return;
   last_ = now;
   drawn_ = true;
+  drawn_done_ = done;
   Emit(Render(done, total, false));
 }
 
@@ -93,8 +102,9 @@ void ConsoleProgress::Finish() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (finished_) return;
   finished_ = true;
-  Emit(Render(done_, total_, true));
-  if (tty_ && !sink_) {
+  // Off a terminal, a final line that would repeat the last one is left out.
+  if (tty_ || !drawn_ || drawn_done_ != done_) Emit(Render(done_, total_, true));
+  if (tty_ && !sink_ && g_enabled) {
     std::fprintf(stderr, "\n");
     std::fflush(stderr);
   }

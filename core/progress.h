@@ -12,6 +12,9 @@
 
 namespace candi {
 
+// Turns console progress off (-q) or on for the whole process.
+void SetConsoleProgressEnabled(bool enabled);
+
 // Called with work done and total (total 0 = unknown). Must be cheap; may be called often.
 using ProgressCallback = std::function<void(uint64_t done, uint64_t total)>;
 
@@ -49,6 +52,7 @@ class ConsoleProgress {
   std::chrono::steady_clock::time_point start_, last_;
   uint64_t done_ = 0, total_ = 0;
   bool finished_ = false, drawn_ = false;
+  uint64_t drawn_done_ = 0;  // `done` of the last line printed
 };
 
 }  // namespace candi

@@ -1,19 +1,33 @@
 #include "core/text_format.h"
 
 #include <charconv>
+#include <cmath>
 
 namespace candi {
 
-char* AppendDouble(char* buf, double value) { return std::to_chars(buf, buf + 32, value).ptr; }
-char* AppendFloat(char* buf, float value) { return std::to_chars(buf, buf + 32, value).ptr; }
+// Fixed notation for ordinary magnitudes (survey coordinates read as 500000.123, never 5e+05),
+// scientific only where fixed would be long. Both are the shortest text that round-trips.
+char* AppendDouble(char* buf, double value) {
+  const double a = std::fabs(value);
+  const bool fixed = a == 0.0 || (a >= 1e-4 && a < 1e16);
+  return fixed ? std::to_chars(buf, buf + 48, value, std::chars_format::fixed).ptr
+               : std::to_chars(buf, buf + 48, value).ptr;
+}
+
+char* AppendFloat(char* buf, float value) {
+  const float a = std::fabs(value);
+  const bool fixed = a == 0.0f || (a >= 1e-4f && a < 1e7f);
+  return fixed ? std::to_chars(buf, buf + 48, value, std::chars_format::fixed).ptr
+               : std::to_chars(buf, buf + 48, value).ptr;
+}
 
 std::string FormatDouble(double value) {
-  char buf[32];
+  char buf[48];
   return std::string(buf, AppendDouble(buf, value));
 }
 
 std::string FormatFloat(float value) {
-  char buf[32];
+  char buf[48];
   return std::string(buf, AppendFloat(buf, value));
 }
 

@@ -9,7 +9,8 @@ namespace candi {
 std::string FormatDouble(double value);
 std::string FormatFloat(float value);
 
-// Writes the shortest round-trip text of value into buf (at least 32 bytes); returns the end.
+// Writes the shortest round-trip text of value into buf (at least 48 bytes); returns the end.
+// Fixed notation for magnitudes in [1e-4, 1e16) (floats: 1e7), scientific otherwise.
 char* AppendDouble(char* buf, double value);
 char* AppendFloat(char* buf, float value);
 

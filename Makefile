@@ -1,0 +1,41 @@
+# candi: the two commands are `make demo` and `make test`; both set up a bare Debian 12 machine
+# (packages via scripts/deps.sh), configure, build, then run the main job / the tests.
+BUILD_DIR ?= build
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+CMAKE_FLAGS ?=
+CTEST_FLAGS ?= --output-on-failure
+# Tests labelled "slow" (long real-data runs) are left to `make test-all`.
+CTEST_EXCLUDE ?= -LE slow
+
+.PHONY: all deps configure build test test-all demo bench clean format
+
+all: build
+
+deps:
+	@bash scripts/deps.sh
+
+$(BUILD_DIR)/build.ninja: | deps
+	@cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release -DCANDI_WERROR=ON $(CMAKE_FLAGS)
+
+configure: $(BUILD_DIR)/build.ninja
+
+build: configure
+	@cmake --build $(BUILD_DIR) -j $(JOBS)
+
+test: build
+	@cd $(BUILD_DIR) && ctest $(CTEST_FLAGS) -j $(JOBS) $(CTEST_EXCLUDE)
+
+test-all: build
+	@cd $(BUILD_DIR) && ctest $(CTEST_FLAGS) -j $(JOBS)
+
+demo: build
+	@$(BUILD_DIR)/apps/candi demo -o demo_out
+
+bench: build
+	@bash scripts/bench.sh $(BUILD_DIR)
+
+format:
+	@git ls-files '*.h' '*.cc' | xargs clang-format -i
+
+clean:
+	@rm -rf $(BUILD_DIR) demo_out

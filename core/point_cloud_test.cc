@@ -1,0 +1,68 @@
+#include "core/point_cloud.h"
+
+#include <gtest/gtest.h>
+
+#include "core/check.h"
+
+namespace candi {
+namespace {
+
+TEST(PointCloud, SchemaControlsWhichArraysExist) {
+  PointCloud cloud;
+  cloud.Resize(3);
+  PointSchema schema;
+  schema.colors = schema.normals = true;
+  schema.scalars = {{"intensity", ScalarType::kFloat32}};
+  cloud.SetSchema(schema);
+  EXPECT_EQ(cloud.colors.size(), 3u);
+  EXPECT_EQ(cloud.normals.size(), 3u);
+  EXPECT_TRUE(cloud.layers.empty());
+  cloud.scalars[0].f32[1] = 5;
+  schema.scalars[0].type = ScalarType::kFloat64;  // widening keeps values
+  schema.colors = false;
+  cloud.SetSchema(schema);
+  EXPECT_TRUE(cloud.colors.empty());
+  EXPECT_EQ(cloud.scalars[0].f64[1], 5.0);
+  EXPECT_NO_THROW(cloud.CheckConsistent());
+  cloud.normals.pop_back();
+  EXPECT_THROW(cloud.CheckConsistent(), InternalError);
+}
+
+TEST(PointCloud, AppendConvertsFramesExactly) {
+  PointCloud a, b;
+  a.frame.origin = Eigen::Vector3d(500000, 4500000, 0);
+  b.frame.origin = Eigen::Vector3d(500100, 4500000, 100);
+  a.Resize(1);
+  b.Resize(1);
+  a.positions[0] = Eigen::Vector3d(0.123, 0.456, 100.789);
+  b.positions[0] = Eigen::Vector3d(-99.877, 0.456, 0.789);
+  a.Append(b);
+  ASSERT_EQ(a.size(), 2u);
+  EXPECT_EQ(a.WorldPosition(0), a.WorldPosition(1));
+}
+
+TEST(PointCloud, RebaseKeepsWorldPositionsAndBoundsFollow) {
+  PointCloud c;
+  c.Resize(2);
+  c.positions = {{500000.123, 4500000.456, 100.789}, {500010.5, 4500020.25, 90.0}};
+  const Box3d before = c.WorldBounds();
+  LocalFrame f;
+  f.origin = Eigen::Vector3d(500000, 4500000, 100);
+  c.Rebase(f);
+  EXPECT_EQ(c.WorldPosition(0), Eigen::Vector3d(500000.123, 4500000.456, 100.789));
+  EXPECT_EQ(c.WorldBounds().min, before.min);
+  EXPECT_EQ(c.WorldBounds().max, before.max);
+  EXPECT_TRUE(PointCloud{}.WorldBounds().IsEmpty());
+}
+
+TEST(PointCloud, ScalarFieldsAreUniqueByName) {
+  PointCloud c;
+  c.Resize(2);
+  EXPECT_EQ(c.AddScalarField("a"), 0);
+  EXPECT_THROW(c.AddScalarField("a"), InternalError);
+  EXPECT_EQ(c.FindScalar("a")->size(), 2u);
+  EXPECT_EQ(c.FindScalar("b"), nullptr);
+}
+
+}  // namespace
+}  // namespace candi

@@ -1,0 +1,92 @@
+#include "core/point_io.h"
+
+#include <gtest/gtest.h>
+
+#include "core/check.h"
+#include "tests/util/test_util.h"
+
+namespace candi {
+namespace {
+
+using testing::TempDir;
+using testing::WriteBytes;
+
+std::string ErrorOf(const std::string& path) {
+  try {
+    DetectPointFormat(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(DetectPointFormat, ExtensionConfirmedByContent) {
+  TempDir dir;
+  WriteBytes(dir.File("a.ply"), "ply\nformat ascii 1.0\n");
+  WriteBytes(dir.File("b.xyz"), "1 2 3\n");
+  WriteBytes(dir.File("c.PTS"), "1\n1 2 3 4\n");
+  EXPECT_EQ(DetectPointFormat(dir.File("a.ply")), PointFormat::kPly);
+  EXPECT_EQ(DetectPointFormat(dir.File("b.xyz")), PointFormat::kXyz);
+  EXPECT_EQ(DetectPointFormat(dir.File("c.PTS")), PointFormat::kPts);
+}
+
+TEST(DetectPointFormat, MismatchIsAnErrorNotAGuess) {
+  TempDir dir;
+  WriteBytes(dir.File("las.ply"), std::string("LASF") + std::string(300, '\0'));
+  EXPECT_NE(ErrorOf(dir.File("las.ply")).find("extension says PLY but the content is LAS"), std::string::npos);
+  WriteBytes(dir.File("bin.xyz"), std::string("\x01\x02\x00\x05", 4));
+  EXPECT_NE(ErrorOf(dir.File("bin.xyz")).find("content is binary data"), std::string::npos);
+  WriteBytes(dir.File("x.foo"), "1 2 3\n");
+  EXPECT_NE(ErrorOf(dir.File("x.foo")).find("unknown point-file extension '.foo'"), std::string::npos);
+}
+
+TEST(DetectPointFormat, EmptyLazAndDxfAreRefusedClearly) {
+  TempDir dir;
+  WriteBytes(dir.File("e.ply"), "");
+  EXPECT_NE(ErrorOf(dir.File("e.ply")).find("byte 0: empty file"), std::string::npos);
+  std::string laz = "LASF" + std::string(300, '\0');
+  laz[104] = static_cast<char>(0x83);  // LASzip: point format 3 with the compression bits
+  WriteBytes(dir.File("z.las"), laz);
+  EXPECT_NE(ErrorOf(dir.File("z.las")).find("LAZ"), std::string::npos);
+  WriteBytes(dir.File("d.dxf"), "  0\nSECTION\n  2\nHEADER\n");
+  EXPECT_NE(ErrorOf(dir.File("d.dxf")).find("not a point file"), std::string::npos);
+  WriteBytes(dir.File("d.ply"), "AutoCAD Binary DXF\r\n\x1a");
+  EXPECT_NE(ErrorOf(dir.File("d.ply")).find("binary DXF"), std::string::npos);
+  EXPECT_NE(ErrorOf(dir.File("missing.ply")).find("cannot open"), std::string::npos);
+}
+
+TEST(DetectPointFormat, RealBinaryDxfAndLazAreRefused) {
+  CANDI_REQUIRE_SHARED_DATA(dxf, "dxf/bin_dxf_r2000.dxf");
+  EXPECT_NE(ErrorOf(dxf).find("binary DXF"), std::string::npos) << ErrorOf(dxf);
+  CANDI_REQUIRE_SHARED_DATA(laz, "las/autzen_trim.laz");
+  EXPECT_NE(ErrorOf(laz).find("LAZ (compressed LAS) is not supported"), std::string::npos) << ErrorOf(laz);
+}
+
+TEST(ShiftSidecar, RoundTripAndStaleSidecarIgnored) {
+  TempDir dir;
+  WriteBytes(dir.File("p.xyz"), "1 2 3\n");
+  LocalFrame f;
+  f.origin = Eigen::Vector3d(500000, 4500000, 100);
+  WriteShiftSidecar(dir.File("p.xyz"), f);
+  ASSERT_TRUE(ReadShiftSidecar(dir.File("p.xyz")).has_value());
+  EXPECT_EQ(*ReadShiftSidecar(dir.File("p.xyz")), f);
+  WriteBytes(dir.File("p.xyz"), "1 2 3\n4 5 6\n");  // rewritten by another tool
+  EXPECT_FALSE(ReadShiftSidecar(dir.File("p.xyz")).has_value());
+  WriteBytes(dir.File("p.xyz.shift.json"), "{ nonsense }");
+  EXPECT_THROW(ReadShiftSidecar(dir.File("p.xyz")), InputError);
+}
+
+TEST(PointWriteOptions, DefaultsPassAndBadValuesNameTheField) {
+  EXPECT_NO_THROW(PointWriteOptions{}.Check());
+  PointWriteOptions o;
+  o.las_point_format = 5;
+  try {
+    o.Check();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("las_point_format = 5"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace candi

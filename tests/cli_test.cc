@@ -1,0 +1,175 @@
+// End-to-end tests of the `candi` command line: exit codes, messages, outputs.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/point_io.h"
+#include "core/rng.h"
+#include "tests/util/test_util.h"
+
+namespace candi {
+namespace {
+
+using testing::FileExists;
+using testing::ReadBytes;
+using testing::TempDir;
+using testing::WriteBytes;
+
+struct Result {
+  int code = -1;
+  std::string out;     // stdout
+  std::string output;  // stdout then stderr
+};
+
+Result RunCandi(const std::string& args) {
+  TempDir dir;
+  const std::string err = dir.File("stderr");
+  const std::string command = std::string(CANDI_EXECUTABLE) + " " + args + " 2>" + err;
+  FILE* pipe = popen(command.c_str(), "r");
+  Result r;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof(buf), pipe)) > 0) r.out.append(buf, n);
+  const int status = pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.output = r.out + ReadBytes(err);
+  return r;
+}
+
+PointCloud SurveyCloud(size_t n) {
+  PointCloud c;
+  c.schema.colors = true;
+  c.schema.scalars = {{"intensity", ScalarType::kFloat32}};
+  c.SetSchema(c.schema);
+  c.Resize(n);
+  Rng rng(11);
+  for (size_t i = 0; i < n; ++i) {
+    c.positions[i] = Eigen::Vector3d(500000.123 + 0.001 * static_cast<double>(rng.Below(100000)),
+                                     4500000.456 + 0.001 * static_cast<double>(rng.Below(100000)),
+                                     100.789 + 0.001 * static_cast<double>(rng.Below(10000)));
+    c.colors[i] = {static_cast<uint8_t>(i), 7, static_cast<uint8_t>(255 - i % 256)};
+    c.scalars[0].f32[i] = static_cast<float>(i % 1000);
+  }
+  return c;
+}
+
+TEST(Cli, VersionHelpAndUsageErrors) {
+  Result r = RunCandi("--version");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.output.find("candi 0."), std::string::npos);
+  EXPECT_EQ(RunCandi("--help").code, 0);
+  EXPECT_EQ(RunCandi("").code, 1) << "a subcommand is required";
+  EXPECT_EQ(RunCandi("nosuchcommand").code, 1);
+  r = RunCandi("convert a.ply b.ply --ply-encoding sideways");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("ply-encoding"), std::string::npos) << r.output;
+  // Option values are checked before any file is touched.
+  r = RunCandi("convert a.ply b.ply --las-scale -1");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("--las-scale '-1'"), std::string::npos) << r.output;
+  EXPECT_EQ(RunCandi("convert a.ply b.ply --shift 1,2").code, 1);
+}
+
+TEST(Cli, MissingInputIsExitTwoNamingTheFile) {
+  TempDir dir;
+  Result r = RunCandi("info " + dir.File("nope.ply"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find(dir.File("nope.ply")), std::string::npos) << r.output;
+  r = RunCandi("convert " + dir.File("nope.ply") + " " + dir.File("out.ply"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_FALSE(FileExists(dir.File("out.ply")));
+}
+
+TEST(Cli, UnwritableOutputIsExitTwoAndCreatesNothing) {
+  TempDir dir;
+  WritePointCloud(dir.File("in.ply"), SurveyCloud(10));
+  const Result r = RunCandi("convert " + dir.File("in.ply") + " " + dir.File("no/such/dir/out.ply"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("no/such/dir/out.ply"), std::string::npos) << r.output;
+}
+
+TEST(Cli, BadInputLeavesTheEarlierOutputIntact) {
+  TempDir dir;
+  WritePointCloud(dir.File("good.ply"), SurveyCloud(10));
+  RunCandi("convert " + dir.File("good.ply") + " " + dir.File("out.las"));
+  const std::string before = ReadBytes(dir.File("out.las"));
+  ASSERT_FALSE(before.empty());
+  std::string bad = ReadBytes(dir.File("good.ply"));
+  bad.resize(bad.size() - 7);
+  WriteBytes(dir.File("bad.ply"), bad);
+  const Result r = RunCandi("convert " + dir.File("bad.ply") + " " + dir.File("out.las"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("bad.ply"), std::string::npos) << r.output;
+  EXPECT_EQ(ReadBytes(dir.File("out.las")), before);
+}
+
+TEST(Cli, RoundTripPlyLasXyzAtSurveyScale) {
+  TempDir dir;
+  const PointCloud cloud = SurveyCloud(2000);
+  WritePointCloud(dir.File("a.ply"), cloud);
+  ASSERT_EQ(RunCandi("-q convert " + dir.File("a.ply") + " " + dir.File("b.las") + " --las-scale 0.001").output, "");
+  ASSERT_EQ(RunCandi("convert " + dir.File("b.las") + " " + dir.File("c.xyz") + " --shift auto").code, 0);
+  EXPECT_TRUE(FileExists(dir.File("c.xyz.shift.json")));
+  Result r = RunCandi("convert " + dir.File("c.xyz") + " " + dir.File("d.ply"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_EQ(RunCandi("convert " + dir.File("d.ply") + " " + dir.File("e.ply") + " --shift none").code, 0);
+  const PointCloud las = ReadPointCloud(dir.File("b.las"));
+  const PointCloud d = ReadPointCloud(dir.File("d.ply"));
+  const PointCloud e = ReadPointCloud(dir.File("e.ply"));
+  ASSERT_EQ(las.size(), cloud.size());
+  ASSERT_EQ(d.size(), cloud.size());
+  EXPECT_FALSE(d.frame.IsIdentity()) << "the shift travelled through XYZ's sidecar into PLY";
+  EXPECT_TRUE(e.frame.IsIdentity());
+  ASSERT_TRUE(e.schema.colors) << "colours survived the text step";
+  ASSERT_NE(e.FindScalar("intensity"), nullptr);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    // LAS: within half the scale; after LAS, every text/double step is exact.
+    ASSERT_LE((las.WorldPosition(i) - cloud.WorldPosition(i)).cwiseAbs().maxCoeff(), 0.0005 + 1e-9);
+    ASSERT_EQ(d.WorldPosition(i), las.WorldPosition(i)) << i;
+    ASSERT_EQ(e.WorldPosition(i), las.WorldPosition(i)) << i;
+    ASSERT_EQ(e.colors[i], cloud.colors[i]);
+    ASSERT_EQ(e.FindScalar("intensity")->Get(i), cloud.scalars[0].Get(i));
+  }
+}
+
+TEST(Cli, InfoReportsCountBoundsFieldsAndJson) {
+  TempDir dir;
+  WritePointCloud(dir.File("a.ply"), SurveyCloud(100));
+  Result r = RunCandi("info " + dir.File("a.ply"));
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.output.find("points    100"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("intensity"), std::string::npos);
+  r = RunCandi("-q info --json " + dir.File("a.ply"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["points"], 100);
+  EXPECT_GE(j["bounds"]["min"][0].get<double>(), 500000.123);
+  EXPECT_LE(j["bounds"]["max"][1].get<double>(), 4500000.456 + 100.0);
+}
+
+TEST(Cli, RealFilesReportTheirCounts) {
+  CANDI_REQUIRE_SHARED_DATA(autzen, "las/autzen_trim.las");
+  Result r = RunCandi("-q info --json " + autzen);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["points"], 110000);
+  CANDI_REQUIRE_SHARED_DATA(laz, "las/autzen_trim.laz");
+  r = RunCandi("info " + laz);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("LAZ"), std::string::npos);
+  CANDI_REQUIRE_SHARED_DATA(dxf, "dxf/bin_dxf_r2000.dxf");
+  EXPECT_EQ(RunCandi("info " + dxf).code, 2);
+}
+
+TEST(Cli, DemoWritesAnImage) {
+  TempDir dir;
+  const Result r = RunCandi("demo -o " + dir.File("demo") + " --width 160 --height 120");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(FileExists(dir.File("demo/builtin_scene.png")));
+  EXPECT_NE(r.output.find("not built yet"), std::string::npos) << "the demo says what it is";
+}
+
+}  // namespace
+}  // namespace candi
