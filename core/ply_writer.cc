@@ -1,5 +1,6 @@
 // The PLY writer: binary (little or big endian) or ascii, positions in float or double.
 #include <charconv>
+#include <cstdio>
 #include <cstring>
 
 #include "core/atomic_file.h"
@@ -223,7 +224,11 @@ void PlyWriter::Close() {
     CANDI_CHECK_EQ(faces_written_, header_.elements[1].count);
   }
   file_.Commit();
-  if (!spec_.frame.IsIdentity()) WriteShiftSidecar(file_.path(), spec_.frame);
+  if (!spec_.frame.IsIdentity()) {
+    WriteShiftSidecar(file_.path(), spec_.frame);
+  } else {
+    std::remove(ShiftSidecarPath(file_.path()).c_str());  // a stale sidecar would mislead
+  }
 }
 
 }  // namespace

@@ -16,9 +16,12 @@
 #include "core/check.h"
 #include "core/log.h"
 #include "core/text_format.h"
+#include "core/text_scan.h"
 
 namespace candi {
 namespace {
+
+using namespace text_scan;
 
 constexpr size_t kBlockSize = size_t{4} << 20;      // bytes read from the file at a time
 constexpr size_t kMaxLineLength = size_t{1} << 20;  // longer lines are an error
@@ -138,136 +141,6 @@ inline uint8_t& Channel(Rgb8& rgb, Col kind) {
 }
 inline uint8_t Channel(const Rgb8& rgb, Col kind) { return Channel(const_cast<Rgb8&>(rgb), kind); }
 
-// ---------------------------------------------------------------------------------------------
-// Tokenizing. Values are separated by blanks (runs count as one) or by one ',' or ';' with
-// optional blanks around it; '\r' is a blank, so CRLF files need no special case.
-
-// One table look-up per character rather than a chain of comparisons.
-constexpr uint8_t kBlank = 1, kComma = 2;  // kComma: ',' or ';'
-struct CharClasses {
-  uint8_t bits[256] = {};
-  constexpr CharClasses() {
-    bits[' '] = bits['\t'] = bits['\r'] = bits['\v'] = bits['\f'] = kBlank;
-    bits[','] = bits[';'] = kComma;
-  }
-};
-constexpr CharClasses kChars;
-inline bool IsBlank(char c) { return kChars.bits[static_cast<uint8_t>(c)] == kBlank; }
-inline bool IsComma(char c) { return kChars.bits[static_cast<uint8_t>(c)] == kComma; }
-inline bool IsSeparator(char c) { return kChars.bits[static_cast<uint8_t>(c)] != 0; }
-
-inline const char* SkipBlanks(const char* p) {
-  while (IsBlank(*p)) ++p;
-  return p;
-}
-
-// From the end of a value to the start of the next one (the line's end when there is none).
-inline const char* NextValue(const char* p) {
-  p = SkipBlanks(p);
-  if (IsComma(*p)) p = SkipBlanks(p + 1);
-  return p;
-}
-
-std::vector<std::string_view> SplitLine(const char* p, const char* end) {
-  std::vector<std::string_view> tokens;
-  for (p = SkipBlanks(p); p != end;) {
-    const char* q = p;
-    while (q != end && !IsSeparator(*q)) ++q;
-    tokens.emplace_back(p, static_cast<size_t>(q - p));
-    p = NextValue(q);
-  }
-  return tokens;
-}
-
-inline bool IsDigit(char c) { return static_cast<unsigned char>(c - '0') < 10; }
-
-// The fast number parsers rely on a sentinel instead of checking the end at every character:
-// every parsed line is followed by a byte that is no digit, sign, '.' or 'e' ('\n' in the block
-// buffer, '\0' after a std::string), and every value within a line by a separator.
-
-// Exact decimal to double without std::from_chars (which libstdc++ 12 implements with strtod,
-// ~100 ns a value) in the common case. Clinger's fast path (W. D. Clinger, "How to read floating
-// point numbers accurately", PLDI 1990): for w < 2^53 and |e| <= 22 both w and 10^|e| are exact
-// doubles, so w * 10^e or w / 10^-e is one correctly rounded operation, i.e. the exact result.
-// Returns false (nothing parsed) when the text is outside that case.
-inline bool FastNumber(const char* p, double* value, const char** stop) {
-  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
-                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-  const bool negative = *p == '-';
-  p += negative;
-  uint64_t w = 0;  // may wrap for > 19 digits, which are then rejected
-  const char* first = p;
-  while (IsDigit(*p)) w = 10 * w + static_cast<uint64_t>(*p++ - '0');
-  int exponent = 0, digits = static_cast<int>(p - first);
-  if (*p == '.') {
-    const char* fraction = ++p;
-    while (IsDigit(*p)) w = 10 * w + static_cast<uint64_t>(*p++ - '0');
-    exponent = -static_cast<int>(p - fraction);
-    digits -= exponent;
-  }
-  if (digits == 0 || digits > 19) return false;  // not a plain decimal, or w may have wrapped
-  if (*p == 'e' || *p == 'E') {
-    const bool e_negative = *++p == '-';
-    p += *p == '-' || *p == '+';
-    const char* e = p;
-    int n = 0;
-    for (; IsDigit(*p) && n < 1000; ++p) n = 10 * n + (*p - '0');
-    if (p == e) return false;
-    exponent += e_negative ? -n : n;
-  }
-  if (w > (uint64_t{1} << 53) || exponent < -22 || exponent > 22) return false;
-  const double d = static_cast<double>(w);
-  *value = exponent < 0 ? d / kPow10[-exponent] : d * kPow10[exponent];
-  if (negative) *value = -*value;
-  *stop = p;
-  return true;
-}
-
-// Float through the double fast path: rounding the exact-rounded double to float is exact unless
-// the double lies exactly on a midpoint between floats (then from_chars decides).
-inline bool FastNumber(const char* p, float* value, const char** stop) {
-  double d;
-  if (!FastNumber(p, &d, stop)) return false;
-  const double magnitude = std::fabs(d);
-  if (magnitude != 0.0 && !(magnitude >= 0x1p-126 && magnitude < 0x1p127)) return false;
-  uint64_t bits;
-  std::memcpy(&bits, &d, sizeof(bits));
-  if ((bits & ((uint64_t{1} << 29) - 1)) == (uint64_t{1} << 28)) return false;  // a midpoint
-  *value = static_cast<float>(d);
-  return true;
-}
-
-inline bool FastNumber(const char* p, int* value, const char** stop) {
-  const char* first = p;
-  uint64_t n = 0;
-  while (IsDigit(*p)) n = 10 * n + static_cast<uint64_t>(*p++ - '0');
-  if (p == first || p - first > 9) return false;
-  *value = static_cast<int>(n);
-  *stop = p;
-  return true;
-}
-inline bool FastNumber(const char*, uint64_t*, const char**) { return false; }
-
-// Parses a number that spans a whole value; returns its end, or nullptr if it is not one.
-template <typename T>
-inline const char* ParseNumber(const char* p, const char* end, T* value) {
-  if (*p == '+') ++p;  // from_chars does not take a leading '+'
-  const char* ptr = nullptr;
-  if (!FastNumber(p, value, &ptr)) {
-    const auto result = std::from_chars(p, end, *value);
-    if (result.ec != std::errc()) return nullptr;
-    ptr = result.ptr;
-  }
-  return ptr == end || IsSeparator(*ptr) ? ptr : nullptr;
-}
-
-template <typename T>
-bool IsNumber(std::string_view token, T* value) {
-  const char* end = token.data() + token.size();
-  return !token.empty() && ParseNumber(token.data(), end, value) == end;
-}
-
 // Columns 4-6 hold colours when they are integers in 0..255 and not an axis-aligned unit normal
 // such as "0 0 1" (which a colour almost never is: near-black).
 bool LooksLikeColor(const std::vector<std::string_view>& tokens) {
@@ -302,6 +175,34 @@ bool IsHeader(const std::vector<std::string_view>& tokens, const Layout* layout)
     if (!IsNumber(tokens[k], &v)) return true;
   }
   return false;
+}
+
+// Column names in a header line ("//X,Y,Z,R,G,B,Intensity" as CloudCompare writes it, or
+// "x y z r g b" as candi does) as a layout, when they are valid names, include x, y, z, and
+// match the number of values on the first point line.
+std::optional<Layout> LayoutFromHeader(const std::string& header, size_t values) {
+  if (header.empty()) return std::nullopt;
+  const std::vector<std::string_view> names = SplitLine(header.data(), header.data() + header.size());
+  if (names.size() != values) return std::nullopt;
+  std::string spec;
+  for (std::string_view name : names) spec += (spec.empty() ? "" : ",") + std::string(name);
+  try {
+    return ParseColumnSpec(spec);
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;  // not column names: an ordinary comment or title
+  }
+}
+
+// The header line candi writes: the column names, so the file reads back without a spec.
+std::string HeaderLine(const std::vector<Column>& columns, const PointSchema& schema) {
+  std::string line = "//";
+  for (size_t k = 0; k < columns.size(); ++k) {
+    const Column& c = columns[k];
+    line += k == 0 ? "" : " ";
+    line += c.kind == Col::kScalar ? schema.scalars[c.scalar].name
+            : c.kind == Col::kSkip ? "_" : kColNames[static_cast<int>(c.kind)];
+  }
+  return line + "\n";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -347,6 +248,8 @@ class XyzReader : public PointReader {
   uint64_t lines_ = 0;                 // lines taken from the buffer
   uint64_t line_ = 0;                  // number of the line being parsed (1-based)
   std::string pending_;                // the first point line, read while opening
+  std::string header_;                 // column names from a header or comment line, if any
+  uint64_t header_line_ = 0;
   uint64_t pending_line_ = 0;          // its number, 0 when there is none
   uint64_t declared_ = kUnknownCount;  // PTS: the count line(s)
   bool warned_extra_ = false, warned_sections_ = false, finished_ = false;
@@ -382,6 +285,8 @@ std::vector<std::string_view> XyzReader::FirstPointLine(const Layout* layout, co
   if (!pts_ && IsHeader(tokens, layout)) {
     LogInfo(path_ + ": line " + std::to_string(line_) + " is not numeric; skipped as a header: '" +
             std::string(*b, std::min<size_t>(*e - *b, 200)) + "'");
+    header_.assign(*b, *e);
+    header_line_ = line_;
     if (!NextDataLine(b, e)) return {};
     tokens = SplitLine(*b, *e);
   }
@@ -414,6 +319,12 @@ void XyzReader::ChooseLayout(std::optional<Layout> layout,
   } else {
     if (tokens.size() < 3) {
       Fail(std::to_string(tokens.size()) + " column(s); at least x,y,z are needed");
+    }
+    if (std::optional<Layout> named = LayoutFromHeader(header_, tokens.size())) {
+      layout_ = std::move(*named);
+      LogInfo(path_ + ": columns " + layout_.text + " from the header on line " +
+              std::to_string(header_line_));
+      return;
     }
     layout_ = ParseColumnSpec(GuessColumns(tokens));
     LogInfo(path_ + ": " + std::to_string(tokens.size()) + " columns, guessed " + layout_.text +
@@ -466,7 +377,15 @@ bool XyzReader::NextDataLine(const char** begin, const char** end) {
   }
   while (NextLine(begin, end)) {
     const char* p = SkipBlanks(*begin);
-    if (p == *end || *p == '#' || (*p == '/' && p + 1 != *end && p[1] == '/')) continue;
+    if (p == *end) continue;
+    if (*p == '#' || (*p == '/' && p + 1 != *end && p[1] == '/')) {
+      // Before the first point, a comment may name the columns ("//x y z r g b intensity").
+      if (points_read_ == 0 && pending_.empty()) {
+        header_.assign(p + (*p == '#' ? 1 : 2), *end);
+        header_line_ = lines_;
+      }
+      continue;
+    }
     line_ = lines_;
     return true;
   }
@@ -673,6 +592,8 @@ XyzWriter::XyzWriter(const std::string& path, bool pts, const PointWriteSpec& sp
     const std::string count =
         spec.count == kUnknownCount ? std::string(kPtsCountWidth, ' ') : std::to_string(spec.count);
     file_.Write(count + "\n");
+  } else {
+    file_.Write(HeaderLine(columns_, spec.schema));
   }
 }
 

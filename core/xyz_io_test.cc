@@ -95,13 +95,20 @@ void ExpectSamePoints(const PointCloud& a, const PointCloud& b) {
 
 constexpr char kSurveyColumns[] = "x,y,z,r,g,b,nx,ny,nz,quality";
 
+// The file's text after candi's "//names" header line.
+std::string Body(const std::string& path) {
+  const std::string text = ReadBytes(path);
+  EXPECT_EQ(text.rfind("//", 0), 0u) << "candi's XYZ starts with a header line";
+  return text.substr(text.find('\n') + 1);
+}
+
 TEST(XyzRoundTrip, SurveyScalePositionsAreBitExact) {
   TempDir dir;
   const PointCloud cloud = SurveyCloud(2000, LocalFrame());
   const std::string path = dir.File("cloud.xyz");
   WritePointCloud(path, cloud);
   EXPECT_FALSE(FileExists(ShiftSidecarPath(path)));
-  EXPECT_EQ(ReadBytes(path).substr(0, 26), "500000.123 4500000.456 100");
+  EXPECT_EQ(Body(path).substr(0, 26), "500000.123 4500000.456 100");
   const PointCloud back = ReadText(path, false, kSurveyColumns);
   EXPECT_TRUE(back.frame.IsIdentity());
   EXPECT_EQ(back.schema.position_type, ScalarType::kFloat64);
@@ -116,7 +123,7 @@ TEST(XyzRoundTrip, ShiftedCloudWritesSidecarAndReadsBackExactWorld) {
   const std::string path = dir.File("cloud.xyz");
   WritePointCloud(path, cloud);
   ASSERT_TRUE(FileExists(ShiftSidecarPath(path)));
-  EXPECT_EQ(ReadBytes(path).substr(0, 4), "0.12");  // local coordinates
+  EXPECT_EQ(Body(path).substr(0, 4), "0.12");  // local coordinates
   const PointCloud back = ReadText(path, false, kSurveyColumns);
   EXPECT_EQ(back.frame, shift);
   ExpectSamePoints(cloud, back);
@@ -172,6 +179,26 @@ TEST(XyzRoundTrip, DefaultColumnsReadBackWithTheGuess) {
   EXPECT_EQ(back.scalars[0].f32, cloud.scalars[0].f32);
 }
 
+TEST(XyzRoundTrip, HeaderLineNamesTheColumnsSoNoSpecIsNeeded) {
+  TempDir dir;
+  const PointCloud cloud = SurveyCloud(50, LocalFrame());
+  const std::string path = dir.File("named.xyz");
+  WritePointCloud(path, cloud);
+  EXPECT_EQ(ReadBytes(path).substr(0, ReadBytes(path).find('\n')), "//x y z r g b nx ny nz quality");
+  const PointCloud back = ReadPointCloud(path);  // no column spec
+  EXPECT_TRUE(back.schema.colors);
+  EXPECT_TRUE(back.schema.normals);
+  ASSERT_NE(back.FindScalar("quality"), nullptr);
+  ExpectSamePoints(cloud, back);
+  // CloudCompare's header style, and a plain title comment that names no columns.
+  WriteBytes(dir.File("cc.txt"), "//X,Y,Z,R,G,B,Deviation\n1 2 3 10 20 30 0.5\n");
+  const PointCloud cc = ReadPointCloud(dir.File("cc.txt"));
+  EXPECT_EQ(cc.colors[0], (Rgb8{10, 20, 30}));
+  EXPECT_EQ(cc.FindScalar("Deviation")->Get(0), 0.5);
+  WriteBytes(dir.File("title.xyz"), "# survey of 2024-05-01\n1 2 3\n");
+  EXPECT_EQ(ReadPointCloud(dir.File("title.xyz")).size(), 1u);
+}
+
 TEST(XyzWriter, Float32PrecisionAndColumnSpec) {
   TempDir dir;
   PointCloud cloud = SurveyCloud(1, LocalFrame());
@@ -181,7 +208,7 @@ TEST(XyzWriter, Float32PrecisionAndColumnSpec) {
   options.columns = "quality,z,y,x";
   const std::string path = dir.File("c.xyz");
   WritePointCloud(path, cloud, options);
-  EXPECT_EQ(ReadBytes(path), "-7.3 3 2 0.1\n");
+  EXPECT_EQ(ReadBytes(path), "//quality z y x\n-7.3 3 2 0.1\n");
   options.columns = "x,y,z,missing";
   EXPECT_THROW(WritePointCloud(path, cloud, options), std::invalid_argument);
   options.columns = "x,y,z,_";
