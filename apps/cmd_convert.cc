@@ -77,6 +77,10 @@ int RunConvert(const ConvertArgs& args) {
     LogInfo("output shift: " + (spec.frame.IsIdentity() ? std::string("none") : spec.frame.ToString()) +
             " (world = local + shift)");
   }
+  if (reader->info().face_count > 0) {
+    LogWarning(args.input + " has " + std::to_string(reader->info().face_count) +
+               " faces; convert writes the vertices as points, without the faces");
+  }
   auto writer = OpenPointWriter(args.output, spec, write_options);
   ConsoleProgress progress("convert " + args.input + " -> " + args.output);
   const uint64_t total = spec.count == kUnknownCount ? 0 : spec.count;

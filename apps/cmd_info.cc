@@ -26,6 +26,20 @@ std::string Vec(const Eigen::Vector3d& v) {
   return FormatDouble(v.x()) + " " + FormatDouble(v.y()) + " " + FormatDouble(v.z());
 }
 
+// Positions stored as float print as the float's shortest text (0.1f, not 0.100000001490116).
+std::string Coordinates(const Eigen::Vector3d& v, const PointFileInfo& info) {
+  if (info.schema.position_type != ScalarType::kFloat32 || !info.frame.IsIdentity()) return Vec(v);
+  return FormatFloat(static_cast<float>(v.x())) + " " + FormatFloat(static_cast<float>(v.y())) +
+         " " + FormatFloat(static_cast<float>(v.z()));
+}
+
+// A difference of coordinates, to nine significant digits (1177.46, not 1177.4599999999627).
+std::string Extent(const Eigen::Vector3d& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof(buf), "%.9g %.9g %.9g", v.x(), v.y(), v.z());
+  return buf;
+}
+
 nlohmann::json JsonVec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 struct Scan {
@@ -87,8 +101,9 @@ void PrintText(const PointFileInfo& info, const Scan& scan, const std::string& p
   std::printf("fields    %s\n", fields.c_str());
   std::printf("shift     %s\n", info.frame.IsIdentity() ? "none" : (Vec(info.frame.origin) + "  (world = local + shift)").c_str());
   if (scan.done && !scan.world.IsEmpty()) {
-    std::printf("bounds    min %s\n          max %s\n", Vec(scan.world.min).c_str(), Vec(scan.world.max).c_str());
-    std::printf("extent    %s\n", Vec(scan.world.Extent()).c_str());
+    std::printf("bounds    min %s\n          max %s\n", Coordinates(scan.world.min, info).c_str(),
+                Coordinates(scan.world.max, info).c_str());
+    std::printf("extent    %s\n", Extent(scan.world.Extent()).c_str());
   }
   if (info.header_bounds) {
     std::printf("header    min %s\n          max %s\n", Vec(info.header_bounds->min).c_str(),

@@ -32,7 +32,7 @@ constexpr const char* kGeneratingSoftware = "candi 0.1.0";
 
 class LasReader : public PointReader {
  public:
-  explicit LasReader(const std::string& path);
+  LasReader(const std::string& path, const PointReadOptions& options);
   size_t Read(size_t max_points, PointCloud* chunk) override;
 
  private:
@@ -45,6 +45,7 @@ class LasReader : public PointReader {
   void DecodeBlock(const uint8_t* records, size_t n, size_t first, PointCloud* chunk) const;
 
   BinaryFile file_;
+  bool scalar_fields_ = true;  // PointReadOptions::scalar_fields
   LasHeader header_;
   LasFormatLayout layout_;
   std::vector<LasColumn> columns_;
@@ -52,7 +53,8 @@ class LasReader : public PointReader {
   std::vector<uint8_t> buffer_;
 };
 
-LasReader::LasReader(const std::string& path) : PointReader(path), file_(path) {
+LasReader::LasReader(const std::string& path, const PointReadOptions& options)
+    : PointReader(path), file_(path), scalar_fields_(options.scalar_fields) {
   header_ = ReadLasHeader(&file_);
   layout_ = LasLayoutOf(header_.point_format);
   std::vector<LasVlr> vlrs = ReadLasVlrs(&file_, header_);
@@ -125,6 +127,7 @@ void LasReader::BuildSchema(const std::vector<LasExtraBytes>& extra) {
   schema.position_type = ScalarType::kFloat64;
   schema.colors = layout_.color_offset >= 0;
   for (const LasStandardColumn& s : LasStandardColumns(header_.point_format)) {
+    if (!scalar_fields_) break;
     LasColumn c = ColumnOf(s);
     c.scalar = static_cast<int>(schema.scalars.size());
     schema.scalars.push_back(
@@ -169,6 +172,7 @@ void LasReader::AddExtraColumns(const std::vector<LasExtraBytes>& extra) {
     c.scale = e.scale;
     c.add = e.add;
     c.normal_axis = schema.normals ? NormalAxis(e.name) : -1;
+    if (c.normal_axis < 0 && !scalar_fields_) continue;
     if (c.normal_axis < 0 && (e.name.empty() || schema.ScalarIndex(e.name) >= 0)) {
       LogWarning(path_ + ": extra bytes field '" + e.name +
                  "' is unnamed or repeats a name; skipped");
@@ -653,8 +657,8 @@ void LasWriter::Close() {
 
 }  // namespace
 
-std::unique_ptr<PointReader> OpenLasReader(const std::string& path) {
-  return std::make_unique<LasReader>(path);
+std::unique_ptr<PointReader> OpenLasReader(const std::string& path, const PointReadOptions& options) {
+  return std::make_unique<LasReader>(path, options);
 }
 
 std::unique_ptr<PointWriter> OpenLasWriter(const std::string& path, const PointWriteSpec& spec,

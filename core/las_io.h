@@ -52,7 +52,8 @@ inline constexpr const char* kGpsTime = "gps_time";                    // double
 inline constexpr const char* kNir = "nir";                             // format 8
 }  // namespace las_field
 
-std::unique_ptr<PointReader> OpenLasReader(const std::string& path);
+std::unique_ptr<PointReader> OpenLasReader(const std::string& path,
+                                           const PointReadOptions& options = {});
 std::unique_ptr<PointWriter> OpenLasWriter(const std::string& path, const PointWriteSpec& spec,
                                            const PointWriteOptions& options);
 

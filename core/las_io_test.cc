@@ -2,10 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <functional>
 
@@ -648,42 +646,6 @@ TEST(LasWrite, ChunkSchemaMustMatchSpec) {
   const PointCloud cloud = MakeSurveyCloud(4);
   auto writer = OpenLasWriter(dir.File("s.las"), {cloud.schema, cloud.frame, cloud.meta, 4}, {});
   EXPECT_THROW(writer->Write(MakePlainCloud(4)), InternalError);
-}
-
-// ---- throughput (run with --gtest_also_run_disabled_tests) ----
-
-TEST(LasThroughput, DISABLED_Format3TenMillionPoints) {
-  TempDir dir;
-  const size_t chunk_size = 1000000, chunks = 10, n = chunk_size * chunks;
-  PointCloud chunk = MakeSurveyCloud(chunk_size);
-  PointSchema schema = chunk.schema;
-  schema.normals = false;
-  schema.scalars.resize(3);  // intensity, classification, gps_time: plain format 3
-  chunk.SetSchema(schema);
-  const std::string path = dir.File("big.las");
-  auto start = std::chrono::steady_clock::now();
-  std::clock_t cpu = std::clock();
-  auto writer = OpenLasWriter(path, {chunk.schema, chunk.frame, chunk.meta, n}, {});
-  for (size_t i = 0; i < chunks; ++i) writer->Write(chunk);
-  writer->Close();
-  const double write_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double write_cpu = double(std::clock() - cpu) / CLOCKS_PER_SEC;
-  auto reader = OpenLasReader(path);  // also warms the page cache
-  EXPECT_EQ(reader->info().description, "LAS 1.2 point format 3");
-  start = std::chrono::steady_clock::now();
-  cpu = std::clock();
-  PointCloud out;
-  uint64_t total = 0;
-  while (size_t got = reader->Read(chunk_size, &out)) total += got;
-  const double read_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double read_cpu = double(std::clock() - cpu) / CLOCKS_PER_SEC;
-  EXPECT_EQ(total, n);
-  std::printf(
-      "LAS format 3, %zu points: write %.1f M points/s (%.1f per CPU second), "
-      "read %.1f M points/s (%.1f per CPU second)\n",
-      n, n / write_s / 1e6, n / write_cpu / 1e6, n / read_s / 1e6, n / read_cpu / 1e6);
 }
 
 }  // namespace

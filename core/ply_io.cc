@@ -185,7 +185,7 @@ void DecodeFastPaths(const std::vector<Column>& columns, const uint8_t* records,
 
 class PlyReader : public PointReader {
  public:
-  explicit PlyReader(const std::string& path);
+  PlyReader(const std::string& path, const PointReadOptions& options);
   size_t Read(size_t max_points, PointCloud* chunk) override;
   // After all vertices: reads the faces, fanning polygons into triangles.
   std::vector<std::array<uint32_t, 3>> ReadFaces();
@@ -208,6 +208,7 @@ class PlyReader : public PointReader {
                              std::vector<int64_t>* indices, std::vector<std::string_view>* tokens);
 
   BinaryFile file_;
+  bool scalar_fields_ = true;  // PointReadOptions::scalar_fields
   ply::Header header_;
   int vertex_element_ = -1;
   std::vector<Column> columns_;  // one per vertex property (lists: kSkip)
@@ -219,7 +220,8 @@ class PlyReader : public PointReader {
   size_t pending_consume_ = 0;  // ASCII: bytes of the current line, consumed by NextLine
 };
 
-PlyReader::PlyReader(const std::string& path) : PointReader(path), file_(path) {
+PlyReader::PlyReader(const std::string& path, const PointReadOptions& options)
+    : PointReader(path), file_(path), scalar_fields_(options.scalar_fields) {
   header_ = ply::ParseHeader(file_);
   vertex_element_ = header_.FindElement("vertex");
   if (vertex_element_ < 0) Fail("header", "no 'vertex' element");
@@ -275,6 +277,8 @@ void PlyReader::MapColumns() {
     } else if (n == "layer" && p.type != Type::kFloat32 && p.type != Type::kFloat64) {
       c.role = Role::kLayer;
       schema.layers = true;
+    } else if (!scalar_fields_) {
+      // skipped: geometry and colour only
     } else {
       std::string name = n.rfind("scalar_", 0) == 0 && n.size() > 7 ? n.substr(7) : n;
       if (schema.ScalarIndex(name) >= 0) name = n;  // both "scalar_q" and "q": keep the full name
@@ -617,13 +621,14 @@ std::string PlyReader::ReadFaceRecord(const ply::Element& element, int index_pro
 
 }  // namespace
 
-std::unique_ptr<PointReader> OpenPlyReader(const std::string& path) {
-  return std::make_unique<PlyReader>(path);
+std::unique_ptr<PointReader> OpenPlyReader(const std::string& path,
+                                           const PointReadOptions& options) {
+  return std::make_unique<PlyReader>(path, options);
 }
 
 TriMesh ReadPlyMesh(const std::string& path) {
   if (DetectPointFormat(path) != PointFormat::kPly) throw InputError(path, "", "not a PLY file");
-  PlyReader reader(path);
+  PlyReader reader(path, PointReadOptions{});
   TriMesh mesh;
   mesh.vertices.SetSchema(reader.info().schema);
   mesh.vertices.frame = reader.info().frame;

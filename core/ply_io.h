@@ -19,7 +19,8 @@
 
 namespace candi {
 
-std::unique_ptr<PointReader> OpenPlyReader(const std::string& path);
+std::unique_ptr<PointReader> OpenPlyReader(const std::string& path,
+                                           const PointReadOptions& options = {});
 std::unique_ptr<PointWriter> OpenPlyWriter(const std::string& path, const PointWriteSpec& spec,
                                            const PointWriteOptions& options);
 

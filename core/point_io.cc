@@ -150,8 +150,8 @@ PointFormat DetectPointFormat(const std::string& path) {
 std::unique_ptr<PointReader> OpenPointReader(const std::string& path,
                                              const PointReadOptions& options) {
   switch (DetectPointFormat(path)) {
-    case PointFormat::kPly: return OpenPlyReader(path);
-    case PointFormat::kLas: return OpenLasReader(path);
+    case PointFormat::kPly: return OpenPlyReader(path, options);
+    case PointFormat::kLas: return OpenLasReader(path, options);
     case PointFormat::kXyz: return OpenXyzReader(path, /*pts=*/false, options);
     case PointFormat::kPts: return OpenXyzReader(path, /*pts=*/true, options);
   }

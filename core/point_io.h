@@ -44,6 +44,9 @@ struct PointReadOptions {
   // (intensity), a name (a float scalar field of that name) or _ (skip). Empty: guessed from the
   // first data line and logged.
   std::string columns;
+  // false: scalar fields are not decoded (LAS attributes and extra bytes, other PLY properties,
+  // other XYZ columns); geometry, colours and normals only. Faster, for rendering and viewing.
+  bool scalar_fields = true;
 };
 
 class PointReader {

@@ -90,3 +90,34 @@ TEST(PointWriteOptions, DefaultsPassAndBadValuesNameTheField) {
 
 }  // namespace
 }  // namespace candi
+
+namespace candi {
+namespace {
+
+TEST(PointReadOptions, WithoutScalarFieldsEveryFormatKeepsGeometryAndColourOnly) {
+  testing::TempDir dir;
+  PointCloud cloud;
+  cloud.schema.colors = true;
+  cloud.schema.scalars = {{"intensity", ScalarType::kFloat32}, {"Deviation", ScalarType::kFloat64}};
+  cloud.SetSchema(cloud.schema);
+  cloud.Resize(3);
+  for (size_t i = 0; i < 3; ++i) {
+    cloud.positions[i] = Eigen::Vector3d(i, 2.0 * i, 500000.25);
+    cloud.colors[i] = {static_cast<uint8_t>(i), 9, 99};
+  }
+  PointReadOptions geometry_only;
+  geometry_only.scalar_fields = false;
+  for (const char* name : {"a.ply", "a.las", "a.xyz"}) {
+    WritePointCloud(dir.File(name), cloud);
+    const PointCloud all = ReadPointCloud(dir.File(name));
+    const PointCloud lean = ReadPointCloud(dir.File(name), geometry_only);
+    EXPECT_FALSE(all.schema.scalars.empty()) << name;
+    EXPECT_TRUE(lean.schema.scalars.empty()) << name;
+    ASSERT_EQ(lean.size(), 3u) << name;
+    EXPECT_EQ(lean.colors, cloud.colors) << name;
+    for (size_t i = 0; i < 3; ++i) EXPECT_EQ(lean.WorldPosition(i), all.WorldPosition(i)) << name;
+  }
+}
+
+}  // namespace
+}  // namespace candi

@@ -219,7 +219,7 @@ struct PointSlot {
 
 class XyzReader : public PointReader {
  public:
-  XyzReader(const std::string& path, bool pts, std::optional<Layout> layout);
+  XyzReader(const std::string& path, bool pts, std::optional<Layout> layout, bool scalar_fields);
   size_t Read(size_t max_points, PointCloud* chunk) override;
 
  private:
@@ -255,7 +255,8 @@ class XyzReader : public PointReader {
   bool warned_extra_ = false, warned_sections_ = false, finished_ = false;
 };
 
-XyzReader::XyzReader(const std::string& path, bool pts, std::optional<Layout> layout)
+XyzReader::XyzReader(const std::string& path, bool pts, std::optional<Layout> layout,
+                     bool scalar_fields)
     : PointReader(path), file_(path), pts_(pts), buffer_(kBlockSize + kMaxLineLength + 2) {
   if (file_.size() == 0) throw InputError(path, "byte 0", "empty file");
   info_.format = pts ? PointFormat::kPts : PointFormat::kXyz;
@@ -267,6 +268,12 @@ XyzReader::XyzReader(const std::string& path, bool pts, std::optional<Layout> la
     pending_line_ = line_;
   }
   ChooseLayout(std::move(layout), tokens);
+  if (!scalar_fields) {  // PointReadOptions::scalar_fields: geometry and colour only
+    for (Column& c : layout_.columns) {
+      if (c.kind == Col::kScalar) c = Column{Col::kSkip, -1};
+    }
+    layout_.schema.scalars.clear();
+  }
   info_.count = declared_;
   info_.schema = layout_.schema;
   info_.description = PointFormatName(info_.format) + " text, columns " + layout_.text;
@@ -679,7 +686,7 @@ std::unique_ptr<PointReader> OpenXyzReader(const std::string& path, bool pts,
                                            const PointReadOptions& options) {
   std::optional<Layout> layout;
   if (!options.columns.empty()) layout = ParseColumnSpec(options.columns);
-  return std::make_unique<XyzReader>(path, pts, std::move(layout));
+  return std::make_unique<XyzReader>(path, pts, std::move(layout), options.scalar_fields);
 }
 
 std::unique_ptr<PointWriter> OpenXyzWriter(const std::string& path, bool pts,

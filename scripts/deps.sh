@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages candi builds and tests with, skipping those already present.
-# Idempotent and quiet; works as root or through sudo. Usage: scripts/deps.sh [--with-oracles]
+# Idempotent and quiet; works as root or through sudo. Usage: scripts/deps.sh
 set -euo pipefail
 
 packages=(
@@ -21,10 +21,6 @@ packages=(
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev
 )
-if [[ "${1:-}" == "--with-oracles" ]]; then
-  # Interoperability oracles (MeshLab, CloudCompare) used by optional tests only.
-  packages+=(meshlab cloudcompare xvfb xauth)
-fi
 
 missing=()
 for p in "${packages[@]}"; do
