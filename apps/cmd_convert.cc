@@ -1,8 +1,8 @@
 // candi convert IN OUT: streams points from one format to another, choosing the output shift.
-#include <charconv>
 #include <cmath>
 #include <stdexcept>
 
+#include "apps/arg_parse.h"
 #include "apps/commands.h"
 #include "core/log.h"
 #include "core/point_io.h"
@@ -13,21 +13,12 @@ namespace candi::app {
 namespace {
 
 Eigen::Vector3d ParseScale(const std::string& text) {
-  std::vector<double> values;
-  const char* p = text.data();
-  const char* end = p + text.size();
-  while (p < end) {
-    double v = 0;
-    auto [next, ec] = std::from_chars(p, end, v);
-    if (ec != std::errc() || !(v > 0) || !std::isfinite(v)) {
-      throw std::invalid_argument("--las-scale '" + text + "': expected s or sx,sy,sz, each > 0");
-    }
-    values.push_back(v);
-    p = next;
-    if (p < end && *p == ',') ++p;
+  const std::vector<double> v = ParseNumbers(text, ',', "--las-scale");
+  for (double s : v) {
+    if (!(s > 0)) throw std::invalid_argument("--las-scale '" + text + "': each scale must be > 0");
   }
-  if (values.size() == 1) return Eigen::Vector3d::Constant(values[0]);
-  if (values.size() == 3) return Eigen::Vector3d(values[0], values[1], values[2]);
+  if (v.size() == 1) return Eigen::Vector3d::Constant(v[0]);
+  if (v.size() == 3) return Eigen::Vector3d(v[0], v[1], v[2]);
   throw std::invalid_argument("--las-scale '" + text + "': expected s or sx,sy,sz");
 }
 

@@ -1,6 +1,5 @@
 // End-to-end tests of the `candi` command line: exit codes, messages, outputs.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -8,6 +7,7 @@
 
 #include "core/point_io.h"
 #include "core/rng.h"
+#include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
 namespace candi {
@@ -18,26 +18,8 @@ using testing::ReadBytes;
 using testing::TempDir;
 using testing::WriteBytes;
 
-struct Result {
-  int code = -1;
-  std::string out;     // stdout
-  std::string output;  // stdout then stderr
-};
-
-Result RunCandi(const std::string& args) {
-  TempDir dir;
-  const std::string err = dir.File("stderr");
-  const std::string command = std::string(CANDI_EXECUTABLE) + " " + args + " 2>" + err;
-  FILE* pipe = popen(command.c_str(), "r");
-  Result r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof(buf), pipe)) > 0) r.out.append(buf, n);
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.output = r.out + ReadBytes(err);
-  return r;
-}
+using Result = testing::CommandResult;
+using testing::RunCandi;
 
 PointCloud SurveyCloud(size_t n) {
   PointCloud c;
@@ -167,7 +149,8 @@ TEST(Cli, DemoWritesAnImage) {
   TempDir dir;
   const Result r = RunCandi("demo -o " + dir.File("demo") + " --width 160 --height 120");
   EXPECT_EQ(r.code, 0) << r.output;
-  EXPECT_TRUE(FileExists(dir.File("demo/builtin_scene.png")));
+  EXPECT_TRUE(FileExists(dir.File("demo/builtin_spbr.png")));
+  EXPECT_TRUE(FileExists(dir.File("demo/builtin_opaque.png")));
   EXPECT_NE(r.output.find("not built yet"), std::string::npos) << "the demo says what it is";
 }
 

@@ -27,6 +27,14 @@ class TempDir {
   std::string path_;
 };
 
+// Runs a shell command; stdout captured separately, then stdout + stderr together.
+struct CommandResult {
+  int code = -1;       // exit status (-1 when killed by a signal)
+  std::string out;     // stdout
+  std::string output;  // stdout then stderr
+};
+CommandResult RunCommand(const std::string& command);
+
 // Writes bytes to a file (not atomic; for building test inputs).
 void WriteBytes(const std::string& path, const std::string& bytes);
 std::string ReadBytes(const std::string& path);

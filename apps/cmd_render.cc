@@ -1,0 +1,265 @@
+// candi render IN... -o out.png: SPBR of one or more point files, merged, in memory (a SplatCloud,
+// 10 bytes per point copy) or streamed in chunks (frame buffers and a bounded chunk only).
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "apps/arg_parse.h"
+#include "apps/commands.h"
+#include "apps/view_json.h"
+#include "core/log.h"
+#include "core/png_io.h"
+#include "core/point_io.h"
+#include "core/progress.h"
+#include "core/version.h"
+#include "render/spbr.h"
+#include "render/spbr_stream.h"
+#include "render/splat_cloud.h"
+#include "sampling/opacity.h"
+
+namespace candi::app {
+
+namespace {
+
+constexpr uint64_t kStreamThreshold = 50000000;  // points; above, --mode auto streams
+
+void ParseSize(const std::string& text, int* w, int* h) {
+  const std::vector<double> v = ParseNumbers(text, 'x', "--size");
+  if (v.size() != 2 || v[0] < 1 || v[1] < 1 || v[0] > 16384 || v[1] > 16384 || v[0] != std::floor(v[0]) ||
+      v[1] != std::floor(v[1])) {
+    throw std::invalid_argument("--size '" + text + "': expected WxH, whole pixels in [1, 16384]");
+  }
+  *w = static_cast<int>(v[0]);
+  *h = static_cast<int>(v[1]);
+}
+
+Rgb8 ParseColor(const std::string& text) {
+  const std::vector<double> v = ParseNumbers(text, ',', "--background");
+  for (double c : v) {
+    if (v.size() != 3 || c < 0 || c > 255 || c != std::floor(c)) {
+      throw std::invalid_argument("--background '" + text + "': expected r,g,b, each 0..255");
+    }
+  }
+  if (v.size() != 3) throw std::invalid_argument("--background '" + text + "': expected r,g,b");
+  return {static_cast<uint8_t>(v[0]), static_cast<uint8_t>(v[1]), static_cast<uint8_t>(v[2])};
+}
+
+// -1: automatic; otherwise the gain.
+double ParseBrightness(const std::string& text) {
+  if (text == "auto") return -1;
+  if (text == "none") return 1;
+  const std::vector<double> v = ParseNumbers(text, ',', "--brightness");
+  if (v.size() != 1 || !(v[0] > 0 && v[0] <= 100)) {
+    throw std::invalid_argument("--brightness '" + text + "': expected auto, none or a gain in (0, 100]");
+  }
+  return v[0];
+}
+
+struct Plan {
+  int width = 1024, height = 768;
+  Rgb8 background;
+  double brightness = -1;
+  int repeat_level = 100;
+  bool stream = false;
+};
+
+Plan MakePlan(const RenderArgs& a) {
+  Plan p;
+  ParseSize(a.size, &p.width, &p.height);
+  p.background = ParseColor(a.background);
+  p.brightness = ParseBrightness(a.brightness);
+  p.repeat_level = a.opaque ? 1 : a.repeat_level;
+  if (a.repeat_level < 1 || a.repeat_level > 100000) {
+    throw std::invalid_argument("--repeat-level " + std::to_string(a.repeat_level) + ": must be in [1, 100000]");
+  }
+  if (!a.alpha.empty() && a.alpha.size() != 1 && a.alpha.size() != a.inputs.size()) {
+    throw std::invalid_argument("--alpha: give one value, or one per input (" + std::to_string(a.inputs.size()) + ")");
+  }
+  for (double alpha : a.alpha) {
+    if (!(alpha >= 0 && alpha <= 1)) throw std::invalid_argument("--alpha " + std::to_string(alpha) + ": must be in [0, 1]");
+  }
+  if (a.opaque && !a.alpha.empty()) throw std::invalid_argument("--opaque and --alpha exclude each other");
+  if (a.mode != "auto" && a.mode != "memory" && a.mode != "stream") {
+    throw std::invalid_argument("--mode '" + a.mode + "': expected auto, memory or stream");
+  }
+  if (a.mode == "stream" && !a.alpha.empty()) {
+    throw std::invalid_argument("--alpha needs the whole cloud (density): use --mode memory");
+  }
+  if (!(a.memory_mb >= 1)) throw std::invalid_argument("--memory-budget must be >= 1 MB");
+  return p;
+}
+
+// The camera in world coordinates: the view file's, or one that frames the data.
+render::Camera WorldCamera(const RenderArgs& a, const Plan& p, const Box3d& world) {
+  render::Camera c;
+  if (!a.view.empty()) {
+    c = LoadView(a.view);
+    if (a.size_given) c.width = p.width, c.height = p.height;
+    return c;
+  }
+  return render::FrameBox(world, p.width, p.height, Eigen::Vector3d(0.45, 0.7, -0.55));
+}
+
+render::Camera InFrame(render::Camera c, const LocalFrame& frame) {
+  c.eye -= frame.origin;
+  c.target -= frame.origin;
+  return c;
+}
+
+render::SpbrResult RenderInMemory(const RenderArgs& a, const Plan& p, render::Camera* world_camera) {
+  std::vector<PointCloud> clouds;
+  PointReadOptions read;
+  read.columns = a.columns;
+  uint64_t total = 0;
+  for (size_t k = 0; k < a.inputs.size(); ++k) {
+    clouds.push_back(ReadPointCloud(a.inputs[k], read));
+    total += clouds.back().size();
+    if (a.alpha.empty()) continue;
+    OpacityOptions o;
+    o.alpha = a.alpha.size() == 1 ? a.alpha[0] : a.alpha[k];
+    o.repeat_level = p.repeat_level;
+    o.image_size = std::max(p.width, p.height);
+    o.seed = a.seed;
+    OpacityResult r = AdjustOpacity(o, clouds.back());
+    LogInfo(a.inputs[k] + ": opacity " + std::to_string(o.alpha) + ": " + std::to_string(r.summary.points_in) +
+            " points -> " + std::to_string(r.summary.total_copies) + " copies (predicted alpha " +
+            std::to_string(r.summary.predicted_alpha) + ")");
+    clouds.back() = std::move(r.cloud);
+  }
+  if (total == 0) throw InputError("nothing to render: the inputs hold no points");
+  std::vector<const PointCloud*> pointers;
+  for (const PointCloud& c : clouds) pointers.push_back(&c);
+  render::SplatCloudOptions build;
+  build.repeat_level = p.repeat_level;
+  build.seed = a.seed;
+  build.use_multiplicity = !a.opaque;
+  ConsoleProgress building("render: preparing " + std::to_string(total) + " points");
+  const render::SplatCloud splats = render::BuildSplatCloud(build, pointers, building.Callback());
+  building.Finish();
+  clouds.clear();
+  *world_camera = WorldCamera(a, p, splats.bounds.Translated(splats.frame.origin));
+  render::SpbrOptions options;
+  options.point_size = a.point_size;
+  options.ensembles = a.preview;
+  options.threads = a.threads;
+  ConsoleProgressOptions po;
+  po.unit = "ensembles";
+  ConsoleProgress progress("render: SPBR L=" + std::to_string(p.repeat_level), po);
+  render::SpbrResult result = render::RenderSpbr(options, InFrame(*world_camera, splats.frame), splats, progress.Callback());
+  progress.Finish();
+  return result;
+}
+
+// Bounds from the headers when every input states them, else from a pass over the points.
+Box3d StreamBounds(const RenderArgs& a, const PointReadOptions& read, uint64_t* total) {
+  Box3d world;
+  bool all_headers = true;
+  *total = 0;
+  for (const std::string& in : a.inputs) {
+    auto r = OpenPointReader(in, read);
+    if (r->info().header_bounds) world.Extend(*r->info().header_bounds); else all_headers = false;
+    if (r->info().count != kUnknownCount) *total += r->info().count;
+  }
+  if (all_headers) return world;
+  world = Box3d();
+  *total = 0;
+  ConsoleProgress progress("render: bounds");
+  PointCloud chunk;
+  for (const std::string& in : a.inputs) {
+    auto r = OpenPointReader(in, read);
+    while (r->Read(1 << 20, &chunk) > 0) {
+      world.Extend(chunk.WorldBounds());
+      *total += chunk.size();
+      progress.Update(*total, 0);
+    }
+  }
+  return world;
+}
+
+render::SpbrResult RenderStreaming(const RenderArgs& a, const Plan& p, render::Camera* world_camera) {
+  PointReadOptions read;
+  read.columns = a.columns;
+  read.scalar_fields = false;  // geometry and colour; multiplicities need --mode memory
+  uint64_t total = 0;
+  const Box3d world = StreamBounds(a, read, &total);
+  if (total == 0 || world.IsEmpty()) throw InputError("nothing to render: the inputs hold no points");
+  const LocalFrame frame = render::RenderFrameFor(world);
+  *world_camera = WorldCamera(a, p, world);
+  if (world_camera->projection != render::Projection::kPerspective) {
+    throw std::invalid_argument("--mode stream draws perspective views; use --mode memory for orthographic views");
+  }
+  render::SpbrStreamOptions o;
+  o.repeat_level = p.repeat_level;
+  o.seed = a.seed;
+  o.point_size = a.point_size;
+  o.threads = a.threads;
+  o.memory_budget = static_cast<uint64_t>(a.memory_mb * 1048576.0);
+  render::SpbrStreamRenderer renderer(o, InFrame(*world_camera, frame), frame);
+  ConsoleProgress progress("render: SPBR L=" + std::to_string(p.repeat_level) + " streaming, " +
+                           std::to_string(renderer.passes()) + " pass(es)");
+  uint64_t done = 0;
+  PointCloud chunk;
+  for (int pass = 0; pass < renderer.passes(); ++pass) {
+    renderer.BeginPass(pass);
+    for (const std::string& in : a.inputs) {
+      auto r = OpenPointReader(in, read);
+      while (r->Read(1 << 20, &chunk) > 0) {
+        renderer.Add(chunk);
+        done += chunk.size();
+        progress.Update(done, total * renderer.passes());
+      }
+    }
+    renderer.EndPass();
+  }
+  progress.Finish();
+  return renderer.Finish();
+}
+
+void WriteOutputs(const RenderArgs& a, const Plan& p, const render::SpbrResult& result,
+                  const render::Camera& world_camera, bool streamed) {
+  const double gain = p.brightness < 0 ? (result.ensembles > 1 ? render::AutoBrightnessGain(result) : 1.0)
+                                       : p.brightness;
+  LogInfo("brightness gain " + std::to_string(gain) + (p.brightness < 0 ? " (auto)" : ""));
+  const ImageF average = render::AverageImage(result, p.background, gain);
+  std::string inputs;
+  for (const std::string& in : a.inputs) inputs += (inputs.empty() ? "" : " ") + in;
+  const PngText text = {{"Software", std::string("candi ") + kVersion},
+                        {"candi:seed", std::to_string(result.seed)},
+                        {"candi:repeat_level", std::to_string(result.repeat_level)},
+                        {"candi:ensembles", std::to_string(result.ensembles)},
+                        {"candi:brightness_gain", std::to_string(gain)},
+                        {"candi:mode", streamed ? "stream" : "memory"},
+                        {"candi:inputs", inputs},
+                        {"candi:view", ViewToJson(world_camera)}};
+  WritePng(a.output, render::ToImage8(average), text);
+  if (!a.output16.empty()) WritePng(a.output16, render::ToImage16(average), text);
+  if (!a.save_view.empty()) SaveView(a.save_view, world_camera);
+  std::printf("%s: %dx%d, SPBR L=%d (%d ensembles), %llu point copies, %.0f ms, gain %.2f, seed %llu\n",
+              a.output.c_str(), world_camera.width, world_camera.height, result.repeat_level,
+              result.ensembles, static_cast<unsigned long long>(result.copies), result.milliseconds,
+              gain, static_cast<unsigned long long>(result.seed));
+}
+
+}  // namespace
+
+int RunRender(const RenderArgs& args) {
+  const Plan plan = MakePlan(args);
+  bool stream = args.mode == "stream";
+  if (args.mode == "auto" && args.alpha.empty()) {
+    uint64_t stated = 0;
+    for (const std::string& in : args.inputs) {
+      PointReadOptions read;
+      read.columns = args.columns;
+      const uint64_t count = OpenPointReader(in, read)->info().count;
+      if (count != kUnknownCount) stated += count;
+    }
+    stream = stated > kStreamThreshold;
+  }
+  render::Camera world_camera;
+  const render::SpbrResult result = stream ? RenderStreaming(args, plan, &world_camera)
+                                           : RenderInMemory(args, plan, &world_camera);
+  WriteOutputs(args, plan, result, world_camera, stream);
+  return kOk;
+}
+
+}  // namespace candi::app

@@ -1,0 +1,212 @@
+#include "render/spbr_stream.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "core/check.h"
+#include "render/splat_cloud.h"
+#include "render/splat_kernel.h"
+
+namespace candi::render {
+
+void SpbrStreamOptions::Check() const {
+  if (repeat_level < 1) {
+    throw std::invalid_argument("SpbrStreamOptions::repeat_level = " + std::to_string(repeat_level) +
+                                "; must be >= 1");
+  }
+  if (!(point_size >= 1.0 && point_size <= 64.0)) {
+    throw std::invalid_argument("SpbrStreamOptions::point_size = " + std::to_string(point_size) +
+                                "; must be in [1, 64] pixels");
+  }
+  if (threads < 0 || threads > 256) {
+    throw std::invalid_argument("SpbrStreamOptions::threads = " + std::to_string(threads) +
+                                "; must be in [0, 256]");
+  }
+}
+
+namespace {
+
+// The points of one resident ensemble in the current chunk.
+struct Staged {
+  std::vector<float> x, y, z;
+  std::vector<uint32_t> color;
+  std::vector<uint64_t> index;  // stream index of each point (for the point-size draws)
+  void Clear() {
+    x.clear(), y.clear(), z.clear(), color.clear(), index.clear();
+  }
+};
+
+struct ThreadSums {
+  Accumulator sums;
+  std::array<uint64_t, 256> first_grey{};
+  ThreadSums(int w, int h) : sums(w, h) {}
+};
+
+inline int Grey(uint64_t key) {
+  const int r = (key >> 16) & 0xff, g = (key >> 8) & 0xff, b = key & 0xff;
+  return (299 * r + 587 * g + 114 * b + 500) / 1000;
+}
+
+}  // namespace
+
+struct SpbrStreamRenderer::Impl {
+  SpbrStreamOptions options;
+  Camera camera;
+  Camera::Projector projector;
+  LocalFrame frame;
+  KernelTransform transform;
+  KernelProjection projection;
+  int per_pass = 1, pass = -1, first = 0, last = 0;
+  uint64_t next_index = 0, copies = 0;
+  std::vector<BandBuffer> buffers;  // resident ensembles [first, last)
+  std::vector<Staged> staged;
+  tbb::enumerable_thread_specific<ThreadSums> sums;
+  std::unique_ptr<tbb::task_arena> arena;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+
+  Impl(const SpbrStreamOptions& o, const Camera& c, const LocalFrame& f)
+      : options(o), camera(c), projector(c.MakeProjector()), frame(f), sums(c.width, c.height) {
+    const double frame_bytes = 8.0 * c.width * c.height;
+    per_pass = static_cast<int>(std::clamp(std::floor(o.memory_budget / frame_bytes), 1.0,
+                                           static_cast<double>(o.repeat_level)));
+    // c = R (p - eye) for positions p in the render frame (float, full precision).
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) transform.a[3 * r + k] = static_cast<float>(projector.rotation(r, k));
+    }
+    const Eigen::Vector3d b = -(projector.rotation * projector.eye);
+    for (int r = 0; r < 3; ++r) transform.b[r] = static_cast<float>(b[r]);
+    projection = {static_cast<float>(projector.focal), static_cast<float>(projector.cx),
+                  static_cast<float>(projector.cy),
+                  projector.perspective ? static_cast<float>(projector.near)
+                                        : -std::numeric_limits<float>::infinity(),
+                  projector.perspective, c.width, c.height, 0, c.height};
+    if (o.threads > 0) arena = std::make_unique<tbb::task_arena>(o.threads);
+  }
+
+  template <typename F>
+  void Run(F&& f) {
+    if (arena) arena->execute(f); else f();
+  }
+};
+
+SpbrStreamRenderer::SpbrStreamRenderer(const SpbrStreamOptions& options, const Camera& camera,
+                                       const LocalFrame& frame) {
+  options.Check();
+  camera.Check();
+  CANDI_CHECK(camera.projection == Projection::kPerspective)
+      << "streaming SPBR draws perspective views (depths must stay positive); use a SplatCloud for "
+         "orthographic views";
+  impl_ = std::make_unique<Impl>(options, camera, frame);
+}
+
+SpbrStreamRenderer::~SpbrStreamRenderer() = default;
+
+int SpbrStreamRenderer::passes() const {
+  return (impl_->options.repeat_level + impl_->per_pass - 1) / impl_->per_pass;
+}
+int SpbrStreamRenderer::ensembles_per_pass() const { return impl_->per_pass; }
+
+void SpbrStreamRenderer::BeginPass(int pass) {
+  Impl& m = *impl_;
+  CANDI_CHECK(pass >= 0 && pass < passes()) << "pass " << pass;
+  m.pass = pass;
+  m.first = pass * m.per_pass;
+  m.last = std::min(m.options.repeat_level, m.first + m.per_pass);
+  m.next_index = 0;
+  m.buffers.resize(m.last - m.first);
+  for (BandBuffer& b : m.buffers) {
+    if (b.width != m.camera.width || b.rows != m.camera.height) b.Reset(m.camera.width, m.camera.height);
+  }
+  m.staged.resize(m.last - m.first);
+}
+
+void SpbrStreamRenderer::Add(const PointCloud& chunk) {
+  Impl& m = *impl_;
+  CANDI_CHECK(m.pass >= 0) << "Add before BeginPass";
+  const Eigen::Vector3d shift = chunk.frame.origin - m.frame.origin;
+  const ScalarField* mult = m.options.use_multiplicity ? chunk.FindScalar(kMultiplicityField) : nullptr;
+  const int L = m.options.repeat_level;
+  for (Staged& s : m.staged) s.Clear();
+  for (size_t i = 0; i < chunk.size(); ++i) {
+    const uint64_t index = m.next_index + i;
+    const Eigen::Vector3d p = chunk.positions[i] + shift;
+    if (!p.allFinite()) {
+      throw InputError("point " + std::to_string(index) + " of the render input has a NaN or infinite coordinate");
+    }
+    const int copies = mult ? static_cast<int>(std::clamp(std::round(mult->Get(i)), 0.0, double(L))) : 1;
+    const int e0 = EnsembleOf(m.options.seed, index, L);
+    for (int j = 0; j < copies; ++j) {
+      const int e = (e0 + j) % L;
+      if (e < m.first || e >= m.last) continue;
+      Staged& s = m.staged[e - m.first];
+      s.x.push_back(static_cast<float>(p.x()));
+      s.y.push_back(static_cast<float>(p.y()));
+      s.z.push_back(static_cast<float>(p.z()));
+      s.color.push_back(PackColor(chunk.schema.colors ? chunk.colors[i] : m.options.default_color));
+      s.index.push_back(index);
+    }
+  }
+  m.next_index += chunk.size();
+  m.Run([&] {
+    tbb::parallel_for(0, m.last - m.first, [&](int k) {
+      Staged& s = m.staged[k];
+      if (s.x.empty()) return;
+      if (m.options.point_size == 1.0) {
+        SplatPoints(m.transform, m.projection, s.x.data(), s.y.data(), s.z.data(), s.color.data(),
+                    s.x.size(), &m.buffers[k]);
+      } else {
+        // Draw point by point so each keeps its own stream index for the size draw.
+        for (size_t i = 0; i < s.x.size(); ++i) {
+          SplatPointsSized(m.transform, m.projection, &s.x[i], &s.y[i], &s.z[i], &s.color[i], 1,
+                           {m.options.point_size, m.options.seed, s.index[i]}, &m.buffers[k]);
+        }
+      }
+    });
+  });
+  for (const Staged& s : m.staged) m.copies += s.x.size();
+}
+
+void SpbrStreamRenderer::EndPass() {
+  Impl& m = *impl_;
+  CANDI_CHECK(m.pass >= 0) << "EndPass before BeginPass";
+  m.Run([&] {
+    tbb::parallel_for(0, m.last - m.first, [&](int k) {
+      ThreadSums& t = m.sums.local();
+      if (m.first + k == 0) {
+        m.buffers[k].Drain([&](uint32_t p, uint64_t key) {
+          t.sums.Add(p, key);
+          ++t.first_grey[Grey(key)];
+        });
+      } else {
+        m.buffers[k].Drain([&](uint32_t p, uint64_t key) { t.sums.Add(p, key); });
+      }
+    });
+  });
+  m.pass = -1;
+}
+
+SpbrResult SpbrStreamRenderer::Finish() {
+  Impl& m = *impl_;
+  SpbrResult result;
+  result.repeat_level = m.options.repeat_level;
+  result.ensembles = m.options.repeat_level;
+  result.seed = m.options.seed;
+  result.copies = m.copies;
+  result.sums = Accumulator(m.camera.width, m.camera.height);
+  for (const ThreadSums& t : m.sums) {
+    result.sums.Merge(t.sums);
+    for (int i = 0; i < 256; ++i) result.first_ensemble_grey[i] += t.first_grey[i];
+  }
+  result.milliseconds =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m.start).count();
+  return result;
+}
+
+}  // namespace candi::render

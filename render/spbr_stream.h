@@ -1,0 +1,53 @@
+// SPBR of points that stream through in chunks: the renderer holds frame buffers and a bounded
+// chunk, never the cloud.
+//
+// Ensembles are assigned exactly as in SplatCloud (a seeded hash of each point's index in the
+// stream, m copies in m distinct ensembles). A pass keeps K ensembles' z-buffers resident (K from
+// the memory budget: 8 bytes a pixel each) and the caller feeds every point once per pass; with
+// K >= L one pass suffices. Positions are used at full float precision in the render frame (no
+// 16-bit quantization), so images match the in-memory renderer's statistically, not bit for bit.
+// Deterministic: the same points, order and seed give the same image for any thread count, chunk
+// size or budget.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "core/local_frame.h"
+#include "core/point_cloud.h"
+#include "render/camera.h"
+#include "render/spbr.h"
+
+namespace candi::render {
+
+struct SpbrStreamOptions {
+  int repeat_level = 100;                        // L, >= 1
+  uint64_t seed = 1;
+  double point_size = 1.0;                       // pixels, in [1, 64]
+  bool use_multiplicity = true;                  // honour `spbr_multiplicity`
+  Rgb8 default_color{200, 200, 200};             // for clouds without colours
+  uint64_t memory_budget = uint64_t{1} << 30;    // bytes for resident z-buffers, >= one frame
+  int threads = 0;                               // 0: as TBB allows
+  void Check() const;
+};
+
+class SpbrStreamRenderer {
+ public:
+  // `camera` is in `frame` (the render frame; chunks may come in other frames).
+  SpbrStreamRenderer(const SpbrStreamOptions& options, const Camera& camera, const LocalFrame& frame);
+  ~SpbrStreamRenderer();
+
+  int passes() const;          // how many times the caller must feed all points
+  int ensembles_per_pass() const;
+  void BeginPass(int pass);    // points are numbered from 0 again
+  void Add(const PointCloud& chunk);  // throws InputError for NaN positions
+  void EndPass();
+  SpbrResult Finish();         // after the last EndPass
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace candi::render

@@ -1,0 +1,82 @@
+// SplatCloud: points prepared for SPBR, held in memory at 10 bytes per point copy.
+//
+// Built once per (clouds, repeat level L, seed): every point gets its ensemble from a seeded hash
+// of its index (its position in the inputs, concatenated), a point with multiplicity m (opacity
+// control's `spbr_multiplicity`) goes to m distinct ensembles (the hash's ensemble and the next
+// m - 1), the copies are grouped by ensemble and, within an ensemble, kept in Morton order, so
+// each ensemble is a random and spatially coherent subset. Each ensemble is cut into blocks of
+// consecutive points; a block stores its points as 16-bit coordinates on its own bounding box
+// (error <= extent / 131070 per axis, documented per block by `step`), plus the colour packed
+// as 0x00RRGGBB: 10 bytes per point copy.
+// Positions are relative to `frame`, the world origin rounded to whole metres at the data's
+// centre: a cloud and the same cloud shifted by whole metres give the same SplatCloud.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/box.h"
+#include "core/local_frame.h"
+#include "core/point_cloud.h"
+#include "core/progress.h"
+#include "core/rng.h"
+
+namespace candi::render {
+
+struct SplatCloudOptions {
+  int repeat_level = 100;             // L, the number of ensembles, >= 1
+  uint64_t seed = 1;                  // seeds the ensemble of every point
+  // Points per block, in [64, 65536]; 0: each ensemble in ~1024 blocks (64..4096 points), so a
+  // block covers a small part of the image and is drawn by one or two bands of rows.
+  int block_size = 0;
+  bool use_multiplicity = true;       // honour the `spbr_multiplicity` field when present
+  Rgb8 default_color{200, 200, 200};  // for clouds without colours
+  void Check() const;
+};
+
+inline constexpr const char* kMultiplicityField = "spbr_multiplicity";
+
+struct SplatBlock {
+  float origin[3];  // position of grid point (0, 0, 0), render frame, m
+  float step[3];    // grid spacing per axis, m (0 on a flat axis)
+  float lo[3], hi[3];  // bounding box of the block's points, render frame, m
+  uint64_t begin;   // first point in the SplatCloud arrays
+  uint32_t count;
+};
+
+struct SplatCloud {
+  int repeat_level = 1;
+  uint64_t seed = 0;
+  LocalFrame frame;           // world = position + frame.origin
+  Box3d bounds;               // of all points, render frame
+  uint64_t source_points = 0; // points in the inputs (multiplicity 0 included)
+  std::vector<uint16_t> qx, qy, qz;  // one entry per point copy
+  std::vector<uint32_t> colors;             // 0x00RRGGBB
+  std::vector<SplatBlock> blocks;           // ensemble by ensemble
+  std::vector<uint64_t> ensemble_blocks;    // L + 1 offsets into blocks
+
+  uint64_t copies() const { return colors.size(); }
+  size_t MemoryBytes() const;  // bytes held (arrays' capacities)
+};
+
+inline uint32_t PackColor(Rgb8 c) {
+  return static_cast<uint32_t>(c.r) << 16 | static_cast<uint32_t>(c.g) << 8 | c.b;
+}
+
+// The ensemble of point `index` under `seed`, in [0, L): the high bits of a seeded hash scaled
+// by L (Lemire's multiply-shift), independent of threads and chunking.
+inline int EnsembleOf(uint64_t seed, uint64_t index, int repeat_level) {
+  return static_cast<int>(((HashIndex(seed, index) >> 32) * static_cast<uint64_t>(repeat_level)) >> 32);
+}
+
+// Builds the SplatCloud of the given clouds (any frames; NaN positions are refused with
+// InputError). Throws InternalError for more than 2^32 points (render those by streaming).
+SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
+                           const std::vector<const PointCloud*>& clouds,
+                           const ProgressCallback& progress = nullptr);
+
+// The render frame candi uses for data spanning `world`: origin at the centre, rounded to metres.
+LocalFrame RenderFrameFor(const Box3d& world);
+
+}  // namespace candi::render
