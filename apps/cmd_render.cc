@@ -11,6 +11,7 @@
 #include "core/png_io.h"
 #include "core/point_io.h"
 #include "core/progress.h"
+#include "core/text_format.h"
 #include "core/version.h"
 #include "render/spbr.h"
 #include "render/spbr_stream.h"
@@ -85,7 +86,7 @@ Plan MakePlan(const RenderArgs& a) {
   if (a.mode == "stream" && !a.alpha.empty()) {
     throw std::invalid_argument("--alpha needs the whole cloud (density): use --mode memory");
   }
-  if (!(a.memory_mb >= 1)) throw std::invalid_argument("--memory-budget must be >= 1 MB");
+  if (!(a.memory_mb > 0)) throw std::invalid_argument("--memory-budget must be > 0 MB");
   return p;
 }
 
@@ -106,27 +107,39 @@ render::Camera InFrame(render::Camera c, const LocalFrame& frame) {
   return c;
 }
 
+// Opacity control for input k (ALGORITHMS.md §1): the pixel footprint s is the camera's at its
+// target, so the law is met where the view is focused.
+void AdjustInput(const RenderArgs& a, const Plan& p, const render::Camera& world_camera, size_t k,
+                 PointCloud* cloud) {
+  OpacityOptions o;
+  o.alpha = a.alpha.size() == 1 ? a.alpha[0] : a.alpha[k];
+  o.repeat_level = p.repeat_level;
+  o.image_size = 0;
+  o.pixel_size = world_camera.PixelFootprint((world_camera.target - world_camera.eye).norm());
+  o.seed = a.seed;
+  o.density.threads = a.threads;
+  OpacityResult r = AdjustOpacity(o, *cloud);
+  LogInfo(a.inputs[k] + ": opacity " + FormatDouble(o.alpha) + " at pixel " + FormatDouble(o.pixel_size) +
+          " m: " + std::to_string(r.summary.points_in) + " points -> " + std::to_string(r.summary.total_copies) +
+          " copies (predicted alpha " + FormatDouble(r.summary.predicted_alpha) + ")");
+  if (!r.summary.message.empty()) LogInfo(a.inputs[k] + ": " + r.summary.message);
+  *cloud = std::move(r.cloud);
+}
+
 render::SpbrResult RenderInMemory(const RenderArgs& a, const Plan& p, render::Camera* world_camera) {
   std::vector<PointCloud> clouds;
   PointReadOptions read;
   read.columns = a.columns;
   uint64_t total = 0;
-  for (size_t k = 0; k < a.inputs.size(); ++k) {
-    clouds.push_back(ReadPointCloud(a.inputs[k], read));
+  Box3d world;
+  for (const std::string& in : a.inputs) {
+    clouds.push_back(ReadPointCloud(in, read));
     total += clouds.back().size();
-    if (a.alpha.empty()) continue;
-    OpacityOptions o;
-    o.alpha = a.alpha.size() == 1 ? a.alpha[0] : a.alpha[k];
-    o.repeat_level = p.repeat_level;
-    o.image_size = std::max(p.width, p.height);
-    o.seed = a.seed;
-    OpacityResult r = AdjustOpacity(o, clouds.back());
-    LogInfo(a.inputs[k] + ": opacity " + std::to_string(o.alpha) + ": " + std::to_string(r.summary.points_in) +
-            " points -> " + std::to_string(r.summary.total_copies) + " copies (predicted alpha " +
-            std::to_string(r.summary.predicted_alpha) + ")");
-    clouds.back() = std::move(r.cloud);
+    if (!clouds.back().empty()) world.Extend(clouds.back().WorldBounds());
   }
   if (total == 0) throw InputError("nothing to render: the inputs hold no points");
+  *world_camera = WorldCamera(a, p, world);
+  for (size_t k = 0; k < clouds.size() && !a.alpha.empty(); ++k) AdjustInput(a, p, *world_camera, k, &clouds[k]);
   std::vector<const PointCloud*> pointers;
   for (const PointCloud& c : clouds) pointers.push_back(&c);
   render::SplatCloudOptions build;
@@ -137,7 +150,7 @@ render::SpbrResult RenderInMemory(const RenderArgs& a, const Plan& p, render::Ca
   const render::SplatCloud splats = render::BuildSplatCloud(build, pointers, building.Callback());
   building.Finish();
   clouds.clear();
-  *world_camera = WorldCamera(a, p, splats.bounds.Translated(splats.frame.origin));
+  if (splats.copies() == 0) LogInfo("every point was removed (alpha 0): the image shows the background");
   render::SpbrOptions options;
   options.point_size = a.point_size;
   options.ensembles = a.preview;

@@ -74,6 +74,12 @@ struct SpbrStreamRenderer::Impl {
   Impl(const SpbrStreamOptions& o, const Camera& c, const LocalFrame& f)
       : options(o), camera(c), projector(c.MakeProjector()), frame(f), sums(c.width, c.height) {
     const double frame_bytes = 8.0 * c.width * c.height;
+    if (o.memory_budget < frame_bytes) {
+      throw std::invalid_argument("SpbrStreamOptions::memory_budget = " + std::to_string(o.memory_budget) +
+                                  " bytes; less than one " + std::to_string(c.width) + "x" +
+                                  std::to_string(c.height) + " z-buffer (" +
+                                  std::to_string(static_cast<uint64_t>(frame_bytes)) + " bytes)");
+    }
     per_pass = static_cast<int>(std::clamp(std::floor(o.memory_budget / frame_bytes), 1.0,
                                            static_cast<double>(o.repeat_level)));
     // c = R (p - eye) for positions p in the render frame (float, full precision).

@@ -42,11 +42,13 @@ double SpbrAlpha(double points_per_ensemble, double point_area_ratio);
 // never asks there (it keeps s/S <= kMaxPointAreaRatio). Bad arguments: CANDI_CHECK.
 double SpbrPointsPerEnsemble(double alpha, double point_area_ratio);
 
-// The largest s/S AdjustOpacity uses. For a given density the law depends on S only through
-// s/S, and tends to 1 - exp(-rho s / L) once S >> s; near s/S = 1 it degenerates (see above).
-// When pixels are so coarse that s > kMaxPointAreaRatio * pi r^2, S is enlarged to
-// s / kMaxPointAreaRatio (the summary says so).
-inline constexpr double kMaxPointAreaRatio = 0.5;
+// The largest s/S AdjustOpacity uses. The law assumes exactly n/L points in S; on a surface
+// sampled uniformly the count in a small S varies (Poisson), and the coverage a renderer measures
+// is 1 - exp(-rho s / L), the law's limit for S >> s. The two differ by a factor 1 + (s/S)/2 in
+// the exponent: at s/S = 0.5 a target of 0.5 renders as 0.39, at 0.01 as 0.498. So when pixels
+// are coarse, s > kMaxPointAreaRatio * pi r^2, S is enlarged to s / kMaxPointAreaRatio (the
+// density measured within r taken as that of the larger S; the summary says so).
+inline constexpr double kMaxPointAreaRatio = 0.01;
 
 struct OpacityOptions {
   double alpha = 0.5;      // target opacity, [0, 1]

@@ -99,18 +99,23 @@ PointCloud Plane(size_t n, uint64_t seed) {
   return cloud;
 }
 
-// Options whose typical ratio r = n' / (kDensity S) is `ratio`: from n' = L ln(1-a)/ln(1-s/S).
+// Options whose typical ratio r = n' / (kDensity S) is `ratio`: from n' = L ln(1-a)/ln(1-s/S),
+// with S = s / kMaxPointAreaRatio (these pixels are coarser than the density disc).
 OpacityOptions ForRatio(double alpha, int repeat_level, double ratio) {
   OpacityOptions o;
   o.alpha = alpha;
   o.repeat_level = repeat_level;
   o.density.radius = kRadius;
-  const double area = kPi * kRadius * kRadius;
-  const double per_ensemble = ratio * kDensity * area / repeat_level;
-  const double s_over_S = -std::expm1(std::log1p(-alpha) / per_ensemble);
+  const double k = kMaxPointAreaRatio;
+  const double s = repeat_level * SpbrPointsPerEnsemble(alpha, k) * k / (kDensity * ratio);
+  EXPECT_GT(s, k * kPi * kRadius * kRadius) << "S is enlarged";
   o.image_size = 0;
-  o.pixel_size = std::sqrt(s_over_S * area);
+  o.pixel_size = std::sqrt(s);
   return o;
+}
+
+double EffectiveArea(const OpacityOptions& o, double density_area) {
+  return std::max(density_area, o.pixel_size * o.pixel_size / kMaxPointAreaRatio);
 }
 
 std::vector<int> Copies(const PointCloud& cloud) {
@@ -124,11 +129,12 @@ std::vector<int> Copies(const PointCloud& cloud) {
 // Sum over points of min(r_i, L), from the densities, independently of AdjustOpacity's code.
 double ExpectedCopies(const OpacityOptions& o, const PointCloud& cloud) {
   const DensityResult density = EstimateSurfaceDensity(o.density, cloud);
-  const double s_over_S = o.pixel_size * o.pixel_size / density.area;
+  const double area = EffectiveArea(o, density.area);
+  const double s_over_S = o.pixel_size * o.pixel_size / area;
   const double needed = o.repeat_level * SpbrPointsPerEnsemble(o.alpha, s_over_S);
   double sum = 0;
   for (double rho : density.density) {
-    sum += std::min(needed / (rho * density.area), 1.0 * o.repeat_level);
+    sum += std::min(needed / (rho * area), 1.0 * o.repeat_level);
   }
   return sum;
 }
@@ -175,7 +181,8 @@ TEST(AdjustOpacity, ReplicationMatchesTheRatiosInExpectation) {
   EXPECT_EQ(s.points_in, cloud.size());
   EXPECT_EQ(s.points_out + s.removed, s.points_in);
   EXPECT_NEAR(s.predicted_alpha, 0.5, 1e-9) << "the median point is not capped";
-  EXPECT_NEAR(s.point_area_ratio, o.pixel_size * o.pixel_size / (kPi * kRadius * kRadius), 1e-12);
+  EXPECT_NEAR(s.point_area_ratio, kMaxPointAreaRatio, 1e-12);
+  EXPECT_NEAR(s.area, o.pixel_size * o.pixel_size / kMaxPointAreaRatio, 1e-12);
   const std::vector<int> m = Copies(r.cloud);
   ASSERT_EQ(m.size(), r.cloud.size());
   uint64_t total = 0;
@@ -290,10 +297,10 @@ TEST(AdjustOpacity, CoarsePixelsEnlargeTheArea) {
   OpacityOptions o;
   o.density.radius = kRadius;
   o.image_size = 0;
-  o.pixel_size = 0.2;  // s = 0.04 m^2 > pi r^2 = 0.031 m^2
+  o.pixel_size = 0.2;  // s = 0.04 m^2 > pi r^2 / 100
   const OpacityResult r = AdjustOpacity(o, cloud);
   EXPECT_NEAR(r.summary.point_area_ratio, kMaxPointAreaRatio, 1e-12);
-  EXPECT_NEAR(r.summary.area, 0.08, 1e-12);
+  EXPECT_NEAR(r.summary.area, 0.04 / kMaxPointAreaRatio, 1e-12);
   EXPECT_NE(r.summary.message.find("S enlarged"), std::string::npos) << r.summary.message;
   EXPECT_GT(r.cloud.size(), 0u);
 }
