@@ -4,7 +4,8 @@
 //  3. SPBR vs exact depth-sorted blending vs weighted blended OIT at 10^6 and 10^7 points:
 //     milliseconds and RMSE to the exact image;
 //  4. the big frame: 1.5 * 10^8 points, L = 100, 1024^2, two threads: seconds, bytes per point.
-// Medians of 3 runs. Usage: render_bench [--quick] [--big N] (N points for section 4; 0 skips).
+// Medians of 3 runs. Usage: render_bench [--quick] [--big N] (N points for section 4; 0 skips)
+// [--section K]... (only these sections).
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -114,12 +115,16 @@ void BigFrame(uint64_t n) {
 int main(int argc, char** argv) {
   bool quick = false;
   uint64_t big = 150000000;
+  std::vector<int> sections;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) quick = true;
     if (!std::strcmp(argv[i], "--big") && i + 1 < argc) big = std::strtoull(argv[++i], nullptr, 10);
+    if (!std::strcmp(argv[i], "--section") && i + 1 < argc) sections.push_back(std::atoi(argv[++i]));
   }
-  Throughput(quick ? 1000000 : 10000000);
-  EnsembleOverhead();
+  auto wanted = [&](int k) { return sections.empty() || std::count(sections.begin(), sections.end(), k) > 0; };
+  if (wanted(1)) Throughput(quick ? 1000000 : 10000000);
+  if (wanted(2)) EnsembleOverhead();
+  if (wanted(3)) {
   std::printf("\n3. SPBR vs references (4 layered sheets, 1024x1024, one thread)\n");
   std::printf("%10s %6s %16s %10s %14s %10s %12s %10s\n", "points", "L", "SPBR ms", "RMSE",
               "WBOIT ms", "RMSE", "sorted ms", "RMSE");
@@ -127,6 +132,7 @@ int main(int argc, char** argv) {
     if (quick && n > 1000000) break;
     AgainstReferences(n, 100);
   }
-  if (!quick && big > 0) BigFrame(big);
+  }
+  if (wanted(4) && !quick && big > 0) BigFrame(big);
   return 0;
 }

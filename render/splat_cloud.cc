@@ -1,8 +1,10 @@
 #include "render/splat_cloud.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -46,33 +48,59 @@ struct Source {
   const ScalarField* multiplicity;
 };
 
-// 30-bit Morton code of a position on a 1024^3 grid over `box`.
-uint32_t Morton30(const Eigen::Vector3d& p, const Box3d& box, const Eigen::Vector3d& inv_cell) {
-  uint32_t code = 0;
-  uint32_t cell[3];
-  for (int k = 0; k < 3; ++k) {
-    const double t = (p[k] - box.min[k]) * inv_cell[k];
-    cell[k] = static_cast<uint32_t>(std::clamp(t, 0.0, 1023.0));
-  }
-  for (int bit = 9; bit >= 0; --bit) {
-    for (int k = 0; k < 3; ++k) code = (code << 1) | ((cell[k] >> bit) & 1u);
-  }
-  return code;
+// Spreads the low 10 bits of v to every third bit.
+inline uint32_t Spread3(uint32_t v) {
+  v &= 0x3ffu;
+  v = (v | (v << 16)) & 0x030000ffu;
+  v = (v | (v << 8)) & 0x0300f00fu;
+  v = (v | (v << 4)) & 0x030c30c3u;
+  v = (v | (v << 2)) & 0x09249249u;
+  return v;
 }
 
-// Stable LSD radix sort of indices by 30-bit codes (two 15-bit passes).
+// 30-bit Morton code of a position on a 1024^3 grid over `box` (x in the highest bit of each
+// triple).
+inline uint32_t Morton30(const Eigen::Vector3f& p, const Eigen::Vector3f& lo, const Eigen::Vector3f& inv_cell) {
+  uint32_t cell[3];
+  for (int k = 0; k < 3; ++k) {
+    const float t = (p[k] - lo[k]) * inv_cell[k];
+    cell[k] = static_cast<uint32_t>(std::clamp(t, 0.0f, 1023.0f));
+  }
+  return Spread3(cell[0]) << 2 | Spread3(cell[1]) << 1 | Spread3(cell[2]);
+}
+
+// Indices 0..n-1 ordered by `codes` (30 bits; stable): an LSD radix sort of (code, index) pairs
+// packed in 64 bits, two 15-bit passes, so each pass reads its input sequentially.
 std::vector<uint32_t> SortByCode(const std::vector<uint32_t>& codes) {
   const size_t n = codes.size();
-  std::vector<uint32_t> order(n), tmp(n);
-  for (size_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(i);
-  for (int shift : {0, 15}) {
+  std::vector<uint64_t> a(n), b(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) a[i] = uint64_t{codes[i]} << 32 | i;
+  });
+  for (int shift : {32, 47}) {
     std::vector<size_t> count((1u << 15) + 1, 0);
-    for (size_t i = 0; i < n; ++i) ++count[((codes[order[i]] >> shift) & 0x7fff) + 1];
-    for (size_t b = 1; b < count.size(); ++b) count[b] += count[b - 1];
-    for (size_t i = 0; i < n; ++i) tmp[count[(codes[order[i]] >> shift) & 0x7fff]++] = order[i];
-    order.swap(tmp);
+    for (size_t i = 0; i < n; ++i) ++count[((a[i] >> shift) & 0x7fff) + 1];
+    for (size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
+    for (size_t i = 0; i < n; ++i) b[count[(a[i] >> shift) & 0x7fff]++] = a[i];
+    a.swap(b);
   }
+  std::vector<uint64_t>().swap(b);
+  std::vector<uint32_t> order(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) order[i] = static_cast<uint32_t>(a[i]);
+  });
   return order;
+}
+
+// v[order[k]] for k = 0..n-1.
+template <typename T>
+std::vector<T> Permuted(std::vector<T>* v, const std::vector<uint32_t>& order) {
+  std::vector<T> out(order.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 65536), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) out[k] = (*v)[order[k]];
+  });
+  std::vector<T>().swap(*v);
+  return out;
 }
 
 struct Located {
@@ -109,52 +137,83 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   out.source_points = located.total;
   const size_t n = located.total;
 
-  // Positions in the render frame, checked, and their Morton codes.
+  // Positions in the render frame, colours and multiplicities (in parallel); NaN is an error
+  // naming the first bad point whatever the thread count.
   std::vector<Eigen::Vector3f> local(n);
   std::vector<Rgb8> color(n);
   std::vector<uint16_t> multiplicity(n, 1);
+  const double cap = std::min(options.repeat_level, 65535);  // more copies than ensembles add nothing
+  std::atomic<uint64_t> first_bad{std::numeric_limits<uint64_t>::max()};
   for (const Source& s : located.sources) {
     const PointCloud& c = *s.cloud;
-    for (size_t i = 0; i < c.size(); ++i) {
-      const Eigen::Vector3d p = c.positions[i] + s.shift;
-      if (!p.allFinite()) {
-        throw InputError("point " + std::to_string(s.first + i) + " of the render input has a NaN or "
-                         "infinite coordinate");
+    const bool weights = options.use_multiplicity && s.multiplicity != nullptr;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, c.size(), 65536), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const Eigen::Vector3d p = c.positions[i] + s.shift;
+        if (!p.allFinite()) {
+          uint64_t bad = first_bad.load();
+          while (s.first + i < bad && !first_bad.compare_exchange_weak(bad, s.first + i)) {}
+        }
+        local[s.first + i] = p.cast<float>();
+        color[s.first + i] = c.schema.colors ? c.colors[i] : options.default_color;
+        if (weights) {
+          const double m = s.multiplicity->Get(i);
+          multiplicity[s.first + i] = static_cast<uint16_t>(std::isfinite(m) ? std::clamp(std::round(m), 0.0, cap) : 0.0);
+        }
       }
-      local[s.first + i] = p.cast<float>();
-      out.bounds.Extend(p);
-      color[s.first + i] = c.schema.colors ? c.colors[i] : options.default_color;
-      if (options.use_multiplicity && s.multiplicity != nullptr) {
-        const double m = s.multiplicity->Get(i);
-        // More copies than ensembles add nothing: each copy needs a distinct ensemble.
-        const double cap = std::min(options.repeat_level, 65535);
-        multiplicity[s.first + i] = static_cast<uint16_t>(std::isfinite(m) ? std::clamp(std::round(m), 0.0, cap) : 0.0);
-      }
-    }
+    });
+  }
+  if (first_bad.load() != std::numeric_limits<uint64_t>::max()) {
+    throw InputError("point " + std::to_string(first_bad.load()) + " of the render input has a NaN or "
+                     "infinite coordinate");
+  }
+  for (const Source& s : located.sources) {
+    if (!s.cloud->empty()) out.bounds.Extend(s.cloud->LocalBounds().Translated(s.shift));
   }
   if (progress) progress(n / 4, n);
   std::vector<uint32_t> codes(n);
-  const Eigen::Vector3d inv_cell = (1024.0 / out.bounds.Extent().array().max(1e-9)).matrix();
-  tbb::parallel_for(size_t{0}, n, [&](size_t i) { codes[i] = Morton30(local[i].cast<double>(), out.bounds, inv_cell); });
+  const Eigen::Vector3f lo = out.bounds.min.cast<float>();
+  const Eigen::Vector3f inv_cell = (1024.0 / out.bounds.Extent().array().max(1e-9)).matrix().cast<float>();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) codes[i] = Morton30(local[i], lo, inv_cell);
+  });
+  // From here on, points are numbered in Morton order (rank k); order[k] is the input index,
+  // which the ensemble hash uses.
   const std::vector<uint32_t> order = SortByCode(codes);
   std::vector<uint32_t>().swap(codes);
+  local = Permuted(&local, order);
+  color = Permuted(&color, order);
+  multiplicity = Permuted(&multiplicity, order);
   if (progress) progress(n / 2, n);
 
   // Copies per ensemble (counting sort); within an ensemble, Morton order.
   const int L = options.repeat_level;
+  std::vector<uint32_t> first_ensemble(n);  // in Morton order
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) first_ensemble[k] = EnsembleOf(options.seed, order[k], L);
+  });
   std::vector<uint64_t> start(L + 1, 0);
-  for (uint32_t i : order) {
-    const int e0 = EnsembleOf(options.seed, i, L);
-    for (int j = 0; j < multiplicity[i]; ++j) ++start[(e0 + j) % L + 1];
+  for (size_t k = 0; k < n; ++k) {
+    const int e0 = first_ensemble[k], m = multiplicity[k];
+    if (m == 1) {
+      ++start[e0 + 1];
+      continue;
+    }
+    for (int j = 0; j < m; ++j) ++start[(e0 + j) % L + 1];
   }
   for (int e = 0; e < L; ++e) start[e + 1] += start[e];
   const uint64_t copies = start[L];
-  std::vector<uint32_t> source(copies);
+  std::vector<uint32_t> source(copies);  // Morton rank of each copy, ensemble by ensemble
   std::vector<uint64_t> fill(start.begin(), start.end() - 1);
-  for (uint32_t i : order) {
-    const int e0 = EnsembleOf(options.seed, i, L);
-    for (int j = 0; j < multiplicity[i]; ++j) source[fill[(e0 + j) % L]++] = i;
+  for (size_t k = 0; k < n; ++k) {
+    const int e0 = first_ensemble[k], m = multiplicity[k];
+    if (m == 1) {
+      source[fill[e0]++] = static_cast<uint32_t>(k);
+      continue;
+    }
+    for (int j = 0; j < m; ++j) source[fill[(e0 + j) % L]++] = static_cast<uint32_t>(k);
   }
+  std::vector<uint32_t>().swap(first_ensemble);
 
   // Blocks: cut each ensemble, quantize each block on its own bounding box.
   out.ensemble_blocks.assign(L + 1, 0);
@@ -194,8 +253,9 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
     }
     for (uint64_t c = block.begin; c < block.begin + block.count; ++c) {
       const Eigen::Vector3f& p = local[source[c]];
+      // (p - lo) * inv is in [0, 65535] up to rounding: round half up by truncation.
       const auto q = [&](int a) {
-        return static_cast<uint16_t>(std::clamp(std::lround((p[a] - lo[a]) * inv[a]), 0L, 65535L));
+        return static_cast<uint16_t>(std::min((p[a] - lo[a]) * inv[a] + 0.5f, 65535.0f));
       };
       out.qx[c] = q(0);
       out.qy[c] = q(1);

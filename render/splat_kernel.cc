@@ -21,7 +21,7 @@ constexpr size_t kBatch = 256;
 // band, behind the near plane or NaN) and the key: the depth's float bits (positive depths order
 // as their bits) above the colour.
 template <bool kPerspective, typename T>
-void ProjectBatch(const KernelTransform& t, const KernelProjection& p, uint32_t spare,
+__attribute__((always_inline)) inline void ProjectBatch(const KernelTransform& t, const KernelProjection& p, uint32_t spare,
                   const T* __restrict x, const T* __restrict y, const T* __restrict z,
                   const uint32_t* __restrict colors, size_t n, uint32_t* __restrict pixel,
                   uint64_t* __restrict key) {
@@ -58,7 +58,7 @@ void ProjectBatch(const KernelTransform& t, const KernelProjection& p, uint32_t 
 
 // Phase 2, branch-free: keep the smaller key; list pixels drawn for the first time (the spare
 // slot holds key 0, so it is never listed).
-inline void TestBatch(const uint32_t* __restrict pixel, const uint64_t* __restrict key, size_t n,
+__attribute__((always_inline)) inline void TestBatch(const uint32_t* __restrict pixel, const uint64_t* __restrict key, size_t n,
                       BandBuffer* band) {
   uint64_t* keys = band->keys.data();
   uint32_t* filled = band->filled.data();
@@ -73,9 +73,13 @@ inline void TestBatch(const uint32_t* __restrict pixel, const uint64_t* __restri
   band->filled_count = count;
 }
 
+// The whole point loop is compiled twice: for AVX2 (8 lanes in phase 1) and for the baseline
+// (SSE2), chosen at load time by the CPU. Both give the same bits: no FMA contraction (ISO C++
+// mode), and vector division and conversion are exact IEEE operations as in scalar code.
 template <typename T>
-void SplatPointsImpl(const KernelTransform& t, const KernelProjection& p, const T* x, const T* y,
-                     const T* z, const uint32_t* colors, size_t n, BandBuffer* band) {
+__attribute__((always_inline)) inline void SplatLoop(const KernelTransform& t, const KernelProjection& p,
+                                                      const T* x, const T* y, const T* z,
+                                                      const uint32_t* colors, size_t n, BandBuffer* band) {
   uint32_t pixel[kBatch];
   uint64_t key[kBatch];
   for (size_t s = 0; s < n; s += kBatch) {
@@ -87,6 +91,18 @@ void SplatPointsImpl(const KernelTransform& t, const KernelProjection& p, const 
     }
     TestBatch(pixel, key, m, band);
   }
+}
+
+__attribute__((target_clones("avx2", "default")))
+void SplatLoopU16(const KernelTransform& t, const KernelProjection& p, const uint16_t* x, const uint16_t* y,
+                  const uint16_t* z, const uint32_t* colors, size_t n, BandBuffer* band) {
+  SplatLoop(t, p, x, y, z, colors, n, band);
+}
+
+__attribute__((target_clones("avx2", "default")))
+void SplatLoopF32(const KernelTransform& t, const KernelProjection& p, const float* x, const float* y,
+                  const float* z, const uint32_t* colors, size_t n, BandBuffer* band) {
+  SplatLoop(t, p, x, y, z, colors, n, band);
 }
 
 // A footprint centred on (u, v), clipped to the band: a side x side square, or the pixels whose
@@ -151,11 +167,11 @@ void SplatPointsSizedImpl(const KernelTransform& t, const KernelProjection& p, c
 
 void SplatPoints(const KernelTransform& t, const KernelProjection& p, const uint16_t* x,
                  const uint16_t* y, const uint16_t* z, const uint32_t* colors, size_t n, BandBuffer* band) {
-  SplatPointsImpl(t, p, x, y, z, colors, n, band);
+  SplatLoopU16(t, p, x, y, z, colors, n, band);
 }
 void SplatPoints(const KernelTransform& t, const KernelProjection& p, const float* x,
                  const float* y, const float* z, const uint32_t* colors, size_t n, BandBuffer* band) {
-  SplatPointsImpl(t, p, x, y, z, colors, n, band);
+  SplatLoopF32(t, p, x, y, z, colors, n, band);
 }
 void SplatPointsSized(const KernelTransform& t, const KernelProjection& p, const uint16_t* x,
                       const uint16_t* y, const uint16_t* z, const uint32_t* colors, size_t n,
