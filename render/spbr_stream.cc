@@ -147,17 +147,15 @@ void SpbrStreamRenderer::Add(const PointCloud& chunk) {
       throw InputError("point " + std::to_string(index) + " of the render input has a NaN or infinite coordinate");
     }
     const int copies = mult ? static_cast<int>(std::clamp(std::round(mult->Get(i)), 0.0, double(L))) : 1;
-    const int e0 = EnsembleOf(m.options.seed, index, L);
-    for (int j = 0; j < copies; ++j) {
-      const int e = (e0 + j) % L;
-      if (e < m.first || e >= m.last) continue;
+    ForEachEnsemble(m.options.seed, index, copies, L, [&](int e) {
+      if (e < m.first || e >= m.last) return;
       Staged& s = m.staged[e - m.first];
       s.x.push_back(static_cast<float>(p.x()));
       s.y.push_back(static_cast<float>(p.y()));
       s.z.push_back(static_cast<float>(p.z()));
       s.color.push_back(PackColor(chunk.schema.colors ? chunk.colors[i] : m.options.default_color));
       s.index.push_back(index);
-    }
+    });
   }
   m.next_index += chunk.size();
   m.Run([&] {

@@ -199,7 +199,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
       ++start[e0 + 1];
       continue;
     }
-    for (int j = 0; j < m; ++j) ++start[(e0 + j) % L + 1];
+    ForEachEnsemble(options.seed, order[k], m, L, [&](int e) { ++start[e + 1]; });
   }
   for (int e = 0; e < L; ++e) start[e + 1] += start[e];
   const uint64_t copies = start[L];
@@ -211,7 +211,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
       source[fill[e0]++] = static_cast<uint32_t>(k);
       continue;
     }
-    for (int j = 0; j < m; ++j) source[fill[(e0 + j) % L]++] = static_cast<uint32_t>(k);
+    ForEachEnsemble(options.seed, order[k], m, L, [&](int e) { source[fill[e]++] = static_cast<uint32_t>(k); });
   }
   std::vector<uint32_t>().swap(first_ensemble);
 

@@ -2,8 +2,8 @@
 //
 // Built once per (clouds, repeat level L, seed): every point gets its ensemble from a seeded hash
 // of its index (its position in the inputs, concatenated), a point with multiplicity m (opacity
-// control's `spbr_multiplicity`) goes to m distinct ensembles (the hash's ensemble and the next
-// m - 1), the copies are grouped by ensemble and, within an ensemble, kept in Morton order, so
+// control's `spbr_multiplicity`) goes to m distinct ensembles (a random m-subset, see
+// ForEachEnsemble), the copies are grouped by ensemble and, within an ensemble, kept in Morton order, so
 // each ensemble is a random and spatially coherent subset. Each ensemble is cut into blocks of
 // consecutive points; a block stores its points as 16-bit coordinates on its own bounding box
 // (error <= extent / 131070 per axis, documented per block by `step`), plus the colour packed
@@ -68,6 +68,43 @@ inline uint32_t PackColor(Rgb8 c) {
 // by L (Lemire's multiply-shift), independent of threads and chunking.
 inline int EnsembleOf(uint64_t seed, uint64_t index, int repeat_level) {
   return static_cast<int>(((HashIndex(seed, index) >> 32) * static_cast<uint64_t>(repeat_level)) >> 32);
+}
+
+// Calls f(e) for each ensemble of point `index` when it has m copies (m clamped to [0, L]):
+// m = 1 gives EnsembleOf; m >= L every ensemble; otherwise a uniformly random m-subset of [0, L)
+// drawn with Floyd's algorithm from a seeded hash of (index, step), in no particular order.
+// Random subsets matter: with consecutive ensembles (e0, e0+1, ...) two points' copies would
+// overlap by a random fraction that does not shrink as L grows, leaving an image error that more
+// ensembles never remove; random subsets overlap as independent draws do. Uses a thread-local
+// bitset of L bits.
+template <typename F>
+void ForEachEnsemble(uint64_t seed, uint64_t index, int m, int repeat_level, F&& f) {
+  const int L = repeat_level;
+  if (m <= 0) return;
+  if (m == 1) {
+    f(EnsembleOf(seed, index, L));
+    return;
+  }
+  if (m >= L) {
+    for (int e = 0; e < L; ++e) f(e);
+    return;
+  }
+  thread_local std::vector<uint64_t> taken;
+  if (taken.size() < static_cast<size_t>(L + 63) / 64) taken.assign((L + 63) / 64, 0);
+  thread_local std::vector<int> chosen;
+  chosen.clear();
+  const uint64_t stream = HashIndex(seed, index, 0x5e1ec7);
+  for (int j = L - m; j < L; ++j) {
+    const uint64_t h = Mix64(stream ^ static_cast<uint64_t>(j));
+    const int t = static_cast<int>(((h >> 32) * static_cast<uint64_t>(j + 1)) >> 32);  // [0, j]
+    const int e = (taken[t >> 6] >> (t & 63)) & 1 ? j : t;
+    taken[e >> 6] |= uint64_t{1} << (e & 63);
+    chosen.push_back(e);
+  }
+  for (int e : chosen) {
+    taken[e >> 6] &= ~(uint64_t{1} << (e & 63));
+    f(e);
+  }
 }
 
 // Builds the SplatCloud of the given clouds (any frames; NaN positions are refused with

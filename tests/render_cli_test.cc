@@ -110,6 +110,24 @@ TEST(RenderCli, SavedViewRepeatsTheRenderExactly) {
   EXPECT_EQ(ReadPng(s.dir.File("a.png")).image8.values(), ReadPng(s.dir.File("b.png")).image8.values());
 }
 
+TEST(RenderCli, BadViewFilesAreExitTwoNamingTheKeyAndPreviewRendersKEnsembles) {
+  Scene s;
+  WriteBytes(s.dir.File("bad.json"), R"({"projection": "orthographic", "eye": [1, 2], "width": 8})");
+  Result r = RunCandi("render " + s.back + " -o " + s.dir.File("x.png") + " --view " + s.dir.File("bad.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("/eye"), std::string::npos) << r.output;
+  WriteBytes(s.dir.File("typo.json"), R"({"projection": "orthographic", "ortho_heigth": 8})");
+  r = RunCandi("render " + s.back + " -o " + s.dir.File("x.png") + " --view " + s.dir.File("typo.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("ortho_heigth"), std::string::npos) << r.output;
+  EXPECT_FALSE(FileExists(s.dir.File("x.png")));
+  r = RunCandi("render " + s.Inputs() + " -o " + s.dir.File("p.png") + " --view " + s.view + " -L 50 --preview 3");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const PngImage png = ReadPng(s.dir.File("p.png"));
+  EXPECT_EQ(png.text.at("candi:ensembles"), "3");
+  EXPECT_EQ(png.text.at("candi:repeat_level"), "50");
+}
+
 TEST(RenderCli, PerInputAlphaZeroHidesALayerAndOneMakesItOpaque) {
   Scene s;
   const std::string common = "render " + s.Inputs() + " --view " + s.view + " -L 32 --brightness none ";

@@ -1,0 +1,90 @@
+#include "render/splat_cloud.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <vector>
+
+#include "render/reference.h"
+#include "render/spbr.h"
+#include "render/synthetic_scene.h"
+
+namespace candi::render {
+namespace {
+
+std::vector<int> Ensembles(uint64_t seed, uint64_t index, int m, int L) {
+  std::vector<int> out;
+  ForEachEnsemble(seed, index, m, L, [&](int e) { out.push_back(e); });
+  return out;
+}
+
+TEST(ForEachEnsemble, DistinctInRangeAndEdges) {
+  EXPECT_TRUE(Ensembles(1, 5, 0, 10).empty());
+  EXPECT_EQ(Ensembles(1, 5, 1, 10), std::vector<int>{EnsembleOf(1, 5, 10)});
+  EXPECT_EQ(Ensembles(1, 5, 10, 10).size(), 10u);
+  EXPECT_EQ(Ensembles(1, 5, 99, 10).size(), 10u) << "more copies than ensembles: all of them once";
+  for (int L : {2, 3, 64, 100, 1000}) {
+    for (uint64_t i = 0; i < 200; ++i) {
+      const int m = 1 + static_cast<int>(i % L);
+      const std::vector<int> e = Ensembles(7, i, m, L);
+      ASSERT_EQ(e.size(), static_cast<size_t>(m));
+      const std::set<int> distinct(e.begin(), e.end());
+      ASSERT_EQ(distinct.size(), e.size()) << "L " << L << " m " << m;
+      ASSERT_GE(*distinct.begin(), 0);
+      ASSERT_LT(*distinct.rbegin(), L);
+      ASSERT_EQ(Ensembles(7, i, m, L), e) << "seeded and repeatable";
+    }
+  }
+}
+
+// Two points with m1 and m2 copies share, on average over point pairs, m1 m2 / L ensembles, and
+// the spread of the shared count is that of independent (hypergeometric) draws: it shrinks
+// relative to the mean as L grows. Consecutive ensembles would give a spread ~ the mean itself.
+TEST(ForEachEnsemble, OverlapsLikeIndependentDraws) {
+  const int L = 1000, m = 300;
+  double sum = 0, sum2 = 0;
+  const int pairs = 2000;
+  std::vector<uint8_t> a(L);
+  for (int k = 0; k < pairs; ++k) {
+    std::fill(a.begin(), a.end(), 0);
+    ForEachEnsemble(3, 2 * k, m, L, [&](int e) { a[e] = 1; });
+    int shared = 0;
+    ForEachEnsemble(3, 2 * k + 1, m, L, [&](int e) { shared += a[e]; });
+    sum += shared;
+    sum2 += double(shared) * shared;
+  }
+  const double mean = sum / pairs, sd = std::sqrt(sum2 / pairs - mean * mean);
+  EXPECT_NEAR(mean, double(m) * m / L, 1.0);
+  // Hypergeometric sd: sqrt(m (m/L) (1 - m/L) (L - m) / (L - 1)) = 6.64; consecutive runs of
+  // ensembles would give ~80 (the overlap of two arcs at a uniform offset).
+  EXPECT_NEAR(sd, 6.64, 0.6);
+}
+
+// With opacity control (multiplicities up to L), the SPBR image converges to the exact blending:
+// the error falls like 1 / sqrt(L) instead of stalling.
+TEST(SplatCloud, MultiplicitiesConvergeToTheExactImage) {
+  const PointCloud scene = LayeredSheets(60000, 4, 7);
+  std::vector<double> rmse;
+  for (int L : {20, 320}) {
+    // Every point drawn with opacity 0.15: m = 0.15 L copies (as opacity control would set).
+    PointCloud adjusted = scene;
+    const int field = adjusted.AddScalarField(kMultiplicityField);
+    for (float& m : adjusted.scalars[field].f32) m = 0.15f * L;
+    SplatCloudOptions b;
+    b.repeat_level = L;
+    const SplatCloud splats = BuildSplatCloud(b, {&adjusted});
+    EXPECT_EQ(splats.copies(), scene.size() * 3 * L / 20);
+    const Camera camera = ObliqueView(splats.bounds, 64, 64);
+    const ImageF image = AverageImage(RenderSpbr(SpbrOptions{}, camera, splats), {0, 0, 0});
+    ReferenceOptions ref;
+    ref.repeat_level = L;
+    rmse.push_back(Rmse(image, RenderSortedBlend(ref, camera, splats.frame, {&adjusted})));
+  }
+  // sqrt(320 / 20) = 4: allow noise in the estimate.
+  EXPECT_LT(rmse[1], rmse[0] / 2.5) << rmse[0] << " -> " << rmse[1];
+  EXPECT_LT(rmse[1], 1.5);
+}
+
+}  // namespace
+}  // namespace candi::render
