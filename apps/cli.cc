@@ -101,13 +101,217 @@ void AddRender(CLI::App& app, RenderArgs& a, std::function<int()>* run) {
 void AddBench(CLI::App& app, BenchArgs& a, std::function<int()>* run) {
   auto* c = app.add_subcommand("bench", "Benchmarks: `candi bench render` prints SPBR accuracy vs "
                                         "time for L = 1 ... 1024");
-  c->add_option("what", a.what, "What to measure: render")->check(CLI::IsMember({"render"}));
+  c->add_option("what", a.what, "What to measure: render (SPBR), foundation (sections to points)")
+      ->check(CLI::IsMember({"render", "foundation"}));
   c->add_option("--points", a.points, "Points in the generated scene");
   c->add_option("--width", a.width, "Image width")->check(CLI::Range(16, 8192));
   c->add_option("--height", a.height, "Image height")->check(CLI::Range(16, 8192));
   c->add_option("--threads", a.threads, "Threads (0: all)")->check(CLI::Range(0, 256));
-  c->callback([run, &a] { *run = [&a] { return RunBench(a); }; });
+  c->callback([run, &a, c] {
+    if (c->got_subcommand("relief")) return;  // `candi bench relief` (AddBenchRelief)
+    *run = [&a] { return RunBench(a); };
+  });
   c->footer("Example: candi bench render --points 1000000");
+}
+
+
+#if CANDI_WITH_RELIEF
+// `candi relief ...`: the buried-relief path (ALGORITHMS.md section 3).
+struct ReliefArgs {
+  ReliefSynthArgs synth;
+  ReliefDatasetArgs dataset;
+  ReliefTrainArgs train;
+  ReliefPredictArgs predict;
+  ReliefPointsArgs points;
+  ReliefEvalArgs eval;
+  BenchReliefArgs bench;
+};
+
+void AddReliefSynth(CLI::App& relief, ReliefSynthArgs& a, std::function<int()>* run) {
+  auto* c = relief.add_subcommand("synth", "Procedural relief panels as old photos with exact depth "
+                                           "(NNN_photo.png 8-bit grey, NNN_depth.png 16-bit levels)");
+  c->add_option("-o,--output", a.output_dir, "Output folder")->required();
+  c->add_option("--count", a.count, "Panels")->check(CLI::Range(1, 100000));
+  c->add_option("--width", a.width, "Pixels along the panel")->check(CLI::Range(32, 16384));
+  c->add_option("--seed", a.seed, "Random seed of the series");
+  c->add_option("--width-m", a.width_m, "Panel width, m");
+  c->add_option("--height-m", a.height_m, "Panel height, m");
+  c->add_option("--depth-m", a.depth_m, "Relief depth (front plane), m");
+  c->add_flag("--no-shadows", a.no_shadows, "No cast shadows");
+  c->add_flag("--no-stains", a.no_stains, "Uniform stone albedo");
+  c->add_flag("--no-blur", a.no_blur, "No lens blur");
+  c->add_flag("--no-grain", a.no_grain, "No film grain");
+  c->add_flag("--no-tone", a.no_tone, "No tone curve");
+  c->add_flag("--no-fading", a.no_fading, "No fading or vignetting");
+  c->callback([run, &a] { *run = [&a] { return RunReliefSynth(a); }; });
+  c->footer("Example: candi relief synth -o panels --count 16 --seed 1");
+}
+
+void AddReliefDataset(CLI::App& relief, ReliefDatasetArgs& a, std::function<int()>* run) {
+  auto* c = relief.add_subcommand("dataset", "Training pairs from scans of visible panels (or from "
+                                             "synthetic panels): orthographic render, patches");
+  c->add_option("inputs", a.inputs, "Scans (.ply .las .xyz .pts), panel photos (*_photo.png) or "
+                                    "folders of them")->required();
+  c->add_option("-o,--output", a.output_dir, "Output folder (train/, val/, dataset.txt)")->required();
+  c->add_option("--pixels-per-m", a.pixels_per_m, "Render resolution, pixels per metre");
+  c->add_option("--patch", a.patch, "Patch side, pixels (multiple of 32)");
+  c->add_option("--stride", a.stride, "Step between patches, pixels");
+  c->add_option("--val-fraction", a.val_fraction, "Inputs held out for validation")->check(CLI::Range(0.0, 0.9));
+  c->add_option("--frame", a.frame, "Scans: panel plane by PCA (auto) or the cloud's x-y (panel)")
+      ->check(CLI::IsMember({"auto", "panel"}));
+  c->add_option("--depth-m", a.depth_m, "Front plane above the wall, m");
+  c->add_option("--panel-width-m", a.panel_width_m, "Width of photo inputs without recorded resolution, m");
+  c->add_flag("--no-relight", a.no_relight, "Scans: use the scan's grey, not a raking-light photo");
+  c->add_option("--seed", a.seed, "Random seed (simulated photos)");
+  c->callback([run, &a] { *run = [&a] { return RunReliefDataset(a); }; });
+  c->footer("Example: candi relief dataset scan.ply panels/ -o data --patch 128");
+}
+
+void AddReliefTrain(CLI::App& relief, ReliefTrainArgs& a, std::function<int()>* run) {
+  auto* c = relief.add_subcommand("train", "Train the BTS-style depth network (libtorch, CPU)");
+  c->add_option("--data", a.data_dir, "Folder from `candi relief dataset`")->required();
+  c->add_option("-o,--out", a.output, "Model file to write")->required();
+  c->add_option("--epochs", a.epochs, "Epochs")->check(CLI::Range(1, 100000));
+  c->add_option("--batch", a.batch, "Batch size")->check(CLI::Range(1, 4096));
+  c->add_option("--growth", a.growth, "DenseNet growth rate")->check(CLI::Range(2, 64));
+  c->add_option("--blocks", a.blocks, "Dense layers in the 4 blocks, e.g. 4,6,8,6");
+  c->add_option("--width", a.decoder_width, "Decoder width (BTS num_features; multiple of 16)");
+  c->add_option("--lr", a.learning_rate, "Start learning rate");
+  c->add_option("--end-lr", a.end_learning_rate, "End learning rate (polynomial decay, power 0.9)");
+  c->add_option("--max-seconds", a.max_seconds, "Stop after this many seconds (0: no limit)");
+  c->add_option("--checkpoint", a.checkpoint, "Checkpoint file (default: <out>.ckpt)");
+  c->add_flag("--resume", a.resume, "Continue from the checkpoint");
+  c->add_option("--seed", a.seed, "Random seed (weights, order, augmentation)");
+  c->add_option("--threads", a.threads, "libtorch threads")->check(CLI::Range(1, 256));
+  c->callback([run, &a] { *run = [&a] { return RunReliefTrain(a); }; });
+  c->footer("Example: candi relief train --data data --out model.pt --epochs 20");
+}
+
+void AddReliefPredict(CLI::App& relief, ReliefPredictArgs& a, std::function<int()>* run) {
+  auto* c = relief.add_subcommand("predict", "Depth of a photo of any size (overlapping tiles, "
+                                             "blended without seams)");
+  c->add_option("photo", a.photo, "Photo (PNG, 8/16-bit, grey or colour)")->required();
+  c->add_option("--model", a.model, "Model file")->required();
+  c->add_option("-o,--output", a.output, "Depth PNG (8-bit levels, 0 = front plane, 255 = wall)")->required();
+  c->add_option("--png16", a.output16, "Also write 16-bit depth (levels x 256)");
+  c->add_option("--width-m", a.width_m, "The panel's width in the photo, m (0: photo is at the "
+                                        "model's resolution)");
+  c->add_option("--tile", a.tile, "Tile side, pixels (multiple of 32)");
+  c->add_option("--overlap", a.overlap, "Tile overlap, pixels");
+  c->add_option("--threads", a.threads, "libtorch threads")->check(CLI::Range(1, 256));
+  c->callback([run, &a] { *run = [&a] { return RunReliefPredict(a); }; });
+  c->footer("Example: candi relief predict photo.png --model model.pt -o depth.png");
+}
+
+void AddReliefPoints(CLI::App& relief, ReliefPointsArgs& a, std::function<int()>* run) {
+  auto* c = relief.add_subcommand("points", "Metric points of a panel from its photo and depth map "
+                                            "(panel frame: x along the wall, y up, z out)");
+  c->add_option("photo", a.photo, "Photo (grey becomes the colour)")->required();
+  c->add_option("depth", a.depth, "Depth PNG (levels)")->required();
+  c->add_option("-o,--output", a.output, "Point file (.ply .las .xyz .pts)")->required();
+  c->add_option("--width-m", a.width_m, "Panel width, m");
+  c->add_option("--height-m", a.height_m, "Panel height, m");
+  c->add_option("--depth-m", a.depth_m, "Relief depth: level 0 is this far out of the wall, m");
+  c->callback([run, &a] { *run = [&a] { return RunReliefPoints(a); }; });
+  c->footer("Example: candi relief points photo.png depth.png -o panel.ply --width-m 2.7 "
+            "--height-m 0.92 --depth-m 0.15");
+}
+
+void AddReliefEval(CLI::App& relief, ReliefEvalArgs& a, std::function<int()>* run) {
+  auto* c = relief.add_subcommand("eval", "The paper's Table 2 metrics: model, intensity-as-depth, "
+                                          "linear SFS and the paper's BTS");
+  c->add_option("--model", a.model, "Model file (without it: the baselines only)");
+  c->add_option("--panels", a.panels, "Held-out synthetic panels")->check(CLI::Range(1, 10000));
+  c->add_option("--width", a.width, "Their width, pixels")->check(CLI::Range(32, 16384));
+  c->add_option("--seed", a.seed, "Their seed (keep it apart from the training seeds)");
+  c->add_option("--photo", a.photo, "Or: one photo ...");
+  c->add_option("--depth", a.depth, "... and its ground-truth depth PNG");
+  c->add_option("--light-azimuth", a.light_azimuth, "SFS light azimuth, degrees (default: from the photo)");
+  c->add_option("--light-elevation", a.light_elevation, "SFS light elevation, degrees");
+  c->add_option("--width-m", a.width_m, "Panel width in --photo, m");
+  c->add_option("--tile", a.tile, "Tile side, pixels");
+  c->add_option("--overlap", a.overlap, "Tile overlap, pixels");
+  c->add_option("--threads", a.threads, "libtorch threads")->check(CLI::Range(1, 256));
+  c->callback([run, &a] { *run = [&a] { return RunReliefEval(a); }; });
+  c->footer("Example: candi relief eval --model examples/relief/relief_model.pt --panels 4");
+}
+
+void AddBenchRelief(CLI::App& app, BenchReliefArgs& a, std::function<int()>* run) {
+  auto* c = app.get_subcommand("bench")->add_subcommand(
+      "relief", "Relief depth: network width x training time -> accuracy, training and "
+                "prediction seconds, 3200x1024 photo -> points");
+  c->add_option("--widths", a.widths, "Decoder widths to train, e.g. 32,64,128");
+  c->add_option("--seconds", a.seconds, "Training budget per width, s");
+  c->add_option("--train-panels", a.train_panels, "Synthetic training panels")->check(CLI::Range(1, 10000));
+  c->add_option("--eval-panels", a.eval_panels, "Held-out panels")->check(CLI::Range(1, 10000));
+  c->add_option("--seed", a.seed, "Seed of the training series");
+  c->add_option("--threads", a.threads, "libtorch threads")->check(CLI::Range(1, 256));
+  c->callback([run, &a] { *run = [&a] { return RunBenchRelief(a); }; });
+  c->footer("Example: candi bench relief --widths 32,64 --seconds 60");
+}
+
+void AddRelief(CLI::App& app, ReliefArgs& a, std::function<int()>* run) {
+  auto* relief = app.add_subcommand("relief", "Buried reliefs from one old photo: synth, dataset, "
+                                              "train, predict, points, eval");
+  relief->require_subcommand(1);
+  AddReliefSynth(*relief, a.synth, run);
+  AddReliefDataset(*relief, a.dataset, run);
+  AddReliefTrain(*relief, a.train, run);
+  AddReliefPredict(*relief, a.predict, run);
+  AddReliefPoints(*relief, a.points, run);
+  AddReliefEval(*relief, a.eval, run);
+  AddBenchRelief(app, a.bench, run);
+}
+
+#else
+// This binary does not link libtorch (loading it costs seconds per call): `candi relief ...` and
+// `candi bench relief` are run by candi-relief (main.cc hands them over before parsing). The
+// subcommand is listed here for --help.
+struct ReliefArgs {};
+void AddRelief(CLI::App& app, ReliefArgs&, std::function<int()>*) {
+  auto* relief = app.add_subcommand("relief", "Buried reliefs from one old photo: synth, dataset, "
+                                              "train, predict, points, eval (run by candi-relief)");
+  relief->allow_extras();
+}
+#endif
+
+void AddFoundation(CLI::App& app, FoundationArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("foundation", "Foundation layers from a CAD section drawing (DXF): "
+                               "profiles, Hermite resampling, rotational blending or sweep, mesh, "
+                               "uniform points");
+  c->add_option("drawing", a.input, "Section drawing (ASCII DXF)")->required();
+  c->add_option("-o,--output", a.output, "Point file (.ply .las .xyz .pts): merged with a layer "
+                "field, or one per layer with --split")->required();
+  c->add_option("--layers", a.layers, "Layers to build, e.g. A,B,C,D (default: all with a "
+                "section)")->delimiter(',');
+  c->add_option("--samples-per-side", a.samples_per_side, "N: Hermite samples per side (>= 2)");
+  c->add_option("--angular-steps", a.angular_steps, "M: steps per half-turn (>= 2)");
+  auto* count = c->add_option("--count", a.count, "Total points, split over the layers by area");
+  auto* density = c->add_option("--density", a.density, "Points per m^2 (default 50)");
+  auto* per = c->add_option("--per-triangle", a.per_triangle, "The paper's mode: this many points "
+                            "in every triangle (not uniform; for comparison)");
+  count->excludes(density);
+  per->excludes(count)->excludes(density);
+  c->add_option("--mode", a.mode, "auto (sweep symmetric layers, blend the others), blend or "
+                "sweep")->check(CLI::IsMember({"auto", "blend", "sweep"}));
+  c->add_option("--mesh", a.mesh, "Also write the mesh (.obj .off .ply); <stem>_<layer><ext> "
+                "when several layers");
+  c->add_flag("--split", a.split, "One point file per layer: <stem>_<layer><ext>");
+  c->add_flag("--close-base", a.close_base, "Close each mesh's bottom ring (a solid)");
+  c->add_flag("--no-check", a.no_check, "Skip the CGAL mesh checks");
+  c->add_flag("--no-self-intersection", a.no_self_intersection,
+              "Skip only CGAL's self-intersection test (the slowest check)");
+  c->add_option("--axis-x", a.axis_x, "Drawing x of the vertical axis, m (default: through each "
+                "layer's highest point)");
+  c->add_option("--symmetry-tolerance", a.symmetry_tolerance, "auto: sides mirrored within this "
+                "fraction of the section's extent count as symmetric");
+  c->add_option("--chord-tolerance", a.chord_tolerance, "Bulge arcs: largest chord error, m");
+  c->add_option("--join-tolerance", a.join_tolerance, "LINE ends closer than this join, m");
+  c->add_option("--seed", a.seed, "Random seed of the sampling");
+  c->add_option("--threads", a.threads, "Threads (0: all)")->check(CLI::Range(0, 256));
+  c->callback([run, &a] { *run = [&a] { return RunFoundation(a); }; });
+  c->footer("Example: candi foundation examples/borobudur/foundation.dxf -o foundation.ply "
+            "--layers A,B,C,D --mesh foundation.obj");
 }
 
 }  // namespace
@@ -136,6 +340,10 @@ int RunCli(int argc, char** argv) {
   AddRender(app, render, &run);
   BenchArgs bench;
   AddBench(app, bench, &run);
+  FoundationArgs foundation;
+  AddFoundation(app, foundation, &run);
+  ReliefArgs relief;
+  AddRelief(app, relief, &run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

@@ -85,5 +85,106 @@ struct BenchArgs {
   int threads = 1;
 };
 int RunBench(const BenchArgs& args);
+int RunBenchFoundation();  // `candi bench foundation`: accuracy vs time of N and M, paper scale
+
+// candi relief synth|dataset|train|predict|points|eval (cmd_relief*.cc): the buried-relief path.
+struct ReliefSynthArgs {
+  std::string output_dir;
+  int count = 8;                      // panels
+  int width = 800;                    // pixels along the panel
+  unsigned long long seed = 1;
+  double width_m = 2.7, height_m = 0.92, depth_m = 0.15;
+  bool no_shadows = false, no_stains = false, no_blur = false, no_grain = false;
+  bool no_tone = false, no_fading = false;
+};
+int RunReliefSynth(const ReliefSynthArgs& args);
+
+struct ReliefDatasetArgs {
+  std::vector<std::string> inputs;    // scans (point files) or synthetic panels (*_photo.png, folders)
+  std::string output_dir;
+  double pixels_per_m = 800 / 2.7;
+  int patch = 128, stride = 64;
+  double val_fraction = 0.1;          // inputs (or patches, with one input) held out for validation
+  std::string frame = "auto";         // scans: auto | panel
+  double depth_m = 0.15;
+  double panel_width_m = 2.7;         // width of a photo input without a recorded resolution
+  bool no_relight = false;            // scans: use the scan's grey instead of a raking-light photo
+  unsigned long long seed = 1;
+};
+int RunReliefDataset(const ReliefDatasetArgs& args);
+
+struct ReliefTrainArgs {
+  std::string data_dir, output;
+  int epochs = 10, batch = 8;
+  int growth = 12, decoder_width = 128;
+  std::string blocks = "4,6,8,6";
+  double learning_rate = 1e-3, end_learning_rate = 1e-4;
+  double max_seconds = 0;
+  std::string checkpoint;             // default: <output>.ckpt
+  bool resume = false;
+  unsigned long long seed = 1;
+  int threads = 1;
+};
+int RunReliefTrain(const ReliefTrainArgs& args);
+
+struct ReliefPredictArgs {
+  std::string photo, model, output;
+  std::string output16;               // optional 16-bit depth (levels * 256)
+  double width_m = 2.7;               // the photo's panel width (sets its resolution); 0 = model's
+  int tile = 128, overlap = 32;
+  int threads = 1;
+};
+int RunReliefPredict(const ReliefPredictArgs& args);
+
+struct ReliefPointsArgs {
+  std::string photo, depth, output;
+  double width_m = 2.7, height_m = 0.92, depth_m = 0.15;
+};
+int RunReliefPoints(const ReliefPointsArgs& args);
+
+struct ReliefEvalArgs {
+  std::string model;                  // optional: baselines only without it
+  int panels = 4, width = 800;
+  unsigned long long seed = 1000;     // held-out series (training uses other seeds)
+  std::string photo, depth;           // or: one photo and its ground-truth depth
+  double light_azimuth = -1, light_elevation = -1;  // for SFS on a photo (default: its PNG text)
+  double width_m = 2.7;
+  int tile = 128, overlap = 32;
+  int threads = 1;
+};
+int RunReliefEval(const ReliefEvalArgs& args);
+
+struct BenchReliefArgs {
+  std::string widths = "32,64,128";   // decoder widths (growth = width / 8 ... see cmd_bench_relief)
+  double seconds = 60;                // training budget per width
+  int train_panels = 12, eval_panels = 3;
+  unsigned long long seed = 1;
+  int threads = 1;
+};
+int RunBenchRelief(const BenchReliefArgs& args);
+
+struct FoundationArgs {
+  std::string input;                 // the section drawing (ASCII DXF)
+  std::string output;                // point file (.ply .las .xyz .pts); merged unless split
+  std::vector<std::string> layers;   // layers to build; empty = every layer holding a section
+  int samples_per_side = 1000;       // N, Hermite samples per side
+  int angular_steps = 90;            // M, steps per half-turn
+  unsigned long long count = 0;      // total points over the layers (split by area); or
+  double density = 0;                // points per m^2 (default 50 when neither is given)
+  int per_triangle = 0;              // > 0: the paper's fixed count per triangle instead
+  std::string mode = "auto";         // auto | blend | sweep
+  std::string mesh;                  // optional mesh output (.obj .off .ply); per layer if several
+  bool split = false;                // one point file per layer, <stem>_<layer><ext>
+  bool close_base = false;           // close each mesh's bottom ring
+  bool no_check = false;             // skip the CGAL checks
+  bool no_self_intersection = false; // skip CGAL's self-intersection test only
+  std::string axis_x;                // drawing x of the axis, m; "" = through the reference point
+  double symmetry_tolerance = 1e-3;  // relative to the section's extent
+  double chord_tolerance = 0.005;    // bulge arcs, m
+  double join_tolerance = 1e-6;      // LINE chains, m
+  unsigned long long seed = 1;
+  int threads = 0;
+};
+int RunFoundation(const FoundationArgs& args);
 
 }  // namespace candi::app

@@ -1,0 +1,267 @@
+#include "mesh/dxf_import.h"
+
+#include <dl_creationadapter.h>
+#include <dl_dxf.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <set>
+#include <stdexcept>
+
+#include "core/check.h"
+#include "core/log.h"
+#include "core/text_format.h"
+
+namespace candi {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A piece as the file gives it: drawing units, with a bulge per vertex.
+struct RawPiece {
+  std::string layer;
+  std::vector<Eigen::Vector3d> vertices;  // x, y, bulge of the segment that starts here
+  bool closed = false;
+};
+
+enum class Pending { kNone, kPolyline, kPolylineMesh, kSpline };
+
+class Collector : public DL_CreationAdapter {
+ public:
+  void setVariableInt(const std::string& key, int value, int) override {
+    if (key == "$INSUNITS") insunits = value;
+  }
+  void addBlock(const DL_BlockData&) override { Finish(), in_block_ = true; }
+  void endBlock() override { Finish(), in_block_ = false; }
+
+  void addLine(const DL_LineData& d) override {
+    Finish();
+    ++Counts().lines;
+    if (Unused() || (d.x1 == d.x2 && d.y1 == d.y2)) return;
+    pieces.push_back({Layer(), {{d.x1, d.y1, 0}, {d.x2, d.y2, 0}}, false});
+  }
+  void addPolyline(const DL_PolylineData& d) override {
+    Finish();
+    const bool mesh = (d.flags & (16 | 64)) != 0;
+    // dxflib delivers an entity when the next one starts: the type is the previous group 0.
+    const bool lw = previous_entity_ == "LWPOLYLINE";
+    ++(mesh ? Counts().polyline_meshes : lw ? Counts().lwpolylines : Counts().polylines);
+    if (!mesh && (d.flags & 1) && !Unused()) ++closed_polylines;
+    Start(mesh ? Pending::kPolylineMesh : Pending::kPolyline, (d.flags & 1) != 0);
+  }
+  void addVertex(const DL_VertexData& d) override {
+    if (pending_ == Pending::kPolyline) current_.vertices.emplace_back(d.x, d.y, d.bulge);
+  }
+  void addSpline(const DL_SplineData& d) override {
+    Finish();
+    ++Counts().splines;
+    Start(Pending::kSpline, (d.flags & 1) != 0);
+  }
+  void addControlPoint(const DL_ControlPointData& d) override {
+    control_.emplace_back(d.x, d.y, 0);
+  }
+  void addFitPoint(const DL_FitPointData& d) override {
+    current_.vertices.emplace_back(d.x, d.y, 0);
+  }
+  void endEntity() override { Finish(); }
+  void endSequence() override { Finish(); }
+
+  // Counts entity types this reader does not use, by section (dxflib reports them elsewhere).
+  void processCodeValuePair(unsigned int code, const std::string& value) override {
+    if (code == 0) {
+      previous_entity_ = entity_;
+      entity_ = value;
+      static const std::set<std::string> kKnown = {"SECTION",  "ENDSEC", "EOF",    "BLOCK",
+                                                   "ENDBLK",   "VERTEX", "SEQEND", "LWPOLYLINE",
+                                                   "POLYLINE", "LINE",   "SPLINE"};
+      if (value == "SECTION") expect_section_name_ = true;
+      if ((section_ == "ENTITIES" || section_ == "BLOCKS") && !kKnown.count(value)) {
+        ++(section_ == "ENTITIES" ? model.other : blocks.other);
+      }
+    } else if (code == 2 && expect_section_name_) {
+      section_ = value;
+      expect_section_name_ = false;
+    }
+  }
+
+  // Called once after parsing: the last entity may still be pending.
+  void Flush() { Finish(); }
+
+  int insunits = 0;
+  DxfEntityCounts model, blocks;
+  size_t closed_polylines = 0;
+  std::vector<RawPiece> pieces;
+  size_t control_polygons = 0;
+
+ private:
+  bool Unused() { return in_block_ || getAttributes().isInPaperSpace(); }
+  DxfEntityCounts& Counts() { return Unused() ? blocks : model; }
+  std::string Layer() { return getAttributes().getLayer(); }
+
+  void Start(Pending kind, bool closed) {
+    pending_ = kind;
+    current_ = {Layer(), {}, closed};
+    current_unused_ = Unused();
+    control_.clear();
+  }
+
+  void Finish() {
+    if (pending_ == Pending::kSpline && current_.vertices.size() < 2) {
+      current_.vertices = control_;
+      if (!control_.empty()) ++control_polygons;
+    }
+    if ((pending_ == Pending::kPolyline || pending_ == Pending::kSpline) && !current_unused_) {
+      pieces.push_back(std::move(current_));
+    }
+    pending_ = Pending::kNone;
+    current_ = {};
+  }
+
+  Pending pending_ = Pending::kNone;
+  RawPiece current_;
+  std::vector<Eigen::Vector3d> control_;
+  bool in_block_ = false, expect_section_name_ = false, current_unused_ = false;
+  std::string section_, entity_, previous_entity_;
+};
+
+// Rejects what dxflib would read as garbage: binary DXF and files without DXF sections.
+void CheckAsciiDxf(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open the file");
+  std::string head(4096, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  if (head.rfind("AutoCAD Binary DXF", 0) == 0) {
+    throw InputError(path, "", "binary DXF is not supported; save the drawing as ASCII DXF");
+  }
+  if (head.find("SECTION") == std::string::npos) {
+    throw InputError(path, "", "not a DXF file (no SECTION in its first 4 KiB)");
+  }
+}
+
+Polyline2 ToMetres(const RawPiece& raw, double scale, double chord_tolerance) {
+  Polyline2 out;
+  out.closed = raw.closed;
+  const size_t n = raw.vertices.size();
+  if (n == 0) return out;
+  out.points.emplace_back(raw.vertices[0].x() * scale, raw.vertices[0].y() * scale);
+  const size_t segments = raw.closed ? n : n - 1;
+  for (size_t k = 0; k < segments; ++k) {
+    const Eigen::Vector3d& a = raw.vertices[k];
+    const Eigen::Vector3d& b = raw.vertices[(k + 1) % n];
+    const std::vector<Eigen::Vector2d> arc =
+        TessellateBulge(a.head<2>() * scale, b.head<2>() * scale, a.z(), chord_tolerance);
+    out.points.insert(out.points.end(), arc.begin(), arc.end());
+  }
+  if (raw.closed) out.points.pop_back();  // the closing arc ends on the first point
+  return out;
+}
+
+}  // namespace
+
+void DxfReadOptions::Check() const {
+  if (!(chord_tolerance > 0) || !std::isfinite(chord_tolerance)) {
+    throw std::invalid_argument("DxfReadOptions::chord_tolerance = " +
+                                FormatDouble(chord_tolerance) + "; must be finite and > 0");
+  }
+  if (!(unitless_scale > 0) || !std::isfinite(unitless_scale)) {
+    throw std::invalid_argument("DxfReadOptions::unitless_scale = " + FormatDouble(unitless_scale) +
+                                "; must be finite and > 0");
+  }
+}
+
+std::vector<std::string> DxfDrawing::LayerNames() const {
+  std::vector<std::string> names;
+  for (const auto& [name, pieces] : layers) names.push_back(name);
+  return names;
+}
+
+double InsUnitsToMetres(int code, double unitless_scale, const std::string& path,
+                        std::string* name) {
+  struct Unit {
+    const char* name;
+    double metres;
+  };
+  // AutoCAD's $INSUNITS table (codes 0-20).
+  static const Unit kUnits[] = {{"unitless", 0},
+                                {"inch", 0.0254},
+                                {"foot", 0.3048},
+                                {"mile", 1609.344},
+                                {"millimetre", 1e-3},
+                                {"centimetre", 1e-2},
+                                {"metre", 1.0},
+                                {"kilometre", 1e3},
+                                {"microinch", 0.0254e-6},
+                                {"mil", 0.0254e-3},
+                                {"yard", 0.9144},
+                                {"angstrom", 1e-10},
+                                {"nanometre", 1e-9},
+                                {"micron", 1e-6},
+                                {"decimetre", 0.1},
+                                {"decametre", 10.0},
+                                {"hectometre", 100.0},
+                                {"gigametre", 1e9},
+                                {"astronomical unit", 149597870700.0},
+                                {"light year", 9460730472580800.0},
+                                {"parsec", 3.0856775814913673e16}};
+  if (code < 0 || code > 20) {
+    throw InputError(path, "$INSUNITS",
+                     "unknown unit code " + std::to_string(code) + " (AutoCAD defines 0-20)");
+  }
+  if (name) *name = kUnits[code].name;
+  return code == 0 ? unitless_scale : kUnits[code].metres;
+}
+
+std::vector<Eigen::Vector2d> TessellateBulge(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                             double bulge, double chord_tolerance) {
+  const double chord = (b - a).norm();
+  if (bulge == 0 || !std::isfinite(bulge) || chord == 0) return {b};
+  const double angle = 4 * std::atan(bulge);  // signed included angle, (-2 pi, 2 pi)
+  const double radius = chord / (2 * std::abs(std::sin(angle / 2)));
+  // Each step of angle s keeps the sagitta radius (1 - cos(s/2)) within the tolerance.
+  const double max_step = 2 * std::acos(std::max(-1.0, 1 - chord_tolerance / radius));
+  const int steps = static_cast<int>(
+      std::clamp(std::ceil(std::abs(angle) / std::max(max_step, 1e-9)), 1.0, 100000.0));
+  const Eigen::Vector2d dir = (b - a) / chord;
+  const Eigen::Vector2d left(-dir.y(), dir.x());
+  const Eigen::Vector2d centre = (a + b) / 2 + left * (chord / 2 / std::tan(angle / 2));
+  const double start = std::atan2(a.y() - centre.y(), a.x() - centre.x());
+  std::vector<Eigen::Vector2d> points;
+  for (int k = 1; k < steps; ++k) {
+    const double t = start + angle * k / steps;
+    points.push_back(centre + radius * Eigen::Vector2d(std::cos(t), std::sin(t)));
+  }
+  points.push_back(b);
+  return points;
+}
+
+DxfDrawing ReadDxf(const DxfReadOptions& options, const std::string& path) {
+  options.Check();
+  CheckAsciiDxf(path);
+  Collector collector;
+  DL_Dxf dxf;
+  if (!dxf.in(path, &collector)) throw InputError(path, "", "cannot open the file");
+  collector.Flush();
+  DxfDrawing drawing;
+  drawing.path = path;
+  drawing.insunits = collector.insunits;
+  drawing.metres_per_unit =
+      InsUnitsToMetres(collector.insunits, options.unitless_scale, path, &drawing.unit_name);
+  drawing.model = collector.model;
+  drawing.blocks = collector.blocks;
+  drawing.closed_polylines = collector.closed_polylines;
+  for (const RawPiece& raw : collector.pieces) {
+    Polyline2 piece = ToMetres(raw, drawing.metres_per_unit, options.chord_tolerance);
+    if (!piece.points.empty()) drawing.layers[raw.layer].push_back(std::move(piece));
+  }
+  if (collector.control_polygons > 0) {
+    LogWarning(path + ": " + std::to_string(collector.control_polygons) +
+               " SPLINE(s) without fit points: their control polygons are used");
+  }
+  return drawing;
+}
+
+}  // namespace candi

@@ -1,0 +1,210 @@
+#include "sampling/surface_sampling.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include "core/check.h"
+#include "core/rng.h"
+#include "core/text_format.h"
+
+namespace candi {
+
+namespace {
+
+constexpr size_t kGrain = 16384;
+
+// Walker's alias table (Vose's construction): O(1) draws from a discrete distribution.
+// Built serially in index order, so it is the same on every run.
+struct AliasTable {
+  std::vector<double> keep;     // probability of keeping column i
+  std::vector<uint32_t> alias;  // the other outcome of column i
+
+  explicit AliasTable(const std::vector<double>& weights)
+      : keep(weights.size(), 1.0), alias(weights.size()) {
+    const size_t n = weights.size();
+    const double total = std::accumulate(weights.begin(), weights.end(), 0.0);
+    std::vector<double> scaled(n);
+    std::vector<uint32_t> small, large;
+    for (size_t i = 0; i < n; ++i) {
+      scaled[i] = weights[i] * static_cast<double>(n) / total;
+      alias[i] = static_cast<uint32_t>(i);
+      (scaled[i] < 1 ? small : large).push_back(static_cast<uint32_t>(i));
+    }
+    while (!small.empty() && !large.empty()) {
+      const uint32_t s = small.back(), l = large.back();
+      small.pop_back();
+      keep[s] = scaled[s];
+      alias[s] = l;
+      scaled[l] += scaled[s] - 1;
+      if (scaled[l] < 1) {
+        large.pop_back();
+        small.push_back(l);
+      }
+    }
+  }
+
+  uint32_t Draw(double u_column, double u_keep) const {
+    const size_t i = std::min(keep.size() - 1, static_cast<size_t>(u_column * keep.size()));
+    return u_keep < keep[i] ? static_cast<uint32_t>(i) : alias[i];
+  }
+};
+
+template <typename Body>
+void ParallelBlocks(int threads, size_t n, const Body& body) {
+  auto run = [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain),
+                      [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
+  };
+  if (threads > 0) {
+    tbb::task_arena(threads).execute(run);
+  } else {
+    run();
+  }
+}
+
+std::vector<double> TriangleAreas(const TriMesh& mesh, int threads) {
+  std::vector<double> areas(mesh.faces.size());
+  const auto& p = mesh.vertices.positions;
+  ParallelBlocks(threads, areas.size(), [&](size_t begin, size_t end) {
+    for (size_t f = begin; f < end; ++f) {
+      const auto& t = mesh.faces[f];
+      areas[f] = 0.5 * (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).norm();
+    }
+  });
+  return areas;
+}
+
+// Sample k's point in triangle `face` (uniform: Turk's sqrt(r1) barycentric coordinates),
+// stored at index `slot`.
+void PlacePoint(const SurfaceSampleOptions& o, const TriMesh& mesh, uint32_t face, uint64_t k,
+                size_t slot, PointCloud* out) {
+  const auto& p = mesh.vertices.positions;
+  const auto& t = mesh.faces[face];
+  const double s = std::sqrt(ToUnit(HashIndex(o.seed, k, 2))), r = ToUnit(HashIndex(o.seed, k, 3));
+  out->positions[slot] = (1 - s) * p[t[0]] + s * (1 - r) * p[t[1]] + s * r * p[t[2]];
+  if (o.normals) {
+    const Eigen::Vector3d n = (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+    const double length = n.norm();
+    out->normals[slot] =
+        length > 0 ? Eigen::Vector3f((n / length).cast<float>()) : Eigen::Vector3f::Zero();
+  }
+}
+
+PointCloud EmptyCloud(const SurfaceSampleOptions& o, const TriMesh& mesh, size_t count) {
+  PointCloud cloud;
+  cloud.frame = mesh.vertices.frame;
+  PointSchema schema;
+  schema.normals = o.normals;
+  schema.colors = o.colour.has_value();
+  schema.layers = o.layer >= 0;
+  cloud.SetSchema(schema);
+  cloud.Resize(count);
+  if (o.colour) std::fill(cloud.colors.begin(), cloud.colors.end(), *o.colour);
+  if (o.layer >= 0) std::fill(cloud.layers.begin(), cloud.layers.end(), o.layer);
+  return cloud;
+}
+
+}  // namespace
+
+void SurfaceSampleOptions::Check() const {
+  auto fail = [](const std::string& field, const std::string& value, const std::string& rule) {
+    throw std::invalid_argument("SurfaceSampleOptions::" + field + " = " + value + "; " + rule);
+  };
+  if (!(density >= 0) || !std::isfinite(density)) {
+    fail("density", FormatDouble(density), "must be finite and >= 0");
+  }
+  if (mode == SurfaceSamplingMode::kArea && (count > 0) == (density > 0)) {
+    fail("count", std::to_string(count), "exactly one of count and density must be > 0");
+  }
+  if (mode == SurfaceSamplingMode::kPerTriangle && per_triangle < 1) {
+    fail("per_triangle", std::to_string(per_triangle), "must be >= 1");
+  }
+  if (threads < 0) fail("threads", std::to_string(threads), "must be >= 0 (0 = all available)");
+  if (layer < -1 || layer > 65535) fail("layer", std::to_string(layer), "must be in [-1, 65535]");
+}
+
+double MeshArea(const TriMesh& mesh) {
+  const std::vector<double> areas = TriangleAreas(mesh, 0);
+  return std::accumulate(areas.begin(), areas.end(), 0.0);
+}
+
+PointCloud SampleSurface(const SurfaceSampleOptions& options, const TriMesh& mesh) {
+  options.Check();
+  CANDI_CHECK(mesh.faces.size() < (uint64_t{1} << 32)) << "SampleSurface: over 2^32 faces";
+  const std::vector<double> areas = TriangleAreas(mesh, options.threads);
+  const double area = std::accumulate(areas.begin(), areas.end(), 0.0);
+  if (options.mode == SurfaceSamplingMode::kPerTriangle) {
+    const uint64_t n = static_cast<uint64_t>(options.per_triangle);
+    PointCloud cloud = EmptyCloud(options, mesh, mesh.faces.size() * n);
+    ParallelBlocks(options.threads, cloud.size(), [&](size_t begin, size_t end) {
+      for (size_t k = begin; k < end; ++k) {
+        PlacePoint(options, mesh, static_cast<uint32_t>(k / n), k, k, &cloud);
+      }
+    });
+    return cloud;
+  }
+  const uint64_t count = options.count > 0
+                             ? options.count
+                             : static_cast<uint64_t>(std::llround(options.density * area));
+  if (count > 0 && !(area > 0)) {
+    throw InputError("SampleSurface: the mesh has no area (" + std::to_string(mesh.faces.size()) +
+                     " faces); cannot place " + std::to_string(count) + " points");
+  }
+  PointCloud cloud = EmptyCloud(options, mesh, count);
+  if (count == 0) return cloud;
+  // Draw every sample's triangle first, then place the samples grouped by triangle (a counting
+  // sort, stable in k): placing them in draw order would jump around the mesh (cache misses cost
+  // more than the arithmetic). The output order is by triangle; each sample k still uses only
+  // HashIndex(seed, k, *), so the result does not depend on the thread count.
+  const AliasTable table(areas);
+  std::vector<uint32_t> face_of(count);
+  ParallelBlocks(options.threads, count, [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) {
+      face_of[k] =
+          table.Draw(ToUnit(HashIndex(options.seed, k, 0)), ToUnit(HashIndex(options.seed, k, 1)));
+    }
+  });
+  std::vector<uint64_t> start(mesh.faces.size() + 1, 0);
+  for (uint32_t f : face_of) ++start[f + 1];
+  for (size_t f = 0; f < mesh.faces.size(); ++f) start[f + 1] += start[f];
+  std::vector<uint64_t> sample_at(count);  // output slot -> sample k
+  for (uint64_t k = 0; k < count; ++k) sample_at[start[face_of[k]]++] = k;
+  ParallelBlocks(options.threads, count, [&](size_t begin, size_t end) {
+    for (size_t slot = begin; slot < end; ++slot) {
+      const uint64_t k = sample_at[slot];
+      PlacePoint(options, mesh, face_of[k], k, slot, &cloud);
+    }
+  });
+  return cloud;
+}
+
+std::vector<uint64_t> SplitCount(uint64_t total, const std::vector<double>& weights) {
+  const double sum = std::accumulate(weights.begin(), weights.end(), 0.0);
+  CANDI_CHECK(!weights.empty() && sum > 0 && std::isfinite(sum))
+      << "SplitCount: weights sum " << sum;
+  std::vector<uint64_t> parts(weights.size());
+  std::vector<std::pair<double, size_t>> remainders;
+  uint64_t assigned = 0;
+  for (size_t i = 0; i < weights.size(); ++i) {
+    CANDI_CHECK(weights[i] >= 0) << "SplitCount: weight " << i << " = " << weights[i];
+    const double exact = static_cast<double>(total) * (weights[i] / sum);
+    parts[i] = std::min(total - assigned, static_cast<uint64_t>(std::floor(exact)));
+    assigned += parts[i];
+    remainders.emplace_back(exact - std::floor(exact), i);
+  }
+  std::stable_sort(remainders.begin(), remainders.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (size_t k = 0; assigned < total; k = (k + 1) % remainders.size(), ++assigned) {
+    ++parts[remainders[k].second];
+  }
+  return parts;
+}
+
+}  // namespace candi
