@@ -27,14 +27,17 @@ function(candi_library folder)
   endif()
 endfunction()
 
-# candi_tests(<folder> [DEPS ...]): one test executable candi_<folder>_test from the unit tests
+# candi_tests(<folder> [DEPS ...] [EXCLUDE regex...]): one test executable candi_<folder>_test from the unit tests
 # beside the sources (<folder>/**/*_test.cc), registered with ctest at test time.
 function(candi_tests folder)
-  cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "DEPS;EXCLUDE" ${ARGN})
   if(NOT CANDI_BUILD_TESTS)
     return()
   endif()
   file(GLOB_RECURSE tests CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*_test.cc)
+  foreach(pattern ${ARG_EXCLUDE})
+    list(FILTER tests EXCLUDE REGEX "${pattern}")
+  endforeach()
   if(NOT tests)
     return()
   endif()
