@@ -4,7 +4,8 @@ BUILD_DIR ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 CMAKE_FLAGS ?=
 CTEST_FLAGS ?= --output-on-failure
-# Tests labelled "slow" (long real-data runs) are left to `make test-all`.
+# Tests labelled "slow", and those guarded by CANDI_REQUIRE_SLOW_TESTS (long real-data runs), are
+# left to `make test-all`.
 CTEST_EXCLUDE ?= -LE slow
 
 .PHONY: all deps configure build test test-all demo bench clean format
@@ -26,7 +27,7 @@ test: build
 	@cd $(BUILD_DIR) && ctest $(CTEST_FLAGS) -j $(JOBS) $(CTEST_EXCLUDE)
 
 test-all: build
-	@cd $(BUILD_DIR) && ctest $(CTEST_FLAGS) -j $(JOBS)
+	@cd $(BUILD_DIR) && CANDI_SLOW_TESTS=1 ctest $(CTEST_FLAGS) -j $(JOBS)
 
 demo: build
 	@$(BUILD_DIR)/apps/candi demo -o demo_out

@@ -70,4 +70,9 @@ bool FileExists(const std::string& path) {
   return stat(path.c_str(), &st) == 0;
 }
 
+bool SlowTestsEnabled() {
+  const char* v = std::getenv("CANDI_SLOW_TESTS");
+  return v != nullptr && std::string(v) == "1";
+}
+
 }  // namespace candi::testing

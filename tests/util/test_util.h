@@ -39,6 +39,8 @@ CommandResult RunCommand(const std::string& command);
 void WriteBytes(const std::string& path, const std::string& bytes);
 std::string ReadBytes(const std::string& path);
 bool FileExists(const std::string& path);
+// True when the environment sets CANDI_SLOW_TESTS=1.
+bool SlowTestsEnabled();
 
 }  // namespace candi::testing
 
@@ -48,4 +50,11 @@ bool FileExists(const std::string& path);
   if (var.empty()) {                                                                      \
     GTEST_SKIP() << "../shared/data/" << (relative) << " is absent (real data beside the " \
                  << "repository); skipping";                                              \
+  }
+
+// Skips the current test unless CANDI_SLOW_TESTS=1 (`make test-all` sets it; `make test` and CI do
+// not): for real-data or long runs that would push CI past its time budget.
+#define CANDI_REQUIRE_SLOW_TESTS()                                                     \
+  if (!::candi::testing::SlowTestsEnabled()) {                                         \
+    GTEST_SKIP() << "slow test: set CANDI_SLOW_TESTS=1 (make test-all) to run it";     \
   }
