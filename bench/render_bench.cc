@@ -5,11 +5,13 @@
 //     milliseconds and RMSE to the exact image;
 //  4. the big frame: 1.5 * 10^8 points, L = 100, 1024^2, two threads: seconds, bytes per point.
 // Medians of 3 runs. Usage: render_bench [--quick] [--big N] (N points for section 4; 0 skips)
-// [--section K]... (only these sections).
+// [--section K]... (only these sections); render_bench --profile N L: one 1024^2 render of N
+// points at L, one thread (for profilers).
 #include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -42,24 +44,42 @@ SplatCloud Build(const PointCloud& cloud, int L, uint64_t seed = 1) {
   return BuildSplatCloud(o, {&cloud});
 }
 
-double RenderMs(const SplatCloud& splats, const Camera& camera, int threads, int runs = 3) {
-  std::vector<double> ms;
+double CpuMs() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+// Median wall milliseconds of `runs` renders; *cpu_ms (when given) the median CPU time of the
+// calling thread (the one that renders when threads = 1),
+// which a busy machine inflates far less than wall time.
+double RenderMs(const SplatCloud& splats, const Camera& camera, int threads, int runs = 3,
+                double* cpu_ms = nullptr) {
+  std::vector<double> ms, cpu;
   SpbrOptions o;
   o.threads = threads;
-  for (int r = 0; r < runs; ++r) ms.push_back(RenderSpbr(o, camera, splats).milliseconds);
+  for (int r = 0; r < runs; ++r) {
+    const double c0 = CpuMs();
+    ms.push_back(RenderSpbr(o, camera, splats).milliseconds);
+    cpu.push_back(CpuMs() - c0);
+  }
+  if (cpu_ms) *cpu_ms = Median(cpu);
   return Median(ms);
 }
 
 void Throughput(uint64_t n) {
   std::printf("\n1. Splat throughput, %llu points (terraced solid), 1024x1024\n",
               static_cast<unsigned long long>(n));
-  std::printf("%6s %12s %12s %14s %14s\n", "L", "ms 1 thr", "ms 2 thr", "Mpts/s 1 thr", "Mpts/s 2 thr");
+  std::printf("%6s %12s %12s %14s %14s %16s\n", "L", "ms 1 thr", "ms 2 thr", "Mpts/s 1 thr",
+              "Mpts/s 2 thr", "Mpts/s CPU 1 thr");
   const PointCloud cloud = TerracedSolid(n, 1);
   for (int L : {1, 10, 100}) {
     const SplatCloud splats = Build(cloud, L);
     const Camera camera = ObliqueView(splats.bounds, 1024, 1024);
-    const double t1 = RenderMs(splats, camera, 1), t2 = RenderMs(splats, camera, 2);
-    std::printf("%6d %12.1f %12.1f %14.1f %14.1f\n", L, t1, t2, n / t1 / 1e3, n / t2 / 1e3);
+    double cpu1 = 0;
+    const double t1 = RenderMs(splats, camera, 1, 3, &cpu1), t2 = RenderMs(splats, camera, 2);
+    std::printf("%6d %12.1f %12.1f %14.1f %14.1f %16.1f\n", L, t1, t2, n / t1 / 1e3, n / t2 / 1e3,
+                n / cpu1 / 1e3);
   }
 }
 
@@ -120,6 +140,15 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--quick")) quick = true;
     if (!std::strcmp(argv[i], "--big") && i + 1 < argc) big = std::strtoull(argv[++i], nullptr, 10);
     if (!std::strcmp(argv[i], "--section") && i + 1 < argc) sections.push_back(std::atoi(argv[++i]));
+  }
+  for (int i = 1; i + 2 < argc; ++i) {
+    if (!std::strcmp(argv[i], "--profile")) {  // one render for profilers: --profile N L
+      const PointCloud cloud = TerracedSolid(std::strtoull(argv[i + 1], nullptr, 10), 1);
+      const SplatCloud splats = Build(cloud, std::atoi(argv[i + 2]));
+      const Camera camera = ObliqueView(splats.bounds, 1024, 1024);
+      std::printf("%.1f ms\n", RenderMs(splats, camera, 1, 1));
+      return 0;
+    }
   }
   auto wanted = [&](int k) { return sections.empty() || std::count(sections.begin(), sections.end(), k) > 0; };
   if (wanted(1)) Throughput(quick ? 1000000 : 10000000);

@@ -81,19 +81,27 @@ std::vector<double> TriangleAreas(const TriMesh& mesh, int threads) {
   return areas;
 }
 
-// Sample k's point in triangle `face` (uniform: Turk's sqrt(r1) barycentric coordinates),
-// stored at index `slot`.
-void PlacePoint(const SurfaceSampleOptions& o, const TriMesh& mesh, uint32_t face, uint64_t k,
-                size_t slot, PointCloud* out) {
+// The samples of triangle `face` in output slots [begin, end): Turk's sqrt(r1) barycentric
+// coordinates, uniform over the triangle. Slot j's coordinates come from HashIndex(seed, j), so
+// the result does not depend on the thread count.
+void PlaceInTriangle(const SurfaceSampleOptions& o, const TriMesh& mesh, size_t face, uint64_t begin,
+                     uint64_t end, PointCloud* out) {
   const auto& p = mesh.vertices.positions;
   const auto& t = mesh.faces[face];
-  const double s = std::sqrt(ToUnit(HashIndex(o.seed, k, 2))), r = ToUnit(HashIndex(o.seed, k, 3));
-  out->positions[slot] = (1 - s) * p[t[0]] + s * (1 - r) * p[t[1]] + s * r * p[t[2]];
+  const Eigen::Vector3d a = p[t[0]], ab = p[t[1]] - a, ac = p[t[2]] - a;
   if (o.normals) {
-    const Eigen::Vector3d n = (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+    const Eigen::Vector3d n = ab.cross(ac);
     const double length = n.norm();
-    out->normals[slot] =
+    const Eigen::Vector3f unit =
         length > 0 ? Eigen::Vector3f((n / length).cast<float>()) : Eigen::Vector3f::Zero();
+    std::fill(out->normals.begin() + begin, out->normals.begin() + end, unit);
+  }
+  for (uint64_t j = begin; j < end; ++j) {
+    // One 64-bit hash gives both coordinates (32 bits each: 2^-32 is far below any mesh detail).
+    const uint64_t h = HashIndex(o.seed, j, 2);
+    const double s = std::sqrt(static_cast<double>(h >> 32) * 0x1.0p-32);
+    const double r = static_cast<double>(h & 0xffffffffu) * 0x1.0p-32;
+    out->positions[j] = a + s * ((1 - r) * ab + r * ac);
   }
 }
 
@@ -143,10 +151,8 @@ PointCloud SampleSurface(const SurfaceSampleOptions& options, const TriMesh& mes
   if (options.mode == SurfaceSamplingMode::kPerTriangle) {
     const uint64_t n = static_cast<uint64_t>(options.per_triangle);
     PointCloud cloud = EmptyCloud(options, mesh, mesh.faces.size() * n);
-    ParallelBlocks(options.threads, cloud.size(), [&](size_t begin, size_t end) {
-      for (size_t k = begin; k < end; ++k) {
-        PlacePoint(options, mesh, static_cast<uint32_t>(k / n), k, k, &cloud);
-      }
+    ParallelBlocks(options.threads, mesh.faces.size(), [&](size_t begin, size_t end) {
+      for (size_t f = begin; f < end; ++f) PlaceInTriangle(options, mesh, f, f * n, (f + 1) * n, &cloud);
     });
     return cloud;
   }
@@ -159,28 +165,25 @@ PointCloud SampleSurface(const SurfaceSampleOptions& options, const TriMesh& mes
   }
   PointCloud cloud = EmptyCloud(options, mesh, count);
   if (count == 0) return cloud;
-  // Draw every sample's triangle first, then place the samples grouped by triangle (a counting
-  // sort, stable in k): placing them in draw order would jump around the mesh (cache misses cost
-  // more than the arithmetic). The output order is by triangle; each sample k still uses only
-  // HashIndex(seed, k, *), so the result does not depend on the thread count.
+  // Exact count, i.i.d. area-uniform: draw each sample's triangle (alias table) and count the
+  // draws per triangle (a multinomial), then place each triangle's samples in its own run of
+  // output slots. Counting with atomic adds makes the counts, and so the output, independent of
+  // the thread count; placing by triangle keeps the mesh reads sequential, and since a slot's
+  // position depends only on (seed, slot), no sample-to-slot table is needed.
   const AliasTable table(areas);
-  std::vector<uint32_t> face_of(count);
+  std::vector<uint64_t> per_face(mesh.faces.size(), 0);
   ParallelBlocks(options.threads, count, [&](size_t begin, size_t end) {
     for (size_t k = begin; k < end; ++k) {
-      face_of[k] =
-          table.Draw(ToUnit(HashIndex(options.seed, k, 0)), ToUnit(HashIndex(options.seed, k, 1)));
+      const uint64_t h = HashIndex(options.seed, k, 0);
+      const uint32_t f = table.Draw(static_cast<double>(h >> 32) * 0x1.0p-32,
+                                    static_cast<double>(h & 0xffffffffu) * 0x1.0p-32);
+      __atomic_fetch_add(&per_face[f], uint64_t{1}, __ATOMIC_RELAXED);
     }
   });
   std::vector<uint64_t> start(mesh.faces.size() + 1, 0);
-  for (uint32_t f : face_of) ++start[f + 1];
-  for (size_t f = 0; f < mesh.faces.size(); ++f) start[f + 1] += start[f];
-  std::vector<uint64_t> sample_at(count);  // output slot -> sample k
-  for (uint64_t k = 0; k < count; ++k) sample_at[start[face_of[k]]++] = k;
-  ParallelBlocks(options.threads, count, [&](size_t begin, size_t end) {
-    for (size_t slot = begin; slot < end; ++slot) {
-      const uint64_t k = sample_at[slot];
-      PlacePoint(options, mesh, face_of[k], k, slot, &cloud);
-    }
+  for (size_t f = 0; f < mesh.faces.size(); ++f) start[f + 1] = start[f] + per_face[f];
+  ParallelBlocks(options.threads, mesh.faces.size(), [&](size_t begin, size_t end) {
+    for (size_t f = begin; f < end; ++f) PlaceInTriangle(options, mesh, f, start[f], start[f + 1], &cloud);
   });
   return cloud;
 }

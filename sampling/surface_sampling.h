@@ -2,10 +2,11 @@
 //
 // kArea: i.i.d. uniform points over the surface, an exact count (or round(density x area)):
 // sample k picks triangle t with probability area_t / area (Walker's alias table, O(1) per
-// point) and a uniform point in it (sqrt(r1) barycentric). Each sample's random numbers are
-// HashIndex(seed, k, stream), so the output is the same for any thread count, and counts in
-// equal-area patches are multinomial: the density, and so SPBR's opacity, is even. Points come
-// out grouped by triangle (in triangle order), which keeps the placement cache-friendly.
+// point) and a uniform point in it (sqrt(r1) barycentric). Draw k's triangle comes from
+// HashIndex(seed, k) and output slot j's point in its triangle from HashIndex(seed, j), so the
+// output is the same for any thread count, and counts in equal-area patches are multinomial: the
+// density, and so SPBR's opacity, is even. Points come out grouped by triangle (in triangle
+// order), which keeps the placement cache-friendly.
 // kPerTriangle: the paper's method, a fixed number of uniform points in every triangle; only
 // uniform when all triangles have equal area (kept for comparison).
 // Positions are in the mesh's local frame (the cloud keeps mesh.vertices.frame). With `normals`
