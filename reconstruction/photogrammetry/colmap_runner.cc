@@ -129,26 +129,6 @@ std::string ArgvText(const std::vector<std::string>& argv) {
   return text;
 }
 
-// Runs one stage; a failure throws with the exit code and the end of the log.
-double RunStage(const SfmStage& stage, const std::string& log_path, int index, int count,
-                const SfmProgress& progress) {
-  if (progress) progress(stage.name, index, count, 0.0, false);
-  WriteFileAtomic(log_path, "$ " + ArgvText(stage.argv) + "\n");
-  const auto start = std::chrono::steady_clock::now();
-  const int code = RunLogged(stage.argv, log_path, [&](double seconds) {
-    if (progress) progress(stage.name, index, count, seconds, false);
-  });
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (code != 0) {
-    const std::string how = code > 128 ? "was killed by signal " + std::to_string(code - 128)
-                                       : "failed with exit code " + std::to_string(code);
-    throw InputError(log_path, "", "colmap " + stage.name + " " + how + "; the end of its log:\n" +
-                                       TailOfFile(log_path, kLogTailLines));
-  }
-  if (progress) progress(stage.name, index, count, seconds, true);
-  return seconds;
-}
-
 }  // namespace
 
 void SfmOptions::Check() const {
@@ -286,11 +266,34 @@ void ParseFeatureExtractionLog(const std::string& log_path, SfmSummary* summary)
       std::istringstream(line.substr(name_at + 5)) >> name;
       continue;
     }
+    if (line.find("ERROR: Failed to read image") != std::string::npos) {
+      summary->unreadable.push_back(name);
+      continue;
+    }
     const size_t focal_at = line.find("Focal Length:");
     if (focal_at == std::string::npos || line.find("(Prior)") != std::string::npos) continue;
     summary->no_exif.push_back(name);
     std::istringstream(line.substr(focal_at + 13)) >> summary->default_focal_px;
   }
+}
+
+double RunSfmStage(const SfmStage& stage, const std::string& log_path, int index, int count,
+                const SfmProgress& progress) {
+  if (progress) progress(stage.name, index, count, 0.0, false);
+  WriteFileAtomic(log_path, "$ " + ArgvText(stage.argv) + "\n");
+  const auto start = std::chrono::steady_clock::now();
+  const int code = RunLogged(stage.argv, log_path, [&](double seconds) {
+    if (progress) progress(stage.name, index, count, seconds, false);
+  });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (code != 0) {
+    const std::string how = code > 128 ? "was killed by signal " + std::to_string(code - 128)
+                                       : "failed with exit code " + std::to_string(code);
+    throw InputError(log_path, "", "colmap " + stage.name + " " + how + "; the end of its log:\n" +
+                                       TailOfFile(log_path, kLogTailLines));
+  }
+  if (progress) progress(stage.name, index, count, seconds, true);
+  return seconds;
 }
 
 std::string TailOfFile(const std::string& path, int lines) {
@@ -302,7 +305,7 @@ std::string TailOfFile(const std::string& path, int lines) {
     // COLMAP redraws some lines with '\r'; keep the last state of each.
     const size_t cr = line.find_last_of('\r', line.size() >= 2 ? line.size() - 2 : 0);
     if (cr != std::string::npos && cr + 1 < line.size()) line = line.substr(cr + 1);
-    if (line.empty()) continue;
+    if (line.empty() || line.rfind("    @ ", 0) == 0) continue;  // glog stack-trace frames
     kept.push_back(line);
     if (kept.size() > static_cast<size_t>(lines)) kept.erase(kept.begin());
   }
@@ -312,6 +315,22 @@ std::string TailOfFile(const std::string& path, int lines) {
 }
 
 namespace {
+
+// After feature extraction: photos COLMAP could not decode are skipped (a warning), unless fewer
+// than two remain.
+void CheckExtraction(const std::string& log_path, const std::string& images_dir, SfmSummary* summary) {
+  ParseFeatureExtractionLog(log_path, summary);
+  if (summary->unreadable.empty()) return;
+  std::string list;
+  for (const std::string& name : summary->unreadable) list += (list.empty() ? "" : ", ") + name;
+  if (summary->images.size() - summary->unreadable.size() < 2) {
+    throw InputError(images_dir, "", "COLMAP could not read " + std::to_string(summary->unreadable.size()) +
+                                         " of the " + std::to_string(summary->images.size()) +
+                                         " images (" + list + "): corrupt or not images; fewer than "
+                                         "2 usable photos remain (see " + log_path + ")");
+  }
+  LogWarning("COLMAP could not read (skipped): " + list);
+}
 
 ColmapVersion DetectColmap(const std::string& colmap, const std::string& log_path) {
   WriteFileAtomic(log_path, "");
@@ -374,14 +393,14 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
       std::replace(stage.argv.begin(), stage.argv.end(), std::string(kModelPlaceholder), summary.model_dir);
     }
     try {
-      summary.stage_seconds.emplace_back(stage.name, RunStage(stage, log_path, i + 1, count, progress));
+      summary.stage_seconds.emplace_back(stage.name, RunSfmStage(stage, log_path, i + 1, count, progress));
     } catch (const InputError&) {
       if (stage.name != "mapper" || !LargestModel(Path(workspace, "sparse"), &model).empty()) throw;
       throw InputError(log_path, "", "no model: the images may not overlap (COLMAP's mapper could "
                                      "not register any pair of them); the end of its log:\n" +
                                          TailOfFile(log_path, kLogTailLines));
     }
-    if (stage.name == "feature_extractor") ParseFeatureExtractionLog(log_path, &summary);
+    if (stage.name == "feature_extractor") CheckExtraction(log_path, images_dir, &summary);
     if (stage.name == "mapper") {
       summary.model_dir = LargestModel(Path(workspace, "sparse"), &model);
       if (summary.model_dir.empty() || model.images.size() < 2) {

@@ -68,6 +68,7 @@ struct SfmSummary {
   std::vector<std::string> registered;    // names of the photos in the model
   std::vector<std::string> no_exif;       // photos whose focal length was guessed (no EXIF prior)
   double default_focal_px = 0;            // the guessed focal, pixels (0 when all had EXIF)
+  std::vector<std::string> unreadable;    // files COLMAP could not decode (skipped)
   size_t points = 0;                      // sparse points
   double mean_reprojection_error = 0;     // pixels, COLMAP's definition
   double mean_track_length = 0;           // observations per point
@@ -89,10 +90,16 @@ std::vector<std::string> ListImages(const std::string& dir, std::vector<std::str
 // killed). Throws InputError naming argv[0] when it cannot be started (not found, not executable).
 int RunLogged(const std::vector<std::string>& argv, const std::string& log_path,
               const std::function<void(double seconds)>& heartbeat = nullptr);
-// Reads COLMAP's feature_extractor log into summary->no_exif / default_focal_px: COLMAP prints
-// "Focal Length: <f>px (Prior)" for a focal from EXIF and no "(Prior)" for its default guess.
+// Reads COLMAP's feature_extractor log into summary->no_exif / default_focal_px / unreadable:
+// COLMAP prints "Focal Length: <f>px (Prior)" for a focal from EXIF, no "(Prior)" for its default
+// guess, and "ERROR: Failed to read image" for a file it cannot decode.
 void ParseFeatureExtractionLog(const std::string& log_path, SfmSummary* summary);
-// The last `lines` lines of a text file ("" when unreadable).
+// Runs one stage with its output in log_path (replaced), reporting progress; returns its seconds.
+// A failure throws InputError naming the log, the exit code (or signal) and the log's last lines.
+double RunSfmStage(const SfmStage& stage, const std::string& log_path, int index, int count,
+                   const SfmProgress& progress);
+// The last `lines` non-empty lines of a text file, glog stack-trace frames ("    @ 0x...") left
+// out ("" when unreadable).
 std::string TailOfFile(const std::string& path, int lines);
 
 }  // namespace candi::photogrammetry

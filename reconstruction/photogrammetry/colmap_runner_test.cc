@@ -270,6 +270,41 @@ TEST(RunSfm, UnrelatedImagesGiveNoModelMessage) {
   EXPECT_FALSE(FileExists(dir.File("ws/images/notes.txt")));
 }
 
+// Files with image names that COLMAP cannot decode: skipped with a warning; fewer than 2 left is
+// an error naming them.
+TEST(RunSfm, UnreadableImagesAreNamed) {
+  REQUIRE_COLMAP();
+  TempDir dir;
+  Put(dir.File("in/a.jpg"), "not a jpeg");
+  WriteNoisePgm(dir.File("in/n0.pgm"), 160, 120, 1);
+  SfmOptions o;
+  o.threads = 1;
+  const std::string text = InputErrorText([&] { RunSfm(o, dir.File("in"), dir.File("ws")); });
+  EXPECT_NE(text.find("could not read 1 of the 2 images (a.jpg)"), std::string::npos) << text;
+}
+
+// A real COLMAP stage failure (the matcher aborts on an empty database): exit status and the end
+// of the log, without the stack-trace frames.
+TEST(RunSfmStage, FailureReportsExitStatusAndLogTail) {
+  REQUIRE_COLMAP();
+  TempDir dir;
+  const SfmStage stage{"exhaustive_matcher",
+                       {"colmap", "exhaustive_matcher", "--database_path", dir.File("empty.db"),
+                        "--SiftMatching.use_gpu", "0"}};
+  int calls = 0;
+  const std::string text = InputErrorText([&] {
+    RunSfmStage(stage, dir.File("m.log"), 2, 4, [&](const std::string&, int, int, double, bool) { ++calls; });
+  });
+  EXPECT_NE(text.find("colmap exhaustive_matcher "), std::string::npos) << text;
+  EXPECT_TRUE(text.find("killed by signal") != std::string::npos ||
+              text.find("exit code") != std::string::npos) << text;
+  EXPECT_NE(text.find("m.log"), std::string::npos) << text;
+  EXPECT_EQ(text.find("    @ "), std::string::npos) << text;
+  EXPECT_EQ(calls, 1);  // started, never done
+  EXPECT_NE(ReadBytes(dir.File("m.log")).find("$ colmap exhaustive_matcher --database_path"),
+            std::string::npos);
+}
+
 // The Sceaux photos end to end, downscaled (slow: minutes on 2 cores).
 TEST(RunSfm, SceauxRegistersAlmostAllPhotos) {
   CANDI_REQUIRE_SLOW_TESTS();
