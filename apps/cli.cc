@@ -314,6 +314,27 @@ void AddFoundation(CLI::App& app, FoundationArgs& a, std::function<int()>* run) 
             "--layers A,B,C,D --mesh foundation.obj");
 }
 
+void AddSfm(CLI::App& app, SfmArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("sfm", "Structure from motion with COLMAP: photos to a sparse model "
+                               "and a dense workspace (WORKSPACE/dense)");
+  c->add_option("images", a.images, "Folder of photos (other files are ignored)")->required();
+  c->add_option("-o,--output", a.workspace, "Workspace folder (created)")->required();
+  c->add_option("--colmap", a.colmap, "COLMAP executable (default: $CANDI_COLMAP, else colmap)");
+  c->add_option("--max-image-size", a.max_image_size, "Longest side in pixels for SIFT and the "
+                "dense images")->check(CLI::Range(64, 100000));
+  c->add_option("--max-features", a.max_features, "SIFT features per image")
+      ->check(CLI::Range(64, 1000000));
+  c->add_option("--exhaustive-max-images", a.exhaustive_max_images, "Exhaustive matching up to "
+                "this many images, sequential matching above")->check(CLI::Range(2, 1000000));
+  c->add_option("--camera-model", a.camera_model, "COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
+  c->add_flag("--camera-per-image", a.camera_per_image, "Separate intrinsics per photo (default: "
+              "one shared camera)");
+  c->add_option("--threads", a.threads, "COLMAP threads (-1: all)");
+  c->add_flag("--overwrite", a.overwrite, "Replace a previous run in the workspace");
+  c->callback([run, &a] { *run = [&a] { return RunSfm(a); }; });
+  c->footer("Example: candi sfm photos/ -o work --max-image-size 1600");
+}
+
 }  // namespace
 
 int RunCli(int argc, char** argv) {
@@ -344,6 +365,8 @@ int RunCli(int argc, char** argv) {
   AddFoundation(app, foundation, &run);
   ReliefArgs relief;
   AddRelief(app, relief, &run);
+  SfmArgs sfm;
+  AddSfm(app, sfm, &run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

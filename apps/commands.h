@@ -187,4 +187,18 @@ struct FoundationArgs {
 };
 int RunFoundation(const FoundationArgs& args);
 
+// candi sfm IMAGES -o WORKSPACE (cmd_sfm.cc): COLMAP structure from motion into a dense workspace.
+struct SfmArgs {
+  std::string images, workspace;
+  std::string colmap;                // executable; "" = $CANDI_COLMAP, else `colmap` on PATH
+  int max_image_size = 1600;         // pixels (SIFT and the undistorted dense images)
+  int max_features = 4096;           // SIFT features per image
+  int exhaustive_max_images = 50;    // more images: sequential matching
+  std::string camera_model = "SIMPLE_RADIAL";
+  bool camera_per_image = false;     // default: one camera shared by all photos
+  int threads = -1;                  // -1 = all
+  bool overwrite = false;
+};
+int RunSfm(const SfmArgs& args);
+
 }  // namespace candi::app

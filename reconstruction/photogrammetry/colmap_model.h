@@ -81,4 +81,24 @@ struct ColmapArray {
 ColmapArray ReadColmapArray(const std::string& path);
 void WriteColmapArray(const ColmapArray& array, const std::string& path);  // atomic
 
+// COLMAP 3.8's camera models: id (as stored in cameras.bin) <-> name, and parameter count.
+// CameraModelId returns -1 and CameraModelNumParams 0 for an unknown name; CameraModelName returns
+// "" for an unknown id.
+int CameraModelId(const std::string& name);
+std::string CameraModelName(int id);
+int CameraModelNumParams(const std::string& name);
+
+// Projects a world point (model frame) to COLMAP image coordinates (pixels, the top-left image
+// corner at (0, 0), so a pixel centre is at (x + 0.5, y + 0.5)), exactly as COLMAP does:
+// x_cam = R(q) X + t with q normalized, (u, v) = x_cam.xy / x_cam.z, distortion, then focal and
+// principal point. Supports SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV and
+// FULL_OPENCV; other models throw std::invalid_argument. A point behind the camera (z <= 0)
+// projects to NaN.
+Eigen::Vector2d ProjectToImage(const ColmapCamera& camera, const ColmapImage& image,
+                               const Eigen::Vector3d& world_point);
+
+// COLMAP's mean reprojection error of a model: the mean of the points' stored errors (points with
+// COLMAP's "no error" value -1 skipped); 0 for a model without points. Pixels.
+double MeanReprojectionError(const ColmapModel& model);
+
 }  // namespace candi::photogrammetry

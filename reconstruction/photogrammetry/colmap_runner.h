@@ -1,0 +1,105 @@
+// Structure from motion with COLMAP run as child processes: a folder of photos in, a COLMAP sparse
+// model and an undistorted dense workspace out.
+//
+// Layout of WORKSPACE after RunSfm:
+//   images/          symlinks to the input photos (COLMAP wants a folder holding only images)
+//   database.db      COLMAP's features and matches
+//   sparse/<k>/      the mapper's models (the largest is the result)
+//   dense/           COLMAP's dense workspace: images/ (undistorted), sparse/ (PINHOLE model),
+//                    stereo/ (empty depth/normal folders), run scripts
+//   logs/<stage>.log stdout + stderr of each COLMAP stage
+//
+// COLMAP is started with an argv vector (posix_spawnp, never a shell), so paths with spaces or
+// shell characters are safe. Failure: InputError when COLMAP is missing, the input folder is
+// unusable, a stage fails (its exit code and the end of its log) or no model results.
+// Not thread-safe with respect to the workspace; one run per workspace.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace candi::photogrammetry {
+
+// What `colmap help` says about itself.
+struct ColmapVersion {
+  std::string version;  // "3.8", "" when not recognised
+  bool cuda = false;    // built with CUDA ("with CUDA" rather than "without CUDA")
+};
+// Parses `colmap help`'s banner ("COLMAP 3.8 -- Structure-from-Motion ... without CUDA)").
+// Throws std::invalid_argument when the text is not a COLMAP banner.
+ColmapVersion ParseColmapVersion(const std::string& help_output);
+
+struct SfmOptions {
+  std::string colmap = "colmap";      // the executable: a path, or a name looked up on PATH
+  int max_image_size = 1600;          // pixels, the longest side for SIFT and the dense images, >= 64
+  int max_features = 4096;            // SIFT features per image, >= 64
+  int exhaustive_max_images = 50;     // exhaustive matching up to this many images, else sequential, >= 2
+  int sequential_overlap = 10;        // sequential matching: neighbours matched per image, >= 1
+  std::string camera_model = "SIMPLE_RADIAL";  // a COLMAP camera model name
+  bool single_camera = true;          // one camera (intrinsics) shared by all photos
+  int threads = -1;                   // COLMAP threads; -1 = all cores, else >= 1
+  bool overwrite = false;             // replace a previous run's outputs in the workspace
+  void Check() const;
+};
+
+// One COLMAP invocation.
+struct SfmStage {
+  std::string name;               // "feature_extractor", ... (also the log's name)
+  std::vector<std::string> argv;  // argv[0] is the executable
+};
+
+// The stages for a workspace (absolute paths inside it) and `num_images` photos. `cuda` keeps the
+// GPU on for SIFT; otherwise `--SiftExtraction.use_gpu 0 --SiftMatching.use_gpu 0`. The mapper
+// stage is followed by image_undistorter whose --input_path is a placeholder (`<model>`) that
+// RunSfm replaces with the largest model's folder.
+std::vector<SfmStage> BuildSfmStages(const SfmOptions& options, const std::string& workspace,
+                                     size_t num_images, bool cuda);
+
+// Progress of a run: called when a stage starts (done = false, seconds = 0), every few seconds
+// while it runs (done = false) and when it ends (done = true). seconds = elapsed in the stage.
+using SfmProgress = std::function<void(const std::string& stage, int index, int count,
+                                       double seconds, bool done)>;
+
+struct SfmSummary {
+  ColmapVersion colmap;
+  std::vector<std::string> images;        // photo file names used (sorted)
+  std::vector<std::string> ignored;       // non-image files skipped in the input folder
+  std::vector<std::string> registered;    // names of the photos in the model
+  std::vector<std::string> no_exif;       // photos whose focal length was guessed (no EXIF prior)
+  double default_focal_px = 0;            // the guessed focal, pixels (0 when all had EXIF)
+  std::vector<std::string> unreadable;    // files COLMAP could not decode (skipped)
+  size_t points = 0;                      // sparse points
+  double mean_reprojection_error = 0;     // pixels, COLMAP's definition
+  double mean_track_length = 0;           // observations per point
+  std::string matcher;                    // exhaustive_matcher | sequential_matcher
+  std::string model_dir;                  // WORKSPACE/sparse/<k>, the largest model
+  std::string dense_dir;                  // WORKSPACE/dense
+  std::vector<std::pair<std::string, double>> stage_seconds;
+};
+
+// Runs feature extraction, matching, mapping and undistortion. See the file comment.
+SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
+                  const std::string& workspace, const SfmProgress& progress = nullptr);
+
+// Lower-level pieces, exposed for tests.
+// Image files (by extension, case-insensitive: jpg jpeg png tif tiff bmp pgm ppm pnm) directly in
+// `dir`, sorted; other regular files go to `ignored`. Throws InputError for a missing folder.
+std::vector<std::string> ListImages(const std::string& dir, std::vector<std::string>* ignored);
+// Runs argv with stdout and stderr appended to log_path; returns the exit code (128 + signal when
+// killed). Throws InputError naming argv[0] when it cannot be started (not found, not executable).
+int RunLogged(const std::vector<std::string>& argv, const std::string& log_path,
+              const std::function<void(double seconds)>& heartbeat = nullptr);
+// Reads COLMAP's feature_extractor log into summary->no_exif / default_focal_px / unreadable:
+// COLMAP prints "Focal Length: <f>px (Prior)" for a focal from EXIF, no "(Prior)" for its default
+// guess, and "ERROR: Failed to read image" for a file it cannot decode.
+void ParseFeatureExtractionLog(const std::string& log_path, SfmSummary* summary);
+// Runs one stage with its output in log_path (replaced), reporting progress; returns its seconds.
+// A failure throws InputError naming the log, the exit code (or signal) and the log's last lines.
+double RunSfmStage(const SfmStage& stage, const std::string& log_path, int index, int count,
+                   const SfmProgress& progress);
+// The last `lines` non-empty lines of a text file, glog stack-trace frames ("    @ 0x...") left
+// out ("" when unreadable).
+std::string TailOfFile(const std::string& path, int lines);
+
+}  // namespace candi::photogrammetry
