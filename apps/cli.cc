@@ -101,8 +101,9 @@ void AddRender(CLI::App& app, RenderArgs& a, std::function<int()>* run) {
 void AddBench(CLI::App& app, BenchArgs& a, std::function<int()>* run) {
   auto* c = app.add_subcommand("bench", "Benchmarks: `candi bench render` prints SPBR accuracy vs "
                                         "time for L = 1 ... 1024");
-  c->add_option("what", a.what, "What to measure: render (SPBR), foundation (sections to points)")
-      ->check(CLI::IsMember({"render", "foundation"}));
+  c->add_option("what", a.what, "What to measure: render (SPBR), foundation (sections to points), "
+                 "dense (PatchMatch on the synthetic scene)")
+      ->check(CLI::IsMember({"render", "foundation", "dense"}));
   c->add_option("--points", a.points, "Points in the generated scene");
   c->add_option("--width", a.width, "Image width")->check(CLI::Range(16, 8192));
   c->add_option("--height", a.height, "Image height")->check(CLI::Range(16, 8192));
@@ -335,6 +336,25 @@ void AddSfm(CLI::App& app, SfmArgs& a, std::function<int()>* run) {
   c->footer("Example: candi sfm photos/ -o work --max-image-size 1600");
 }
 
+void AddDense(CLI::App& app, DenseArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("dense", "CPU multi-view PatchMatch stereo on a COLMAP dense workspace "
+                               "(images/ + sparse/): depth and normal maps (written to stereo/ for "
+                               "COLMAP's stereo_fusion), fused into coloured points with normals");
+  c->add_option("workspace", a.workspace, "COLMAP dense workspace (e.g. from candi sfm)")->required();
+  c->add_option("-o,--output", a.output, "Point file (.ply .las .xyz .pts)")->required();
+  c->add_option("--resolution-scale", a.resolution_scale, "Resample images by this factor (0, 1]");
+  c->add_option("--iterations", a.iterations, "PatchMatch rounds (propagation + refinement)");
+  c->add_option("--window", a.window, "Matching window radius, pixels");
+  c->add_option("--views", a.views, "Source views per reference image");
+  c->add_option("--min-consistent", a.min_consistent, "Source views that must agree geometrically");
+  c->add_option("--min-views", a.min_views, "Fusion: views per point");
+  c->add_flag("--no-maps", a.no_maps, "Do not write stereo/{depth,normal}_maps");
+  c->add_option("--seed", a.seed, "Random seed");
+  c->add_option("--threads", a.threads, "Threads (0: all)")->check(CLI::Range(0, 256));
+  c->callback([run, &a] { *run = [&a] { return RunDense(a); }; });
+  c->footer("Example: candi dense workspace -o dense.ply --resolution-scale 0.5 --iterations 3");
+}
+
 }  // namespace
 
 int RunCli(int argc, char** argv) {
@@ -363,6 +383,8 @@ int RunCli(int argc, char** argv) {
   AddBench(app, bench, &run);
   FoundationArgs foundation;
   AddFoundation(app, foundation, &run);
+  DenseArgs dense;
+  AddDense(app, dense, &run);
   ReliefArgs relief;
   AddRelief(app, relief, &run);
   SfmArgs sfm;

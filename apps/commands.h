@@ -200,5 +200,20 @@ struct SfmArgs {
   bool overwrite = false;
 };
 int RunSfm(const SfmArgs& args);
+struct DenseArgs {
+  std::string workspace;              // COLMAP dense workspace: images/ + sparse/ (PINHOLE cameras)
+  std::string output;                 // fused points (.ply .las .xyz .pts)
+  double resolution_scale = 1.0;      // images resampled by this factor, (0, 1]
+  int iterations = 3;                 // PatchMatch red-black rounds
+  int window = 4;                     // window radius, pixels
+  int views = 4;                      // source views per reference
+  int min_consistent = 2;             // geometric consistency: agreeing source views
+  int min_views = 3;                  // fusion: views per point
+  bool no_maps = false;               // do not write WORKSPACE/stereo/*_maps
+  unsigned long long seed = 1;
+  int threads = 0;
+};
+int RunDense(const DenseArgs& args);
+int RunBenchDense(const BenchArgs& args);  // `candi bench dense`
 
 }  // namespace candi::app

@@ -1,0 +1,312 @@
+#include "reconstruction/photogrammetry/synthetic_views.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "core/check.h"
+#include "core/png_io.h"
+#include "core/rng.h"
+
+namespace candi::photogrammetry {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A convex polyhedron {X : n_i . X <= d_i for all i} with a base albedo.
+struct Convex {
+  std::vector<std::pair<Eigen::Vector3d, double>> planes;
+  Eigen::Vector3d albedo;
+};
+
+Convex Box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3d& albedo) {
+  Convex c;
+  for (int a = 0; a < 3; ++a) {
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    n[a] = 1;
+    c.planes.push_back({n, hi[a]});
+    c.planes.push_back({-n, -lo[a]});
+  }
+  c.albedo = albedo;
+  return c;
+}
+
+// The scene: ground, two terraces, a ramp (its slanted face rises from x = 1.6 to the lower
+// terrace's top at x = 1).
+const std::vector<Convex>& Scene() {
+  static const std::vector<Convex> scene = [] {
+    std::vector<Convex> s;
+    s.push_back(Box({-40, -40, -1}, {40, 40, 0}, {0.55, 0.50, 0.42}));
+    s.push_back(Box({-1.0, -1.0, 0}, {1.0, 1.0, 0.5}, {0.78, 0.70, 0.60}));
+    s.push_back(Box({-0.55, -0.55, 0}, {0.55, 0.55, 0.9}, {0.70, 0.72, 0.75}));
+    Convex ramp = Box({1.0, -1.0, 0}, {1.6, 1.0, 0.5}, {0.72, 0.62, 0.50});
+    ramp.planes.push_back({Eigen::Vector3d(5.0 / 6.0, 0, 1).normalized(),
+                           (4.0 / 3.0) / Eigen::Vector3d(5.0 / 6.0, 0, 1).norm()});
+    s.push_back(ramp);
+    return s;
+  }();
+  return scene;
+}
+
+struct Hit {
+  double t = -1;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  int primitive = -1;
+};
+
+// Cyrus-Beck clipping of the ray against each convex primitive; the nearest entry wins.
+Hit CastRay(const Eigen::Vector3d& o, const Eigen::Vector3d& dir) {
+  Hit best;
+  const auto& scene = Scene();
+  for (size_t k = 0; k < scene.size(); ++k) {
+    double t_enter = -std::numeric_limits<double>::infinity();
+    double t_exit = std::numeric_limits<double>::infinity();
+    int enter_plane = -1;
+    bool miss = false;
+    for (size_t i = 0; i < scene[k].planes.size() && !miss; ++i) {
+      const auto& [n, d] = scene[k].planes[i];
+      const double denom = n.dot(dir), num = d - n.dot(o);
+      if (denom == 0) {
+        miss = num < 0;
+      } else if (denom < 0) {
+        if (num / denom > t_enter) t_enter = num / denom, enter_plane = static_cast<int>(i);
+      } else {
+        t_exit = std::min(t_exit, num / denom);
+      }
+    }
+    if (miss || enter_plane < 0 || t_enter > t_exit || t_enter <= 1e-9) continue;
+    if (best.t < 0 || t_enter < best.t) {
+      best.t = t_enter;
+      best.normal = scene[k].planes[enter_plane].first;
+      best.primitive = static_cast<int>(k);
+    }
+  }
+  return best;
+}
+
+double LatticeValue(uint64_t seed, int64_t x, int64_t y, int64_t z) {
+  const uint64_t key = (static_cast<uint64_t>(x) * 0x9E3779B1ULL) ^
+                       (static_cast<uint64_t>(y) * 0x85EBCA77ULL << 21) ^
+                       (static_cast<uint64_t>(z) * 0xC2B2AE3DULL << 42);
+  return ToUnit(HashIndex(seed, key, 0x7e37));
+}
+
+// Trilinear value noise in [0, 1) on a lattice of spacing 1.
+double ValueNoise(uint64_t seed, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d f = p.array().floor();
+  const int64_t x = static_cast<int64_t>(f.x()), y = static_cast<int64_t>(f.y()),
+                z = static_cast<int64_t>(f.z());
+  const Eigen::Vector3d w = p - f;
+  double v = 0;
+  for (int c = 0; c < 8; ++c) {
+    const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
+    const double weight = (dx ? w.x() : 1 - w.x()) * (dy ? w.y() : 1 - w.y()) * (dz ? w.z() : 1 - w.z());
+    v += weight * LatticeValue(seed, x + dx, y + dy, z + dz);
+  }
+  return v;
+}
+
+Eigen::Vector3d Shade(const SyntheticViewsOptions& o, const Eigen::Vector3d& origin,
+                      const Eigen::Vector3d& dir) {
+  static const Eigen::Vector3d light = Eigen::Vector3d(0.45, -0.55, 0.70).normalized();
+  const Hit hit = CastRay(origin, dir);
+  if (hit.t < 0) return Eigen::Vector3d::Zero();
+  const Eigen::Vector3d x = origin + hit.t * dir;
+  double texture = 1.0;
+  if (!o.textureless) {
+    const Eigen::Vector3d p = x / o.texture_cell;
+    texture = 0.25 + 0.75 * (0.55 * ValueNoise(o.seed, p) + 0.3 * ValueNoise(o.seed + 1, p * 2.3) +
+                             0.15 * ValueNoise(o.seed + 2, p * 0.37));
+  }
+  const double lambert = 0.3 + 0.7 * std::max(0.0, hit.normal.dot(light));
+  return Scene()[hit.primitive].albedo * (texture * lambert);
+}
+
+PinholeCamera ArcCamera(const SyntheticViewsOptions& o, int k) {
+  const double az = (-90.0 + (o.views > 1 ? o.arc_degrees * (k / (o.views - 1.0) - 0.5) : 0.0)) *
+                    kPi / 180.0;
+  const double el = o.elevation_degrees * kPi / 180.0;
+  const Eigen::Vector3d target(0, 0, 0.35);
+  const Eigen::Vector3d center =
+      target + o.distance * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
+                                            std::sin(el));
+  const Eigen::Vector3d forward = (target - center).normalized();
+  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d down = forward.cross(right);
+  PinholeCamera c;
+  c.width = o.width;
+  c.height = o.height;
+  c.fx = c.fy = 0.5 * o.width / std::tan(0.5 * o.fov_degrees * kPi / 180.0);
+  c.cx = 0.5 * o.width;
+  c.cy = 0.5 * o.height;
+  c.rotation.row(0) = right;
+  c.rotation.row(1) = down;
+  c.rotation.row(2) = forward;
+  c.translation = -c.rotation * center;
+  return c;
+}
+
+// A standard normal from two hashed uniforms (Box-Muller), stateless.
+double HashNormal(uint64_t seed, uint64_t index, uint64_t stream) {
+  const double u1 = std::max(ToUnit(HashIndex(seed, 2 * index, stream)), 1e-300);
+  const double u2 = ToUnit(HashIndex(seed, 2 * index + 1, stream));
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+}
+
+SyntheticView RenderView(const SyntheticViewsOptions& o, int k) {
+  SyntheticView v;
+  char name[32];
+  std::snprintf(name, sizeof(name), "view_%03d.png", k);
+  v.name = name;
+  v.camera = ArcCamera(o, k);
+  v.image = Image8(o.width, o.height, 3);
+  v.depth = ImageF(o.width, o.height, 1, 0.0f);
+  const Eigen::Matrix3d world_from_cam = v.camera.rotation.transpose();
+  const Eigen::Vector3d origin = v.camera.Center();
+  const int ss = o.supersample;
+  for (int y = 0; y < o.height; ++y) {
+    for (int x = 0; x < o.width; ++x) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int j = 0; j < ss; ++j)
+        for (int i = 0; i < ss; ++i)
+          sum += Shade(o, origin, world_from_cam * v.camera.Ray(x + (i + 0.5) / ss, y + (j + 0.5) / ss));
+      const Hit centre = CastRay(origin, world_from_cam * v.camera.Ray(x + 0.5, y + 0.5));
+      v.depth.at(x, y) = centre.t > 0 ? static_cast<float>(centre.t) : 0.0f;  // ray has z = 1
+      for (int c = 0; c < 3; ++c) {
+        double value = 255.0 * sum[c] / (ss * ss);
+        if (o.noise_sigma > 0) {
+          const uint64_t index = (static_cast<uint64_t>(y) * o.width + x) * 3 + c;
+          value += o.noise_sigma * HashNormal(o.seed, index, 0x5eed0000ULL + k);
+        }
+        v.image.at(x, y, c) = static_cast<uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+      }
+    }
+  }
+  return v;
+}
+
+// True when X is in frame and unoccluded in a view other than k.
+bool SeenByAnother(const std::vector<SyntheticView>& views, size_t k, const Eigen::Vector3d& X) {
+  for (size_t s = 0; s < views.size(); ++s) {
+    if (s == k) continue;
+    const PinholeCamera& c = views[s].camera;
+    const Eigen::Vector3d p = c.ToCamera(X);
+    if (!(p.z() > 0)) continue;
+    const Eigen::Vector2d uv = c.Project(p);
+    if (!(uv.x() >= 0 && uv.y() >= 0 && uv.x() < c.width && uv.y() < c.height)) continue;
+    if (CastRay(c.Center(), X - c.Center()).t > 1 - 1e-5) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+void SyntheticViewsOptions::Check() const {
+  auto fail = [](const std::string& field, double value, const std::string& rule) {
+    throw std::invalid_argument("SyntheticViewsOptions::" + field + " = " + std::to_string(value) +
+                                "; must be " + rule);
+  };
+  if (views < 1) fail("views", views, ">= 1");
+  if (width < 8) fail("width", width, ">= 8");
+  if (height < 8) fail("height", height, ">= 8");
+  if (!(arc_degrees >= 0 && arc_degrees < 360)) fail("arc_degrees", arc_degrees, "in [0, 360)");
+  if (!(elevation_degrees > 0 && elevation_degrees < 90))
+    fail("elevation_degrees", elevation_degrees, "in (0, 90)");
+  if (!(distance > 2)) fail("distance", distance, "> 2");
+  if (!(fov_degrees > 5 && fov_degrees < 150)) fail("fov_degrees", fov_degrees, "in (5, 150)");
+  if (!(texture_cell > 0)) fail("texture_cell", texture_cell, "> 0");
+  if (supersample < 1 || supersample > 8) fail("supersample", supersample, "in [1, 8]");
+  if (!(noise_sigma >= 0)) fail("noise_sigma", noise_sigma, ">= 0");
+}
+
+std::vector<SyntheticView> RenderSyntheticViews(const SyntheticViewsOptions& options) {
+  options.Check();
+  std::vector<SyntheticView> views;
+  for (int k = 0; k < options.views; ++k) views.push_back(RenderView(options, k));
+  return views;
+}
+
+double SyntheticSceneRayHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) {
+  return CastRay(origin, direction).t;
+}
+
+std::vector<Eigen::Vector3d> SyntheticSparsePoints(const std::vector<SyntheticView>& views,
+                                                   int stride) {
+  std::vector<Eigen::Vector3d> points;
+  for (const SyntheticView& v : views) {
+    for (int y = stride / 2; y < v.depth.height(); y += stride) {
+      for (int x = stride / 2; x < v.depth.width(); x += stride) {
+        const double d = v.depth.at(x, y);
+        if (d > 0) points.push_back(v.camera.ToWorld(d * v.camera.Ray(x + 0.5, y + 0.5)));
+      }
+    }
+  }
+  return points;
+}
+
+SyntheticDenseScore ScoreSyntheticDense(const std::vector<SyntheticView>& views,
+                                        const std::vector<ImageF>& depths,
+                                        const std::vector<Eigen::Vector3d>& points,
+                                        double tolerance) {
+  CANDI_CHECK(depths.size() == views.size()) << depths.size() << " depth maps for " << views.size();
+  SyntheticDenseScore score;
+  score.points = points.size();
+  std::vector<double> errors;
+  for (const Eigen::Vector3d& p : points) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const SyntheticView& v : views) {
+      const Eigen::Vector3d c = v.camera.ToCamera(p);
+      if (!(c.z() > 0)) continue;
+      const Eigen::Vector2d uv = v.camera.Project(c);
+      if (!(uv.x() >= 0 && uv.y() >= 0 && uv.x() < v.camera.width && uv.y() < v.camera.height)) continue;
+      const Eigen::Vector3d origin = v.camera.Center(), dir = p - origin;
+      const double t = CastRay(origin, dir).t;  // 1 = at p
+      if (t > 0) best = std::min(best, std::abs(1.0 - t));
+    }
+    errors.push_back(best);
+  }
+  size_t good = 0;
+  for (double e : errors) good += e <= tolerance;
+  score.accuracy = points.empty() ? 0.0 : static_cast<double>(good) / points.size();
+  if (!errors.empty()) {
+    std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+    score.median_error = errors[errors.size() / 2];
+  }
+  uint64_t with_truth = 0, correct = 0, observable = 0, observable_correct = 0;
+  for (size_t k = 0; k < views.size(); ++k) {
+    const ImageF& truth = views[k].depth;
+    const ImageF& d = depths[k];
+    if (d.empty()) continue;
+    for (int y = 0; y < d.height(); ++y) {
+      for (int x = 0; x < d.width(); ++x) {
+        const int tx = std::min(truth.width() - 1, static_cast<int>((x + 0.5) * truth.width() / d.width()));
+        const int ty = std::min(truth.height() - 1, static_cast<int>((y + 0.5) * truth.height() / d.height()));
+        const double t = truth.at(tx, ty);
+        if (!(t > 0)) continue;
+        ++with_truth;
+        const bool ok = d.at(x, y) > 0 && std::abs(d.at(x, y) - t) <= tolerance * t;
+        correct += ok;
+        const Eigen::Vector3d X = views[k].camera.ToWorld(t * views[k].camera.Ray(tx + 0.5, ty + 0.5));
+        if (SeenByAnother(views, k, X)) ++observable, observable_correct += ok;
+      }
+    }
+  }
+  score.completeness_all = with_truth ? static_cast<double>(correct) / with_truth : 0.0;
+  score.completeness = observable ? static_cast<double>(observable_correct) / observable : 0.0;
+  return score;
+}
+
+void WriteSyntheticImages(const std::vector<SyntheticView>& views, const std::string& dir) {
+  std::filesystem::create_directories(dir);
+  for (const SyntheticView& v : views) WritePng((std::filesystem::path(dir) / v.name).string(), v.image);
+}
+
+}  // namespace candi::photogrammetry
