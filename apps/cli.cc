@@ -355,6 +355,38 @@ void AddDense(CLI::App& app, DenseArgs& a, std::function<int()>* run) {
   c->footer("Example: candi dense workspace -o dense.ply --resolution-scale 0.5 --iterations 3");
 }
 
+void AddRegister(CLI::App& app, RegisterArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("register", "ICP refinement of MOVING onto FIXED (PCL, local "
+                               "coordinates): RMS, overlap, the 4x4 transform; writes MOVING moved");
+  c->add_option("moving", a.moving, "Point file to move")->required();
+  c->add_option("fixed", a.fixed, "Point file to register onto")->required();
+  c->add_option("-o,--output", a.output, "MOVING after the transform (its precision and shift "
+                "kept)")->required();
+  c->add_option("--max-distance", a.max_distance, "Largest correspondence distance, m");
+  c->add_option("--iterations", a.iterations, "Largest number of ICP iterations");
+  c->add_option("--method", a.method, "point (point-to-point) or plane (point-to-plane; normals "
+                "estimated when FIXED has none)")->check(CLI::IsMember({"point", "plane"}));
+  c->add_option("--voxel", a.voxel, "Thin both clouds to this voxel size for the solve, m");
+  c->add_option("--transform-out", a.transform_out, "Write the transform and figures as JSON");
+  c->add_option("--initial", a.initial, "Initial transform (JSON as --transform-out writes)");
+  c->callback([run, &a] { *run = [&a] { return RunRegister(a); }; });
+  c->footer("Example: candi register scan2.las scan1.las -o scan2_reg.las --max-distance 0.2 "
+            "--transform-out t.json");
+}
+
+void AddClean(CLI::App& app, CleanArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("clean", "Statistical outlier removal (PCL) and voxel thinning "
+                               "(one real point per voxel); every field kept");
+  c->add_option("input", a.input, "Input point file")->required();
+  c->add_option("-o,--output", a.output, "Output point file")->required();
+  c->add_option("--sor-k", a.sor_k, "Outlier removal: neighbours averaged");
+  c->add_option("--sor-std", a.sor_std, "Outlier removal: threshold in standard deviations");
+  c->add_flag("--no-sor", a.no_sor, "Skip outlier removal");
+  c->add_option("--voxel", a.voxel, "Keep the point nearest each voxel's centre, voxel side m");
+  c->callback([run, &a] { *run = [&a] { return RunClean(a); }; });
+  c->footer("Example: candi clean dense.ply -o dense_clean.ply --voxel 0.01");
+}
+
 }  // namespace
 
 int RunCli(int argc, char** argv) {
@@ -389,6 +421,10 @@ int RunCli(int argc, char** argv) {
   AddRelief(app, relief, &run);
   SfmArgs sfm;
   AddSfm(app, sfm, &run);
+  RegisterArgs register_args;
+  AddRegister(app, register_args, &run);
+  CleanArgs clean;
+  AddClean(app, clean, &run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

@@ -1,13 +1,11 @@
 // candi opacity IN OUT: SPBR point-number adjustment (sampling/opacity.h) from file to file.
 // Writes the kept points with the field spbr_multiplicity, records the parameters as a comment
 // ("candi_opacity alpha=... repeat_level=... pixel_size=... seed=..."), prints a summary table.
-#include <unistd.h>
-
 #include <cstdio>
-#include <filesystem>
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/output_folder.h"
 #include "core/check.h"
 #include "core/point_io.h"
 #include "core/progress.h"
@@ -32,20 +30,6 @@ OpacityOptions Options(const OpacityArgs& args) {
   o.density.threads = args.threads;
   o.Check();
   return o;
-}
-
-// Fails before the (long) density pass when the output cannot be written at all.
-void CheckOutputFolder(const std::string& output) {
-  OutputPointFormat(output);  // a known extension
-  std::filesystem::path folder = std::filesystem::path(output).parent_path();
-  if (folder.empty()) folder = ".";
-  std::error_code ec;
-  if (!std::filesystem::is_directory(folder, ec)) {
-    throw InputError(output, "", "output folder '" + folder.string() + "' does not exist");
-  }
-  if (::access(folder.c_str(), W_OK) != 0) {
-    throw InputError(output, "", "output folder '" + folder.string() + "' is not writable");
-  }
 }
 
 std::string Comment(const OpacityOptions& o, const OpacitySummary& s) {
@@ -87,6 +71,7 @@ void PrintSummary(const OpacityOptions& o, const OpacitySummary& s) {
 
 int RunOpacity(const OpacityArgs& args) {
   OpacityOptions options = Options(args);  // bad values: std::invalid_argument, exit 1
+  OutputPointFormat(args.output);  // a known extension, and a writable folder, before the work
   CheckOutputFolder(args.output);
   const PointCloud cloud = ReadPointCloud(args.input);
   ConsoleProgress progress("opacity: density of " + args.input);

@@ -215,5 +215,25 @@ struct DenseArgs {
 };
 int RunDense(const DenseArgs& args);
 int RunBenchDense(const BenchArgs& args);  // `candi bench dense`
+// candi register / candi clean (cmd_register.cc, cmd_clean.cc): ICP and cleaning with PCL.
+struct RegisterArgs {
+  std::string moving, fixed, output;
+  double max_distance = 0.5;     // m: correspondences farther apart are ignored
+  int iterations = 50;
+  std::string method = "plane";  // point | plane
+  double voxel = 0;              // m: thin both clouds for the solve; 0 = off
+  std::string transform_out;     // optional JSON: the 4x4 and the figures
+  std::string initial;           // optional JSON: initial fixed_from_moving (same format)
+};
+int RunRegister(const RegisterArgs& args);
+
+struct CleanArgs {
+  std::string input, output;
+  int sor_k = 16;                // statistical outlier removal: neighbours
+  double sor_std = 3.0;          // ... threshold in standard deviations
+  bool no_sor = false;
+  double voxel = 0;              // m: keep one point per voxel; 0 = off
+};
+int RunClean(const CleanArgs& args);
 
 }  // namespace candi::app
