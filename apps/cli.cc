@@ -75,7 +75,8 @@ void AddOpacity(CLI::App& app, OpacityArgs& a, std::function<int()>* run) {
 void AddRender(CLI::App& app, RenderArgs& a, std::function<int()>* run) {
   auto* c = app.add_subcommand("render", "Render point files see-through with SPBR (stochastic "
                                          "point-based rendering), merged into one image");
-  c->add_option("inputs", a.inputs, "Point files (.ply .las .xyz .pts)")->required();
+  c->add_option("inputs", a.inputs, "Point files (.ply .las .xyz .pts), or one archive (candi pack); "
+                "under mpirun the ranks share the ensembles")->required();
   c->add_option("-o,--output", a.output, "Output PNG (8-bit)")->required();
   c->add_option("--png16", a.output16, "Also write a 16-bit PNG (for analysis)");
   c->add_option("-L,--repeat-level", a.repeat_level, "Ensembles averaged (more: less noise, slower)");
@@ -93,6 +94,7 @@ void AddRender(CLI::App& app, RenderArgs& a, std::function<int()>* run) {
   c->add_option("--preview", a.preview, "Render only the first k ensembles (progressive preview)");
   c->add_option("--mode", a.mode, "auto, memory (fast, 10 B/point) or stream (bounded memory)");
   c->add_option("--memory-budget", a.memory_mb, "Stream mode: MB of z-buffers resident per pass");
+  c->add_option("--chunk-budget", a.chunk_budget_mb, "Archive input: MB of chunks in flight");
   c->add_option("--columns", a.columns, "XYZ/PTS column spec");
   c->callback([run, &a] { *run = [&a] { return RunRender(a); }; });
   c->footer("Example: candi render building.ply foundation.ply -o site.png -L 100 --alpha 0.3,0.8");
@@ -109,12 +111,39 @@ void AddBench(CLI::App& app, BenchArgs& a, std::function<int()>* run) {
   c->add_option("--height", a.height, "Image height")->check(CLI::Range(16, 8192));
   c->add_option("--threads", a.threads, "Threads (0: all)")->check(CLI::Range(0, 256));
   c->callback([run, &a, c] {
-    if (c->got_subcommand("relief")) return;  // `candi bench relief` (AddBenchRelief)
+    if (!c->get_subcommands().empty()) return;  // `bench relief`, `bench scale` (got_subcommand throws for absent ones)
     *run = [&a] { return RunBench(a); };
   });
   c->footer("Example: candi bench render --points 1000000");
 }
 
+
+void AddPack(CLI::App& app, PackArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("pack", "Pack point files into a render archive: Morton-ordered chunks, "
+                               "8 bytes a point, memory-mapped by `candi render ARCHIVE`");
+  c->add_option("inputs", a.inputs, "Point files (.ply .las .xyz .pts)")->required();
+  c->add_option("-o,--output", a.output, "Archive directory (replaced if it is an archive)")->required();
+  c->add_option("--chunk-points", a.chunk_points, "Points per chunk at most")->check(CLI::Range(64, 1 << 24));
+  c->add_option("--memory", a.memory_mb, "MB for sorting (larger inputs are bucketed on disk)");
+  c->add_option("--columns", a.columns, "XYZ/PTS column spec");
+  c->add_option("--threads", a.threads, "Threads (0: all)")->check(CLI::Range(0, 256));
+  c->callback([run, &a] { *run = [&a] { return RunPack(a); }; });
+  c->footer("Example: candi pack site.las photos.ply -o site.archive && candi render site.archive -o site.png");
+}
+
+void AddBenchScale(CLI::App& app, BenchScaleArgs& a, std::function<int()>* run) {
+  auto* c = app.get_subcommand("bench")->add_subcommand(
+      "scale", "Pack and render generated scenes of 1e7, 1e8 (1e9) points: points/s, s/frame, peak RSS");
+  c->add_option("--sizes", a.sizes, "Point counts, comma separated");
+  c->add_flag("--billion", a.billion, "Also 1e9 points (~8 GB archive, ~28 GB temporary disk, minutes)");
+  c->add_option("--work-dir", a.work_dir, "Folder for the generated data (deleted afterwards)");
+  c->add_option("--size", a.size, "Image size WxH");
+  c->add_option("-L,--repeat-level", a.repeat_level, "Ensembles");
+  c->add_option("--ranks", a.ranks, "mpirun -np for the MPI runs (0: none)")->check(CLI::Range(0, 64));
+  c->add_flag("--keep", a.keep, "Keep the generated data");
+  c->callback([run, &a] { *run = [&a] { return RunBenchScale(a); }; });
+  c->footer("Example: candi bench scale --sizes 1e7");
+}
 
 #if CANDI_WITH_RELIEF
 // `candi relief ...`: the buried-relief path (ALGORITHMS.md section 3).
@@ -413,6 +442,10 @@ int RunCli(int argc, char** argv) {
   AddRender(app, render, &run);
   BenchArgs bench;
   AddBench(app, bench, &run);
+  PackArgs pack;
+  AddPack(app, pack, &run);
+  BenchScaleArgs bench_scale;
+  AddBenchScale(app, bench_scale, &run);
   FoundationArgs foundation;
   AddFoundation(app, foundation, &run);
   DenseArgs dense;

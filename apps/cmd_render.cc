@@ -1,18 +1,26 @@
 // candi render IN... -o out.png: SPBR of one or more point files, merged, in memory (a SplatCloud,
-// 10 bytes per point copy) or streamed in chunks (frame buffers and a bounded chunk only).
+// 10 bytes per point copy) or streamed in chunks (frame buffers and a bounded chunk only); or of
+// one render archive (candi pack), streamed from its memory-mapped chunks, split over the ranks
+// when started by mpirun.
 #include <cmath>
 #include <cstdio>
+#include <exception>
+#include <memory>
 #include <stdexcept>
 
 #include "apps/arg_parse.h"
 #include "apps/commands.h"
 #include "apps/view_json.h"
+#include "core/check.h"
 #include "core/log.h"
 #include "core/png_io.h"
 #include "core/point_io.h"
 #include "core/progress.h"
 #include "core/text_format.h"
 #include "core/version.h"
+#include "render/archive.h"
+#include "render/archive_render.h"
+#include "render/mpi/mpi_session.h"
 #include "render/spbr.h"
 #include "render/spbr_stream.h"
 #include "render/splat_cloud.h"
@@ -229,7 +237,7 @@ render::SpbrResult RenderStreaming(const RenderArgs& a, const Plan& p, render::C
 }
 
 void WriteOutputs(const RenderArgs& a, const Plan& p, const render::SpbrResult& result,
-                  const render::Camera& world_camera, bool streamed) {
+                  const render::Camera& world_camera, const char* mode) {
   const double gain = p.brightness < 0 ? (result.ensembles > 1 ? render::AutoBrightnessGain(result) : 1.0)
                                        : p.brightness;
   LogInfo("brightness gain " + std::to_string(gain) + (p.brightness < 0 ? " (auto)" : ""));
@@ -241,7 +249,7 @@ void WriteOutputs(const RenderArgs& a, const Plan& p, const render::SpbrResult& 
                         {"candi:repeat_level", std::to_string(result.repeat_level)},
                         {"candi:ensembles", std::to_string(result.ensembles)},
                         {"candi:brightness_gain", std::to_string(gain)},
-                        {"candi:mode", streamed ? "stream" : "memory"},
+                        {"candi:mode", mode},
                         {"candi:inputs", inputs},
                         {"candi:view", ViewToJson(world_camera)}};
   WritePng(a.output, render::ToImage8(average), text);
@@ -253,10 +261,103 @@ void WriteOutputs(const RenderArgs& a, const Plan& p, const render::SpbrResult& 
               gain, static_cast<unsigned long long>(result.seed));
 }
 
+// One archive, streamed; this rank's share of the ensembles (all of them for one process).
+render::SpbrResult RenderArchiveInput(const RenderArgs& a, const Plan& p, render::Camera* world_camera, int rank,
+                                      int ranks) {
+  if (!a.alpha.empty()) {
+    throw std::invalid_argument("--alpha needs point files: an archive holds one copy per point");
+  }
+  if (!(a.chunk_budget_mb > 0)) throw std::invalid_argument("--chunk-budget must be > 0 MB");
+  const render::Archive archive(a.inputs[0]);
+  const render::ArchiveManifest& m = archive.manifest();
+  *world_camera = WorldCamera(a, p, m.bounds.Translated(m.frame.origin));
+  if (world_camera->projection != render::Projection::kPerspective) {
+    throw std::invalid_argument("an archive renders perspective views; use --mode memory on point files for "
+                                "orthographic ones");
+  }
+  const int drawn = a.preview > 0 ? std::min(a.preview, p.repeat_level) : p.repeat_level;
+  render::ArchiveRenderOptions o;
+  o.repeat_level = p.repeat_level;
+  o.seed = a.seed;
+  o.point_size = a.point_size;
+  o.threads = a.threads;
+  o.memory_budget = static_cast<uint64_t>(a.memory_mb * 1048576.0);
+  o.chunk_budget = static_cast<uint64_t>(a.chunk_budget_mb * 1048576.0);
+  render::mpi::EnsembleShare(drawn, rank, ranks, &o.ensemble_begin, &o.ensemble_end);
+  const bool none = o.ensemble_begin == o.ensemble_end;  // more ranks than ensembles
+  ConsoleProgress progress("render: SPBR L=" + std::to_string(p.repeat_level) + " from " +
+                           std::to_string(m.points) + " archived points" +
+                           (ranks > 1 ? ", ensembles " + std::to_string(o.ensemble_begin) + "-" +
+                                            std::to_string(o.ensemble_end - 1) + " on rank 0 of " +
+                                            std::to_string(ranks)
+                                      : ""));
+  render::ArchiveRenderStats stats;
+  render::SpbrResult result;
+  if (none) {
+    result.sums = render::Accumulator(world_camera->width, world_camera->height);
+  } else {
+    result = render::RenderArchive(o, InFrame(*world_camera, m.frame), archive, progress.Callback(), &stats);
+  }
+  progress.Finish();
+  if (rank == 0) {
+    LogInfo("archive: " + std::to_string(stats.chunks_visible) + " of " + std::to_string(stats.chunks) +
+            " chunks in view (" + std::to_string(stats.points_visible) + " points), " + std::to_string(stats.passes) +
+            " pass(es)" + (ranks > 1 ? ", " + std::to_string(ranks) + " MPI ranks" : ""));
+  }
+  result.repeat_level = p.repeat_level;
+  result.ensembles = drawn;
+  result.seed = a.seed;
+  return result;
+}
+
+// Renders an archive, under mpirun as one of the ranks: every rank draws its ensembles, the
+// ranks agree that all succeeded, the sums are added on rank 0, which alone writes the image
+// (atomically). A failed rank makes every rank fail: no image.
+int RunRenderArchive(const RenderArgs& args, const Plan& plan) {
+  std::unique_ptr<render::mpi::Session> session;
+  if (render::mpi::LaunchedByMpi()) session = std::make_unique<render::mpi::Session>();
+  const int rank = session ? session->rank() : 0, ranks = session ? session->size() : 1;
+  if (rank != 0) SetConsoleProgressEnabled(false);
+  render::Camera world_camera;
+  render::SpbrResult result;
+  std::exception_ptr failure;
+  try {
+    result = RenderArchiveInput(args, plan, &world_camera, rank, ranks);
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  if (!session) {
+    if (failure) std::rethrow_exception(failure);
+  } else {
+    const bool all_ok = session->AllOk(!failure);
+    if (failure) {
+      std::fprintf(stderr, "candi: MPI rank %d of %d failed; no image is written\n", rank, ranks);
+      std::rethrow_exception(failure);
+    }
+    if (!all_ok) {
+      throw InputError("MPI rank " + std::to_string(rank) + " of " + std::to_string(ranks) +
+                       ": stopped because another rank failed (its message is above); no image written");
+    }
+    session->ReduceToRoot(&result);
+    if (rank != 0) return kOk;
+  }
+  WriteOutputs(args, plan, result, world_camera, ranks > 1 ? "archive, MPI" : "archive");
+  return kOk;
+}
+
 }  // namespace
 
 int RunRender(const RenderArgs& args) {
   const Plan plan = MakePlan(args);
+  for (const std::string& in : args.inputs) {
+    if (!render::IsArchive(in)) continue;
+    if (args.inputs.size() > 1) throw std::invalid_argument(in + " is an archive: render it alone");
+    return RunRenderArchive(args, plan);
+  }
+  if (render::mpi::LaunchedByMpi()) {
+    throw std::invalid_argument("under mpirun, candi render splits an archive (candi pack) over the ranks; "
+                                "point files render in one process");
+  }
   bool stream = args.mode == "stream";
   if (args.mode == "auto" && args.alpha.empty()) {
     uint64_t stated = 0;
@@ -271,7 +372,7 @@ int RunRender(const RenderArgs& args) {
   render::Camera world_camera;
   const render::SpbrResult result = stream ? RenderStreaming(args, plan, &world_camera)
                                            : RenderInMemory(args, plan, &world_camera);
-  WriteOutputs(args, plan, result, world_camera, stream);
+  WriteOutputs(args, plan, result, world_camera, stream ? "stream" : "memory");
   return kOk;
 }
 

@@ -74,6 +74,7 @@ struct RenderArgs {
   int preview = 0;                    // > 0: only the first k ensembles
   std::string mode = "auto";          // auto | memory | stream
   double memory_mb = 1024;            // stream mode: z-buffers resident per pass
+  double chunk_budget_mb = 256;       // archive input: chunks in flight (28 bytes a point)
   std::string columns;                // XYZ/PTS inputs
 };
 int RunRender(const RenderArgs& args);
@@ -235,5 +236,28 @@ struct CleanArgs {
   double voxel = 0;              // m: keep one point per voxel; 0 = off
 };
 int RunClean(const CleanArgs& args);
+// candi pack IN... -o ARCHIVE (cmd_pack.cc): the compact chunked render archive (render/archive.h).
+struct PackArgs {
+  std::vector<std::string> inputs;
+  std::string output;                  // archive directory
+  unsigned long long chunk_points = 65536;
+  double memory_mb = 400;              // sort buffers (~100 bytes a point)
+  std::string columns;                 // XYZ/PTS inputs
+  int threads = 0;
+};
+int RunPack(const PackArgs& args);
+
+// candi bench scale (cmd_bench_scale.cc): pack and render 10^7, 10^8 (10^9) generated points,
+// one process and mpirun -np 2.
+struct BenchScaleArgs {
+  std::string sizes = "1e7,1e8";       // point counts
+  bool billion = false;                // add 1e9 (~8 GB archive, ~28 GB temporary, minutes)
+  std::string work_dir = "candi-bench-scale";  // generated data (deleted afterwards)
+  std::string size = "1024x1024";
+  int repeat_level = 100;
+  int ranks = 2;                       // mpirun -np; 0 skips the MPI runs
+  bool keep = false;                   // keep the generated data
+};
+int RunBenchScale(const BenchScaleArgs& args);
 
 }  // namespace candi::app

@@ -1,0 +1,377 @@
+#include "render/archive.h"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cmath>
+#include <cstring>
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/check.h"
+
+namespace candi::render {
+
+namespace {
+
+constexpr uint64_t kP1 = 0x9E3779B185EBCA87ULL, kP2 = 0xC2B2AE3D27D4EB4FULL, kP3 = 0x165667B19E3779F9ULL,
+                   kP4 = 0x85EBCA77C2B2AE63ULL, kP5 = 0x27D4EB2F165667C5ULL;
+
+inline uint64_t Rotl(uint64_t x, int r) { return (x << r) | (x >> (64 - r)); }
+inline uint64_t Round(uint64_t acc, uint64_t input) { return Rotl(acc + input * kP2, 31) * kP1; }
+inline uint64_t MergeRound(uint64_t acc, uint64_t v) { return (acc ^ Round(0, v)) * kP1 + kP4; }
+inline uint64_t Load64(const uint8_t* p) {
+  uint64_t v;
+  std::memcpy(&v, p, 8);
+  return v;
+}
+
+std::string Hex(uint64_t v) {
+  char buffer[17];
+  std::snprintf(buffer, sizeof(buffer), "%016llx", static_cast<unsigned long long>(v));
+  return buffer;
+}
+
+uint64_t ParseHex(const std::string& text, const std::string& path, const std::string& field) {
+  if (text.size() != 16 || text.find_first_not_of("0123456789abcdef") != std::string::npos) {
+    throw InputError(path, field, "expected 16 lower-case hex digits, got '" + text + "'");
+  }
+  return std::stoull(text, nullptr, 16);
+}
+
+}  // namespace
+
+uint64_t ArchiveHash(const void* data, size_t bytes, uint64_t seed) {
+  // xxHash64 (Yann Collet's algorithm, reimplemented), so a chunk hashes at memory speed.
+  const uint8_t* p = static_cast<const uint8_t*>(data);
+  const uint8_t* end = p + bytes;
+  uint64_t h;
+  if (bytes >= 32) {
+    uint64_t v1 = seed + kP1 + kP2, v2 = seed + kP2, v3 = seed, v4 = seed - kP1;
+    const uint8_t* limit = end - 32;
+    do {
+      v1 = Round(v1, Load64(p));
+      v2 = Round(v2, Load64(p + 8));
+      v3 = Round(v3, Load64(p + 16));
+      v4 = Round(v4, Load64(p + 24));
+      p += 32;
+    } while (p <= limit);
+    h = Rotl(v1, 1) + Rotl(v2, 7) + Rotl(v3, 12) + Rotl(v4, 18);
+    h = MergeRound(h, v1);
+    h = MergeRound(h, v2);
+    h = MergeRound(h, v3);
+    h = MergeRound(h, v4);
+  } else {
+    h = seed + kP5;
+  }
+  h += static_cast<uint64_t>(bytes);
+  for (; p + 8 <= end; p += 8) h = Rotl(h ^ Round(0, Load64(p)), 27) * kP1 + kP4;
+  if (p + 4 <= end) {
+    uint32_t v;
+    std::memcpy(&v, p, 4);
+    h = Rotl(h ^ (static_cast<uint64_t>(v) * kP1), 23) * kP2 + kP3;
+    p += 4;
+  }
+  for (; p < end; ++p) h = Rotl(h ^ (*p * kP5), 11) * kP1;
+  h ^= h >> 33;
+  h *= kP2;
+  h ^= h >> 29;
+  h *= kP3;
+  h ^= h >> 32;
+  return h;
+}
+
+ChunkQuantizer ChunkQuantizer::ForBox(const Box3d& box) {
+  CANDI_CHECK(!box.IsEmpty()) << "ChunkQuantizer::ForBox of an empty box";
+  ChunkQuantizer q;
+  q.box = box;
+  const Eigen::Vector3d extent = box.Extent();
+  int left = kArchivePositionBits;
+  auto step_of = [&](int a, int bits) { return extent[a] / (std::ldexp(1.0, bits) - 1.0); };
+  for (int a = 0; a < 3; ++a) {
+    CANDI_CHECK(std::isfinite(extent[a])) << "ChunkQuantizer::ForBox: box not finite";
+    if (extent[a] > 0) q.bits[a] = 1, --left;
+  }
+  while (left > 0) {
+    int best = -1;
+    double best_step = 0;
+    for (int a = 0; a < 3; ++a) {
+      if (q.bits[a] == 0 || q.bits[a] >= kArchiveMaxAxisBits) continue;
+      const double s = step_of(a, q.bits[a]);
+      if (s > best_step) best = a, best_step = s;
+    }
+    if (best < 0) break;
+    ++q.bits[best];
+    --left;
+  }
+  for (int a = 0; a < 3; ++a) q.step[a] = q.bits[a] ? step_of(a, q.bits[a]) : 0.0;
+  return q;
+}
+
+uint64_t ChunkQuantizer::Encode(const Eigen::Vector3d& x, uint32_t rgb) const {
+  uint64_t word = rgb & 0xffffff;
+  int shift = 24;
+  for (int a = 0; a < 3; ++a) {
+    if (bits[a] == 0) continue;
+    const double top = std::ldexp(1.0, bits[a]) - 1.0;
+    const double t = std::clamp(std::nearbyint((x[a] - box.min[a]) / step[a]), 0.0, top);
+    word |= static_cast<uint64_t>(t) << shift;
+    shift += bits[a];
+  }
+  return word;
+}
+
+// ---- manifest -------------------------------------------------------------------------------
+
+namespace {
+
+using Json = nlohmann::json;
+
+Json Vec(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
+
+template <typename T>
+T Get(const Json& j, const char* key, const std::string& path, const std::string& where) {
+  if (!j.is_object() || !j.contains(key)) throw InputError(path, where, std::string("missing field '") + key + "'");
+  try {
+    return j.at(key).get<T>();
+  } catch (const Json::exception& e) {
+    throw InputError(path, where + "." + key, std::string("wrong type: ") + e.what());
+  }
+}
+
+Eigen::Vector3d GetVec(const Json& j, const char* key, const std::string& path, const std::string& where) {
+  const std::vector<double> v = Get<std::vector<double>>(j, key, path, where);
+  if (v.size() != 3 || !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
+    throw InputError(path, where + "." + key, "expected three finite numbers");
+  }
+  return {v[0], v[1], v[2]};
+}
+
+}  // namespace
+
+std::string ArchiveManifest::ToJson() const {
+  Json j;
+  j["format"] = "candi render archive";
+  j["version"] = version;
+  j["frame_origin"] = Vec(frame.origin);
+  j["bounds_min"] = Vec(bounds.min);
+  j["bounds_max"] = Vec(bounds.max);
+  j["points"] = points;
+  j["chunk_points"] = chunk_points;
+  j["encoding"] = "uint64 LE per point: bits 0-23 colour 0xRRGGBB, then x, y, z with bits[] bits each, "
+                  "x = min + q * step; points in Morton order; hash = xxHash64 seed 0";
+  Json s = Json::array();
+  for (const ArchiveSource& src : sources) {
+    s.push_back({{"path", src.path}, {"bytes", src.bytes}, {"hash", Hex(src.hash)}, {"points", src.points}});
+  }
+  j["sources"] = s;
+  Json f = Json::array();
+  for (const ArchiveFile& file : files) f.push_back({{"name", file.name}, {"bytes", file.bytes}});
+  j["files"] = f;
+  Json c = Json::array();
+  for (const ArchiveChunk& ch : chunks) {
+    c.push_back({{"file", ch.file},
+                 {"offset", ch.offset},
+                 {"count", ch.count},
+                 {"first", ch.first},
+                 {"min", Vec(ch.quantizer.box.min)},
+                 {"max", Vec(ch.quantizer.box.max)},
+                 {"bits", {ch.quantizer.bits[0], ch.quantizer.bits[1], ch.quantizer.bits[2]}},
+                 {"step", {ch.quantizer.step[0], ch.quantizer.step[1], ch.quantizer.step[2]}},
+                 {"hash", Hex(ch.hash)}});
+  }
+  j["chunks"] = c;
+  return j.dump(1) + "\n";
+}
+
+ArchiveManifest ArchiveManifest::FromJson(const std::string& text, const std::string& path) {
+  Json j;
+  try {
+    j = Json::parse(text);
+  } catch (const Json::exception& e) {
+    throw InputError(path, "", std::string("not valid JSON: ") + e.what());
+  }
+  ArchiveManifest m;
+  if (Get<std::string>(j, "format", path, "manifest") != "candi render archive") {
+    throw InputError(path, "format", "not a candi render archive manifest");
+  }
+  m.version = Get<int>(j, "version", path, "manifest");
+  if (m.version != kArchiveVersion) {
+    throw InputError(path, "version", "archive version " + std::to_string(m.version) + "; this candi reads version " +
+                                          std::to_string(kArchiveVersion));
+  }
+  m.frame.origin = GetVec(j, "frame_origin", path, "manifest");
+  m.bounds.min = GetVec(j, "bounds_min", path, "manifest");
+  m.bounds.max = GetVec(j, "bounds_max", path, "manifest");
+  m.points = Get<uint64_t>(j, "points", path, "manifest");
+  m.chunk_points = Get<uint64_t>(j, "chunk_points", path, "manifest");
+  for (const Json& s : Get<Json>(j, "sources", path, "manifest")) {
+    ArchiveSource src;
+    src.path = Get<std::string>(s, "path", path, "sources");
+    src.bytes = Get<uint64_t>(s, "bytes", path, "sources");
+    src.hash = ParseHex(Get<std::string>(s, "hash", path, "sources"), path, "sources.hash");
+    src.points = Get<uint64_t>(s, "points", path, "sources");
+    m.sources.push_back(src);
+  }
+  for (const Json& f : Get<Json>(j, "files", path, "manifest")) {
+    ArchiveFile file;
+    file.name = Get<std::string>(f, "name", path, "files");
+    if (file.name.empty() || file.name.find('/') != std::string::npos || file.name[0] == '.') {
+      throw InputError(path, "files", "data file name '" + file.name + "' must be a plain file name");
+    }
+    file.bytes = Get<uint64_t>(f, "bytes", path, "files");
+    m.files.push_back(file);
+  }
+  const Json& chunks = Get<Json>(j, "chunks", path, "manifest");
+  m.chunks.reserve(chunks.size());
+  uint64_t next = 0;
+  for (size_t k = 0; k < chunks.size(); ++k) {
+    const Json& c = chunks[k];
+    const std::string where = "chunks[" + std::to_string(k) + "]";
+    ArchiveChunk ch;
+    ch.file = Get<int>(c, "file", path, where);
+    ch.offset = Get<uint64_t>(c, "offset", path, where);
+    ch.count = Get<uint64_t>(c, "count", path, where);
+    ch.first = Get<uint64_t>(c, "first", path, where);
+    ch.quantizer.box.min = GetVec(c, "min", path, where);
+    ch.quantizer.box.max = GetVec(c, "max", path, where);
+    const std::vector<int> bits = Get<std::vector<int>>(c, "bits", path, where);
+    const std::vector<double> step = Get<std::vector<double>>(c, "step", path, where);
+    if (bits.size() != 3 || step.size() != 3) throw InputError(path, where, "bits and step need 3 entries");
+    int total = 0;
+    for (int a = 0; a < 3; ++a) {
+      if (bits[a] < 0 || bits[a] > kArchiveMaxAxisBits || !(step[a] >= 0) || !std::isfinite(step[a])) {
+        throw InputError(path, where, "bad bits/step on axis " + std::to_string(a));
+      }
+      ch.quantizer.bits[a] = bits[a];
+      ch.quantizer.step[a] = step[a];
+      total += bits[a];
+    }
+    if (total > kArchivePositionBits) throw InputError(path, where, "more than 40 position bits");
+    ch.hash = ParseHex(Get<std::string>(c, "hash", path, where), path, where + ".hash");
+    if (ch.file < 0 || static_cast<size_t>(ch.file) >= m.files.size()) {
+      throw InputError(path, where, "file index " + std::to_string(ch.file) + " out of range");
+    }
+    if (ch.count == 0 || ch.first != next || ch.offset % 8 != 0 ||
+        ch.offset + 8 * ch.count > m.files[ch.file].bytes || ch.offset + 8 * ch.count < ch.offset) {
+      throw InputError(path, where, "count/first/offset inconsistent with the file sizes and the chunks before");
+    }
+    next += ch.count;
+    m.chunks.push_back(ch);
+  }
+  if (next != m.points) {
+    throw InputError(path, "points", "the chunks hold " + std::to_string(next) + " points, the manifest says " +
+                                         std::to_string(m.points));
+  }
+  return m;
+}
+
+bool IsArchive(const std::string& path) {
+  struct stat st;
+  if (stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) return false;
+  return stat((path + "/" + kArchiveManifest).c_str(), &st) == 0;
+}
+
+// ---- Archive --------------------------------------------------------------------------------
+
+Archive::Archive(const std::string& directory) : directory_(directory) {
+  const std::string manifest_path = directory + "/" + kArchiveManifest;
+  struct stat st;
+  if (stat(directory.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    throw InputError(directory, "", "not a directory (a render archive is a directory with manifest.json)");
+  }
+  manifest_ = ArchiveManifest::FromJson(ReadFileToString(manifest_path), manifest_path);
+  maps_.resize(manifest_.files.size());
+  for (size_t f = 0; f < manifest_.files.size(); ++f) {
+    const std::string path = directory + "/" + manifest_.files[f].name;
+    const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+      throw InputError(path, "", std::string("cannot open archive data file: ") + std::strerror(errno));
+    }
+    struct stat fs;
+    if (fstat(fd, &fs) != 0 || static_cast<uint64_t>(fs.st_size) != manifest_.files[f].bytes) {
+      const uint64_t size = static_cast<uint64_t>(fs.st_size);
+      close(fd);
+      throw InputError(path, "", "archive data file has " + std::to_string(size) + " bytes; the manifest says " +
+                                     std::to_string(manifest_.files[f].bytes) + " (truncated or replaced)");
+    }
+    if (fs.st_size > 0) {
+      void* p = mmap(nullptr, fs.st_size, PROT_READ, MAP_SHARED, fd, 0);
+      const int err = errno;
+      close(fd);
+      if (p == MAP_FAILED) throw InputError(path, "", std::string("cannot map: ") + std::strerror(err));
+      madvise(p, fs.st_size, MADV_SEQUENTIAL);
+      maps_[f] = {p, static_cast<size_t>(fs.st_size)};
+    } else {
+      close(fd);
+    }
+  }
+}
+
+Archive::~Archive() {
+  for (const Mapping& m : maps_) {
+    if (m.data) munmap(m.data, m.bytes);
+  }
+}
+
+const uint64_t* Archive::ChunkWords(size_t chunk, bool verify) const {
+  CANDI_CHECK_LT(chunk, manifest_.chunks.size());
+  const ArchiveChunk& c = manifest_.chunks[chunk];
+  const uint8_t* base = static_cast<const uint8_t*>(maps_[c.file].data) + c.offset;
+  if (verify) {
+    const uint64_t h = ArchiveHash(base, 8 * c.count);
+    if (h != c.hash) {
+      throw InputError(directory_ + "/" + manifest_.files[c.file].name, "byte " + std::to_string(c.offset),
+                       "chunk " + std::to_string(chunk) + " (" + std::to_string(c.count) +
+                           " points) does not match its hash: the archive is corrupt");
+    }
+  }
+  return reinterpret_cast<const uint64_t*>(base);
+}
+
+void Archive::Release(size_t chunk) const {
+  const ArchiveChunk& c = manifest_.chunks[chunk];
+  const long page = sysconf(_SC_PAGESIZE);
+  const uint64_t begin = (c.offset + page - 1) / page * page;  // whole pages inside the chunk
+  const uint64_t end = (c.offset + 8 * c.count) / page * page;
+  if (end > begin) {
+    madvise(static_cast<uint8_t*>(maps_[c.file].data) + begin, end - begin, MADV_DONTNEED);
+  }
+}
+
+void Archive::ReadChunk(size_t chunk, PointCloud* out, bool verify) const {
+  const ArchiveChunk& c = manifest_.chunks[chunk];
+  const uint64_t* words = ChunkWords(chunk, verify);
+  PointSchema schema;
+  schema.colors = true;
+  out->SetSchema(schema);
+  out->frame = manifest_.frame;
+  out->Resize(c.count);
+  for (uint64_t i = 0; i < c.count; ++i) {
+    out->positions[i] = c.quantizer.Decode(words[i]);
+    const uint32_t rgb = ChunkQuantizer::Color(words[i]);
+    out->colors[i] = {static_cast<uint8_t>(rgb >> 16), static_cast<uint8_t>(rgb >> 8), static_cast<uint8_t>(rgb)};
+  }
+}
+
+PointCloud Archive::ReadAll() const {
+  PointCloud all, chunk;
+  PointSchema schema;
+  schema.colors = true;
+  all.SetSchema(schema);
+  all.frame = manifest_.frame;
+  all.Reserve(manifest_.points);
+  for (size_t k = 0; k < manifest_.chunks.size(); ++k) {
+    ReadChunk(k, &chunk);
+    all.positions.insert(all.positions.end(), chunk.positions.begin(), chunk.positions.end());
+    all.colors.insert(all.colors.end(), chunk.colors.begin(), chunk.colors.end());
+  }
+  return all;
+}
+
+}  // namespace candi::render

@@ -1,0 +1,136 @@
+// The render archive: a compact, chunked, memory-mapped point archive for streaming SPBR.
+//
+// A directory holding `manifest.json` and data files `data-NNNNN.bin`. Points are in Morton order
+// (21 bits per axis over the archive's bounds) and cut into chunks of consecutive points that
+// share a Morton prefix (at most `chunk_points` each), so every chunk covers a compact box. A
+// point is one little-endian uint64 (8 bytes with colour):
+//   bits 0..23   colour 0xRRGGBB
+//   bits 24..    x (bx bits), then y (by bits), then z (bz bits); bx + by + bz = 40
+// quantized on the chunk's bounding box (double, local frame): q = round((x - min) / step),
+// step = extent / (2^b - 1). The 40 bits are shared out per chunk: each axis with an extent gets
+// at least 1 bit, then each further bit goes to the axis with the largest step (at most 24 bits
+// an axis); a flat axis (extent 0) gets 0 bits and step 0.
+// Error bound per axis: |x - dequantized x| <= step / 2 = extent / (2^b - 1) / 2, plus the double
+// rounding of min + q * step (a few ulps of the coordinates, ~1e-16 relative), tested in
+// archive_test.cc. A chunk of 65536 points spanning 1 m gets 13-14 bits per axis: 0.06 mm.
+// Point k of the archive (its position in the Morton order, over all chunks) is its index for
+// the ensemble draw, so ensembles follow from (index, seed) as in SplatCloud.
+// Integrity: each data file's size and each chunk's 64-bit hash are in the manifest; a missing
+// or short file is an InputError at open, a chunk whose bytes do not match its hash an
+// InputError when it is read (with verification on). Multiplicities (opacity control) are not
+// stored: every point is one copy.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/box.h"
+#include "core/local_frame.h"
+#include "core/point_cloud.h"
+
+namespace candi::render {
+
+inline constexpr int kArchiveVersion = 1;
+inline constexpr int kArchivePositionBits = 40;
+inline constexpr int kArchiveMaxAxisBits = 24;
+inline constexpr const char* kArchiveManifest = "manifest.json";
+
+// A 64-bit content hash (xxHash64's round function over 8-byte words, little-endian).
+uint64_t ArchiveHash(const void* data, size_t bytes, uint64_t seed = 0);
+
+// Quantization of one chunk's box.
+struct ChunkQuantizer {
+  Box3d box;             // local frame
+  int bits[3] = {0, 0, 0};
+  double step[3] = {0, 0, 0};
+
+  static ChunkQuantizer ForBox(const Box3d& box);
+  // The bound on |x - Dequantize(Quantize(x))| per axis (excluding double rounding).
+  double ErrorBound(int axis) const { return 0.5 * step[axis]; }
+  uint64_t Encode(const Eigen::Vector3d& x, uint32_t rgb) const;
+  // Positions in the local frame: box.min + q * step per axis.
+  Eigen::Vector3d Decode(uint64_t word) const {
+    const uint64_t q = word >> 24;
+    const uint64_t qx = q & ((uint64_t{1} << bits[0]) - 1);
+    const uint64_t qy = (q >> bits[0]) & ((uint64_t{1} << bits[1]) - 1);
+    const uint64_t qz = (q >> (bits[0] + bits[1])) & ((uint64_t{1} << bits[2]) - 1);
+    return {box.min.x() + static_cast<double>(qx) * step[0], box.min.y() + static_cast<double>(qy) * step[1],
+            box.min.z() + static_cast<double>(qz) * step[2]};
+  }
+  static uint32_t Color(uint64_t word) { return static_cast<uint32_t>(word & 0xffffff); }
+};
+
+struct ArchiveChunk {
+  int file = 0;            // index into ArchiveManifest::files
+  uint64_t offset = 0;     // byte offset in the file
+  uint64_t count = 0;      // points
+  uint64_t first = 0;      // archive index of the first point
+  ChunkQuantizer quantizer;
+  uint64_t hash = 0;       // ArchiveHash of the chunk's 8 * count bytes
+};
+
+struct ArchiveSource {
+  std::string path;
+  uint64_t bytes = 0;
+  uint64_t hash = 0;       // ArchiveHash of the whole file
+  uint64_t points = 0;
+};
+
+struct ArchiveFile {
+  std::string name;        // relative to the archive directory
+  uint64_t bytes = 0;
+};
+
+struct ArchiveManifest {
+  int version = kArchiveVersion;
+  LocalFrame frame;        // world = local + frame.origin
+  Box3d bounds;            // local frame, of the (original) points
+  uint64_t points = 0;
+  uint64_t chunk_points = 0;  // the largest chunk allowed when packing
+  std::vector<ArchiveSource> sources;
+  std::vector<ArchiveFile> files;
+  std::vector<ArchiveChunk> chunks;
+
+  std::string ToJson() const;
+  // Throws InputError naming `path` and the field for anything malformed.
+  static ArchiveManifest FromJson(const std::string& text, const std::string& path);
+};
+
+// True when `path` is a directory holding a manifest.json.
+bool IsArchive(const std::string& path);
+
+// An open archive: the manifest and its data files, memory-mapped read-only.
+class Archive {
+ public:
+  // Reads the manifest, checks that every data file exists with its recorded size, maps them.
+  // Throws InputError naming the file for anything missing, short or malformed.
+  explicit Archive(const std::string& directory);
+  ~Archive();
+  Archive(const Archive&) = delete;
+  Archive& operator=(const Archive&) = delete;
+
+  const std::string& directory() const { return directory_; }
+  const ArchiveManifest& manifest() const { return manifest_; }
+  // The chunk's words (count of them), mapped. With `verify`, hashes them first and throws
+  // InputError naming the data file, the chunk and its offset when they do not match.
+  const uint64_t* ChunkWords(size_t chunk, bool verify) const;
+  // Lets the kernel drop the chunk's mapped pages (bounded resident memory while streaming).
+  void Release(size_t chunk) const;
+  // Decodes a chunk into a PointCloud in the archive's frame (positions dequantized, colours).
+  void ReadChunk(size_t chunk, PointCloud* out, bool verify = true) const;
+  // Every point, dequantized (tests; small archives).
+  PointCloud ReadAll() const;
+
+ private:
+  std::string directory_;
+  ArchiveManifest manifest_;
+  struct Mapping {
+    void* data = nullptr;
+    size_t bytes = 0;
+  };
+  std::vector<Mapping> maps_;
+};
+
+}  // namespace candi::render

@@ -1,0 +1,602 @@
+#include "render/archive_pack.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include "core/atomic_file.h"
+#include "core/binary_file.h"
+#include "core/check.h"
+#include "render/splat_cloud.h"
+
+namespace candi::render {
+
+namespace fs = std::filesystem;
+
+void PackOptions::Check() const {
+  if (chunk_points < 64 || chunk_points > (uint64_t{1} << 24)) {
+    throw std::invalid_argument("PackOptions::chunk_points = " + std::to_string(chunk_points) +
+                                "; must be in [64, 16777216]");
+  }
+  if (memory_points < chunk_points) {
+    throw std::invalid_argument("PackOptions::memory_points = " + std::to_string(memory_points) +
+                                "; must be >= chunk_points (" + std::to_string(chunk_points) + ")");
+  }
+  if (file_bytes < 8 * chunk_points) {
+    throw std::invalid_argument("PackOptions::file_bytes = " + std::to_string(file_bytes) +
+                                "; must hold at least one chunk");
+  }
+  if (threads < 0 || threads > 256) {
+    throw std::invalid_argument("PackOptions::threads = " + std::to_string(threads) + "; must be in [0, 256]");
+  }
+}
+
+PackInput PackInputFromFile(const std::string& path) {
+  PackInput in;
+  in.name = path;
+  in.path = path;
+  in.open = [path] {
+    PointReadOptions read;
+    read.scalar_fields = false;
+    return OpenPointReader(path, read);
+  };
+  return in;
+}
+
+namespace {
+
+class GeneratedReader : public PointReader {
+ public:
+  GeneratedReader(const std::string& name, uint64_t total, uint64_t piece,
+                  std::function<PointCloud(uint64_t, uint64_t)> make)
+      : PointReader(name), total_(total), piece_(piece), make_(std::move(make)) {
+    info_.count = total;
+    info_.description = "generated";
+    info_.schema.colors = true;
+  }
+  size_t Read(size_t max_points, PointCloud* chunk) override {
+    if (at_ >= cloud_.size()) {
+      if (next_ * piece_ >= total_) return 0;
+      cloud_ = make_(next_, std::min(piece_, total_ - next_ * piece_));
+      ++next_;
+      at_ = 0;
+      if (cloud_.empty()) return 0;
+    }
+    const size_t n = std::min<size_t>(max_points, cloud_.size() - at_);
+    chunk->SetSchema(cloud_.schema);
+    chunk->frame = cloud_.frame;
+    chunk->Resize(0);
+    chunk->positions.assign(cloud_.positions.begin() + at_, cloud_.positions.begin() + at_ + n);
+    if (cloud_.schema.colors) chunk->colors.assign(cloud_.colors.begin() + at_, cloud_.colors.begin() + at_ + n);
+    if (cloud_.schema.alphas) chunk->alphas.assign(cloud_.alphas.begin() + at_, cloud_.alphas.begin() + at_ + n);
+    chunk->Resize(n);
+    at_ += n;
+    points_read_ += n;
+    return n;
+  }
+
+ private:
+  uint64_t total_, piece_;
+  std::function<PointCloud(uint64_t, uint64_t)> make_;
+  PointCloud cloud_;
+  uint64_t next_ = 0;
+  size_t at_ = 0;
+};
+
+}  // namespace
+
+PackInput PackInputFromGenerator(const std::string& name, uint64_t total, uint64_t piece,
+                                 std::function<PointCloud(uint64_t k, uint64_t n)> make) {
+  CANDI_CHECK(piece > 0) << "PackInputFromGenerator: piece 0";
+  PackInput in;
+  in.name = name;
+  in.open = [=] { return std::unique_ptr<PointReader>(new GeneratedReader(name, total, piece, make)); };
+  return in;
+}
+
+uint64_t HashFile(const std::string& path, uint64_t* bytes) {
+  BinaryFile file(path);
+  *bytes = file.size();
+  constexpr size_t kBlock = size_t{64} << 20;
+  std::vector<uint8_t> buffer(std::min<uint64_t>(kBlock, std::max<uint64_t>(file.size(), 1)));
+  std::vector<uint64_t> blocks;
+  while (file.remaining() > 0) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(kBlock, file.remaining()));
+    file.ReadExact(buffer.data(), n, "block for hashing");
+    blocks.push_back(ArchiveHash(buffer.data(), n));
+  }
+  return ArchiveHash(blocks.data(), 8 * blocks.size(), file.size());
+}
+
+namespace {
+
+#pragma pack(push, 1)
+struct TempPoint {  // 28 bytes: local-frame position and colour, in cell files and in memory
+  double x, y, z;
+  uint32_t rgb;
+};
+#pragma pack(pop)
+static_assert(sizeof(TempPoint) == 28, "TempPoint must be packed");
+
+constexpr int kMortonBits = 21;  // per axis; 63-bit codes, 21 levels of 3 bits
+
+inline uint64_t Spread(uint64_t v) {  // 21 bits -> every third bit
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  v = (v | v << 2) & 0x1249249249249249ULL;
+  return v;
+}
+
+struct MortonGrid {
+  Eigen::Vector3d min, scale;  // cells per metre
+  uint64_t Code(const TempPoint& p) const {
+    const double top = static_cast<double>((1 << kMortonBits) - 1);
+    const double c[3] = {p.x, p.y, p.z};
+    uint64_t q[3];
+    for (int a = 0; a < 3; ++a) q[a] = static_cast<uint64_t>(std::clamp((c[a] - min[a]) * scale[a], 0.0, top));
+    return Spread(q[0]) | Spread(q[1]) << 1 | Spread(q[2]) << 2;
+  }
+};
+
+// The key of a point at a level: the code's top 3 * levels bits.
+inline uint64_t Prefix(uint64_t code, int levels) { return levels == 0 ? 0 : code >> (63 - 3 * levels); }
+
+struct Keyed {
+  uint64_t code;
+  uint64_t index;
+};
+
+// LSD radix sort by code on the bits below the first `level` levels (the ones above are equal).
+void RadixSort(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int level) {
+  const int bits = 63 - 3 * level;
+  scratch->resize(keys->size());
+  std::vector<uint64_t> count(1 << 16);
+  for (int shift = 0; shift < bits; shift += 16) {
+    std::fill(count.begin(), count.end(), 0);
+    for (const Keyed& k : *keys) ++count[(k.code >> shift) & 0xffff];
+    if (*std::max_element(count.begin(), count.end()) == keys->size()) continue;  // one bucket
+    uint64_t sum = 0;
+    for (uint64_t& c : count) {
+      const uint64_t n = c;
+      c = sum;
+      sum += n;
+    }
+    for (const Keyed& k : *keys) (*scratch)[count[(k.code >> shift) & 0xffff]++] = k;
+    keys->swap(*scratch);
+  }
+}
+
+class CellFile {
+ public:
+  explicit CellFile(std::string path) : path_(std::move(path)) {}
+  ~CellFile() {
+    if (fd_ >= 0) close(fd_);
+    if (!path_.empty()) unlink(path_.c_str());
+  }
+  void Add(const TempPoint& p) {
+    buffer_.push_back(p);
+    if (buffer_.size() == kBuffer) Flush();
+  }
+  void Flush() {
+    if (buffer_.empty()) return;
+    if (fd_ < 0) {
+      fd_ = open(path_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+      if (fd_ < 0) throw InputError(path_, "", std::string("cannot create cell file: ") + std::strerror(errno));
+    }
+    const char* p = reinterpret_cast<const char*>(buffer_.data());
+    size_t left = buffer_.size() * sizeof(TempPoint);
+    while (left > 0) {
+      const ssize_t n = write(fd_, p, left);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) throw InputError(path_, "", std::string("cannot write cell file: ") + std::strerror(errno));
+      p += n, left -= static_cast<size_t>(n);
+    }
+    count_ += buffer_.size();
+    buffer_.clear();
+    buffer_.shrink_to_fit();
+  }
+  uint64_t count() const { return count_ + buffer_.size(); }
+  // Reads points [from, from + n) (after Flush).
+  void Read(uint64_t from, size_t n, TempPoint* out) const {
+    size_t left = n * sizeof(TempPoint);
+    char* p = reinterpret_cast<char*>(out);
+    uint64_t offset = from * sizeof(TempPoint);
+    while (left > 0) {
+      const ssize_t got = pread(fd_, p, left, static_cast<off_t>(offset));
+      if (got < 0 && errno == EINTR) continue;
+      if (got <= 0) throw InputError(path_, "byte " + std::to_string(offset), "cannot read cell file back");
+      p += got, left -= static_cast<size_t>(got), offset += static_cast<uint64_t>(got);
+    }
+  }
+
+ private:
+  static constexpr size_t kBuffer = 2048;  // 56 KB per cell
+  std::string path_;
+  int fd_ = -1;
+  uint64_t count_ = 0;
+  std::vector<TempPoint> buffer_;
+};
+
+// A source of points in batches: returns false at the end.
+using Batches = std::function<bool(std::vector<TempPoint>*)>;
+
+class Packer {
+ public:
+  Packer(const PackOptions& o, const std::string& dir, const MortonGrid& grid, uint64_t total,
+         const ProgressCallback& progress)
+      : o_(o), dir_(dir), grid_(grid), total_(total), progress_(progress) {}
+
+  // Sorts points (all of one cell at `level`) in memory and writes their chunks.
+  void AddCell(std::vector<TempPoint>* points, int level) {
+    const size_t n = points->size();
+    if (n == 0) return;
+    keys_.resize(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) keys_[i] = {grid_.Code((*points)[i]), i};
+    });
+    RadixSort(&keys_, &scratch_, level);
+    sorted_.resize(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) sorted_[i] = (*points)[keys_[i].index];
+    });
+    ranges_.clear();
+    Cut(0, n, level);
+    WriteChunks();
+  }
+
+  // Buckets a stream of points (one cell at `level`, `count` of them) into cell files by the
+  // next Morton levels, then handles each cell in Morton order.
+  void Spill(const Batches& source, uint64_t count, int level) {
+    if (level >= kMortonBits) {  // every code equal: any order is Morton order
+      std::vector<TempPoint> batch;
+      while (source(&batch)) {
+        for (size_t i = 0; i < batch.size(); i += o_.chunk_points) {
+          std::vector<TempPoint> part(batch.begin() + i,
+                                      batch.begin() + std::min<size_t>(batch.size(), i + o_.chunk_points));
+          AddCell(&part, kMortonBits);
+        }
+      }
+      return;
+    }
+    int k = 1;
+    while (k < 3 && level + k < kMortonBits && count >> (3 * k) > o_.memory_points / 2) ++k;
+    const size_t cells = size_t{1} << (3 * k);
+    std::vector<std::unique_ptr<CellFile>> files(cells);
+    const std::string stem = dir_ + "/cell-L" + std::to_string(level) + "-" + std::to_string(spill_id_++) + "-";
+    for (size_t c = 0; c < cells; ++c) files[c] = std::make_unique<CellFile>(stem + std::to_string(c) + ".tmp");
+    std::vector<TempPoint> batch;
+    while (source(&batch)) {
+      spilled_ += batch.size();
+      for (const TempPoint& p : batch) files[Prefix(grid_.Code(p), level + k) & (cells - 1)]->Add(p);
+    }
+    for (auto& f : files) f->Flush();
+    for (size_t c = 0; c < cells; ++c) {
+      CellFile& f = *files[c];
+      const uint64_t n = f.count();
+      if (n == 0) {
+        files[c].reset();
+        continue;
+      }
+      if (n <= o_.memory_points) {
+        cell_.resize(n);
+        f.Read(0, n, cell_.data());
+        files[c].reset();  // delete the file before sorting: disk stays ~ one copy of the input
+        AddCell(&cell_, level + k);
+      } else {
+        uint64_t next = 0;
+        const size_t batch_points = std::max<size_t>(1, o_.memory_points / 4);
+        Spill(
+            [&](std::vector<TempPoint>* out) {
+              if (next >= n) return false;
+              const size_t m = static_cast<size_t>(std::min<uint64_t>(batch_points, n - next));
+              out->resize(m);
+              f.Read(next, m, out->data());
+              next += m;
+              return true;
+            },
+            n, level + k);
+        files[c].reset();
+      }
+    }
+  }
+
+  // Closes the last data file; returns the manifest's chunks and files.
+  void Finish(ArchiveManifest* m) {
+    CloseFile();
+    m->chunks = std::move(chunks_);
+    m->files = std::move(files_);
+  }
+  uint64_t spilled() const { return spilled_; }
+  const double* max_error() const { return max_error_; }
+
+ private:
+  // Cuts sorted_[a, b) (codes equal in the first `level` levels) into chunks of points sharing
+  // a Morton prefix: consecutive children are grouped while they fit, a child too big recurses.
+  void Cut(size_t a, size_t b, int level) {
+    if (b - a <= o_.chunk_points) {
+      ranges_.push_back({a, b});
+      return;
+    }
+    if (level >= kMortonBits) {
+      for (size_t i = a; i < b; i += o_.chunk_points) ranges_.push_back({i, std::min(b, i + o_.chunk_points)});
+      return;
+    }
+    size_t group = a;
+    size_t child = a;
+    while (child < b) {
+      const uint64_t key = Prefix(keys_[child].code, level + 1);
+      size_t end = child;
+      // The child's end: galloping then binary search (children are contiguous).
+      size_t step = 1;
+      while (end + step < b && Prefix(keys_[end + step].code, level + 1) == key) end += step, step *= 2;
+      size_t lo = end, hi = std::min(b, end + step);  // key at lo, not at hi (or hi == b)
+      while (hi - lo > 1) {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (Prefix(keys_[mid].code, level + 1) == key) lo = mid; else hi = mid;
+      }
+      end = hi;
+      if (end - child > o_.chunk_points) {
+        if (child > group) ranges_.push_back({group, child});
+        Cut(child, end, level + 1);
+        group = end;
+      } else if (end - group > o_.chunk_points) {
+        ranges_.push_back({group, child});
+        group = child;
+      }
+      child = end;
+    }
+    if (b > group) ranges_.push_back({group, b});
+  }
+
+  void WriteChunks() {
+    const size_t n = ranges_.size();
+    std::vector<ArchiveChunk> made(n);
+    words_.resize(sorted_.size());
+    tbb::parallel_for(size_t{0}, n, [&](size_t k) {
+      const auto [a, b] = ranges_[k];
+      Box3d box;
+      for (size_t i = a; i < b; ++i) box.Extend(Eigen::Vector3d(sorted_[i].x, sorted_[i].y, sorted_[i].z));
+      ArchiveChunk& c = made[k];
+      c.quantizer = ChunkQuantizer::ForBox(box);
+      c.count = b - a;
+      for (size_t i = a; i < b; ++i) {
+        words_[i] = c.quantizer.Encode(Eigen::Vector3d(sorted_[i].x, sorted_[i].y, sorted_[i].z), sorted_[i].rgb);
+      }
+      c.hash = ArchiveHash(&words_[a], 8 * (b - a));
+    });
+    for (size_t k = 0; k < n; ++k) {
+      const auto [a, b] = ranges_[k];
+      if (!file_ || file_->Tell() >= o_.file_bytes) OpenFile();
+      ArchiveChunk& c = made[k];
+      c.file = static_cast<int>(files_.size() - 1);
+      c.offset = file_->Tell();
+      c.first = written_;
+      file_->Write(&words_[a], 8 * (b - a));
+      written_ += c.count;
+      for (int ax = 0; ax < 3; ++ax) max_error_[ax] = std::max(max_error_[ax], c.quantizer.ErrorBound(ax));
+      chunks_.push_back(c);
+    }
+    if (progress_) progress_(written_, total_);
+  }
+
+  void OpenFile() {
+    CloseFile();
+    char name[32];
+    std::snprintf(name, sizeof(name), "data-%05zu.bin", files_.size());
+    files_.push_back({name, 0});
+    file_ = std::make_unique<AtomicFile>(dir_ + "/" + name);
+  }
+  void CloseFile() {
+    if (!file_) return;
+    files_.back().bytes = file_->Tell();
+    file_->Commit();
+    file_.reset();
+  }
+
+  const PackOptions& o_;
+  std::string dir_;
+  MortonGrid grid_;
+  uint64_t total_;
+  ProgressCallback progress_;
+  std::vector<Keyed> keys_, scratch_;
+  std::vector<TempPoint> sorted_, cell_;
+  std::vector<uint64_t> words_;
+  std::vector<std::pair<size_t, size_t>> ranges_;
+  std::vector<ArchiveChunk> chunks_;
+  std::vector<ArchiveFile> files_;
+  std::unique_ptr<AtomicFile> file_;
+  uint64_t written_ = 0, spilled_ = 0;
+  int spill_id_ = 0;
+  double max_error_[3] = {0, 0, 0};
+};
+
+// Reads all inputs as TempPoints in the archive frame, `batch` points at a time.
+class InputBatches {
+ public:
+  InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color)
+      : inputs_(inputs), frame_(frame), default_color_(default_color) {}
+  bool operator()(std::vector<TempPoint>* out) {
+    out->clear();
+    while (true) {
+      if (!reader_) {
+        if (next_ >= inputs_.size()) return false;
+        reader_ = inputs_[next_++].open();
+        index_ = 0;
+      }
+      const size_t n = reader_->Read(1 << 20, &chunk_);
+      if (n == 0) {
+        reader_.reset();
+        continue;
+      }
+      const Eigen::Vector3d shift = chunk_.frame.origin - frame_.origin;
+      out->resize(n);
+      const uint32_t fallback = PackColor(default_color_);
+      bool finite = true;
+      for (size_t i = 0; i < n; ++i) {
+        const Eigen::Vector3d p = chunk_.positions[i] + shift;
+        finite &= std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+        (*out)[i] = {p.x(), p.y(), p.z(), chunk_.schema.colors ? PackColor(chunk_.colors[i]) : fallback};
+      }
+      if (!finite) {
+        for (size_t i = 0; i < n; ++i) {
+          if (!chunk_.positions[i].allFinite()) {
+            throw InputError(inputs_[next_ - 1].name, "point " + std::to_string(index_ + i),
+                             "NaN or infinite coordinate");
+          }
+        }
+      }
+      index_ += n;
+      return true;
+    }
+  }
+
+ private:
+  const std::vector<PackInput>& inputs_;
+  LocalFrame frame_;
+  Rgb8 default_color_;
+  size_t next_ = 0;
+  uint64_t index_ = 0;
+  std::unique_ptr<PointReader> reader_;
+  PointCloud chunk_;
+};
+
+// Builds into `temp`, then renames over `output` (replacing an archive, refusing anything else).
+void Publish(const std::string& temp, const std::string& output) {
+  std::error_code ec;
+  if (fs::exists(output, ec)) {
+    if (!IsArchive(output)) {
+      throw InputError(output, "", "exists and is not a candi render archive; not overwriting it");
+    }
+    const std::string old = output + ".candi-old-" + std::to_string(getpid());
+    fs::rename(output, old, ec);
+    if (ec) throw InputError(output, "", "cannot move the old archive aside: " + ec.message());
+    fs::rename(temp, output, ec);
+    if (ec) {
+      std::error_code ignored;
+      fs::rename(old, output, ignored);
+      throw InputError(output, "", "cannot rename the new archive into place: " + ec.message());
+    }
+    fs::remove_all(old, ec);
+    return;
+  }
+  fs::rename(temp, output, ec);
+  if (ec) throw InputError(output, "", "cannot rename the new archive into place: " + ec.message());
+}
+
+}  // namespace
+
+PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>& inputs,
+                        const std::string& output_dir, const ProgressCallback& progress) {
+  options.Check();
+  if (inputs.empty()) throw std::invalid_argument("PackArchive: no inputs");
+  const auto start = std::chrono::steady_clock::now();
+  std::unique_ptr<tbb::task_arena> arena;
+  if (options.threads > 0) arena = std::make_unique<tbb::task_arena>(options.threads);
+  PackSummary summary;
+  ArchiveManifest manifest;
+  manifest.chunk_points = options.chunk_points;
+
+  // Pass 1: bounds and counts (headers when they state both).
+  Box3d world;
+  uint64_t total = 0;
+  std::vector<uint64_t> counts(inputs.size(), 0);
+  for (size_t k = 0; k < inputs.size(); ++k) {
+    auto reader = inputs[k].open();
+    const PointFileInfo& info = reader->info();
+    if (info.header_bounds && info.count != kUnknownCount) {
+      counts[k] = info.count;
+      if (info.count > 0) world.Extend(*info.header_bounds);
+      continue;
+    }
+    PointCloud chunk;
+    while (reader->Read(1 << 20, &chunk) > 0) {
+      for (const Eigen::Vector3d& p : chunk.positions) {
+        if (!p.allFinite()) continue;  // reported with its index in pass 2
+        world.Extend(chunk.frame.ToWorld(p));
+      }
+      counts[k] += chunk.size();
+    }
+  }
+  for (uint64_t c : counts) total += c;
+  if (total == 0 || world.IsEmpty()) throw InputError("nothing to pack: the inputs hold no points");
+  manifest.frame = RenderFrameFor(world);
+  MortonGrid grid;
+  const Box3d local = world.Translated(-manifest.frame.origin);
+  grid.min = local.min;
+  for (int a = 0; a < 3; ++a) {
+    const double extent = local.max[a] - local.min[a];
+    grid.scale[a] = extent > 0 ? std::ldexp(1.0, kMortonBits) / extent : 0.0;
+  }
+
+  // The output is built beside its destination.
+  const fs::path out_path = fs::absolute(output_dir);
+  const std::string temp = out_path.string() + ".candi-tmp-" + std::to_string(getpid());
+  std::error_code ec;
+  fs::remove_all(temp, ec);
+  if (!fs::create_directories(temp, ec) || ec) {
+    throw InputError(temp, "", "cannot create the archive's build directory: " + ec.message());
+  }
+  struct Cleanup {
+    std::string dir;
+    ~Cleanup() {
+      std::error_code ignored;
+      if (!dir.empty()) fs::remove_all(dir, ignored);
+    }
+  } cleanup{temp};
+
+  auto run = [&] {
+    Packer packer(options, temp, grid, total, progress);
+    InputBatches batches(inputs, manifest.frame, options.default_color);
+    if (total <= options.memory_points) {
+      std::vector<TempPoint> all, batch;
+      all.reserve(total);
+      while (batches(&batch)) all.insert(all.end(), batch.begin(), batch.end());
+      packer.AddCell(&all, 0);
+    } else {
+      packer.Spill([&batches](std::vector<TempPoint>* out) { return batches(out); }, total, 0);
+    }
+    packer.Finish(&manifest);
+    summary.spilled_points = packer.spilled();
+    for (int a = 0; a < 3; ++a) summary.max_error[a] = packer.max_error()[a];
+  };
+  if (arena) arena->execute(run); else run();
+
+  manifest.points = manifest.chunks.empty() ? 0 : manifest.chunks.back().first + manifest.chunks.back().count;
+  if (manifest.points != total) {
+    throw InputError(inputs.front().name, "", "the inputs gave " + std::to_string(manifest.points) +
+                                                  " points on the second read, " + std::to_string(total) +
+                                                  " on the first (did a file change?)");
+  }
+  manifest.bounds = local;
+  for (size_t k = 0; k < inputs.size(); ++k) {
+    ArchiveSource src;
+    src.path = inputs[k].path.empty() ? inputs[k].name : inputs[k].path;
+    src.points = counts[k];
+    if (!inputs[k].path.empty()) src.hash = HashFile(inputs[k].path, &src.bytes);
+    manifest.sources.push_back(src);
+  }
+  WriteFileAtomic(temp + "/" + kArchiveManifest, manifest.ToJson());
+  Publish(temp, out_path.string());
+  cleanup.dir.clear();
+
+  summary.points = manifest.points;
+  summary.chunks = manifest.chunks.size();
+  summary.files = manifest.files.size();
+  for (const ArchiveFile& f : manifest.files) summary.bytes += f.bytes;
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+}  // namespace candi::render

@@ -1,0 +1,62 @@
+// Packing point files into a render archive (render/archive.h), streaming with bounded memory.
+//
+// Pass 1 finds the bounds (LAS headers, else a read of the points) and the archive's frame (the
+// render frame: origin at the centre, rounded to metres). Pass 2 reads the points once more and
+// computes 63-bit Morton codes (21 bits per axis over the bounds). Inputs of at most
+// `memory_points` points are sorted in memory; larger ones are bucketed by the top Morton bits
+// into up to 512 cell files on disk (28 bytes a point), then each cell, in Morton order, is
+// sorted in memory (a cell still too large is bucketed again by the next bits), so memory stays
+// ~ 100 bytes x memory_points (400 MB by default) whatever the input size. Sorted points are cut into chunks of
+// consecutive points sharing a Morton prefix (<= chunk_points each), quantized and written to
+// data files of ~file_bytes. The output directory appears complete or not at all (built beside
+// it, then renamed; an existing archive there is replaced, anything else refused).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/point_io.h"
+#include "core/progress.h"
+#include "render/archive.h"
+
+namespace candi::render {
+
+struct PackOptions {
+  uint64_t chunk_points = 65536;               // points per chunk at most, [64, 2^24]
+  uint64_t memory_points = uint64_t{4} << 20;  // points sorted in memory at once, >= chunk_points
+  uint64_t file_bytes = uint64_t{1} << 30;     // data files are cut at chunk ends past this size
+  Rgb8 default_color{200, 200, 200};           // for inputs without colours
+  int threads = 0;                             // 0: as TBB allows
+  void Check() const;
+};
+
+// One input: a name for messages and the manifest, and how to open it (called twice: bounds,
+// then points). `path` (may be empty, e.g. generated points) is hashed into the manifest.
+struct PackInput {
+  std::string name;
+  std::string path;
+  std::function<std::unique_ptr<PointReader>()> open;
+};
+PackInput PackInputFromFile(const std::string& path);
+// Points made on demand, `piece` at a time: make(k, n) returns piece k (n points, any frame).
+// For generated data (benchmarks, tests) that never touches a point file.
+PackInput PackInputFromGenerator(const std::string& name, uint64_t total, uint64_t piece,
+                                 std::function<PointCloud(uint64_t k, uint64_t n)> make);
+
+struct PackSummary {
+  uint64_t points = 0, chunks = 0, files = 0, bytes = 0;
+  uint64_t spilled_points = 0;  // points that went through cell files on disk (external sort)
+  double seconds = 0;           // whole pack, including bounds and hashing
+  double max_error[3] = {0, 0, 0};  // largest quantization step / 2 over the chunks, m
+};
+
+PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>& inputs,
+                        const std::string& output_dir, const ProgressCallback& progress = nullptr);
+
+// The hash of a file recorded in the manifest: xxHash64 over the xxHash64s of its 64 MiB blocks.
+uint64_t HashFile(const std::string& path, uint64_t* bytes);
+
+}  // namespace candi::render

@@ -1,0 +1,59 @@
+// Streaming SPBR of a render archive: memory-mapped chunks pass through the splat kernel, so the
+// renderer holds frame buffers and a bounded batch of chunks, never the cloud.
+//
+// The image equals, bit for bit, SpbrStreamRenderer's (and so any chunking of it) fed the
+// archive's dequantized points (Archive::ReadAll) in archive order, in the archive's frame, at
+// the same seed: a point's ensemble is EnsembleOf(seed, archive index), its position the float
+// of the dequantized double, drawn by the same kernel with the same transform. Quantization moves
+// points by at most the archive's documented bound, so against the original points the image
+// agrees statistically, not bitwise.
+// Chunks whose box lies wholly outside the view frustum (with a margin of the splat size) are
+// skipped; this never changes the image, since the kernel would drop their points.
+// A subset of the ensembles can be drawn (ensemble_begin/end): the integer sums of disjoint
+// subsets add up to the whole render's (the MPI split, render/mpi/).
+#pragma once
+
+#include <cstdint>
+
+#include "core/progress.h"
+#include "render/archive.h"
+#include "render/camera.h"
+#include "render/spbr.h"
+
+namespace candi::render {
+
+struct ArchiveRenderOptions {
+  int repeat_level = 100;                       // L, >= 1
+  uint64_t seed = 1;
+  double point_size = 1.0;                      // pixels, in [1, 64]
+  // Bytes for resident z-buffers (12 bytes a pixel per ensemble): ensembles beyond it take
+  // further passes over the chunks.
+  uint64_t memory_budget = uint64_t{1} << 30;
+  // Bytes for chunks in flight: kChunkBytesPerPoint a point (mapped data, ensemble ids, staged
+  // float positions and colours; 8 more with point_size > 1). Must hold the largest visible chunk.
+  uint64_t chunk_budget = uint64_t{256} << 20;
+  int threads = 0;                              // 0: as TBB allows
+  int ensemble_begin = 0, ensemble_end = 0;     // ensembles drawn here; end 0 = L
+  bool verify = true;                           // check each chunk's hash before drawing it
+  void Check() const;
+};
+
+inline constexpr uint64_t kChunkBytesPerPoint = 28;
+
+struct ArchiveRenderStats {
+  uint64_t chunks = 0, chunks_visible = 0;
+  uint64_t points_visible = 0;   // points in visible chunks (read once per pass)
+  int passes = 0;
+  double seconds = 0;
+};
+
+// `camera` is perspective, in the archive's frame (world - manifest().frame.origin). The result
+// holds the sums of the drawn ensembles; `ensembles` and `repeat_level` are L.
+SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& camera, const Archive& archive,
+                         const ProgressCallback& progress = nullptr, ArchiveRenderStats* stats = nullptr);
+
+// True when the chunk box (archive frame) may draw a pixel of `camera` (perspective), with
+// `margin_px` pixels around the image.
+bool BoxMayBeVisible(const Camera::Projector& projector, const Camera& camera, const Box3d& box, double margin_px);
+
+}  // namespace candi::render

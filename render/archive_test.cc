@@ -1,0 +1,408 @@
+#include "render/archive.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include "core/atomic_file.h"
+#include "core/check.h"
+#include "core/point_io.h"
+#include "core/rng.h"
+#include "render/archive_pack.h"
+#include "render/archive_render.h"
+#include "render/spbr_stream.h"
+#include "render/splat_cloud.h"
+#include "render/synthetic_scene.h"
+#include "tests/util/test_util.h"
+
+namespace candi::render {
+namespace {
+
+namespace fs = std::filesystem;
+using candi::testing::TempDir;
+
+// Rounding of box.min + q * step in double: a few ulps of the largest magnitude involved.
+double Slack(const ChunkQuantizer& q, int a) {
+  const double mag = std::max(std::abs(q.box.min[a]), std::abs(q.box.max[a]));
+  return 4 * mag * std::numeric_limits<double>::epsilon();
+}
+
+TEST(ArchiveHash, MatchesXxHash64) {
+  EXPECT_EQ(ArchiveHash("", 0), 0xEF46DB3751D8E999ULL);
+  const std::string text = "candi render archive chunk hashing test vector, long enough for lanes";
+  EXPECT_NE(ArchiveHash(text.data(), text.size()), ArchiveHash(text.data(), text.size() - 1));
+  EXPECT_NE(ArchiveHash(text.data(), text.size(), 1), ArchiveHash(text.data(), text.size(), 0));
+}
+
+TEST(ChunkQuantizer, ErrorWithinDocumentedBoundOverRandomBoxes) {
+  Rng rng(11);
+  for (int trial = 0; trial < 400; ++trial) {
+    // Extents from 1 um to 1 km, offsets up to survey scale (1e6 m), some axes flat.
+    Box3d box;
+    Eigen::Vector3d lo, extent;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = (trial % 3 == 0 ? 1e6 : 10.0) * rng.Uniform(-1, 1);
+      extent[a] = rng.Uniform() < 0.15 ? 0.0 : std::pow(10.0, rng.Uniform(-6, 3));
+    }
+    std::vector<Eigen::Vector3d> points;
+    for (int i = 0; i < 64; ++i) {
+      Eigen::Vector3d p;
+      for (int a = 0; a < 3; ++a) p[a] = lo[a] + extent[a] * (i < 2 ? i : rng.Uniform());
+      points.push_back(p);
+      box.Extend(p);
+    }
+    const ChunkQuantizer q = ChunkQuantizer::ForBox(box);
+    ASSERT_LE(q.bits[0] + q.bits[1] + q.bits[2], kArchivePositionBits);
+    for (int a = 0; a < 3; ++a) {
+      if (box.max[a] > box.min[a]) {
+        EXPECT_GE(q.bits[a], 1);
+        EXPECT_DOUBLE_EQ(q.step[a], (box.max[a] - box.min[a]) / (std::ldexp(1.0, q.bits[a]) - 1));
+      } else {
+        EXPECT_EQ(q.bits[a], 0);
+      }
+    }
+    for (size_t i = 0; i < points.size(); ++i) {
+      const uint32_t rgb = static_cast<uint32_t>(i * 0x10101 + trial);
+      const uint64_t word = q.Encode(points[i], rgb & 0xffffff);
+      EXPECT_EQ(ChunkQuantizer::Color(word), rgb & 0xffffff);
+      const Eigen::Vector3d back = q.Decode(word);
+      for (int a = 0; a < 3; ++a) {
+        ASSERT_LE(std::abs(back[a] - points[i][a]), q.ErrorBound(a) + Slack(q, a))
+            << "trial " << trial << " axis " << a << " extent " << box.Extent()[a] << " bits " << q.bits[a];
+      }
+    }
+  }
+}
+
+TEST(ChunkQuantizer, SinglePointAndFlatChunksAreExact) {
+  Box3d single;
+  single.Extend(Eigen::Vector3d(1234567.125, -7654321.5, 12.25));
+  const ChunkQuantizer q = ChunkQuantizer::ForBox(single);
+  EXPECT_EQ(q.bits[0] + q.bits[1] + q.bits[2], 0);
+  EXPECT_EQ(q.Decode(q.Encode(single.min, 0xabcdef)), single.min);
+  // A flat chunk (z constant): the 40 bits go to x and y (at most 24 each), z exact.
+  Box3d flat;
+  flat.Extend(Eigen::Vector3d(0, 0, 5));
+  flat.Extend(Eigen::Vector3d(1, 1, 5));
+  const ChunkQuantizer f = ChunkQuantizer::ForBox(flat);
+  EXPECT_EQ(f.bits[0], 20);
+  EXPECT_EQ(f.bits[1], 20);
+  EXPECT_EQ(f.bits[2], 0);
+  EXPECT_EQ(f.Decode(f.Encode(Eigen::Vector3d(0.3, 0.7, 5), 0)).z(), 5.0);
+}
+
+// A cloud whose colour encodes the point's index (n < 2^24), shifted to survey coordinates.
+PointCloud IndexedCloud(uint64_t n, const Eigen::Vector3d& origin) {
+  PointCloud c = TerracedSolid(n, 5);
+  c.frame.origin = origin;
+  for (uint64_t i = 0; i < n; ++i) {
+    c.colors[i] = {static_cast<uint8_t>(i >> 16), static_cast<uint8_t>(i >> 8), static_cast<uint8_t>(i)};
+  }
+  return c;
+}
+
+PackInput CloudInput(const PointCloud& cloud) {
+  return PackInputFromGenerator("cloud", cloud.size(), 5000, [&cloud](uint64_t k, uint64_t n) {
+    PointCloud part;
+    part.SetSchema(cloud.schema);
+    part.frame = cloud.frame;
+    for (uint64_t i = k * 5000; i < k * 5000 + n; ++i) part.AppendFrom(cloud, i);
+    return part;
+  });
+}
+
+std::string ReadBytes(const std::string& path) { return ReadFileToString(path); }
+
+TEST(Archive, RoundTripWithinBoundInMortonChunksInMemoryAndExternalSortAgree) {
+  TempDir dir;
+  const PointCloud cloud = IndexedCloud(30000, Eigen::Vector3d(500000, 4200000, 150));
+  PackOptions o;
+  o.chunk_points = 512;
+  o.file_bytes = 64 * 1024;
+  const PackSummary in_memory = PackArchive(o, {CloudInput(cloud)}, dir.path() + "/a");
+  EXPECT_EQ(in_memory.spilled_points, 0u);
+  o.memory_points = 2048;  // forces the bucketing on disk, nested
+  const PackSummary external = PackArchive(o, {CloudInput(cloud)}, dir.path() + "/b");
+  EXPECT_GE(external.spilled_points, 30000u);
+  EXPECT_EQ(in_memory.points, 30000u);
+  EXPECT_GT(in_memory.files, 1u);
+  // The same Morton order whichever way the points were sorted (chunk cuts may differ: the
+  // external sort never cuts across its cells): the colours (point indices) come in the same order.
+  const PointCloud from_memory = Archive(dir.path() + "/a").ReadAll();
+  const PointCloud from_disk = Archive(dir.path() + "/b").ReadAll();
+  ASSERT_EQ(from_memory.size(), from_disk.size());
+  for (size_t i = 0; i < from_memory.size(); ++i) ASSERT_EQ(from_memory.colors[i], from_disk.colors[i]) << i;
+  // Packing is deterministic: the same inputs and options give the same bytes.
+  PackArchive(o, {CloudInput(cloud)}, dir.path() + "/c");
+  EXPECT_EQ(ReadBytes(dir.path() + "/b/manifest.json"), ReadBytes(dir.path() + "/c/manifest.json"));
+  EXPECT_EQ(ReadBytes(dir.path() + "/b/data-00001.bin"), ReadBytes(dir.path() + "/c/data-00001.bin"));
+  fs::remove_all(dir.path() + "/c");
+  // Nothing left behind but the two archives.
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 2);
+
+  const Archive archive(dir.path() + "/b");
+  const ArchiveManifest& m = archive.manifest();
+  EXPECT_EQ(m.frame.origin, RenderFrameFor(cloud.WorldBounds()).origin);
+  std::vector<int> seen(cloud.size(), 0);
+  PointCloud chunk;
+  for (size_t k = 0; k < m.chunks.size(); ++k) {
+    const ArchiveChunk& c = m.chunks[k];
+    EXPECT_LE(c.count, o.chunk_points);
+    archive.ReadChunk(k, &chunk);
+    for (size_t i = 0; i < chunk.size(); ++i) {
+      const Rgb8 rgb = chunk.colors[i];
+      const uint64_t original = uint64_t{rgb.r} << 16 | uint64_t{rgb.g} << 8 | rgb.b;
+      ASSERT_LT(original, cloud.size());
+      ++seen[original];
+      const Eigen::Vector3d truth = cloud.positions[original] + cloud.frame.origin - m.frame.origin;
+      for (int a = 0; a < 3; ++a) {
+        ASSERT_LE(std::abs(chunk.positions[i][a] - truth[a]), c.quantizer.ErrorBound(a) + Slack(c.quantizer, a));
+        ASSERT_GE(chunk.positions[i][a], c.quantizer.box.min[a]);
+        ASSERT_LE(chunk.positions[i][a], c.quantizer.box.max[a] + Slack(c.quantizer, a));
+      }
+    }
+  }
+  for (int s : seen) ASSERT_EQ(s, 1);
+  // Chunks are compact: their boxes' total volume is below the whole box's.
+  double volume = 0;
+  for (const ArchiveChunk& c : m.chunks) {
+    const Eigen::Vector3d e = c.quantizer.box.Extent();
+    volume += e.x() * e.y() * e.z();
+  }
+  const Eigen::Vector3d all = m.bounds.Extent();
+  EXPECT_LT(volume, 0.5 * all.x() * all.y() * all.z());  // ~60 times it in input order
+  // The manifest records the source.
+  ASSERT_EQ(m.sources.size(), 1u);
+  EXPECT_EQ(m.sources[0].points, 30000u);
+}
+
+TEST(Archive, PacksPlyFilesRecordingTheirHashes) {
+  TempDir dir;
+  PointCloud a = TerracedSolid(3000, 1), b = TerracedSolid(2000, 2);
+  WritePointCloud(dir.path() + "/a.ply", a);
+  WritePointCloud(dir.path() + "/b.ply", b);
+  PackOptions o;
+  o.chunk_points = 256;
+  PackArchive(o, {PackInputFromFile(dir.path() + "/a.ply"), PackInputFromFile(dir.path() + "/b.ply")},
+              dir.path() + "/out");
+  const Archive archive(dir.path() + "/out");
+  ASSERT_EQ(archive.manifest().sources.size(), 2u);
+  uint64_t bytes = 0;
+  EXPECT_EQ(archive.manifest().sources[1].hash, HashFile(dir.path() + "/b.ply", &bytes));
+  EXPECT_EQ(archive.manifest().sources[1].bytes, bytes);
+  EXPECT_NE(archive.manifest().sources[0].hash, archive.manifest().sources[1].hash);
+  EXPECT_EQ(archive.manifest().points, 5000u);
+  // Packing again over an archive replaces it; over another kind of file is refused.
+  PackArchive(o, {PackInputFromFile(dir.path() + "/b.ply")}, dir.path() + "/out");
+  EXPECT_EQ(Archive(dir.path() + "/out").manifest().points, 2000u);
+  EXPECT_THROW(PackArchive(o, {PackInputFromFile(dir.path() + "/b.ply")}, dir.path() + "/a.ply"), InputError);
+  EXPECT_EQ(ReadPointCloud(dir.path() + "/a.ply").size(), 3000u);
+}
+
+TEST(Archive, RefusesEmptyAndNanInputs) {
+  TempDir dir;
+  PointCloud empty = TerracedSolid(0, 1);
+  EXPECT_THROW(PackArchive({}, {CloudInput(empty)}, dir.path() + "/e"), InputError);
+  PointCloud nan = TerracedSolid(100, 1);
+  nan.positions[42].y() = std::numeric_limits<double>::quiet_NaN();
+  try {
+    PackArchive({}, {CloudInput(nan)}, dir.path() + "/n");
+    FAIL() << "NaN accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("point 42"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.path() + "/n"));
+}
+
+class ArchiveDamage : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    PackOptions o;
+    o.chunk_points = 256;
+    o.file_bytes = 16 * 1024;
+    PackArchive(o, {CloudInput(cloud_)}, path_);
+  }
+  TempDir dir_;
+  PointCloud cloud_ = TerracedSolid(8000, 3);
+  std::string path_ = dir_.path() + "/arc";
+};
+
+TEST_F(ArchiveDamage, MissingDataFileNamesIt) {
+  fs::remove(path_ + "/data-00001.bin");
+  try {
+    Archive a(path_);
+    FAIL() << "opened";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("data-00001.bin"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(ArchiveDamage, TruncatedDataFileNamesIt) {
+  fs::resize_file(path_ + "/data-00002.bin", fs::file_size(path_ + "/data-00002.bin") - 8);
+  try {
+    Archive a(path_);
+    FAIL() << "opened";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("data-00002.bin"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(ArchiveDamage, CorruptChunkFailsItsHash) {
+  {
+    std::fstream f(path_ + "/data-00000.bin", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(3000);
+    f.put('\x5a');
+  }
+  const Archive a(path_);
+  PointCloud chunk;
+  EXPECT_THROW(
+      {
+        for (size_t k = 0; k < a.manifest().chunks.size(); ++k) a.ReadChunk(k, &chunk);
+      },
+      InputError);
+  ArchiveRenderOptions o;
+  o.repeat_level = 4;
+  Camera camera = ObliqueView(a.manifest().bounds, 64, 48);
+  EXPECT_THROW(RenderArchive(o, camera, a), InputError);
+}
+
+TEST_F(ArchiveDamage, MalformedManifestNamesTheField) {
+  std::string text = ReadFileToString(path_ + "/manifest.json");
+  const size_t at = text.find("\"count\"");
+  text.replace(at, 7, "\"cuont\"");
+  WriteFileAtomic(path_ + "/manifest.json", text);
+  try {
+    Archive a(path_);
+    FAIL() << "opened";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("count"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("chunks[0]"), std::string::npos) << e.what();
+  }
+}
+
+// ---- rendering ------------------------------------------------------------------------------
+
+// The in-memory reference: SpbrStreamRenderer fed every dequantized point in one piece.
+SpbrResult Reference(const Archive& a, const Camera& camera, int L, uint64_t seed, double point_size) {
+  const PointCloud all = a.ReadAll();
+  SpbrStreamOptions o;
+  o.repeat_level = L;
+  o.seed = seed;
+  o.point_size = point_size;
+  SpbrStreamRenderer r(o, camera, a.manifest().frame);
+  for (int pass = 0; pass < r.passes(); ++pass) {
+    r.BeginPass(pass);
+    r.Add(all);
+    r.EndPass();
+  }
+  return r.Finish();
+}
+
+class ArchiveRender : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir;
+    PackOptions o;
+    o.chunk_points = 1024;
+    PackArchive(o, {PackInputFromGenerator("scene", 60000, 20000,
+                                           [](uint64_t k, uint64_t n) { return TerracedSolid(n, 100 + k); })},
+                dir_->path() + "/arc");
+    archive_ = new Archive(dir_->path() + "/arc");
+  }
+  static void TearDownTestSuite() {
+    delete archive_;
+    delete dir_;
+  }
+  static TempDir* dir_;
+  static Archive* archive_;
+};
+TempDir* ArchiveRender::dir_ = nullptr;
+Archive* ArchiveRender::archive_ = nullptr;
+
+TEST_F(ArchiveRender, EqualsInMemoryRenderOfDequantizedPointsBitForBit) {
+  const Camera camera = ObliqueView(archive_->manifest().bounds, 120, 90);
+  for (double size : {1.0, 2.5}) {
+    const SpbrResult ref = Reference(*archive_, camera, 12, 7, size);
+    ArchiveRenderOptions o;
+    o.repeat_level = 12;
+    o.seed = 7;
+    o.point_size = size;
+    o.threads = 2;
+    const SpbrResult one = RenderArchive(o, camera, *archive_);
+    EXPECT_TRUE(one.sums == ref.sums) << "point size " << size;
+    EXPECT_EQ(one.first_ensemble_grey, ref.first_ensemble_grey);
+    EXPECT_EQ(one.copies, ref.copies);
+    // Small budgets: several passes, one chunk per batch, one thread: same sums.
+    o.memory_budget = 12 * 120 * 90 * 5;
+    o.chunk_budget = 1024 * (kChunkBytesPerPoint + 8);
+    o.threads = 1;
+    ArchiveRenderStats stats;
+    const SpbrResult small = RenderArchive(o, camera, *archive_, nullptr, &stats);
+    EXPECT_EQ(stats.passes, 3);
+    EXPECT_TRUE(small.sums == ref.sums);
+    // A different seed gives a different image (the test can fail).
+    o.seed = 8;
+    EXPECT_FALSE(RenderArchive(o, camera, *archive_).sums == ref.sums);
+  }
+}
+
+TEST_F(ArchiveRender, EnsembleSharesAddUpToTheWhole) {
+  const Camera camera = ObliqueView(archive_->manifest().bounds, 80, 60);
+  ArchiveRenderOptions o;
+  o.repeat_level = 9;
+  const SpbrResult whole = RenderArchive(o, camera, *archive_);
+  Accumulator sum(80, 60);
+  uint64_t copies = 0;
+  for (auto [b, e] : {std::pair{0, 4}, std::pair{4, 5}, std::pair{5, 9}}) {
+    o.ensemble_begin = b, o.ensemble_end = e;
+    const SpbrResult part = RenderArchive(o, camera, *archive_);
+    sum.Merge(part.sums);
+    copies += part.copies;
+  }
+  EXPECT_TRUE(sum == whole.sums);
+  EXPECT_EQ(copies, whole.copies);
+  EXPECT_EQ(copies, 60000u);
+}
+
+TEST_F(ArchiveRender, SkipsChunksOutsideTheViewWithoutChangingTheImage) {
+  // A narrow view of one corner of the scene.
+  const Box3d& b = archive_->manifest().bounds;
+  Camera camera;
+  camera.width = 64, camera.height = 64;
+  camera.target = Eigen::Vector3d(b.min.x() + 0.15 * b.Extent().x(), b.min.y() + 0.15 * b.Extent().y(), b.min.z());
+  camera.eye = camera.target + Eigen::Vector3d(0, 0, 0.3 * b.Extent().x());
+  camera.up = Eigen::Vector3d::UnitY();
+  camera.fov_y_deg = 30;
+  ArchiveRenderOptions o;
+  o.repeat_level = 6;
+  ArchiveRenderStats stats;
+  const SpbrResult r = RenderArchive(o, camera, *archive_, nullptr, &stats);
+  EXPECT_LT(stats.chunks_visible, stats.chunks / 3);
+  EXPECT_GT(stats.chunks_visible, 0u);
+  EXPECT_TRUE(r.sums == Reference(*archive_, camera, 6, 1, 1.0).sums);
+  uint64_t hits = 0;
+  for (size_t p = 0; p < r.sums.sums.size(); p += 4) hits += r.sums.sums[p + 3];
+  EXPECT_GT(hits, 0u);
+}
+
+TEST_F(ArchiveRender, ChunkBudgetBelowOneChunkIsAClearError) {
+  const Camera camera = ObliqueView(archive_->manifest().bounds, 64, 48);
+  ArchiveRenderOptions o;
+  o.chunk_budget = 1000;
+  try {
+    RenderArchive(o, camera, *archive_);
+    FAIL() << "rendered";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("chunk budget"), std::string::npos) << e.what();
+  }
+  o.chunk_budget = uint64_t{1} << 30;
+  o.memory_budget = 100;
+  EXPECT_THROW(RenderArchive(o, camera, *archive_), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace candi::render

@@ -1,0 +1,81 @@
+#include "render/mpi/mpi_session.h"
+
+#include <mpi.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <string>
+
+#include "core/check.h"
+
+namespace candi::render::mpi {
+
+bool LaunchedByMpi() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"}) {
+    if (std::getenv(name) != nullptr) return true;
+  }
+  return false;
+}
+
+void EnsembleShare(int repeat_level, int rank, int size, int* begin, int* end) {
+  CANDI_CHECK(size >= 1 && rank >= 0 && rank < size) << "rank " << rank << " of " << size;
+  const int64_t L = repeat_level;
+  *begin = static_cast<int>(L * rank / size);
+  *end = static_cast<int>(L * (rank + 1) / size);
+}
+
+namespace {
+void Check(int code, const char* what) {
+  if (code != MPI_SUCCESS) {
+    char text[MPI_MAX_ERROR_STRING];
+    int length = 0;
+    MPI_Error_string(code, text, &length);
+    throw InternalError(std::string(what) + " failed: " + std::string(text, length));
+  }
+}
+}  // namespace
+
+Session::Session() {
+  int provided = 0;
+  Check(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+}
+
+Session::~Session() { MPI_Finalize(); }
+
+bool Session::AllOk(bool ok) const {
+  int mine = ok ? 1 : 0, all = 0;
+  Check(MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
+  return all == 1;
+}
+
+void Session::ReduceToRoot(SpbrResult* result) const {
+  // The image size first, so a mismatch is an error, not a garbled reduction.
+  const uint64_t n = result->sums.sums.size();
+  uint64_t lo = n, hi = n;
+  Check(MPI_Allreduce(&n, &lo, 1, MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
+  Check(MPI_Allreduce(&n, &hi, 1, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+  CANDI_CHECK(lo == hi) << "ranks rendered different image sizes";
+  const bool root = rank_ == 0;
+  // In slices of at most 2^30 values (MPI counts are int).
+  uint32_t* sums = result->sums.sums.data();
+  for (uint64_t at = 0; at < n; at += uint64_t{1} << 30) {
+    const int count = static_cast<int>(std::min<uint64_t>(uint64_t{1} << 30, n - at));
+    Check(MPI_Reduce(root ? MPI_IN_PLACE : sums + at, root ? sums + at : nullptr, count, MPI_UINT32_T, MPI_SUM, 0,
+                     MPI_COMM_WORLD),
+          "MPI_Reduce");
+  }
+  uint64_t* grey = result->first_ensemble_grey.data();
+  Check(MPI_Reduce(root ? MPI_IN_PLACE : grey, root ? grey : nullptr, 256, MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD),
+        "MPI_Reduce");
+  Check(MPI_Reduce(root ? MPI_IN_PLACE : &result->copies, root ? &result->copies : nullptr, 1, MPI_UINT64_T,
+                   MPI_SUM, 0, MPI_COMM_WORLD),
+        "MPI_Reduce");
+  double ms = result->milliseconds, max_ms = 0;
+  Check(MPI_Reduce(&ms, &max_ms, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD), "MPI_Reduce");
+  if (root) result->milliseconds = max_ms;
+}
+
+}  // namespace candi::render::mpi
