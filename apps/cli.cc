@@ -416,6 +416,49 @@ void AddClean(CLI::App& app, CleanArgs& a, std::function<int()>* run) {
   c->footer("Example: candi clean dense.ply -o dense_clean.ply --voxel 0.01");
 }
 
+void AddGeoref(CLI::App& app, GeorefArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("georef", "Georeference with total-station targets: robust "
+                               "similarity (Ceres), residuals per target, RMSE of control and "
+                               "check targets; per chunk, ties chunks into one frame");
+  c->add_option("input", a.input, "Point file, or a COLMAP sparse model folder")->required();
+  c->add_option("--targets", a.targets, "Targets CSV: name,E,N,H,role,accuracy[,x,y,z]")->required();
+  c->add_option("-o,--output", a.output, "Output point file (or folder, for a model); also "
+                "writes OUT.georef.json")->required();
+  c->add_option("--model", a.model, "COLMAP sparse model whose images the picks are in");
+  c->add_option("--picks", a.picks, "Picks CSV: name,image,u,v (pixels, undistorted images)");
+  c->add_option("--loss", a.loss, "Robust loss: huber, cauchy or none")
+      ->check(CLI::IsMember({"none", "huber", "cauchy"}));
+  c->add_option("--loss-scale", a.loss_scale, "Robust loss scale, m")->check(CLI::PositiveNumber);
+  c->add_option("--outlier-threshold", a.outlier_threshold, "Flag residuals above this, m "
+                "(default: 4 x max(robust sigma, target accuracy))")->check(CLI::NonNegativeNumber);
+  c->add_flag("--rigid", a.rigid, "Rigid fit (scale 1)");
+  c->callback([run, &a] { *run = [&a] { return RunGeoref(a); }; });
+  c->footer("Example: candi georef chunk1.ply --targets targets.csv -o chunk1_utm.ply");
+}
+
+void AddColorCorrect(CLI::App& app, ColorCorrectArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("colorcorrect", "Colour-card correction: a 3x4 matrix in linear RGB "
+                               "from the card's patches, applied to a PNG or point colours; "
+                               "CIEDE2000 before and after");
+  c->add_option("input", a.input, "PNG image or point file with colours")->required();
+  c->add_option("-o,--output", a.output, "Corrected output (same kind); also OUT.colorcorrect.json")
+      ->required();
+  auto* patches = c->add_option("--patches", a.patches, "CSV: patch,measured_r,measured_g,"
+                                "measured_b,reference_r,reference_g,reference_b (0..255)");
+  auto* card = c->add_option("--card", a.card, "Photo of the colour card (8-bit PNG)");
+  auto* corners = c->add_option("--corners", a.corners, "CSV: patch,x0,y0,...,x3,y3,reference_r,"
+                                "reference_g,reference_b (corners in pixels, around the patch)");
+  patches->excludes(card)->excludes(corners);
+  card->needs(corners);
+  corners->needs(card);
+  c->add_option("--outlier-delta-e", a.outlier_delta_e, "A patch predicted worse than this "
+                "(CIEDE2000) may be left out")->check(CLI::PositiveNumber);
+  c->add_option("--max-outliers", a.max_outliers, "Patches that may be left out")
+      ->check(CLI::Range(0, 100));
+  c->callback([run, &a] { *run = [&a] { return RunColorCorrect(a); }; });
+  c->footer("Example: candi colorcorrect photo.png -o photo_corrected.png --patches card.csv");
+}
+
 }  // namespace
 
 int RunCli(int argc, char** argv) {
@@ -458,6 +501,10 @@ int RunCli(int argc, char** argv) {
   AddRegister(app, register_args, &run);
   CleanArgs clean;
   AddClean(app, clean, &run);
+  GeorefArgs georef;
+  AddGeoref(app, georef, &run);
+  ColorCorrectArgs colorcorrect;
+  AddColorCorrect(app, colorcorrect, &run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

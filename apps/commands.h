@@ -259,5 +259,28 @@ struct BenchScaleArgs {
   bool keep = false;                   // keep the generated data
 };
 int RunBenchScale(const BenchScaleArgs& args);
+// candi georef (cmd_georef.cc): total-station targets -> robust similarity -> georeferenced output.
+struct GeorefArgs {
+  std::string input;                 // point file, or a COLMAP sparse model folder
+  std::string targets;               // targets CSV (reconstruction/photogrammetry/georef.h)
+  std::string output;                // point file (IN a point file) or folder (IN a model)
+  std::string model;                 // COLMAP sparse model of the picks (default: IN if a model)
+  std::string picks;                 // picks CSV name,image,u,v
+  std::string loss = "huber";        // none | huber | cauchy
+  double loss_scale = 0.05;          // m
+  double outlier_threshold = 0;      // m; 0 = robust (k * max(MAD sigma, accuracy))
+  bool rigid = false;                // scale fixed to 1
+};
+int RunGeoref(const GeorefArgs& args);
+
+// candi colorcorrect (cmd_colorcorrect.cc): a colour card's 3x4 matrix applied to an image or points.
+struct ColorCorrectArgs {
+  std::string input, output;         // PNG image or point file with colours
+  std::string patches;               // CSV of measured vs reference patch colours, or
+  std::string card, corners;         // the card photo (PNG) and its patches' corners CSV
+  double outlier_delta_e = 10;       // CIEDE2000
+  int max_outliers = 2;
+};
+int RunColorCorrect(const ColorCorrectArgs& args);
 
 }  // namespace candi::app
