@@ -10,7 +10,7 @@
 
 #include "core/check.h"
 #include "mesh/testing/dxf_text.h"
-#include "mesh/testing/input_error.h"
+#include "tests/util/input_error.h"
 #include "tests/util/test_util.h"
 
 namespace candi {

@@ -5,7 +5,7 @@
 #include <algorithm>
 
 #include "core/check.h"
-#include "mesh/testing/input_error.h"
+#include "tests/util/input_error.h"
 
 namespace candi {
 namespace {

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "core/check.h"
-#include "mesh/testing/input_error.h"
+#include "tests/util/input_error.h"
 
 namespace candi {
 namespace {

@@ -7,7 +7,7 @@
 #include <set>
 
 #include "core/rng.h"
-#include "mesh/testing/input_error.h"
+#include "tests/util/input_error.h"
 #include "reconstruction/photogrammetry/testing/surface_cloud.h"
 
 namespace candi::photogrammetry {

@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "core/check.h"
-#include "mesh/testing/input_error.h"
+#include "tests/util/input_error.h"
 #include "reconstruction/photogrammetry/testing/surface_cloud.h"
 
 namespace candi::photogrammetry {
