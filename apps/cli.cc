@@ -145,7 +145,6 @@ void AddBenchScale(CLI::App& app, BenchScaleArgs& a, std::function<int()>* run) 
   c->footer("Example: candi bench scale --sizes 1e7");
 }
 
-#if CANDI_WITH_RELIEF
 // `candi relief ...`: the buried-relief path (ALGORITHMS.md section 3).
 struct ReliefArgs {
   ReliefSynthArgs synth;
@@ -293,17 +292,6 @@ void AddRelief(CLI::App& app, ReliefArgs& a, std::function<int()>* run) {
   AddBenchRelief(app, a.bench, run);
 }
 
-#else
-// This binary does not link libtorch (loading it costs seconds per call): `candi relief ...` and
-// `candi bench relief` are run by candi-relief (main.cc hands them over before parsing). The
-// subcommand is listed here for --help.
-struct ReliefArgs {};
-void AddRelief(CLI::App& app, ReliefArgs&, std::function<int()>*) {
-  auto* relief = app.add_subcommand("relief", "Buried reliefs from one old photo: synth, dataset, "
-                                              "train, predict, points, eval (run by candi-relief)");
-  relief->allow_extras();
-}
-#endif
 
 void AddFoundation(CLI::App& app, FoundationArgs& a, std::function<int()>* run) {
   auto* c = app.add_subcommand("foundation", "Foundation layers from a CAD section drawing (DXF): "

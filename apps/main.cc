@@ -16,46 +16,64 @@ namespace candi::app {
 int RunCli(int argc, char** argv);
 }
 
-#if !CANDI_WITH_RELIEF
 namespace {
 
-// True for `candi [global flags] relief ...` and `candi [flags] bench ... relief ...`.
-bool WantsRelief(int argc, char** argv) {
+// The commands are split over three executables from the same sources, so that a call loads only
+// the shared libraries it needs (dynamic linking is most of a short call's time):
+//   candi        everything else (start-up ~0.1 s);
+//   candi-pcl    register and clean (PCL: its BIND_NOW libraries cost ~0.4 s to load);
+//   candi-relief the relief commands, and everything else too (libtorch: seconds to load).
+// cli.cc is the same in all three (every command's options and --help); an executable without a
+// command's code hands the call over, before parsing, to the sibling that has it (same folder,
+// same arguments).
+enum Group { kCore, kPcl, kRelief };
+
+// The group of `candi [global flags] COMMAND ...`; `bench ... relief` is a relief command.
+Group CommandGroup(int argc, char** argv) {
   int i = 1;
   while (i < argc && argv[i][0] == '-') ++i;
-  if (i >= argc) return false;
-  if (!std::strcmp(argv[i], "relief")) return true;
-  if (std::strcmp(argv[i], "bench") != 0) return false;
-  for (++i; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "relief")) return true;
+  if (i >= argc) return kCore;
+  const char* command = argv[i];
+  if (!std::strcmp(command, "relief")) return kRelief;
+  if (!std::strcmp(command, "register") || !std::strcmp(command, "clean")) return kPcl;
+  if (!std::strcmp(command, "bench")) {
+    for (++i; i < argc; ++i)
+      if (!std::strcmp(argv[i], "relief")) return kRelief;
+  }
+  return kCore;
+}
+
+bool HasGroup(Group group) {
+  switch (group) {
+    case kCore: return true;
+    case kPcl: return CANDI_WITH_PCL;
+    case kRelief: return CANDI_WITH_RELIEF;
   }
   return false;
 }
 
-// Replaces this process with candi-relief from this executable's folder (same arguments).
-int ExecRelief(char** argv) {
+// Replaces this process with `name` from this executable's folder (same arguments).
+int Exec(const char* name, char** argv) {
   char self[4096];
   const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
-  std::string path = "candi-relief";
+  std::string path = name;
   if (n > 0) {
     self[n] = '\0';
     const std::string exe(self);
-    path = exe.substr(0, exe.rfind('/') + 1) + "candi-relief";
+    path = exe.substr(0, exe.rfind('/') + 1) + name;
   }
   execv(path.c_str(), argv);
-  std::fprintf(stderr, "candi: internal error: the relief commands are run by %s, which could not be started: %s\n",
+  std::fprintf(stderr, "candi: internal error: this command is run by %s, which could not be started: %s\n",
                path.c_str(), std::strerror(errno));
   return candi::app::kInternal;
 }
 
 }  // namespace
-#endif
 
 int main(int argc, char** argv) {
   using namespace candi::app;
-#if !CANDI_WITH_RELIEF
-  if (WantsRelief(argc, argv)) return ExecRelief(argv);
-#endif
+  const Group group = CommandGroup(argc, argv);
+  if (!HasGroup(group)) return Exec(group == kPcl ? "candi-pcl" : "candi-relief", argv);
   try {
     return RunCli(argc, argv);
   } catch (const candi::InputError& e) {

@@ -27,6 +27,15 @@ function(candi_library folder)
   endif()
 endfunction()
 
+# Test code is compiled for build speed: -O1 (the code under test is in the -O3 libraries) and a
+# precompiled header of what every test includes (GoogleTest and Eigen cost ~8 s of parsing per
+# translation unit on the 2-core machines this is built on).
+function(candi_test_compile_options target)
+  target_compile_options(${target} PRIVATE -O1)
+  target_precompile_headers(${target} PRIVATE <gtest/gtest.h> <Eigen/Core> <algorithm> <cmath>
+                            <cstdint> <filesystem> <functional> <memory> <string> <vector>)
+endfunction()
+
 # candi_tests(<folder> [DEPS ...] [EXCLUDE regex...]): one test executable candi_<folder>_test from the unit tests
 # beside the sources (<folder>/**/*_test.cc), registered with ctest at test time.
 function(candi_tests folder)
@@ -45,6 +54,7 @@ function(candi_tests folder)
   add_executable(${target} ${tests})
   target_link_libraries(${target} PRIVATE candi_${folder} candi_test_util ${ARG_DEPS} GTest::gtest_main)
   candi_warnings(${target})
+  candi_test_compile_options(${target})
   include(GoogleTest)
   gtest_discover_tests(${target} DISCOVERY_MODE PRE_TEST WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
                        PROPERTIES LABELS ${folder} DISCOVERY_TIMEOUT 60)

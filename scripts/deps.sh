@@ -7,7 +7,7 @@ packages=(
   # toolchain
   g++ cmake ninja-build pkg-config make git ca-certificates
   # core
-  libeigen3-dev libpng-dev libtbb-dev
+  libeigen3-dev libpng-dev libjpeg-dev libtbb-dev
   # mesh
   libcgal-dev libopenmesh-dev libdxflib-dev
   # sampling

@@ -5,28 +5,12 @@
 #include <filesystem>
 #include <string>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "core/check.h"
+#include "core/jpeg_io.h"
 
 namespace candi::photogrammetry {
 
 namespace fs = std::filesystem;
-
-namespace {
-Image8 ReadRgb(const std::string& path) {
-  const cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
-  if (bgr.empty()) throw InputError(path, "", "cannot read the image (missing or not an image)");
-  cv::Mat rgb;
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  Image8 image(rgb.cols, rgb.rows, 3);
-  for (int y = 0; y < rgb.rows; ++y)
-    std::copy(rgb.ptr<uint8_t>(y), rgb.ptr<uint8_t>(y) + 3 * rgb.cols, &image.at(0, y));
-  return image;
-}
-}  // namespace
 
 StereoInput ReadDenseWorkspace(const std::string& workspace) {
   const std::string sparse = (fs::path(workspace) / "sparse").string();
@@ -42,7 +26,7 @@ StereoInput ReadDenseWorkspace(const std::string& workspace) {
     s.name = image.name;
     s.camera = ToPinholeCamera(camera->second, image, sparse);
     const std::string path = (fs::path(workspace) / "images" / image.name).string();
-    s.image = ReadRgb(path);
+    s.image = ReadImageRgb8(path);
     if (s.image.width() != s.camera.width || s.image.height() != s.camera.height)
       throw InputError(path, "", "image is " + std::to_string(s.image.width()) + "x" +
                                      std::to_string(s.image.height()) + ", its camera " +
