@@ -293,6 +293,17 @@ void AddRelief(CLI::App& app, ReliefArgs& a, std::function<int()>* run) {
 }
 
 
+void AddBuild(CLI::App& app, BuildArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("build", "Build the integrated archive of a scene file: every layer "
+                               "digitized, placed in one frame, written per layer, packed, rendered, "
+                               "with provenance (archive.json) and a MeshLab project");
+  c->add_option("scene", a.scene, "Scene JSON (format: apps/scene.h, README)")->required();
+  c->add_option("-o,--output", a.output, "Archive folder")->required();
+  c->add_option("--threads", a.threads, "Threads (0: all)")->check(CLI::Range(0, 256));
+  c->callback([run, &a] { *run = [&a] { return RunBuild(a); }; });
+  c->footer("Example: candi build examples/borobudur/scene.json -o borobudur_archive");
+}
+
 void AddFoundation(CLI::App& app, FoundationArgs& a, std::function<int()>* run) {
   auto* c = app.add_subcommand("foundation", "Foundation layers from a CAD section drawing (DXF): "
                                "profiles, Hermite resampling, rotational blending or sweep, mesh, "
@@ -493,6 +504,8 @@ int RunCli(int argc, char** argv) {
   AddGeoref(app, georef, &run);
   ColorCorrectArgs colorcorrect;
   AddColorCorrect(app, colorcorrect, &run);
+  BuildArgs build;
+  AddBuild(app, build, &run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

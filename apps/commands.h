@@ -283,4 +283,12 @@ struct ColorCorrectArgs {
 };
 int RunColorCorrect(const ColorCorrectArgs& args);
 
+// candi build SCENE -o ARCHIVE (cmd_build.cc, scene.h): the integrated archive of every layer.
+struct BuildArgs {
+  std::string scene;                 // scene JSON (apps/scene.h)
+  std::string output;                // archive folder (created; its parent must exist)
+  int threads = 0;
+};
+int RunBuild(const BuildArgs& args);
+
 }  // namespace candi::app

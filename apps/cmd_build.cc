@@ -1,0 +1,377 @@
+// candi build SCENE -o ARCHIVE/: the integrated archive (apps/scene.h). Each layer is digitized
+// by its own path (a point file read; a foundation from its DXF; relief panels from photos through
+// the depth network, placed by Ceres; photogrammetry from a dense workspace, georeferenced), moved
+// by world_from_layer into the scene's one LocalFrame and written as:
+//   layers/<name>.ply      double world coordinates (shift as comment + sidecar when the scene is
+//                          georeferenced), colours, scalar_layer and a quality copy of it
+//   archive/               the render archive of every layer (candi pack)
+//   renders/<view>.png     one SPBR render per view, and its .view.json (repeatable)
+//   meshlab/               float local-coordinate PLYs, scene.mlp and shift.txt
+//   archive.json           provenance: sources and hashes, method, parameters, seed, version, counts
+// Intermediate files go to work/. Every file is written atomically.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "apps/commands.h"
+#include "apps/output_folder.h"
+#include "apps/scene.h"
+#include "core/atomic_file.h"
+#include "core/check.h"
+#include "core/log.h"
+#include "core/point_io.h"
+#include "core/sha256.h"
+#include "reconstruction/photogrammetry/colmap_runner.h"
+
+namespace candi::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+std::string Join(const std::vector<std::string>& items, const char* separator) {
+  std::string s;
+  for (const std::string& i : items) s += (s.empty() ? "" : separator) + i;
+  return s;
+}
+
+// This executable's sibling `name` (candi-relief for the relief stages).
+std::string Sibling(const std::string& name) {
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? name : (self.parent_path() / name).string();
+}
+
+void RunChild(const std::vector<std::string>& argv, const std::string& log, const std::string& what) {
+  const int code = photogrammetry::RunLogged(argv, log);
+  if (code != 0)
+    throw InputError(log, "", what + " failed (exit code " + std::to_string(code) + "): " +
+                                  photogrammetry::TailOfFile(log, 10));
+}
+
+struct LayerResult {
+  PointCloud cloud;   // world coordinates (frame: the source's shift)
+  std::string method;
+  json parameters;
+  double seconds = 0;
+};
+
+PointCloud ReadAny(const std::string& path, const std::string& columns = "") {
+  PointReadOptions o;
+  o.columns = columns;
+  return ReadPointCloud(path, o);
+}
+
+LayerResult Foundation(const Scene& scene, const SceneLayer& l, const std::string& work) {
+  FoundationArgs f;
+  f.input = l.dxf;
+  f.output = (fs::path(work) / (l.name + "_foundation.ply")).string();
+  f.layers = l.sections;
+  if (l.samples_per_side) f.samples_per_side = l.samples_per_side;
+  if (l.angular_steps) f.angular_steps = l.angular_steps;
+  f.density = l.density;
+  f.count = l.count;
+  f.mode = l.mode;
+  f.seed = scene.seed;
+  const int code = RunFoundation(f);
+  if (code != kOk) throw InputError(l.dxf, "", "the foundation path failed (exit code " + std::to_string(code) + ")");
+  LayerResult r;
+  r.cloud = ReadAny(f.output);
+  r.method = "reconstructed: CAD sections -> Hermite profiles -> rotational blending / sweep -> mesh -> uniform samples";
+  r.parameters = {{"sections", l.sections}, {"samples_per_side", f.samples_per_side},
+                  {"angular_steps", f.angular_steps}, {"mode", l.mode}, {"seed", scene.seed}};
+  if (l.count) r.parameters["count"] = l.count;
+  else r.parameters["density"] = l.density > 0 ? l.density : 50.0;
+  return r;
+}
+
+// Each panel: photo -> depth (network) -> metric points in the panel frame (candi-relief, in a
+// child process so this one never loads libtorch), or its point file; then Ceres placement.
+LayerResult Relief(const SceneLayer& l, const std::string& work) {
+  std::vector<std::string> panel_points;
+  const std::string relief = Sibling("candi-relief");
+  for (const ReliefPanelSpec& p : l.panels) {
+    if (!p.points.empty()) {
+      panel_points.push_back(p.points);
+      continue;
+    }
+    const std::string base = (fs::path(work) / (l.name + "_" + p.id)).string();
+    const std::string w = std::to_string(l.width_m);
+    RunChild({relief, "-q", "relief", "predict", p.photo, "--model", l.model, "-o", base + "_depth.png",
+              "--width-m", w}, base + "_predict.log", "relief predict of " + p.photo);
+    RunChild({relief, "-q", "relief", "points", p.photo, base + "_depth.png", "-o", base + "_panel.ply",
+              "--width-m", w}, base + "_points.log", "relief points of " + p.photo);
+    panel_points.push_back(base + "_panel.ply");
+  }
+  const std::string placed = (fs::path(work) / (l.name + "_placed")).string();
+  std::vector<std::string> argv = {relief, "-q", "relief", "place", l.placement, "-o", placed + ".json",
+                                   "--points-out", placed};
+  for (size_t k = 0; k < l.panels.size(); ++k) argv.push_back("--panel=" + l.panels[k].id + "=" + panel_points[k]);
+  RunChild(argv, placed + ".log", "relief place");
+  LayerResult r;
+  r.cloud.schema.colors = true;
+  r.cloud.SetSchema(r.cloud.schema);
+  for (const ReliefPanelSpec& p : l.panels) {
+    const PointCloud panel = ReadAny((fs::path(placed) / (p.id + ".ply")).string());
+    if (r.cloud.empty()) r.cloud.frame = panel.frame;
+    r.cloud.Reserve(r.cloud.size() + panel.size());
+    for (size_t i = 0; i < panel.size(); ++i) {
+      r.cloud.positions.push_back(r.cloud.frame.ToLocal(panel.frame.ToWorld(panel.positions[i])));
+      r.cloud.colors.push_back(panel.schema.colors ? panel.colors[i] : Rgb8{200, 200, 200});
+    }
+  }
+  r.method = l.panels.front().photo.empty() ? "panel points placed by Ceres"
+                                            : "reconstructed: one old photo per panel -> depth network -> metric points -> Ceres placement";
+  r.parameters = {{"panels", l.panels.size()}, {"width_m", l.width_m}};
+  json placement = json::parse(ReadFileToString(placed + ".json"), nullptr, false);
+  if (!placement.is_discarded()) r.parameters["placement"] = placement;
+  return r;
+}
+
+LayerResult Photogrammetry(const Scene& scene, const SceneLayer& l, const std::string& work) {
+  std::string dense = l.dense;
+  LayerResult r;
+  r.method = "scanned: photogrammetry (dense multi-view stereo)";
+  if (!l.workspace.empty()) {
+    DenseArgs d;
+    d.workspace = l.workspace;
+    d.output = (fs::path(work) / (l.name + "_dense.ply")).string();
+    d.no_maps = true;
+    d.seed = scene.seed;
+    if (RunDense(d) != kOk) throw InputError(l.workspace, "", "dense stereo failed");
+    dense = d.output;
+    r.parameters["dense"] = {{"iterations", d.iterations}, {"window", d.window}, {"views", d.views}};
+  }
+  if (!l.targets.empty()) {
+    GeorefArgs g;
+    g.input = dense;
+    g.targets = l.targets;
+    g.output = (fs::path(work) / (l.name + "_georef.ply")).string();
+    if (RunGeoref(g) != kOk) throw InputError(l.targets, "", "georeferencing failed");
+    dense = g.output;
+    r.parameters["georeferenced_by"] = l.targets;
+  }
+  r.cloud = ReadAny(dense);
+  return r;
+}
+
+LayerResult Digitize(const Scene& scene, const SceneLayer& l, const std::string& work) {
+  switch (l.kind) {
+    case LayerKind::kPoints: {
+      LayerResult r;
+      r.cloud = ReadAny(l.file, l.columns);
+      r.method = "scanned: points from " + fs::path(l.file).filename().string();
+      return r;
+    }
+    case LayerKind::kFoundation: return Foundation(scene, l, work);
+    case LayerKind::kRelief: return Relief(l, work);
+    case LayerKind::kPhotogrammetry: return Photogrammetry(scene, l, work);
+  }
+  throw InternalError("unknown layer kind");
+}
+
+// world_from_layer, the colour override, the scene's frame; NaN positions are dropped (counted).
+size_t Place(const SceneLayer& l, uint16_t id, const LocalFrame& scene_frame, PointCloud* cloud) {
+  PointCloud& c = *cloud;
+  size_t kept = 0, dropped = 0;
+  for (size_t i = 0; i < c.size(); ++i) {
+    const Eigen::Vector3d world = l.world_from_layer * c.frame.ToWorld(c.positions[i]);
+    if (!world.allFinite()) {
+      ++dropped;
+      continue;
+    }
+    if (kept != i) {  // compact every present array
+      c.positions[kept] = c.positions[i];
+      if (c.schema.colors) c.colors[kept] = c.colors[i];
+      if (c.schema.alphas) c.alphas[kept] = c.alphas[i];
+      if (c.schema.normals) c.normals[kept] = c.normals[i];
+      if (c.schema.layers) c.layers[kept] = c.layers[i];
+      for (ScalarField& f : c.scalars) f.Set(kept, f.Get(i));
+    }
+    c.positions[kept] = scene_frame.ToLocal(world);
+    if (c.schema.normals) {
+      const Eigen::Vector3d n = l.world_from_layer.rotation * c.normals[kept].cast<double>();
+      c.normals[kept] = n.cast<float>();
+    }
+    ++kept;
+  }
+  c.Resize(kept);
+  c.frame = scene_frame;
+  PointSchema schema = c.schema;
+  schema.colors = true;
+  schema.scalars.clear();
+  schema.scalars.push_back({"layer", ScalarType::kFloat32});
+  schema.scalars.push_back({"quality", ScalarType::kFloat32});
+  const bool had_colors = c.schema.colors;
+  c.SetSchema(schema);
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (l.color || !had_colors) c.colors[i] = l.color ? *l.color : Rgb8{180, 180, 180};
+    c.scalars[0].Set(i, id);
+    c.scalars[1].Set(i, id);
+  }
+  return dropped;
+}
+
+// A MeshLab project: float PLYs in local coordinates (MeshLab reads matrices as float, so world
+// coordinates of 10^6 m would lose centimetres) and the shift beside it.
+void WriteMeshlab(const Scene& scene, const std::vector<PointCloud>& clouds, const std::string& dir) {
+  fs::create_directories(dir);
+  std::string mlp = "<!DOCTYPE MeshLabDocument>\n<MeshLabProject>\n <MeshGroup>\n";
+  for (size_t k = 0; k < clouds.size(); ++k) {
+    PointCloud local = clouds[k];
+    local.frame = LocalFrame();
+    PointWriteOptions o;
+    o.precision = PositionPrecision::kFloat32;
+    WritePointCloud((fs::path(dir) / (scene.layers[k].name + ".ply")).string(), local, o);
+    mlp += "  <MLMesh label=\"" + scene.layers[k].name + "\" filename=\"" + scene.layers[k].name +
+           ".ply\" visible=\"1\">\n   <MLMatrix44>\n1 0 0 0 \n0 1 0 0 \n0 0 1 0 \n0 0 0 1 \n</MLMatrix44>\n"
+           "   <RenderingOption pointSize=\"1\" wireColor=\"64 64 64 255\" boxColor=\"234 234 234 255\" "
+           "solidColor=\"192 192 192 255\" pointColor=\"131 149 69 255\">100001000000000000000100000001010100000010100000000100111011110000001001</RenderingOption>\n"
+           "  </MLMesh>\n";
+  }
+  mlp += " </MeshGroup>\n <RasterGroup/>\n</MeshLabProject>\n";
+  WriteFileAtomic((fs::path(dir) / "scene.mlp").string(), mlp);
+  const Eigen::Vector3d o = clouds.empty() ? Eigen::Vector3d::Zero() : clouds.front().frame.origin;
+  char shift[256];
+  std::snprintf(shift, sizeof(shift),
+                "# world = local + shift (metres); the PLYs here are in local coordinates\n%.17g %.17g %.17g\n",
+                o.x(), o.y(), o.z());
+  WriteFileAtomic((fs::path(dir) / "shift.txt").string(), shift);
+}
+
+}  // namespace
+
+int RunBuild(const BuildArgs& args) {
+  const auto start = std::chrono::steady_clock::now();
+  const Scene scene = LoadScene(args.scene);
+  CheckOutputFolder(args.output);
+  std::error_code ec;
+  fs::create_directories(args.output, ec);
+  if (ec) throw InputError(args.output, "", "cannot create the output folder: " + ec.message());
+  const fs::path out(args.output);
+  const std::string work = (out / "work").string();
+  for (const char* sub : {"work", "layers", "renders"}) fs::create_directories(out / sub);
+
+  // 1. Digitize every layer, in world coordinates.
+  std::vector<LayerResult> results;
+  Box3d world_box;
+  for (const SceneLayer& l : scene.layers) {
+    LogInfo("layer " + l.name + " (" + LayerKindName(l.kind) + ")");
+    const auto t = std::chrono::steady_clock::now();
+    LayerResult r = Digitize(scene, l, work);
+    r.seconds = Seconds(t);
+    for (size_t i = 0; i < r.cloud.size(); ++i) {
+      const Eigen::Vector3d w = l.world_from_layer * r.cloud.frame.ToWorld(r.cloud.positions[i]);
+      if (w.allFinite()) world_box.Extend(w);
+    }
+    results.push_back(std::move(r));
+  }
+  const LocalFrame frame = scene.origin ? LocalFrame{*scene.origin} : LocalFrame::Auto(world_box);
+
+  // 2. Place, colour and write each layer.
+  std::vector<std::string> layer_files;
+  std::vector<PointCloud> clouds;
+  std::vector<size_t> dropped;
+  for (size_t k = 0; k < scene.layers.size(); ++k) {
+    const SceneLayer& l = scene.layers[k];
+    dropped.push_back(Place(l, static_cast<uint16_t>(k), frame, &results[k].cloud));
+    if (dropped.back() > 0) LogWarning("layer " + l.name + ": " + std::to_string(dropped.back()) + " points with NaN coordinates dropped");
+    const std::string file = (out / "layers" / (l.name + ".ply")).string();
+    WritePointCloud(file, results[k].cloud);  // double, with the frame's shift when it has one
+    layer_files.push_back(file);
+    clouds.push_back(std::move(results[k].cloud));
+  }
+
+  // 3. The render archive of every layer.
+  const auto t_pack = std::chrono::steady_clock::now();
+  PackArgs pack;
+  pack.inputs = layer_files;
+  pack.output = (out / "archive").string();
+  if (RunPack(pack) != kOk) throw InputError(pack.output, "", "packing failed");
+  const double pack_seconds = Seconds(t_pack);
+
+  // 4. Renders.
+  json views = json::array();
+  for (const SceneView& v : scene.views) {
+    const auto t = std::chrono::steady_clock::now();
+    RenderArgs r;
+    for (size_t k = 0; k < scene.layers.size(); ++k) {
+      const SceneLayer& l = scene.layers[k];
+      if (!v.layers.empty() && std::find(v.layers.begin(), v.layers.end(), l.name) == v.layers.end()) continue;
+      r.inputs.push_back(layer_files[k]);
+      if (!v.opaque) r.alpha.push_back(ViewOpacity(v, l));
+    }
+    r.output = (out / "renders" / (v.name + ".png")).string();
+    r.repeat_level = scene.repeat_level;
+    r.seed = scene.seed;
+    r.size = std::to_string(scene.width) + "x" + std::to_string(scene.height);
+    r.size_given = true;
+    r.background = std::to_string(scene.background.r) + "," + std::to_string(scene.background.g) + "," +
+                   std::to_string(scene.background.b);
+    r.brightness = scene.brightness;
+    r.opaque = v.opaque;
+    r.mode = "memory";
+    r.threads = args.threads;
+    const std::string view_file = (out / "renders" / (v.name + ".view.json")).string();
+    if (!v.camera_file.empty()) r.view = v.camera_file;
+    if (!v.camera_json.empty()) {
+      WriteFileAtomic(view_file, v.camera_json + "\n");
+      r.view = view_file;
+    }
+    if (r.view.empty()) r.save_view = view_file;
+    if (RunRender(r) != kOk) throw InputError(r.output, "", "render failed");
+    json alphas = json::object();
+    for (size_t k = 0; k < r.alpha.size(); ++k) alphas[fs::path(r.inputs[k]).stem().string()] = r.alpha[k];
+    views.push_back({{"name", v.name}, {"png", "renders/" + v.name + ".png"}, {"opaque", v.opaque},
+                     {"opacity", alphas}, {"seconds", Seconds(t)}});
+  }
+
+  // 5. MeshLab project, provenance.
+  WriteMeshlab(scene, clouds, (out / "meshlab").string());
+  json layers = json::array();
+  uint64_t total = 0;
+  for (size_t k = 0; k < scene.layers.size(); ++k) {
+    const SceneLayer& l = scene.layers[k];
+    json sources = json::array();
+    for (const std::string& s : l.Sources()) sources.push_back({{"path", s}, {"sha256", Sha256OfFile(s)}, {"bytes", fs::file_size(s)}});
+    const Eigen::Matrix4d m = l.world_from_layer.ToMatrix();
+    json matrix = json::array();
+    for (int r = 0; r < 4; ++r) matrix.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
+    total += clouds[k].size();
+    layers.push_back({{"name", l.name}, {"kind", LayerKindName(l.kind)},
+                      {"scanned", l.kind == LayerKind::kPoints || l.kind == LayerKind::kPhotogrammetry},
+                      {"method", results[k].method}, {"parameters", results[k].parameters},
+                      {"sources", sources}, {"world_from_layer", matrix}, {"opacity", l.opacity},
+                      {"highlight", l.highlight}, {"points", clouds[k].size()}, {"dropped_nan", dropped[k]},
+                      {"file", "layers/" + l.name + ".ply"}, {"seconds", results[k].seconds}});
+  }
+  const json provenance = {
+      {"candi_version", CANDI_VERSION}, {"scene", {{"path", scene.path}, {"sha256", Sha256Hex(scene.text)}}},
+      {"name", scene.name}, {"seed", scene.seed},
+      {"frame", {{"origin", {frame.origin.x(), frame.origin.y(), frame.origin.z()}}}},
+      {"points", total}, {"layers", layers}, {"archive", "archive"}, {"pack_seconds", pack_seconds},
+      {"views", views}, {"meshlab", "meshlab/scene.mlp"}, {"seconds", Seconds(start)}};
+  WriteFileAtomic((out / "archive.json").string(), provenance.dump(2) + "\n");
+
+  std::printf("%-16s %-15s %12s %8s %-8s %s\n", "layer", "kind", "points", "opacity", "scanned", "seconds");
+  for (size_t k = 0; k < scene.layers.size(); ++k)
+    std::printf("%-16s %-15s %12zu %8.3g %-8s %.1f\n", scene.layers[k].name.c_str(),
+                LayerKindName(scene.layers[k].kind).c_str(), clouds[k].size(), scene.layers[k].opacity,
+                layers[k]["scanned"].get<bool>() ? "yes" : "no", results[k].seconds);
+  std::printf("%s: %llu points in %zu layers, frame origin %s, %zu render(s), %.1f s\n", args.output.c_str(),
+              static_cast<unsigned long long>(total), clouds.size(), frame.ToString().c_str(), views.size(),
+              Seconds(start));
+  return kOk;
+}
+
+}  // namespace candi::app

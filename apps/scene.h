@@ -1,0 +1,118 @@
+// The scene file of `candi build`: every layer of a site, how it is digitized, where it goes and
+// how it is shown. JSON, version 1; paths are relative to the scene file's folder.
+//
+// {
+//   "candi_scene": 1,                        required
+//   "name": "borobudur",                     optional, default: the file's stem
+//   "origin": [E, N, H] | "auto",            the scene's one LocalFrame (default "auto": chosen from
+//                                            the layers' bounds, see LocalFrame::Auto)
+//   "seed": 1,                               every random step (sampling, opacity, SPBR)
+//   "render": {"repeat_level": 100, "width": 1024, "height": 768, "background": [r, g, b],
+//              "brightness": "auto" | "none" | gain},
+//   "views": [{"name": "overview",           one PNG per view: renders/<name>.png
+//              "camera": "view.json" | {...},  a view as `candi render --save-view` writes (world
+//                                            coordinates); absent: the default view of the data
+//              "opaque": false,              true: L = 1, every layer opaque
+//              "layers": ["a", "b"],         default: all
+//              "focus": false,               true: highlighted layers at focus_opacity, the others
+//              "focus_opacity": 0.95,          at dim x their opacity
+//              "dim": 0.5,
+//              "opacity": {"a": 0.2}}],      per-view overrides of layer opacities
+//   "layers": [{
+//     "name": "foundation",                  unique; [A-Za-z0-9_-]+ (it names files)
+//     "kind": "points" | "foundation" | "relief" | "photogrammetry",
+//     "world_from_layer": {"matrix": [[4 x 4]]} | {"scale": s, "rotation_deg": [rx, ry, rz],
+//                          "translation": [x, y, z]}      (R = Rz Ry Rx; default identity)
+//     "color": [r, g, b],                    override every point's colour
+//     "opacity": 0.5,                        target opacity in (0, 1] (default 1: every point)
+//     "highlight": false,
+//     points:         "file": "scan.las", "columns": "xyzrgb" (XYZ/PTS only)
+//     foundation:     "dxf": "foundation.dxf", "sections": ["A", ...], "samples_per_side": 1000,
+//                     "angular_steps": 90, "density": 50 | "count": K, "mode": "auto"|"blend"|"sweep"
+//     relief:         "panels": [{"id": "P01", "photo": "p01.png" | "points": "p01.ply"}],
+//                     "model": "relief_model.pt" (with photos), "width_m": 2.7,
+//                     "placement": "correspondences.csv" (panel ids as in "panels")
+//     photogrammetry: "dense": "dense.ply" | "workspace": "ws/" (runs candi dense),
+//                     "targets": "targets.csv" (georeference, candi georef's format)
+//   }]
+// }
+// Unknown keys, wrong types, missing files and bad values throw InputError naming the scene file
+// and the JSON path of the culprit (e.g. "/layers/2/opacity").
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/point_cloud.h"
+#include "core/transform.h"
+
+namespace candi::app {
+
+enum class LayerKind { kPoints, kFoundation, kRelief, kPhotogrammetry };
+std::string LayerKindName(LayerKind kind);
+
+struct ReliefPanelSpec {
+  std::string id;
+  std::string photo;   // absolute; exactly one of photo and points
+  std::string points;
+};
+
+struct SceneLayer {
+  std::string name;
+  LayerKind kind = LayerKind::kPoints;
+  Sim3 world_from_layer;
+  std::optional<Rgb8> color;
+  double opacity = 1.0;
+  bool highlight = false;
+  // points
+  std::string file, columns;
+  // foundation
+  std::string dxf;
+  std::vector<std::string> sections;
+  int samples_per_side = 0, angular_steps = 0;  // 0: candi foundation's defaults
+  double density = 0;
+  unsigned long long count = 0;
+  std::string mode = "auto";
+  // relief
+  std::vector<ReliefPanelSpec> panels;
+  std::string model, placement;
+  double width_m = 2.7;
+  // photogrammetry
+  std::string dense, workspace, targets;
+  // Every input file of the layer (absolute), for provenance.
+  std::vector<std::string> Sources() const;
+};
+
+struct SceneView {
+  std::string name;
+  std::string camera_file;   // absolute, or "" (inline or default)
+  std::string camera_json;   // inline camera as JSON text, or ""
+  bool opaque = false;
+  std::vector<std::string> layers;  // empty: all
+  bool focus = false;
+  double focus_opacity = 0.95, dim = 0.5;
+  std::map<std::string, double> opacity;
+};
+
+struct Scene {
+  std::string path;   // the scene file
+  std::string name;
+  std::optional<Eigen::Vector3d> origin;  // none: auto
+  unsigned long long seed = 1;
+  int repeat_level = 100, width = 1024, height = 768;
+  Rgb8 background{255, 255, 255};
+  std::string brightness = "auto";
+  std::vector<SceneView> views;
+  std::vector<SceneLayer> layers;
+  std::string text;   // the file's bytes (hashed for provenance)
+};
+
+Scene LoadScene(const std::string& path);
+
+// The opacity layer `layer` gets in `view` (focus, dim and overrides applied), in (0, 1].
+double ViewOpacity(const SceneView& view, const SceneLayer& layer);
+
+}  // namespace candi::app

@@ -1,0 +1,193 @@
+// End-to-end tests of `candi build SCENE -o ARCHIVE`: outputs, provenance, survey-scale frames,
+// and the scene file's errors (each names the JSON path of the culprit).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/png_io.h"
+#include "core/point_io.h"
+#include "core/sha256.h"
+#include "tests/run_candi.h"
+#include "tests/util/test_util.h"
+
+namespace candi {
+namespace {
+
+using nlohmann::json;
+using testing::FileExists;
+using testing::RunCandi;
+using testing::TempDir;
+using Result = testing::CommandResult;
+
+// A 4 m x 2 m wall of points at survey coordinates, 1 cm grid, with millimetre offsets that float
+// would lose (E 416000.xxx).
+void WriteSurveyWall(const std::string& path) {
+  PointCloud c;
+  c.schema.colors = true;
+  c.SetSchema(c.schema);
+  c.frame.origin = Eigen::Vector3d(416000, 9168000, 250);
+  for (int i = 0; i < 400; ++i)
+    for (int j = 0; j < 200; ++j) {
+      c.positions.emplace_back(0.01 * i + 0.0007, 5.0, 0.01 * j);
+      c.colors.push_back({200, 60, 40});
+    }
+  WritePointCloud(path, c);
+}
+
+json BaseScene() {
+  json scene = json::parse(R"({
+    "candi_scene": 1,
+    "name": "test",
+    "seed": 7,
+    "render": {"repeat_level": 8, "width": 96, "height": 64, "background": [255, 255, 255]},
+    "views": [{"name": "all"}, {"name": "opaque", "opaque": true},
+              {"name": "focus", "focus": true, "layers": ["wall", "hill"]}],
+    "layers": [
+      {"name": "wall", "kind": "points", "file": "wall.ply", "opacity": 0.6, "highlight": true},
+      {"name": "hill", "kind": "foundation", "dxf": "FOUNDATION", "sections": ["D"],
+       "samples_per_side": 40, "angular_steps": 12, "count": 3000, "color": [0, 160, 0],
+       "opacity": 0.3,
+       "world_from_layer": {"scale": 0.001, "translation": [416002, 9168010, 240]}}
+    ]})");
+  scene["layers"][1]["dxf"] = std::filesystem::absolute("examples/borobudur/foundation.dxf").string();
+  return scene;
+}
+
+void WriteScene(const std::string& path, const json& scene) { testing::WriteBytes(path, scene.dump(2)); }
+
+TEST(BuildCli, TwoLayerSceneGivesLayersArchiveRendersProvenanceAndMeshlab) {
+  TempDir dir;
+  WriteSurveyWall(dir.File("wall.ply"));
+  WriteScene(dir.File("scene.json"), BaseScene());
+  const Result r = RunCandi("build " + dir.File("scene.json") + " -o " + dir.File("out"));
+  ASSERT_EQ(r.code, 0) << r.output;
+
+  // Layers: the wall keeps its millimetres at survey coordinates; the hill has its exact count.
+  const PointCloud wall = ReadPointCloud(dir.File("out/layers/wall.ply"));
+  ASSERT_EQ(wall.size(), 80000u);
+  const Eigen::Vector3d first = wall.frame.ToWorld(wall.positions[0]);
+  EXPECT_NEAR(first.x(), 416000.0007, 1e-6);
+  EXPECT_NEAR(first.y(), 9168005.0, 1e-6);
+  EXPECT_EQ(wall.colors[0], (Rgb8{200, 60, 40}));
+  ASSERT_NE(wall.FindScalar("layer"), nullptr);
+  ASSERT_NE(wall.FindScalar("quality"), nullptr);
+  const PointCloud hill = ReadPointCloud(dir.File("out/layers/hill.ply"));
+  ASSERT_EQ(hill.size(), 3000u);
+  EXPECT_EQ(hill.colors[17], (Rgb8{0, 160, 0}));
+  EXPECT_EQ(hill.FindScalar("layer")->Get(5), 1.0);
+  for (size_t i = 0; i < hill.size(); i += 97) {  // the drawing (mm) placed near the wall, in metres
+    const Eigen::Vector3d w = hill.frame.ToWorld(hill.positions[i]);
+    EXPECT_NEAR(w.x(), 416002, 200);
+    EXPECT_NEAR(w.y(), 9168010, 200);
+  }
+
+  // Renders: three PNGs of the scene's size; the opaque one differs from the transparent one.
+  for (const char* v : {"all", "opaque", "focus"}) {
+    const PngImage png = ReadPng(dir.File(std::string("out/renders/") + v + ".png"));
+    EXPECT_EQ(png.image8.width(), 96);
+    EXPECT_EQ(png.image8.height(), 64);
+    EXPECT_TRUE(FileExists(dir.File(std::string("out/renders/") + v + ".view.json")));
+  }
+  EXPECT_FALSE(ReadPng(dir.File("out/renders/all.png")).image8 == ReadPng(dir.File("out/renders/opaque.png")).image8);
+
+  // Provenance: sources with their hashes, methods, counts, the frame; scanned vs reconstructed.
+  const json a = json::parse(testing::ReadBytes(dir.File("out/archive.json")));
+  EXPECT_EQ(a["points"], 83000);
+  EXPECT_EQ(a["seed"], 7);
+  ASSERT_EQ(a["layers"].size(), 2u);
+  EXPECT_EQ(a["layers"][0]["sources"][0]["sha256"], Sha256OfFile(dir.File("wall.ply")));
+  EXPECT_EQ(a["layers"][0]["scanned"], true);
+  EXPECT_EQ(a["layers"][1]["scanned"], false);
+  EXPECT_EQ(a["layers"][1]["sources"][0]["sha256"], Sha256OfFile("examples/borobudur/foundation.dxf"));
+  EXPECT_EQ(a["scene"]["sha256"], Sha256OfFile(dir.File("scene.json")));
+  EXPECT_GT(a["frame"]["origin"][0].get<double>(), 4e5);  // survey coordinates: a shift was chosen
+  // The focus view: the highlighted wall at 0.95, the hill dimmed to 0.3 x 0.5.
+  EXPECT_DOUBLE_EQ(a["views"][2]["opacity"]["wall"].get<double>(), 0.95);
+  EXPECT_DOUBLE_EQ(a["views"][2]["opacity"]["hill"].get<double>(), 0.15);
+
+  // The archive and the MeshLab project (local float coordinates, shift beside them).
+  EXPECT_TRUE(FileExists(dir.File("out/archive/archive.json")) || std::filesystem::is_directory(dir.File("out/archive")));
+  const std::string mlp = testing::ReadBytes(dir.File("out/meshlab/scene.mlp"));
+  EXPECT_NE(mlp.find("filename=\"wall.ply\""), std::string::npos);
+  EXPECT_NE(mlp.find("filename=\"hill.ply\""), std::string::npos);
+  const PointCloud local = ReadPointCloud(dir.File("out/meshlab/wall.ply"));
+  EXPECT_TRUE(local.frame.IsIdentity());
+  EXPECT_LT(local.positions[0].cwiseAbs().maxCoeff(), 1e4);
+  EXPECT_NE(testing::ReadBytes(dir.File("out/meshlab/shift.txt")).find("416000"), std::string::npos);
+
+  // Same scene, same seed: the same bytes.
+  const Result again = RunCandi("build " + dir.File("scene.json") + " -o " + dir.File("out2"));
+  ASSERT_EQ(again.code, 0) << again.output;
+  EXPECT_EQ(testing::ReadBytes(dir.File("out/layers/hill.ply")), testing::ReadBytes(dir.File("out2/layers/hill.ply")));
+  EXPECT_TRUE(ReadPng(dir.File("out/renders/all.png")).image8 == ReadPng(dir.File("out2/renders/all.png")).image8);
+}
+
+// Each bad key, type, path and value: exit code 2 and the JSON path in the message.
+TEST(BuildCli, SceneErrorsNameTheJsonPathOfTheCulprit) {
+  TempDir dir;
+  WriteSurveyWall(dir.File("wall.ply"));
+  struct Case {
+    const char* what;
+    std::function<void(json&)> edit;
+    const char* expected;  // in the message
+  };
+  const std::vector<Case> cases = {
+      {"unknown root key", [](json& s) { s["colour"] = 1; }, "/colour: unknown key"},
+      {"missing version", [](json& s) { s.erase("candi_scene"); }, "candi_scene"},
+      {"wrong version", [](json& s) { s["candi_scene"] = 2; }, "/candi_scene"},
+      {"no layers", [](json& s) { s["layers"] = json::array(); }, "/layers: no layers"},
+      {"layers not an array", [](json& s) { s["layers"] = 3; }, "/layers: expected an array"},
+      {"unknown layer key", [](json& s) { s["layers"][0]["colour"] = {1, 2, 3}; }, "/layers/0/colour: unknown key"},
+      {"key of another kind", [](json& s) { s["layers"][0]["dxf"] = "x.dxf"; }, "/layers/0/dxf: unknown key"},
+      {"unknown kind", [](json& s) { s["layers"][0]["kind"] = "mesh"; }, "/layers/0/kind: unknown kind"},
+      {"missing file", [](json& s) { s["layers"][0]["file"] = "nope.ply"; }, "/layers/0/file: no such file"},
+      {"folder as file", [](json& s) { s["layers"][0]["file"] = "."; }, "/layers/0/file: a folder"},
+      {"no file key", [](json& s) { s["layers"][0].erase("file"); }, "needs \"file\""},
+      {"opacity 0", [](json& s) { s["layers"][0]["opacity"] = 0; }, "/layers/0/opacity: out of range"},
+      {"opacity 1.5", [](json& s) { s["layers"][0]["opacity"] = 1.5; }, "/layers/0/opacity: out of range"},
+      {"opacity a string", [](json& s) { s["layers"][0]["opacity"] = "half"; }, "/layers/0/opacity: expected a number"},
+      {"colour 300", [](json& s) { s["layers"][0]["color"] = {300, 0, 0}; }, "/layers/0/color/0: out of range"},
+      {"colour of two", [](json& s) { s["layers"][0]["color"] = {3, 0}; }, "/layers/0/color: expected [r, g, b]"},
+      {"bad name", [](json& s) { s["layers"][0]["name"] = "a/b"; }, "/layers/0/name"},
+      {"repeated layer", [](json& s) { s["layers"][1] = s["layers"][0]; }, "/layers/1/name: layer name \"wall\" repeats"},
+      {"not a similarity", [](json& s) {
+         s["layers"][0]["world_from_layer"] = {{"matrix", {{2, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}}};
+       }, "/layers/0/world_from_layer/matrix: not a similarity"},
+      {"scale 0", [](json& s) { s["layers"][0]["world_from_layer"] = {{"scale", 0}}; }, "/layers/0/world_from_layer/scale"},
+      {"unknown transform key", [](json& s) { s["layers"][0]["world_from_layer"] = {{"shift", 1}}; },
+       "/layers/0/world_from_layer/shift: unknown key"},
+      {"view of an unknown layer", [](json& s) { s["views"][2]["layers"] = {"wall", "moat"}; }, "/views/2/layers/1: no layer named \"moat\""},
+      {"view opacity of an unknown layer", [](json& s) { s["views"][0]["opacity"] = {{"moat", 0.5}}; }, "/views/0/opacity/moat"},
+      {"repeated view", [](json& s) { s["views"][1]["name"] = "all"; }, "/views/1/name"},
+      {"missing camera file", [](json& s) { s["views"][0]["camera"] = "v.json"; }, "/views/0/camera: no such file"},
+      {"density and count", [](json& s) { s["layers"][1]["density"] = 5; }, "/layers/1/count: give one of"},
+      {"bad mode", [](json& s) { s["layers"][1]["mode"] = "twist"; }, "/layers/1/mode"},
+      {"repeat level 0", [](json& s) { s["render"]["repeat_level"] = 0; }, "/render/repeat_level: out of range"},
+      {"huge image", [](json& s) { s["render"]["width"] = 100000; }, "/render/width: out of range"},
+      {"NaN-like origin", [](json& s) { s["origin"] = {1, "x", 3}; }, "/origin/1: expected a number"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    json scene = BaseScene();
+    c.edit(scene);
+    WriteScene(dir.File("scene.json"), scene);
+    const Result r = RunCandi("build " + dir.File("scene.json") + " -o " + dir.File("out"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("scene.json"), std::string::npos) << r.output;
+    EXPECT_FALSE(FileExists(dir.File("out/archive.json")));
+  }
+  testing::WriteBytes(dir.File("broken.json"), "{\"candi_scene\": 1,\n \"layers\": [}");
+  const Result r = RunCandi("build " + dir.File("broken.json") + " -o " + dir.File("out"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("not valid JSON"), std::string::npos) << r.output;
+  EXPECT_EQ(RunCandi("build " + dir.File("missing.json") + " -o " + dir.File("out")).code, 2);
+  WriteScene(dir.File("scene.json"), BaseScene());
+  const Result unwritable = RunCandi("build " + dir.File("scene.json") + " -o " + dir.File("no/such/folder/out"));
+  EXPECT_EQ(unwritable.code, 2) << unwritable.output;
+}
+
+}  // namespace
+}  // namespace candi
