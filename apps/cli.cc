@@ -46,6 +46,7 @@ void AddDemo(CLI::App& app, DemoArgs& a, std::function<int()>* run) {
   c->add_option("--width", a.width, "Image width in pixels")->check(CLI::Range(16, 16384));
   c->add_option("--height", a.height, "Image height in pixels")->check(CLI::Range(16, 16384));
   c->add_option("--seed", a.seed, "Random seed");
+  c->add_flag("--quick", a.quick, "The reduced scene (fewer points, L = 32), as CI runs it");
   c->callback([run, &a] { *run = [&a] { return RunDemo(a); }; });
   c->footer("Example: candi demo -o demo_out");
 }

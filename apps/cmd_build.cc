@@ -3,7 +3,7 @@
 // the depth network, placed by Ceres; photogrammetry from a dense workspace, georeferenced), moved
 // by world_from_layer into the scene's one LocalFrame and written as:
 //   layers/<name>.ply      double world coordinates (shift as comment + sidecar when the scene is
-//                          georeferenced), colours, scalar_layer and a quality copy of it
+//                          georeferenced), colours, scalar_scene_layer (the layer index) and a quality copy
 //   archive/               the render archive of every layer (candi pack)
 //   renders/<view>.png     one SPBR render per view, and its .view.json (repeatable)
 //   meshlab/               float local-coordinate PLYs, scene.mlp and shift.txt
@@ -210,7 +210,7 @@ size_t Place(const SceneLayer& l, uint16_t id, const LocalFrame& scene_frame, Po
   PointSchema schema = c.schema;
   schema.colors = true;
   schema.scalars.clear();
-  schema.scalars.push_back({"layer", ScalarType::kFloat32});
+  schema.scalars.push_back({"scene_layer", ScalarType::kFloat32});
   schema.scalars.push_back({"quality", ScalarType::kFloat32});
   const bool had_colors = c.schema.colors;
   c.SetSchema(schema);

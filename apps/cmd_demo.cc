@@ -1,117 +1,226 @@
-// candi demo: until the integrated Borobudur example exists, renders a built-in scene (a stepped
-// temple of square and circular terraces with small stupas) with the best renderer candi has.
+// candi demo: the bundled Borobudur example, end to end, through `candi build`.
+//
+// The building is a procedural stand-in for the photogrammetric scan of the paper (which is not
+// public): nine stacked platforms — six square, three circular carrying 72 perforated stupas —
+// and the central stupa; a 113 m square base, ~35 m high; the balustrades of the galleries; and
+// the foot encasement, the broad platform added in the 9th century that hides the original foot
+// and its reliefs, with the southeast corner excavated as it is today. It is sampled as a UAV scan
+// would be (uniform points on the visible surfaces; nothing inside the encasement). The foundation
+// comes from examples/borobudur/foundation.dxf through the foundation path. The demo writes the
+// scene file it builds (out/scene.json), so every step can be repeated with `candi build`.
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
+#include "core/atomic_file.h"
 #include "core/log.h"
-#include "core/png_io.h"
 #include "core/point_io.h"
 #include "core/rng.h"
-#include "render/camera.h"
-#include "render/spbr.h"
-#include "render/splat_cloud.h"
 
 namespace candi::app {
 
 namespace {
 
+namespace fs = std::filesystem;
+using nlohmann::json;
 constexpr double kPi = 3.14159265358979323846;
 
-Rgb8 Stone(Rng& rng, double shade) {
-  const double g = std::clamp(shade * (0.85 + 0.15 * rng.Uniform()), 0.0, 1.0);
-  return {static_cast<uint8_t>(150 * g + 40), static_cast<uint8_t>(140 * g + 35), static_cast<uint8_t>(120 * g + 30)};
-}
+// Geometry of the stand-in (metres; x east, y north, z up; the base's centre at the origin).
+constexpr double kBaseHalf = 56.5;        // 113 m square base: the original foot wall
+constexpr double kEncasementHalf = 60.0;  // the encasement's outer face
+constexpr double kFootHeight = 4.0;       // the foot (and the encasement) top
+// The excavated southeast corner: the encasement removed over x in [kDigX0, kEncasementHalf] on
+// the south side, exposing the foot wall (and its panels) there.
+constexpr double kDigX0 = 44.0;
 
-void AddPoint(PointCloud* c, const Eigen::Vector3d& p, Rgb8 color) {
-  c->positions.push_back(p);
-  c->colors.push_back(color);
-}
+struct Sampler {
+  PointCloud* cloud;
+  Rng rng;
+  double density;  // points per m^2
 
-// A square terrace: four walls of half-size a between heights z0 and z1, and its top ring.
-void SquareTerrace(double a, double inner, double z0, double z1, double density, Rng& rng, PointCloud* c) {
-  const size_t wall = static_cast<size_t>(density * 8 * a * (z1 - z0));
-  for (size_t i = 0; i < wall; ++i) {
-    const double t = rng.Uniform(-a, a), z = rng.Uniform(z0, z1);
-    const int side = static_cast<int>(rng.Below(4));
-    const Eigen::Vector3d p = side == 0 ? Eigen::Vector3d(t, -a, z) : side == 1 ? Eigen::Vector3d(a, t, z)
-                            : side == 2 ? Eigen::Vector3d(t, a, z) : Eigen::Vector3d(-a, t, z);
-    AddPoint(c, p, Stone(rng, side % 2 == 0 ? 0.8 : 0.6));
+  size_t Count(double area) {
+    const double n = density * area;
+    size_t k = static_cast<size_t>(n);
+    if (rng.Uniform() < n - static_cast<double>(k)) ++k;
+    return k;
   }
-  const size_t top = static_cast<size_t>(density * 4 * (a * a - inner * inner));
-  for (size_t i = 0; i < top; ++i) {
-    const double x = rng.Uniform(-a, a), y = rng.Uniform(-a, a);
-    if (std::max(std::abs(x), std::abs(y)) < inner) continue;
-    AddPoint(c, Eigen::Vector3d(x, y, z1), Stone(rng, 1.0));
+  void Add(const Eigen::Vector3d& p, double shade) {
+    const double g = std::clamp(shade * (0.86 + 0.14 * rng.Uniform()), 0.0, 1.0);
+    cloud->positions.push_back(p);
+    cloud->colors.push_back({static_cast<uint8_t>(150 * g + 45), static_cast<uint8_t>(140 * g + 40),
+                             static_cast<uint8_t>(118 * g + 32)});
   }
-}
-
-// A dome (half ellipsoid) of radius r and height hgt standing at base.
-void Dome(const Eigen::Vector3d& base, double r, double hgt, double density, Rng& rng, PointCloud* c) {
-  const size_t n = static_cast<size_t>(density * 2 * kPi * r * std::max(r, hgt));
-  for (size_t i = 0; i < n; ++i) {
-    const double phi = rng.Uniform(0, 2 * kPi), cz = rng.Uniform(0, 1);
-    const double s = std::sqrt(1 - cz * cz);
-    AddPoint(c, base + Eigen::Vector3d(r * s * std::cos(phi), r * s * std::sin(phi), hgt * cz),
-             Stone(rng, 0.6 + 0.4 * cz));
+  // An axis-aligned rectangle: origin + s u + t v, s, t in [0, 1]; `keep` filters points.
+  template <typename Keep>
+  void Rect(const Eigen::Vector3d& o, const Eigen::Vector3d& u, const Eigen::Vector3d& v, double shade, Keep keep) {
+    const size_t n = Count(u.norm() * v.norm());
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d p = o + rng.Uniform() * u + rng.Uniform() * v;
+      if (keep(p)) Add(p, shade);
+    }
   }
-}
+  void Rect(const Eigen::Vector3d& o, const Eigen::Vector3d& u, const Eigen::Vector3d& v, double shade) {
+    Rect(o, u, v, shade, [](const Eigen::Vector3d&) { return true; });
+  }
+  // The four vertical faces of a square of half-size a between z0 and z1, and optionally the ring
+  // on top between half-sizes inner and a.
+  template <typename Keep>
+  void SquareWalls(double a, double z0, double z1, Keep keep) {
+    const double h = z1 - z0;
+    const double shades[4] = {0.75, 0.95, 0.6, 0.8};  // south east north west: a light from the east
+    Rect({-a, -a, z0}, {2 * a, 0, 0}, {0, 0, h}, shades[0], keep);
+    Rect({a, -a, z0}, {0, 2 * a, 0}, {0, 0, h}, shades[1], keep);
+    Rect({-a, a, z0}, {2 * a, 0, 0}, {0, 0, h}, shades[2], keep);
+    Rect({-a, -a, z0}, {0, 2 * a, 0}, {0, 0, h}, shades[3], keep);
+  }
+  template <typename Keep>
+  void SquareRing(double a, double inner, double z, Keep keep) {
+    const size_t n = Count(4 * (a * a - inner * inner));
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d p(rng.Uniform(-a, a), rng.Uniform(-a, a), z);
+      if (std::max(std::abs(p.x()), std::abs(p.y())) >= inner && keep(p)) Add(p, 1.0);
+    }
+  }
+  void Cylinder(double r, double z0, double z1) {
+    const size_t n = Count(2 * kPi * r * (z1 - z0));
+    for (size_t i = 0; i < n; ++i) {
+      const double phi = rng.Uniform(0, 2 * kPi);
+      Add({r * std::cos(phi), r * std::sin(phi), rng.Uniform(z0, z1)}, 0.7 + 0.25 * std::cos(phi));
+    }
+  }
+  void Disc(double r, double inner, double z) {
+    const size_t n = Count(kPi * (r * r - inner * inner));
+    for (size_t i = 0; i < n; ++i) {
+      const double phi = rng.Uniform(0, 2 * kPi), rr = std::sqrt(rng.Uniform(inner * inner, r * r));
+      Add({rr * std::cos(phi), rr * std::sin(phi), z}, 1.0);
+    }
+  }
+  // A bell-shaped stupa at `base`: a half ellipsoid of radius r and height h; perforated ones have
+  // diamond openings (points removed in a lattice), as the 72 on the circular terraces do.
+  void Stupa(const Eigen::Vector3d& base, double r, double h, bool perforated) {
+    const size_t n = Count(2 * kPi * r * std::max(r, h));
+    for (size_t i = 0; i < n; ++i) {
+      const double phi = rng.Uniform(0, 2 * kPi), c = rng.Uniform(0, 1), s = std::sqrt(1 - c * c);
+      if (perforated && c < 0.7) {
+        const double a = phi * 16 / (2 * kPi), b = c * 8;
+        const double fa = a - std::floor(a) - 0.5, fb = b - std::floor(b) - 0.5;
+        if (std::abs(fa) + std::abs(fb) < 0.28) continue;  // an opening
+      }
+      Add(base + Eigen::Vector3d(r * s * std::cos(phi), r * s * std::sin(phi), h * c),
+          0.55 + 0.3 * c + 0.15 * std::cos(phi));
+    }
+    const size_t spire = Count(2 * kPi * 0.15 * r * 0.5 * h);
+    for (size_t i = 0; i < spire; ++i) {
+      const double phi = rng.Uniform(0, 2 * kPi);
+      Add(base + Eigen::Vector3d(0.15 * r * std::cos(phi), 0.15 * r * std::sin(phi), h * rng.Uniform(1.0, 1.5)), 0.8);
+    }
+  }
+};
 
-PointCloud BuiltinScene(uint64_t seed) {
+bool Excavated(const Eigen::Vector3d& p) { return p.x() >= kDigX0 && p.y() <= -kBaseHalf + 1e-9; }
+
+PointCloud Building(uint64_t seed, double density) {
   PointCloud cloud;
   cloud.schema.colors = true;
   cloud.SetSchema(cloud.schema);
-  Rng rng(seed);
-  const double density = 60.0;  // points per m^2
-  double z = 0;
-  for (int k = 0; k < 6; ++k) {  // six square terraces
-    const double a = 56.0 - 5.5 * k, h = k == 0 ? 4.0 : 3.0;
-    SquareTerrace(a, 56.0 - 5.5 * (k + 1), z, z + h, density, rng, &cloud);
+  Sampler s{&cloud, Rng(seed), density};
+  auto all = [](const Eigen::Vector3d&) { return true; };
+  // The encasement: outer faces (with the southeast dig cut out), its top, and the dig's floor
+  // and side face; the original foot wall shows only inside the dig.
+  const double e = kEncasementHalf, a0 = kBaseHalf;
+  s.SquareWalls(e, 0, kFootHeight, [&](const Eigen::Vector3d& p) {
+    return !(p.y() <= -e + 1e-9 && p.x() >= kDigX0);
+  });
+  s.SquareRing(e, a0, kFootHeight, [&](const Eigen::Vector3d& p) { return !(p.x() >= kDigX0 && p.y() <= -a0); });
+  s.Rect({kDigX0, -e, 0}, {0, e - a0, 0}, {0, 0, kFootHeight}, 0.9);          // the dig's west face
+  s.Rect({kDigX0, -e, 0}, {e - kDigX0, 0, 0}, {0, e - a0, 0}, 0.5);            // the dig's floor
+  s.Rect({e, -e, 0}, {0, e - a0, 0}, {0, 0, kFootHeight}, 0.95);               // east face end
+  s.Rect({kDigX0, -a0, 0}, {a0 - kDigX0, 0, 0}, {0, 0, kFootHeight}, 0.8);     // the exposed foot
+  // Five more square platforms with balustrades (galleries), then three circular terraces.
+  double z = kFootHeight;
+  for (int k = 1; k < 6; ++k) {
+    const double a = a0 - 5.5 * k, h = 3.4;
+    s.SquareWalls(a, z, z + h, all);
+    const double next = k < 5 ? a0 - 5.5 * (k + 1) : 25.5;
+    s.SquareRing(a, next, z + h, all);
+    s.SquareWalls(a - 0.3, z + h, z + h + 1.2, all);  // the balustrade
     z += h;
   }
-  for (int k = 0; k < 3; ++k) {  // three circular terraces with rings of small stupas
-    const double ring = 25.0 - 6.0 * k;
-    const int stupas = k == 0 ? 32 : k == 1 ? 24 : 16;
-    for (int s = 0; s < stupas; ++s) {
-      const double phi = 2 * kPi * s / stupas;
-      Dome(Eigen::Vector3d(ring * std::cos(phi), ring * std::sin(phi), z), 1.8, 3.2, density, rng, &cloud);
+  const double rings[3] = {25.0, 19.5, 14.0};
+  const int stupas[3] = {32, 24, 16};
+  for (int k = 0; k < 3; ++k) {
+    const double r = rings[k] + 2.6, h = 1.3;
+    s.Cylinder(r, z, z + h);
+    s.Disc(r, k < 2 ? rings[k + 1] + 2.6 : 6.0, z + h);
+    z += h;
+    for (int j = 0; j < stupas[k]; ++j) {
+      const double phi = 2 * kPi * (j + 0.5 * k) / stupas[k];
+      s.Stupa({rings[k] * std::cos(phi), rings[k] * std::sin(phi), z}, 1.6, 3.2, true);
     }
-    z += 1.5;
   }
-  Dome(Eigen::Vector3d(0, 0, z), 8.0, 10.0, density, rng, &cloud);  // the central stupa
+  s.Stupa({0, 0, z}, 8.0, 8.5, false);  // the central stupa; its spire reaches ~35 m
   cloud.CheckConsistent();
   return cloud;
+}
+
+json Camera(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, double fov, int w, int h) {
+  return {{"projection", "perspective"}, {"eye", {eye.x(), eye.y(), eye.z()}},
+          {"target", {target.x(), target.y(), target.z()}}, {"up", {0, 0, 1}}, {"fov_y_deg", fov},
+          {"width", w}, {"height", h}};
 }
 
 }  // namespace
 
 int RunDemo(const DemoArgs& args) {
-  std::filesystem::create_directories(args.output_dir);
-  LogInfo("candi demo: the integrated Borobudur example is not built yet; rendering the built-in "
-          "scene (a stepped temple) with SPBR, candi's renderer, transparent and opaque");
-  const PointCloud scene = BuiltinScene(args.seed);
-  LogInfo("built-in scene: " + std::to_string(scene.size()) + " points");
-  const std::string ply = args.output_dir + "/builtin_scene.ply";
-  WritePointCloud(ply, scene);
-  for (const int repeat_level : {1, 100}) {
-    render::SplatCloudOptions build;
-    build.repeat_level = repeat_level;
-    build.seed = args.seed;
-    const render::SplatCloud splats = render::BuildSplatCloud(build, {&scene});
-    const render::Camera camera = render::FrameBox(splats.bounds, args.width, args.height,
-                                                   Eigen::Vector3d(0.55, 0.75, -0.45));
-    const render::SpbrResult result = render::RenderSpbr({}, camera, splats);
-    const double gain = repeat_level > 1 ? render::AutoBrightnessGain(result) : 1.0;
-    const Image8 image = render::ToImage8(render::AverageImage(result, Rgb8{0, 0, 0}, gain));
-    const std::string png = args.output_dir + (repeat_level == 1 ? "/builtin_opaque.png" : "/builtin_spbr.png");
-    WritePng(png, image, {{"Software", std::string("candi demo (SPBR)")},
-                          {"candi:seed", std::to_string(args.seed)},
-                          {"candi:repeat_level", std::to_string(repeat_level)},
-                          {"candi:brightness_gain", std::to_string(gain)}});
-    std::printf("wrote %s (%dx%d, SPBR L=%d, %.0f ms, gain %.2f)\n", png.c_str(), image.width(),
-                image.height(), repeat_level, result.milliseconds, gain);
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path out = fs::absolute(args.output_dir).lexically_normal();
+  fs::create_directories(out / "inputs");
+  const double density = args.quick ? 4.0 : 40.0;
+  LogInfo("candi demo: the bundled Borobudur example (building: a procedural stand-in for the scan, "
+          "which is not public; foundation: examples/borobudur/foundation.dxf)");
+  const PointCloud building = Building(args.seed, density);
+  const std::string building_ply = (out / "inputs" / "building.ply").string();
+  WritePointCloud(building_ply, building);
+  LogInfo("building: " + std::to_string(building.size()) + " points");
+
+  const std::string source_dir = CANDI_SOURCE_DIR;
+  const int w = args.width, h = args.height;
+  json building_layer = {{"name", "building"}, {"kind", "points"}, {"file", building_ply}, {"opacity", 0.25}};
+  json foundation_layer = {{"name", "foundation"}, {"kind", "foundation"},
+                           {"dxf", source_dir + "/examples/borobudur/foundation.dxf"},
+                           {"count", args.quick ? 200000 : 4470000}, {"opacity", 0.6},
+                           {"samples_per_side", args.quick ? 200 : 1000}, {"angular_steps", args.quick ? 36 : 90}};
+  json scene = {{"candi_scene", 1}, {"name", "borobudur"}, {"seed", args.seed}};
+  scene["render"] = {{"repeat_level", args.quick ? 32 : 100}, {"width", w}, {"height", h},
+                     {"background", {255, 255, 255}}};
+  scene["layers"] = json::array({building_layer, foundation_layer});
+  const json overview = Camera({170, -230, 110}, {0, 0, -5}, 38, w, h);
+  // The southeast corner close up: the building (and the reliefs), not the hill around it.
+  const json corner_layers = json::array({"building"});
+  const json corner = Camera({74, -80, 7}, {50, -56.5, 1.5}, 40, w, h);
+  scene["views"] = {{{"name", "overview_opaque"}, {"camera", overview}, {"opaque", true}},
+                    {{"name", "overview_transparent"}, {"camera", overview}},
+                    {{"name", "corner_opaque"}, {"camera", corner}, {"opaque", true}, {"layers", corner_layers}},
+                    {{"name", "corner_transparent"}, {"camera", corner}, {"layers", corner_layers}}};
+  const std::string scene_file = (out / "scene.json").string();
+  WriteFileAtomic(scene_file, scene.dump(2) + "\n");
+
+  BuildArgs build;
+  build.scene = scene_file;
+  build.output = (out / "archive").string();
+  const int code = RunBuild(build);
+  if (code != kOk) return code;
+  for (const char* v : {"overview_opaque", "overview_transparent", "corner_opaque", "corner_transparent"}) {
+    std::error_code ec;
+    fs::copy_file(out / "archive" / "renders" / (std::string(v) + ".png"), out / (std::string(v) + ".png"),
+                  fs::copy_options::overwrite_existing, ec);
   }
+  std::printf("demo: %s (scene %s), %.1f s\n", out.string().c_str(), scene_file.c_str(),
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return kOk;
 }
 

@@ -39,6 +39,7 @@ struct DemoArgs {
   std::string output_dir = "demo_out";
   int width = 1024, height = 768;
   unsigned long long seed = 1;
+  bool quick = false;                 // the reduced scene CI runs (fewer points, L = 32)
 };
 int RunDemo(const DemoArgs& args);
 

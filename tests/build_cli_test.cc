@@ -71,12 +71,12 @@ TEST(BuildCli, TwoLayerSceneGivesLayersArchiveRendersProvenanceAndMeshlab) {
   EXPECT_NEAR(first.x(), 416000.0007, 1e-6);
   EXPECT_NEAR(first.y(), 9168005.0, 1e-6);
   EXPECT_EQ(wall.colors[0], (Rgb8{200, 60, 40}));
-  ASSERT_NE(wall.FindScalar("layer"), nullptr);
+  ASSERT_NE(wall.FindScalar("scene_layer"), nullptr);
   ASSERT_NE(wall.FindScalar("quality"), nullptr);
   const PointCloud hill = ReadPointCloud(dir.File("out/layers/hill.ply"));
   ASSERT_EQ(hill.size(), 3000u);
   EXPECT_EQ(hill.colors[17], (Rgb8{0, 160, 0}));
-  EXPECT_EQ(hill.FindScalar("layer")->Get(5), 1.0);
+  EXPECT_EQ(hill.FindScalar("scene_layer")->Get(5), 1.0);
   for (size_t i = 0; i < hill.size(); i += 97) {  // the drawing (mm) placed near the wall, in metres
     const Eigen::Vector3d w = hill.frame.ToWorld(hill.positions[i]);
     EXPECT_NEAR(w.x(), 416002, 200);
