@@ -108,8 +108,8 @@ PanelPlacement PlaceOne(const PanelPlacementOptions& o, const std::vector<PanelC
   fit.outlier_k = o.outlier_k;
   fit.collinear_ratio = o.collinear_ratio;
   // A panel's points lie on (or within 0.15 m of) the wall plane by nature; a planar layout still
-  // fixes the full rotation, and nothing is extrapolated far from the plane: no coplanar warning.
-  fit.coplanar_ratio = 1e-12;
+  // fixes the full rotation, and nothing is extrapolated far from the plane: the fit's coplanar
+  // warning is dropped below (planarity stays in the result).
   pg::SimilarityFitResult r;
   try {
     r = pg::FitSimilarity(fit, x, y, accuracy);
@@ -124,7 +124,10 @@ PanelPlacement PlaceOne(const PanelPlacementOptions& o, const std::vector<PanelC
   p.planarity = r.planarity;
   p.converged = r.converged;
   p.solver_message = r.solver_message;
-  p.warnings = r.warnings;
+  for (const std::string& w : r.warnings) {
+    // A panel's points lie on (or within 0.15 m of) the wall plane by nature: see above.
+    if (w.rfind("targets nearly coplanar", 0) != 0) p.warnings.push_back(w);
+  }
   double sum2 = 0;
   for (size_t i = 0; i < r.residuals.size(); ++i) {
     p.residuals_mm.push_back(1000.0 * r.residuals[i]);

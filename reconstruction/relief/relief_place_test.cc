@@ -96,6 +96,7 @@ TEST(PlacePanels, RecoversThe160PanelsAtSurveyCoordinatesFromMillimetreNoise) {
     EXPECT_EQ(p.status, "ok") << p.panel;
     EXPECT_EQ(p.inliers, 8) << p.panel << ": no outlier at 1 mm noise";
     EXPECT_DOUBLE_EQ(p.world_from_panel.scale, 1.0) << "rigid by default";
+    EXPECT_TRUE(p.warnings.empty()) << p.panel << ": " << p.warnings.front();
     const double e = CornerErrorMm(p.world_from_panel, site.truth[i]);
     worst = std::max(worst, e);
     sum2 += e * e;
@@ -136,6 +137,18 @@ TEST(PlacePanels, FlagsACorruptedCorrespondenceAndStillPlacesThePanel) {
   ASSERT_FALSE(p.warnings.empty());
   EXPECT_NE(p.warnings.back().find("'top_right'"), std::string::npos) << p.warnings.back();
   EXPECT_EQ(r.panels[0].inliers, 8);
+}
+
+TEST(PlacePanels, FlagsACorruptedCornerWhenOnlyTheFourCornersAreDocumented) {
+  Site site = MakeSite(1, 0.001, 12);
+  std::vector<PanelCorrespondence> corners(site.c.begin(), site.c.begin() + 4);
+  corners[3].in_world += V(0.0, 0.1, -0.1);  // top_left: a misread position
+  const PlacementResult r = PlacePanels({}, corners, "site.csv");
+  const PanelPlacement& p = r.panels[0];
+  EXPECT_EQ(p.outlier, std::vector<bool>({false, false, false, true}));
+  EXPECT_EQ(p.inliers, 3);
+  EXPECT_TRUE(p.fits) << p.status;
+  EXPECT_LT(CornerErrorMm(p.world_from_panel, site.truth[0]), 3.0);
 }
 
 TEST(PlacePanels, CollinearPointsAreReportedNotPlaced) {
