@@ -183,8 +183,8 @@ TEST(ReliefPlaceCli, PlacesPanelsWarnsAMisfitAndWritesWorldPoints) {
 }
 
 TEST(ReliefPlaceCli, BadInputIsExitTwoNamingFileAndLineAndWritesNothing) {
-  // A few cases here (each call loads candi-relief, ~2.5 s of CPU); relief_place_test.cc has all
-  // the CSV errors (missing column, < 3 points, duplicates, coincident points, accuracy).
+  // A few cases here (each call loads candi-relief's libtorch, ~3 s of CPU); relief_place_test.cc
+  // has all the CSV errors (missing column, < 3 points, duplicates, coincident points, accuracy).
   TempDir dir;
   testing::WriteBytes(dir.File("bad.csv"), "panel,point,x,y,z,E,N,H\np,a,0,0,0,1,2,3\n"
                                            "p,b,1,NaN,0,2,2,3\np,c,0,1,0,1,2,4\n");
@@ -203,10 +203,6 @@ TEST(ReliefPlaceCli, BadInputIsExitTwoNamingFileAndLineAndWritesNothing) {
                dir.File("panel_0001.ply") + " --points-out " + dir.File("world"));
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find(dir.File("panel_0001.ply")), std::string::npos) << r.output;
-  EXPECT_FALSE(FileExists(dir.File("p.json")));
-  // Bad option values are exit 1.
-  r = RunCandi("relief place " + dir.File("walls.csv") + " -o " + dir.File("p.json") + " --panels " + dir.path());
-  EXPECT_EQ(r.code, 1) << "--panels without --points-out: " << r.output;
   EXPECT_FALSE(FileExists(dir.File("p.json")));
 }
 
