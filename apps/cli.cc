@@ -155,6 +155,7 @@ struct ReliefArgs {
   ReliefPointsArgs points;
   ReliefEvalArgs eval;
   BenchReliefArgs bench;
+  ReliefPlaceArgs place;
 };
 
 void AddReliefSynth(CLI::App& relief, ReliefSynthArgs& a, std::function<int()>* run) {
@@ -280,9 +281,38 @@ void AddBenchRelief(CLI::App& app, BenchReliefArgs& a, std::function<int()>* run
   c->footer("Example: candi bench relief --widths 32,64 --seconds 60");
 }
 
+void AddReliefPlace(CLI::App& relief, ReliefPlaceArgs& a, std::function<int()>* run) {
+  auto* c = relief.add_subcommand("place", "Each panel's world_from_panel by a robust rigid or Sim3 "
+                                  "fit (Ceres) of its corners / edge points to documented wall "
+                                  "positions; residuals per panel, misfits warned");
+  c->add_option("correspondences", a.correspondences, "CSV: panel,point,x,y,z,E,N,H[,accuracy]")
+      ->required();
+  c->add_option("-o,--output", a.output, "Placements JSON (world_from_panel, residuals)")->required();
+  c->add_option("--panels", a.panels, "The panels' point files, named <panel>.ply, or folders of them");
+  c->add_option("--points-out", a.points_out, "Folder for the panels in world coordinates (double, "
+                "shifted; with --panels)");
+  c->add_flag("--sim3", a.sim3, "Estimate the scale too (default: rigid, the points are metric)");
+  c->add_option("--loss", a.loss, "Robust loss: huber, cauchy or none")
+      ->check(CLI::IsMember({"none", "huber", "cauchy"}));
+  c->add_option("--loss-scale", a.loss_scale, "Robust loss scale, m")->check(CLI::PositiveNumber);
+  c->add_option("--accuracy", a.accuracy, "Accuracy of positions without one in the CSV, m")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--tolerance-mm", a.tolerance_mm, "A panel whose RMS residual exceeds this does "
+                "not fit (a warning)")->check(CLI::PositiveNumber);
+  c->callback([run, &a] { *run = [&a] { return RunReliefPlace(a); }; });
+  c->footer(
+      "CSV: one row per point of a panel: panel id, point name (unique per panel), x,y,z in the\n"
+      "panel frame of `relief points` (m: x along the wall from the left edge, y up from the bottom\n"
+      "edge, z out of the wall; the corners of a W x H panel are (0,0,0), (W,0,0), (W,H,0), (0,H,0)),\n"
+      "E,N,H its documented position on the wall (m), optional accuracy (m). >= 3 points per panel.\n"
+      "Exit 0 also when panels do not fit (status 'misfit' or 'collinear' in the table and JSON,\n"
+      "a warning each); exit 2 for bad input (file, line and field named), nothing written.\n"
+      "Example: candi relief place walls.csv -o placements.json --panels panels/ --points-out world/");
+}
+
 void AddRelief(CLI::App& app, ReliefArgs& a, std::function<int()>* run) {
   auto* relief = app.add_subcommand("relief", "Buried reliefs from one old photo: synth, dataset, "
-                                              "train, predict, points, eval");
+                                              "train, predict, points, eval, place");
   relief->require_subcommand(1);
   AddReliefSynth(*relief, a.synth, run);
   AddReliefDataset(*relief, a.dataset, run);
@@ -290,6 +320,7 @@ void AddRelief(CLI::App& app, ReliefArgs& a, std::function<int()>* run) {
   AddReliefPredict(*relief, a.predict, run);
   AddReliefPoints(*relief, a.points, run);
   AddReliefEval(*relief, a.eval, run);
+  AddReliefPlace(*relief, a.place, run);
   AddBenchRelief(app, a.bench, run);
 }
 

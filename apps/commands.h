@@ -292,4 +292,18 @@ struct BuildArgs {
 };
 int RunBuild(const BuildArgs& args);
 
+// candi relief place (cmd_relief_place.cc): panels placed on the wall by a robust fit of their
+// corners / edge points to documented positions (reconstruction/relief/relief_place.h).
+struct ReliefPlaceArgs {
+  std::string correspondences, output;  // CSV panel,point,x,y,z,E,N,H[,accuracy]; placements JSON
+  std::vector<std::string> panels;      // the panels' point files (<panel>.ply) or folders of them
+  std::string points_out;               // folder for the panels in world coordinates
+  bool sim3 = false;                    // estimate the scale too (default: rigid)
+  std::string loss = "huber";
+  double loss_scale = 0.01;             // m
+  double accuracy = 0.005;              // m, for rows without an accuracy
+  double tolerance_mm = 20;             // RMS above this: the panel does not fit
+};
+int RunReliefPlace(const ReliefPlaceArgs& args);
+
 }  // namespace candi::app

@@ -34,7 +34,10 @@ Group CommandGroup(int argc, char** argv) {
   while (i < argc && argv[i][0] == '-') ++i;
   if (i >= argc) return kCore;
   const char* command = argv[i];
-  if (!std::strcmp(command, "relief")) return kRelief;
+  if (!std::strcmp(command, "relief")) {
+    // `relief place` (Ceres, no libtorch) runs here; the other relief commands need the network.
+    return i + 1 < argc && !std::strcmp(argv[i + 1], "place") ? kCore : kRelief;
+  }
   if (!std::strcmp(command, "register") || !std::strcmp(command, "clean")) return kPcl;
   if (!std::strcmp(command, "bench")) {
     for (++i; i < argc; ++i)

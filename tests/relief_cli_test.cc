@@ -2,6 +2,8 @@
 // points -> eval, exit codes and messages for bad input, and `candi bench relief`.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/png_io.h"
@@ -129,6 +131,79 @@ TEST(ReliefCliScan, DatasetFromARealScan) {
   const Result huge = RunCandi("-q relief dataset " + scan + " -o " + dir.File("huge") + " --pixels-per-m 200");
   EXPECT_EQ(huge.code, 2) << huge.output;
   EXPECT_NE(huge.output.find("Laurana50k.ply"), std::string::npos) << huge.output;
+}
+
+// `candi relief place`: two panels on a south face at survey coordinates; panel_0001's positions
+// are those of a 2.4 x 1.1 m slot (it does not fit: a warning, exit 0).
+std::string PlaceCsv() {
+  std::string csv = "# documented positions on the foot wall, UTM 49S\npanel,point,x,y,z,E,N,H\n";
+  const double e0 = 416012.3456, n0 = 9168001.2345, h0 = 240.5;
+  auto row = [&](const std::string& panel, const std::string& point, double x, double y, double e, double h) {
+    char buf[200];
+    std::snprintf(buf, sizeof(buf), "%s,%s,%.4f,%.4f,0,%.4f,%.4f,%.4f\n", panel.c_str(), point.c_str(), x, y, e, n0, h);
+    csv += buf;
+  };
+  const char* names[] = {"bl", "br", "tr", "tl"};
+  const double u[] = {0, 1, 1, 0}, v[] = {0, 0, 1, 1};
+  for (int k = 0; k < 4; ++k) row("panel_0000", names[k], 2.7 * u[k], 0.92 * v[k], e0 + 2.7 * u[k], h0 + 0.92 * v[k]);
+  for (int k = 0; k < 4; ++k) row("panel_0001", names[k], 2.7 * u[k], 0.92 * v[k], e0 + 3 + 2.4 * u[k], h0 + 1.1 * v[k]);
+  return csv;
+}
+
+TEST(ReliefPlaceCli, PlacesPanelsWarnsAMisfitAndWritesWorldPoints) {
+  TempDir dir;
+  testing::WriteBytes(dir.File("walls.csv"), PlaceCsv());
+  PointCloud panel;
+  panel.positions = {Eigen::Vector3d(1.35, 0.46, 0.1), Eigen::Vector3d(0, 0, 0)};
+  WritePointCloud(dir.File("panel_0000.ply"), panel);
+  WritePointCloud(dir.File("panel_0001.ply"), panel);
+  const Result r = RunCandi("relief place " + dir.File("walls.csv") + " -o " + dir.File("placements.json") +
+                            " --panels " + dir.path() + " --points-out " + dir.File("world"));
+  ASSERT_EQ(r.code, 0) << "a misfit is a warning: " << r.output;
+  EXPECT_NE(r.out.find("2 panels, 1 fit, 1 do not"), std::string::npos) << r.out;
+  EXPECT_NE(r.output.find("panel 'panel_0001': does not fit"), std::string::npos) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(testing::ReadBytes(dir.File("placements.json")));
+  EXPECT_EQ(j["fit"], "rigid");
+  EXPECT_EQ(j["misfits"], 1);
+  const nlohmann::json& p0 = j["panels"][0];
+  EXPECT_EQ(p0["status"], "ok");
+  EXPECT_LT(p0["rms_mm"].get<double>(), 0.01);
+  EXPECT_EQ(p0["correspondences"].size(), 4u);
+  EXPECT_EQ(p0["correspondences"][0]["line"], 3);
+  EXPECT_NEAR(p0["world_from_panel"]["matrix"][0][3].get<double>(), 416012.3456, 1e-6);
+  EXPECT_EQ(j["panels"][1]["status"], "misfit");
+  EXPECT_GT(j["panels"][1]["rms_mm"].get<double>(), 20.0);
+  // The panel's points in world coordinates keep mm detail at 10^7 m (double, shifted).
+  const PointCloud world = ReadPointCloud(dir.File("world/panel_0000.ply"));
+  ASSERT_EQ(world.size(), 2u);
+  EXPECT_FALSE(world.frame.IsIdentity());
+  const Eigen::Vector3d expected(416012.3456 + 1.35, 9168001.2345 - 0.1, 240.5 + 0.46);
+  EXPECT_LT((world.WorldPosition(0) - expected).norm(), 1e-6) << world.WorldPosition(0).transpose();
+  EXPECT_TRUE(FileExists(dir.File("world/panel_0001.ply")));
+}
+
+TEST(ReliefPlaceCli, BadInputIsExitTwoNamingFileAndLineAndWritesNothing) {
+  // A few cases here (each call loads candi-relief's libtorch, ~3 s of CPU); relief_place_test.cc
+  // has all the CSV errors (missing column, < 3 points, duplicates, coincident points, accuracy).
+  TempDir dir;
+  testing::WriteBytes(dir.File("bad.csv"), "panel,point,x,y,z,E,N,H\np,a,0,0,0,1,2,3\n"
+                                           "p,b,1,NaN,0,2,2,3\np,c,0,1,0,1,2,4\n");
+  Result r = RunCandi("relief place " + dir.File("bad.csv") + " -o " + dir.File("p.json"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find(dir.File("bad.csv") + ": line 3: field 'y': 'NaN' is not a finite number"),
+            std::string::npos) << r.output;
+  EXPECT_FALSE(FileExists(dir.File("p.json")));
+  testing::WriteBytes(dir.File("walls.csv"), PlaceCsv());
+  // The output folder does not exist.
+  r = RunCandi("relief place " + dir.File("walls.csv") + " -o " + dir.File("no/such/p.json"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find(dir.File("no/such")), std::string::npos) << r.output;
+  testing::WriteBytes(dir.File("panel_0001.ply"), "not a ply");
+  r = RunCandi("relief place " + dir.File("walls.csv") + " -o " + dir.File("p.json") + " --panels " +
+               dir.File("panel_0001.ply") + " --points-out " + dir.File("world"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find(dir.File("panel_0001.ply")), std::string::npos) << r.output;
+  EXPECT_FALSE(FileExists(dir.File("p.json")));
 }
 
 }  // namespace
