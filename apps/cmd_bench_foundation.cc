@@ -6,18 +6,23 @@
 //    profile (Hermite) + grid (sweep) + OpenMesh mesh build. Meshes over 4 M vertices are timed
 //    without the OpenMesh build (marked "grid only").
 // 2. The bundled example (examples/borobudur/foundation.dxf, four layers) at the defaults
-//    (N = 1000, M = 90) with 4.47 M points in all, as in the paper's Table 1: wall time per stage,
-//    without and with the CGAL checks. Median of CANDI_BENCH_RUNS runs (default 3).
+//    (N = 1000, M = 90) with 4.47 M points in all, as in the paper's Table 1: wall time per stage
+//    (DXF import, meshes, sampling; then writing the merged binary PLY with colours and layer
+//    field, as `candi foundation` does, to a temporary file), on 1 and 2 threads without the CGAL
+//    checks and on 2 threads with them. Median of CANDI_BENCH_RUNS runs (default 3).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
 
 #include "mesh/foundation.h"
+#include "sampling/layer_clouds.h"
+#include "sampling/layer_colours.h"
 #include "sampling/surface_sampling.h"
 #include "apps/commands.h"
 
@@ -102,12 +107,12 @@ void AccuracyTable() {
 }
 
 struct Stages {
-  double import_ms = 0, mesh_ms = 0, sample_ms = 0;
+  double import_ms = 0, mesh_ms = 0, sample_ms = 0, write_ms = 0;
   size_t points = 0;
   double Total() const { return import_ms + mesh_ms + sample_ms; }
 };
 
-Stages PaperScale(const std::string& path, bool check) {
+Stages PaperScale(const std::string& path, bool check, int threads, const std::string& output) {
   FoundationOptions o;
   o.check = check;
   Stages s;
@@ -115,19 +120,27 @@ Stages PaperScale(const std::string& path, bool check) {
   const DxfDrawing drawing = ReadDxf(o.dxf, path);
   s.import_ms = Ms(t);
   t = std::chrono::steady_clock::now();
-  const std::vector<LayerSurface> layers = BuildLayerSurfaces(o, drawing, drawing.LayerNames());
+  const std::vector<std::string> names = drawing.LayerNames();
+  const std::vector<LayerSurface> layers = BuildLayerSurfaces(o, drawing, names, threads);
   std::vector<double> areas;
-  for (const LayerSurface& layer : layers) areas.push_back(MeshArea(layer.mesh));
+  for (const LayerSurface& layer : layers) areas.push_back(MeshArea(layer.mesh));  // as the CLI
   s.mesh_ms = Ms(t);
   t = std::chrono::steady_clock::now();
   const std::vector<uint64_t> counts = SplitCount(4470000, areas);
+  std::vector<PointCloud> clouds;
   for (size_t k = 0; k < layers.size(); ++k) {
     SurfaceSampleOptions so;
     so.count = counts[k];
+    so.threads = threads;
+    so.colour = DefaultLayerColour(layers[k].layer, k).rgb;
     so.layer = static_cast<int>(k);
-    s.points += SampleSurface(so, layers[k].mesh).size();
+    clouds.push_back(SampleSurface(so, layers[k].mesh));
+    s.points += clouds.back().size();
   }
   s.sample_ms = Ms(t);
+  t = std::chrono::steady_clock::now();
+  WriteLayerClouds(output, clouds, names);
+  s.write_ms = Ms(t);
   return s;
 }
 
@@ -137,18 +150,27 @@ void PaperScaleTable(size_t runs) {
   if (!std::ifstream(path)) path = std::string(CANDI_SOURCE_DIR) + "/" + path;
   std::printf("\npaper scale: %s, 4 layers, N = 1000, M = 90, 4.47 M points, median of %zu\n",
               path.c_str(), runs);
-  std::printf("%-26s %10s %10s %10s %10s %10s\n", "", "import ms", "meshes ms", "sample ms",
-              "total ms", "points");
-  for (bool check : {false, true}) {
+  std::printf("%-28s %10s %10s %10s %10s %10s %10s\n", "", "import ms", "meshes ms", "sample ms",
+              "total ms", "write ms", "points");
+  const std::string output =
+      (std::filesystem::temp_directory_path() / "candi_foundation_bench.ply").string();
+  const struct {
+    bool check;
+    int threads;
+    const char* name;
+  } rows[] = {{false, 1, "without checks, 1 thread"},
+              {false, 2, "without checks, 2 threads"},
+              {true, 2, "with CGAL checks, 2 threads"}};
+  for (const auto& row : rows) {
     std::vector<Stages> all;
-    for (size_t r = 0; r < runs; ++r) all.push_back(PaperScale(path, check));
+    for (size_t r = 0; r < runs; ++r) all.push_back(PaperScale(path, row.check, row.threads, output));
     std::sort(all.begin(), all.end(),
               [](const Stages& a, const Stages& b) { return a.Total() < b.Total(); });
     const Stages& s = all[all.size() / 2];
-    std::printf("%-26s %10.1f %10.1f %10.1f %10.1f %10zu\n",
-                check ? "with CGAL checks" : "without checks", s.import_ms, s.mesh_ms, s.sample_ms,
-                s.Total(), s.points);
+    std::printf("%-28s %10.1f %10.1f %10.1f %10.1f %10.1f %10zu\n", row.name, s.import_ms,
+                s.mesh_ms, s.sample_ms, s.Total(), s.write_ms, s.points);
   }
+  std::filesystem::remove(output);
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "core/point_io.h"
 #include "mesh/foundation.h"
 #include "mesh/mesh_export.h"
+#include "sampling/layer_clouds.h"
 #include "sampling/layer_colours.h"
 #include "sampling/surface_sampling.h"
 
@@ -90,22 +91,6 @@ void PrintTable(const std::vector<LayerSurface>& layers, const std::vector<Point
   }
 }
 
-PointCloud Merge(const std::vector<PointCloud>& clouds, const std::vector<LayerSurface>& layers) {
-  PointCloud merged;
-  merged.SetSchema(clouds.front().schema);
-  merged.frame = clouds.front().frame;
-  size_t n = 0;
-  for (const PointCloud& c : clouds) n += c.size();
-  merged.Reserve(n);
-  std::string names = "candi_layers";
-  for (size_t k = 0; k < clouds.size(); ++k) {
-    merged.Append(clouds[k]);
-    names += " " + std::to_string(k) + "=" + layers[k].layer;
-  }
-  merged.meta.comments.push_back(names);
-  return merged;
-}
-
 void WriteOutputs(const FoundationArgs& a, const std::vector<LayerSurface>& layers,
                   const std::vector<PointCloud>& clouds) {
   for (size_t k = 0; k < layers.size(); ++k) {
@@ -114,7 +99,11 @@ void WriteOutputs(const FoundationArgs& a, const std::vector<LayerSurface>& laye
     }
     if (a.split) WritePointCloud(LayerPath(a.output, layers[k].layer), clouds[k]);
   }
-  if (!a.split) WritePointCloud(a.output, Merge(clouds, layers));
+  if (!a.split) {  // one file with a layer field, streamed layer by layer (no merged copy)
+    std::vector<std::string> names;
+    for (const LayerSurface& layer : layers) names.push_back(layer.layer);
+    WriteLayerClouds(a.output, clouds, names);
+  }
 }
 
 double Seconds(std::chrono::steady_clock::time_point since) {

@@ -34,9 +34,8 @@ class PlyWriter : public PointWriter {
   void Close() override;
 
  private:
-  void EncodeBinary(const PointCloud& chunk, const std::vector<Eigen::Vector3d>& positions);
-  void EncodeBlock(const PointCloud& chunk, const std::vector<Eigen::Vector3d>& positions,
-                   size_t first, size_t n);
+  void EncodeBinary(const PointCloud& chunk);
+  void EncodeBlock(const PointCloud& chunk, const Eigen::Vector3d* positions, size_t first, size_t n);
   void EncodeAscii(const PointCloud& chunk, const std::vector<Eigen::Vector3d>& positions);
 
   AtomicFile file_;
@@ -101,37 +100,47 @@ void PlyWriter::Write(const PointCloud& chunk) {
               chunk.schema.scalars == spec_.schema.scalars)
       << "PLY writer " << file_.path() << ": chunk schema differs from the writer's";
   chunk.CheckConsistent();
-  const std::vector<Eigen::Vector3d>* positions = &chunk.positions;
-  if (chunk.frame != spec_.frame) {
-    rebased_.resize(chunk.size());
-    for (size_t i = 0; i < chunk.size(); ++i) {
-      rebased_[i] = (chunk.positions[i] + chunk.frame.origin) - spec_.frame.origin;
-    }
-    positions = &rebased_;
-  }
   if (encoding_ == PlyEncoding::kAscii) {
+    const std::vector<Eigen::Vector3d>* positions = &chunk.positions;
+    if (chunk.frame != spec_.frame) {
+      rebased_.resize(chunk.size());
+      for (size_t i = 0; i < chunk.size(); ++i) {
+        rebased_[i] = (chunk.positions[i] + chunk.frame.origin) - spec_.frame.origin;
+      }
+      positions = &rebased_;
+    }
     EncodeAscii(chunk, *positions);
   } else {
-    EncodeBinary(chunk, *positions);
+    EncodeBinary(chunk);
   }
   points_written_ += chunk.size();
 }
 
-void PlyWriter::EncodeBinary(const PointCloud& chunk, const std::vector<Eigen::Vector3d>& positions) {
+void PlyWriter::EncodeBinary(const PointCloud& chunk) {
   // Block by block through one small buffer: it stays in cache, and no chunk-sized buffer is
-  // faulted in.
+  // faulted in. A chunk in another frame is re-expressed block by block too.
   constexpr size_t kBlock = 1 << 16;
+  const bool rebase = chunk.frame != spec_.frame;
   buffer_.resize(std::min(chunk.size(), kBlock) * stride_);
+  if (rebase) rebased_.resize(std::min(chunk.size(), kBlock));
   for (size_t first = 0; first < chunk.size(); first += kBlock) {
     const size_t n = std::min(kBlock, chunk.size() - first);
+    const Eigen::Vector3d* positions = chunk.positions.data() + first;
+    if (rebase) {
+      for (size_t i = 0; i < n; ++i) {
+        rebased_[i] = (positions[i] + chunk.frame.origin) - spec_.frame.origin;
+      }
+      positions = rebased_.data();
+    }
     EncodeBlock(chunk, positions, first, n);
     file_.Write(buffer_.data(), n * stride_);
   }
 }
 
-// Encodes points [first, first + n) into buffer_, one column at a time.
-void PlyWriter::EncodeBlock(const PointCloud& chunk, const std::vector<Eigen::Vector3d>& positions,
-                            size_t first, size_t n) {
+// Encodes points [first, first + n) into buffer_, one column at a time; positions[i] is point
+// first + i's position in the writer's frame.
+void PlyWriter::EncodeBlock(const PointCloud& chunk, const Eigen::Vector3d* positions, size_t first,
+                            size_t n) {
   const bool swap = encoding_ == PlyEncoding::kBinaryBigEndian;
   uint8_t* base = buffer_.data();
   size_t offset = 0;
@@ -141,9 +150,11 @@ void PlyWriter::EncodeBlock(const PointCloud& chunk, const std::vector<Eigen::Ve
   };
   for (int k = 0; k < 3; ++k) {
     if (double_positions_) {
-      column(8, [&](uint8_t* p, size_t i) { Store(p, positions[i][k], swap); });
+      column(8, [&](uint8_t* p, size_t i) { Store(p, positions[i - first][k], swap); });
     } else {
-      column(4, [&](uint8_t* p, size_t i) { Store(p, static_cast<float>(positions[i][k]), swap); });
+      column(4, [&](uint8_t* p, size_t i) {
+        Store(p, static_cast<float>(positions[i - first][k]), swap);
+      });
     }
   }
   if (spec_.schema.normals) {

@@ -19,6 +19,24 @@ struct OpenMeshTraits : public OpenMesh::DefaultTraits {
 };
 using OpenTriMesh = OpenMesh::TriMesh_ArrayKernelT<OpenMeshTraits>;
 
+// The halfedge mesh of a triangle mesh: vertices and faces in index order. A face OpenMesh
+// rejects (a non-manifold edge or vertex, a flipped neighbour) is InternalError naming it.
+inline OpenTriMesh ToOpenMesh(const TriMesh& mesh) {
+  OpenTriMesh om;
+  om.reserve(mesh.vertices.size(), mesh.faces.size() * 3 / 2 + mesh.vertices.size(), mesh.faces.size());
+  std::vector<OpenTriMesh::VertexHandle> handles;
+  handles.reserve(mesh.vertices.size());
+  for (const Eigen::Vector3d& p : mesh.vertices.positions) {
+    handles.push_back(om.add_vertex(OpenMesh::Vec3d(p.x(), p.y(), p.z())));
+  }
+  for (const auto& f : mesh.faces) {
+    const auto face = om.add_face(handles.at(f[0]), handles.at(f[1]), handles.at(f[2]));
+    CANDI_CHECK(face.is_valid()) << "ToOpenMesh: face " << f[0] << " " << f[1] << " " << f[2]
+                                 << " rejected";
+  }
+  return om;
+}
+
 // Vertices in index order, faces in index order; colours, normals and fields are not copied.
 inline TriMesh FromOpenMesh(const OpenTriMesh& om, const LocalFrame& frame) {
   TriMesh mesh;

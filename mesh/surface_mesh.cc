@@ -1,41 +1,8 @@
 #include "mesh/surface_mesh.h"
 
 #include "core/check.h"
-#include "mesh/open_mesh.h"
 
 namespace candi {
-
-namespace {
-
-using internal::OpenTriMesh;
-using VertexHandle = OpenTriMesh::VertexHandle;
-
-void AddFace(OpenTriMesh* om, VertexHandle a, VertexHandle b, VertexHandle c) {
-  const auto face = om->add_face(a, b, c);
-  CANDI_CHECK(face.is_valid()) << "BuildSurfaceMesh: face " << a.idx() << " " << b.idx() << " "
-                               << c.idx() << " rejected";
-}
-
-// Closes the bottom ring with a fan around a vertex on the axis: each new face runs along the
-// ring's free (boundary) halfedge, so its orientation follows the surface's.
-void CloseBase(const SurfaceGrid& grid, const std::vector<VertexHandle>& bottom, OpenTriMesh* om) {
-  Eigen::Vector3d centre = grid.axis_point;
-  double height = 0;
-  for (int j = 0; j < grid.columns; ++j) height += grid.At(grid.rings - 1, j).z();
-  centre.z() = height / grid.columns;
-  const VertexHandle c = om->add_vertex(OpenMesh::Vec3d(centre.x(), centre.y(), centre.z()));
-  for (size_t j = 0; j < bottom.size(); ++j) {
-    const VertexHandle a = bottom[j], b = bottom[(j + 1) % bottom.size()];
-    const auto h = om->find_halfedge(a, b);
-    if (h.is_valid() && om->is_boundary(h)) {
-      AddFace(om, a, b, c);
-    } else {
-      AddFace(om, b, a, c);
-    }
-  }
-}
-
-}  // namespace
 
 TriMesh BuildSurfaceMesh(const SurfaceMeshOptions& options, const SurfaceGrid& grid) {
   const int n = grid.rings, cols = grid.columns;
@@ -43,29 +10,50 @@ TriMesh BuildSurfaceMesh(const SurfaceMeshOptions& options, const SurfaceGrid& g
               grid.positions.size() == static_cast<size_t>(n) * static_cast<size_t>(cols))
       << "BuildSurfaceMesh: " << n << " rings, " << cols << " columns, " << grid.positions.size()
       << " positions";
-  OpenTriMesh om;
-  const size_t faces = 2 * static_cast<size_t>(n) * static_cast<size_t>(cols);
-  om.reserve(static_cast<size_t>(n) * cols + 1, 3 * faces / 2 + cols, faces + cols);
-  std::vector<std::vector<VertexHandle>> rings(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) {
+  const bool close = options.close_base && !grid.apex_bottom;
+  // Ring i's first vertex index; an apex ring is one vertex (the grid's column 0).
+  std::vector<uint32_t> first(static_cast<size_t>(n) + 1, 0);
+  auto ring_size = [&](int i) {
     const bool apex = (i == 0 && grid.apex_top) || (i == n - 1 && grid.apex_bottom);
-    for (int j = 0; j < (apex ? 1 : cols); ++j) {
-      const Eigen::Vector3d& p = grid.At(i, j);
-      rings[i].push_back(om.add_vertex(OpenMesh::Vec3d(p.x(), p.y(), p.z())));
-    }
+    return apex ? 1u : static_cast<uint32_t>(cols);
+  };
+  for (int i = 0; i < n; ++i) first[i + 1] = first[i] + ring_size(i);
+  TriMesh mesh;
+  mesh.vertices.frame = grid.frame;
+  mesh.vertices.Resize(first[n] + (close ? 1 : 0));
+  auto& positions = mesh.vertices.positions;
+  for (int i = 0; i < n; ++i) {
+    for (uint32_t j = 0; j < ring_size(i); ++j) positions[first[i] + j] = grid.At(i, static_cast<int>(j));
   }
-  auto vertex = [&](int i, int j) { return rings[i].size() == 1 ? rings[i][0] : rings[i][j]; };
+  auto vertex = [&](int i, int j) {
+    return first[i + 1] - first[i] == 1 ? first[i] : first[i] + static_cast<uint32_t>(j);
+  };
+  mesh.faces.reserve(2 * static_cast<size_t>(n - 1) * static_cast<size_t>(cols) + (close ? cols : 0));
   for (int i = 0; i + 1 < n; ++i) {
     for (int j = 0; j < cols; ++j) {
       const int next = (j + 1) % cols;
-      const VertexHandle a = vertex(i, j), b = vertex(i, next);
-      const VertexHandle c = vertex(i + 1, j), d = vertex(i + 1, next);
-      if (a != b) AddFace(&om, a, b, c);
-      if (c != d) AddFace(&om, c, b, d);
+      const uint32_t a = vertex(i, j), b = vertex(i, next);
+      const uint32_t c = vertex(i + 1, j), d = vertex(i + 1, next);
+      if (a != b) mesh.faces.push_back({a, b, c});
+      if (c != d) mesh.faces.push_back({c, b, d});
     }
   }
-  if (options.close_base && !grid.apex_bottom) CloseBase(grid, rings[n - 1], &om);
-  return internal::FromOpenMesh(om, grid.frame);
+  if (close) {
+    // A fan around a vertex on the axis at the bottom ring's mean height. The last strip's faces
+    // (c, b, d) run along the bottom ring from column j + 1 to j, so the ring's free side runs
+    // from j to j + 1 and each fan face (j, j + 1, centre) continues the surface's orientation.
+    Eigen::Vector3d centre = grid.axis_point;
+    double height = 0;
+    for (int j = 0; j < cols; ++j) height += grid.At(n - 1, j).z();
+    centre.z() = height / cols;
+    const uint32_t c = first[n];
+    positions[c] = centre;
+    for (int j = 0; j < cols; ++j) {
+      mesh.faces.push_back({first[n - 1] + static_cast<uint32_t>(j),
+                            first[n - 1] + static_cast<uint32_t>((j + 1) % cols), c});
+    }
+  }
+  return mesh;
 }
 
 }  // namespace candi

@@ -6,6 +6,7 @@
 #include <functional>
 
 #include "mesh/mesh_check.h"
+#include "mesh/open_mesh.h"
 
 namespace candi {
 namespace {
@@ -96,7 +97,37 @@ TEST(BuildSurfaceMesh, AClosedSectionGivesAClosedSolidWithTwoApexes) {
   EXPECT_TRUE(r.Ok()) << r.Summary();
 }
 
-TEST(SweepConvergence, ConeApproachesTheAnalyticSurfaceAtSecondOrderInAngularSteps) {
+// The directly indexed triangles are a valid OpenMesh halfedge mesh: OpenMesh accepts every face
+// (no non-manifold or flipped one; ToOpenMesh would throw), returns the same mesh, and its
+// boundary is the expected rings. Covers an apex, a closed base on a blended (asymmetric) grid,
+// and two apexes.
+TEST(BuildSurfaceMesh, OpenMeshAcceptsEveryFaceAndGivesTheSameMeshBack) {
+  SurfaceMeshOptions closed;
+  closed.close_base = true;
+  const std::vector<V> lopsided = {V(-7, -1), V(-3, 2), V(0, 5), V(4, 1), V(9, -2)};
+  const struct {
+    SurfaceGrid grid;
+    SurfaceMeshOptions options;
+    size_t boundary;  // boundary halfedges
+  } cases[] = {{Revolve(Cone(), 11, 6), {}, 12},
+               {Revolve(lopsided, 9, 5), closed, 0},
+               {Revolve(lopsided, 9, 5), {}, 10},
+               {Revolve({V(0, -2), V(1, 0), V(0, 2), V(-1, 0)}, 20, 16, true), {}, 0}};
+  for (const auto& c : cases) {
+    const TriMesh mesh = BuildSurfaceMesh(c.options, c.grid);
+    const internal::OpenTriMesh om = internal::ToOpenMesh(mesh);
+    EXPECT_EQ(om.n_faces(), mesh.faces.size());
+    size_t boundary = 0;
+    for (const auto h : om.halfedges()) boundary += om.is_boundary(h);
+    EXPECT_EQ(boundary, c.boundary);
+    const TriMesh back = internal::FromOpenMesh(om, mesh.vertices.frame);
+    EXPECT_EQ(back.vertices.positions, mesh.vertices.positions);
+    EXPECT_EQ(back.faces, mesh.faces);
+    EXPECT_TRUE(CheckMesh({}, mesh).Ok()) << CheckMesh({}, mesh).Summary();
+  }
+}
+
+TEST(SweepConvergence, ConeApproachesTheTheAnalyticSurfaceAtSecondOrderInAngularSteps) {
   std::vector<double> errors;
   for (int m : {8, 16, 32, 64, 128}) {
     errors.push_back(CentroidError(BuildSurfaceMesh({}, Revolve(Cone(), 20, m)), ConeDistance));

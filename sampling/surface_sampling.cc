@@ -21,27 +21,30 @@ namespace {
 constexpr size_t kGrain = 16384;
 
 // Walker's alias table (Vose's construction): O(1) draws from a discrete distribution.
-// Built serially in index order, so it is the same on every run.
+// Built serially in index order, so it is the same on every run. One 8-byte entry per column, so
+// a draw reads one cache line: column i is kept when a 32-bit uniform is below keep (a column
+// that is always kept has alias i, so either outcome is i).
 struct AliasTable {
-  std::vector<double> keep;     // probability of keeping column i
-  std::vector<uint32_t> alias;  // the other outcome of column i
+  struct Entry {
+    uint32_t keep;   // probability of keeping column i, x 2^32
+    uint32_t alias;  // the other outcome of column i
+  };
+  std::vector<Entry> entries;
 
-  explicit AliasTable(const std::vector<double>& weights)
-      : keep(weights.size(), 1.0), alias(weights.size()) {
+  explicit AliasTable(const std::vector<double>& weights) : entries(weights.size()) {
     const size_t n = weights.size();
     const double total = std::accumulate(weights.begin(), weights.end(), 0.0);
     std::vector<double> scaled(n);
     std::vector<uint32_t> small, large;
     for (size_t i = 0; i < n; ++i) {
       scaled[i] = weights[i] * static_cast<double>(n) / total;
-      alias[i] = static_cast<uint32_t>(i);
+      entries[i] = {0xffffffffu, static_cast<uint32_t>(i)};
       (scaled[i] < 1 ? small : large).push_back(static_cast<uint32_t>(i));
     }
     while (!small.empty() && !large.empty()) {
       const uint32_t s = small.back(), l = large.back();
       small.pop_back();
-      keep[s] = scaled[s];
-      alias[s] = l;
+      entries[s] = {static_cast<uint32_t>(std::min(scaled[s] * 0x1.0p32, 4294967295.0)), l};
       scaled[l] += scaled[s] - 1;
       if (scaled[l] < 1) {
         large.pop_back();
@@ -50,11 +53,38 @@ struct AliasTable {
     }
   }
 
-  uint32_t Draw(double u_column, double u_keep) const {
-    const size_t i = std::min(keep.size() - 1, static_cast<size_t>(u_column * keep.size()));
-    return u_keep < keep[i] ? static_cast<uint32_t>(i) : alias[i];
+  // The column from the high 32 bits (multiply-shift), the keep test from the low 32.
+  size_t Column(uint64_t h) const { return static_cast<size_t>(((h >> 32) * entries.size()) >> 32); }
+  uint32_t Outcome(size_t column, uint64_t h) const {
+    const Entry& e = entries[column];
+    return static_cast<uint32_t>(h) < e.keep ? static_cast<uint32_t>(column) : e.alias;
   }
 };
+
+// Draws samples [begin, end) from `table` and adds one to per_face[triangle] for each (atomic,
+// so the sums, and the output, do not depend on the thread count). The table and the counts are
+// megabytes read at random: draws go in batches whose table entries and counters are prefetched
+// first, so the cache misses overlap.
+template <typename Count>
+void CountDraws(const AliasTable& table, uint64_t seed, size_t begin, size_t end, Count* per_face) {
+  constexpr size_t kBatch = 32;
+  uint64_t hash[kBatch];
+  size_t column[kBatch];
+  uint32_t face[kBatch];
+  for (size_t k0 = begin; k0 < end; k0 += kBatch) {
+    const size_t n = std::min(kBatch, end - k0);
+    for (size_t b = 0; b < n; ++b) {
+      hash[b] = HashIndex(seed, k0 + b, 0);
+      column[b] = table.Column(hash[b]);
+      __builtin_prefetch(&table.entries[column[b]]);
+    }
+    for (size_t b = 0; b < n; ++b) {
+      face[b] = table.Outcome(column[b], hash[b]);
+      __builtin_prefetch(&per_face[face[b]], 1);
+    }
+    for (size_t b = 0; b < n; ++b) __atomic_fetch_add(&per_face[face[b]], Count{1}, __ATOMIC_RELAXED);
+  }
+}
 
 template <typename Body>
 void ParallelBlocks(int threads, size_t n, const Body& body) {
@@ -171,17 +201,19 @@ PointCloud SampleSurface(const SurfaceSampleOptions& options, const TriMesh& mes
   // the thread count; placing by triangle keeps the mesh reads sequential, and since a slot's
   // position depends only on (seed, slot), no sample-to-slot table is needed.
   const AliasTable table(areas);
-  std::vector<uint64_t> per_face(mesh.faces.size(), 0);
-  ParallelBlocks(options.threads, count, [&](size_t begin, size_t end) {
-    for (size_t k = begin; k < end; ++k) {
-      const uint64_t h = HashIndex(options.seed, k, 0);
-      const uint32_t f = table.Draw(static_cast<double>(h >> 32) * 0x1.0p-32,
-                                    static_cast<double>(h & 0xffffffffu) * 0x1.0p-32);
-      __atomic_fetch_add(&per_face[f], uint64_t{1}, __ATOMIC_RELAXED);
-    }
-  });
   std::vector<uint64_t> start(mesh.faces.size() + 1, 0);
-  for (size_t f = 0; f < mesh.faces.size(); ++f) start[f + 1] = start[f] + per_face[f];
+  auto count_faces = [&](auto zero) {  // 32-bit counters when they cannot overflow: half the cache
+    std::vector<decltype(zero)> per_face(mesh.faces.size(), 0);
+    ParallelBlocks(options.threads, count, [&](size_t begin, size_t end) {
+      CountDraws(table, options.seed, begin, end, per_face.data());
+    });
+    for (size_t f = 0; f < mesh.faces.size(); ++f) start[f + 1] = start[f] + per_face[f];
+  };
+  if (count < (uint64_t{1} << 32)) {
+    count_faces(uint32_t{0});
+  } else {
+    count_faces(uint64_t{0});
+  }
   ParallelBlocks(options.threads, mesh.faces.size(), [&](size_t begin, size_t end) {
     for (size_t f = begin; f < end; ++f) PlaceInTriangle(options, mesh, f, start[f], start[f + 1], &cloud);
   });

@@ -1,0 +1,19 @@
+// Several layers' point clouds (one schema, e.g. from SampleSurface with `layer` set) written as
+// one point file: the clouds go through one writer in turn, in the first cloud's frame (the
+// others are re-expressed, exactly as PointCloud::Append would), so no merged copy of the points
+// is made. The file gets the comment "candi_layers 0=<name 0> 1=<name 1> ...".
+// Failures: as WritePointCloud (InputError naming the path; the destination is left as it was).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/point_cloud.h"
+#include "core/point_io.h"
+
+namespace candi {
+
+void WriteLayerClouds(const std::string& path, const std::vector<PointCloud>& clouds,
+                      const std::vector<std::string>& names, const PointWriteOptions& options = {});
+
+}  // namespace candi
