@@ -41,6 +41,15 @@ void EmitMessage(j_common_ptr info, int level) {
     reinterpret_cast<ErrorManager*>(info->err)->truncated = true;
 }
 
+jpeg_error_mgr* InstallErrorManager(ErrorManager* err) {
+  jpeg_error_mgr* base = jpeg_std_error(&err->base);
+  err->base.error_exit = ErrorExit;
+  err->base.emit_message = EmitMessage;
+  err->message[0] = '\0';
+  err->truncated = false;
+  return base;
+}
+
 // Largest image read: 2^28 pixels (16384 x 16384), ~805 MB as RGB. A header claiming more is
 // refused before anything is allocated.
 constexpr uint64_t kMaxPixels = uint64_t{1} << 28;
@@ -98,11 +107,7 @@ Image8 DecodeJpeg(const std::string& path, const std::string& bytes) {
   if (!IsJpeg(bytes)) throw InputError(path, "byte 0", "not a JPEG file (bad signature)");
   jpeg_decompress_struct cinfo;
   ErrorManager err;
-  cinfo.err = jpeg_std_error(&err.base);
-  err.base.error_exit = ErrorExit;
-  err.base.emit_message = EmitMessage;
-  err.message[0] = '\0';
-  err.truncated = false;
+  cinfo.err = InstallErrorManager(&err);
   const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
   if (!ReadHeader(&cinfo, &err, data, static_cast<unsigned long>(bytes.size()))) {
     jpeg_destroy_decompress(&cinfo);
@@ -147,11 +152,7 @@ void WriteJpeg(const std::string& path, const Image8& image, int quality) {
   }
   jpeg_compress_struct cinfo;
   ErrorManager err;
-  cinfo.err = jpeg_std_error(&err.base);
-  err.base.error_exit = ErrorExit;
-  err.base.emit_message = EmitMessage;
-  err.message[0] = '\0';
-  err.truncated = false;
+  cinfo.err = InstallErrorManager(&err);
   unsigned char* buffer = nullptr;
   unsigned long size = 0;
   const bool ok = Compress(&cinfo, &err, &image, channels, quality, rows, &buffer, &size);
