@@ -11,6 +11,7 @@
 // Intermediate files go to work/. Every file is written atomically.
 #include <algorithm>
 #include <chrono>
+#include <map>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -26,7 +27,10 @@
 #include "core/log.h"
 #include "core/point_io.h"
 #include "core/sha256.h"
+#include "core/progress.h"
+#include "core/text_format.h"
 #include "reconstruction/photogrammetry/colmap_runner.h"
+#include "reconstruction/relief/relief_place.h"
 
 namespace candi::app {
 
@@ -37,12 +41,6 @@ using nlohmann::json;
 
 double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-std::string Join(const std::vector<std::string>& items, const char* separator) {
-  std::string s;
-  for (const std::string& i : items) s += (s.empty() ? "" : separator) + i;
-  return s;
 }
 
 // This executable's sibling `name` (candi-relief for the relief stages).
@@ -95,46 +93,71 @@ LayerResult Foundation(const Scene& scene, const SceneLayer& l, const std::strin
   return r;
 }
 
-// Each panel: photo -> depth (network) -> metric points in the panel frame (candi-relief, in a
-// child process so this one never loads libtorch), or its point file; then Ceres placement.
+// Each panel: photo -> depth (network) -> metric points in the panel frame (in this process when
+// it holds the relief path, else by candi-relief child processes, so candi never loads libtorch),
+// or its point file; then each panel's world_from_panel from the correspondences CSV (Ceres,
+// reconstruction/relief/relief_place.h). A panel that does not fit is a warning; a panel without
+// correspondences is an error.
 LayerResult Relief(const SceneLayer& l, const std::string& work) {
-  std::vector<std::string> panel_points;
-  const std::string relief = Sibling("candi-relief");
-  for (const ReliefPanelSpec& p : l.panels) {
-    if (!p.points.empty()) {
-      panel_points.push_back(p.points);
-      continue;
-    }
-    const std::string base = (fs::path(work) / (l.name + "_" + p.id)).string();
-    const std::string w = std::to_string(l.width_m);
-    RunChild({relief, "-q", "relief", "predict", p.photo, "--model", l.model, "-o", base + "_depth.png",
-              "--width-m", w}, base + "_predict.log", "relief predict of " + p.photo);
-    RunChild({relief, "-q", "relief", "points", p.photo, base + "_depth.png", "-o", base + "_panel.ply",
-              "--width-m", w}, base + "_points.log", "relief points of " + p.photo);
-    panel_points.push_back(base + "_panel.ply");
-  }
-  const std::string placed = (fs::path(work) / (l.name + "_placed")).string();
-  std::vector<std::string> argv = {relief, "-q", "relief", "place", l.placement, "-o", placed + ".json",
-                                   "--points-out", placed};
-  for (size_t k = 0; k < l.panels.size(); ++k) argv.push_back("--panel=" + l.panels[k].id + "=" + panel_points[k]);
-  RunChild(argv, placed + ".log", "relief place");
+  const std::vector<relief::PanelCorrespondence> correspondences = relief::ReadPanelCorrespondences(l.placement);
+  const relief::PlacementResult placed = relief::PlacePanels(relief::PanelPlacementOptions(), correspondences, l.placement);
+  std::map<std::string, const relief::PanelPlacement*> by_id;
+  for (const relief::PanelPlacement& p : placed.panels) by_id[p.panel] = &p;
+  for (const ReliefPanelSpec& p : l.panels)
+    if (!by_id.count(p.id)) throw InputError(l.placement, "", "panel '" + p.id + "' of layer '" + l.name + "' has no correspondences");
+
+  const std::string relief_exe = Sibling("candi-relief");
   LayerResult r;
   r.cloud.schema.colors = true;
   r.cloud.SetSchema(r.cloud.schema);
-  for (const ReliefPanelSpec& p : l.panels) {
-    const PointCloud panel = ReadAny((fs::path(placed) / (p.id + ".ply")).string());
-    if (r.cloud.empty()) r.cloud.frame = panel.frame;
-    r.cloud.Reserve(r.cloud.size() + panel.size());
+  r.cloud.frame = placed.frame;
+  json panels = json::array();
+  ConsoleProgressOptions po;
+  po.unit = "panels";
+  ConsoleProgress progress("relief panels of " + l.name, po);
+  for (size_t k = 0; k < l.panels.size(); ++k) {
+    const ReliefPanelSpec& p = l.panels[k];
+    std::string points = p.points;
+    if (points.empty()) {
+      const std::string base = (fs::path(work) / (l.name + "_" + p.id)).string();
+      ReliefPredictArgs predict;
+      predict.photo = p.photo, predict.model = l.model, predict.output = base + "_depth.png";
+      predict.width_m = l.width_m;
+      ReliefPointsArgs to_points;
+      to_points.photo = p.photo, to_points.depth = predict.output, to_points.output = base + "_panel.ply";
+      to_points.width_m = l.width_m;
+      if (ReliefInProcess()) {
+        predict.threads = 2;
+        RunReliefPredict(predict);
+        RunReliefPoints(to_points);
+      } else {
+        const std::string w = FormatDouble(l.width_m);
+        RunChild({relief_exe, "-q", "relief", "predict", p.photo, "--model", l.model, "-o", predict.output,
+                  "--width-m", w}, base + "_predict.log", "relief predict of " + p.photo);
+        RunChild({relief_exe, "-q", "relief", "points", p.photo, predict.output, "-o", to_points.output,
+                  "--width-m", w}, base + "_points.log", "relief points of " + p.photo);
+      }
+      points = to_points.output;
+    }
+    const relief::PanelPlacement& placement = *by_id.at(p.id);
+    if (!placement.fits)
+      LogWarning("layer " + l.name + ": panel " + p.id + " does not fit its documented position (" +
+                 placement.status + ", RMS " + FormatDouble(placement.rms_mm) + " mm); placed anyway");
+    const PointCloud panel = ReadAny(points);
     for (size_t i = 0; i < panel.size(); ++i) {
-      r.cloud.positions.push_back(r.cloud.frame.ToLocal(panel.frame.ToWorld(panel.positions[i])));
+      r.cloud.positions.push_back(r.cloud.frame.ToLocal(placement.world_from_panel * panel.frame.ToWorld(panel.positions[i])));
       r.cloud.colors.push_back(panel.schema.colors ? panel.colors[i] : Rgb8{200, 200, 200});
     }
+    panels.push_back({{"id", p.id}, {"status", placement.status}, {"rms_mm", placement.rms_mm},
+                      {"max_mm", placement.max_mm}, {"points", panel.size()}});
+    progress.Update(k + 1, l.panels.size());
   }
-  r.method = l.panels.front().photo.empty() ? "panel points placed by Ceres"
-                                            : "reconstructed: one old photo per panel -> depth network -> metric points -> Ceres placement";
-  r.parameters = {{"panels", l.panels.size()}, {"width_m", l.width_m}};
-  json placement = json::parse(ReadFileToString(placed + ".json"), nullptr, false);
-  if (!placement.is_discarded()) r.parameters["placement"] = placement;
+  progress.Finish();
+  r.method = l.panels.front().photo.empty()
+                 ? "panel points placed by Ceres from documented wall positions"
+                 : "reconstructed: one old photo per panel -> depth network -> metric points -> Ceres placement";
+  r.parameters = {{"panels", panels}, {"width_m", l.width_m}, {"misfits", placed.misfits}};
+  if (!l.model.empty()) r.parameters["model"] = l.model;
   return r;
 }
 
@@ -320,6 +343,7 @@ int RunBuild(const BuildArgs& args) {
                    std::to_string(scene.background.b);
     r.brightness = scene.brightness;
     r.opaque = v.opaque;
+    r.point_size = v.point_size;
     r.mode = "memory";
     r.threads = args.threads;
     const std::string view_file = (out / "renders" / (v.name + ".view.json")).string();

@@ -6,7 +6,10 @@
 // the foot encasement, the broad platform added in the 9th century that hides the original foot
 // and its reliefs, with the southeast corner excavated as it is today. It is sampled as a UAV scan
 // would be (uniform points on the visible surfaces; nothing inside the encasement). The foundation
-// comes from examples/borobudur/foundation.dxf through the foundation path. The demo writes the
+// comes from examples/borobudur/foundation.dxf through the foundation path. The reliefs: 160
+// Karmawibhangga panels on the original foot wall (156 hidden behind the encasement, 4 visible in
+// the dig), each from a synthetic old photo (relief synth) through the shipped depth model,
+// placed by Ceres from a documented-positions CSV (1 mm survey noise). The demo writes the
 // scene file it builds (out/scene.json), so every step can be repeated with `candi build`.
 #include <algorithm>
 #include <chrono>
@@ -20,6 +23,7 @@
 #include "core/log.h"
 #include "core/point_io.h"
 #include "core/rng.h"
+#include "core/transform.h"
 
 namespace candi::app {
 
@@ -35,7 +39,7 @@ constexpr double kEncasementHalf = 60.0;  // the encasement's outer face
 constexpr double kFootHeight = 4.0;       // the foot (and the encasement) top
 // The excavated southeast corner: the encasement removed over x in [kDigX0, kEncasementHalf] on
 // the south side, exposing the foot wall (and its panels) there.
-constexpr double kDigX0 = 44.0;
+constexpr double kDigX0 = 44.8;  // between panels 36 and 37 of the south side (k = 35, 36)
 
 struct Sampler {
   PointCloud* cloud;
@@ -121,25 +125,26 @@ struct Sampler {
   }
 };
 
-bool Excavated(const Eigen::Vector3d& p) { return p.x() >= kDigX0 && p.y() <= -kBaseHalf + 1e-9; }
-
 PointCloud Building(uint64_t seed, double density) {
   PointCloud cloud;
   cloud.schema.colors = true;
   cloud.SetSchema(cloud.schema);
   Sampler s{&cloud, Rng(seed), density};
   auto all = [](const Eigen::Vector3d&) { return true; };
+  // The foot and the encasement at 10x the density (the close-range scan of the lowest 4 m): the
+  // corner close-ups must be watertight, or hidden panels would show through the gaps.
+  Sampler foot{&cloud, Rng(seed + 1), 10 * density};
   // The encasement: outer faces (with the southeast dig cut out), its top, and the dig's floor
   // and side face; the original foot wall shows only inside the dig.
   const double e = kEncasementHalf, a0 = kBaseHalf;
-  s.SquareWalls(e, 0, kFootHeight, [&](const Eigen::Vector3d& p) {
+  foot.SquareWalls(e, 0, kFootHeight, [&](const Eigen::Vector3d& p) {
     return !(p.y() <= -e + 1e-9 && p.x() >= kDigX0);
   });
-  s.SquareRing(e, a0, kFootHeight, [&](const Eigen::Vector3d& p) { return !(p.x() >= kDigX0 && p.y() <= -a0); });
-  s.Rect({kDigX0, -e, 0}, {0, e - a0, 0}, {0, 0, kFootHeight}, 0.9);          // the dig's west face
-  s.Rect({kDigX0, -e, 0}, {e - kDigX0, 0, 0}, {0, e - a0, 0}, 0.5);            // the dig's floor
-  s.Rect({e, -e, 0}, {0, e - a0, 0}, {0, 0, kFootHeight}, 0.95);               // east face end
-  s.Rect({kDigX0, -a0, 0}, {a0 - kDigX0, 0, 0}, {0, 0, kFootHeight}, 0.8);     // the exposed foot
+  foot.SquareRing(e, a0, kFootHeight, [&](const Eigen::Vector3d& p) { return !(p.x() >= kDigX0 && p.y() <= -a0); });
+  foot.Rect({kDigX0, -e, 0}, {0, e - a0, 0}, {0, 0, kFootHeight}, 0.9);          // the dig's west face
+  foot.Rect({kDigX0, -e, 0}, {e - kDigX0, 0, 0}, {0, e - a0, 0}, 0.5);            // the dig's floor
+  foot.Rect({e, -e, 0}, {0, e - a0, 0}, {0, 0, kFootHeight}, 0.95);               // east face end
+  foot.Rect({kDigX0, -a0, 0}, {a0 - kDigX0, 0, 0}, {0, 0, kFootHeight}, 0.8);     // the exposed foot
   // Five more square platforms with balustrades (galleries), then three circular terraces.
   double z = kFootHeight;
   for (int k = 1; k < 6; ++k) {
@@ -173,13 +178,49 @@ json Camera(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, double fo
           {"width", w}, {"height", h}};
 }
 
+// The Karmawibhangga panels on the original foot wall: 40 a side (south, east, north, west), 2.7 x
+// 0.92 m, 2.8 m apart, bottoms 0.8 m above the foot. Panel k's frame (relief_points.h: x along the
+// wall left to right seen from outside, y up, z out) in world coordinates.
+constexpr double kPanelWidth = 2.7, kPanelHeight = 0.92;
+Sim3 WorldFromPanel(int k) {
+  const double angle = (k / 40) * kPi / 2;  // south, east, north, west
+  const Eigen::Vector3d n(std::sin(angle), -std::cos(angle), 0);  // outward normal
+  const Eigen::Vector3d along = Eigen::Vector3d::UnitZ().cross(n);
+  const double t = -kBaseHalf + 0.5 + 2.8 * (k % 40) + 0.05;
+  Eigen::Matrix3d r;
+  r.col(0) = along, r.col(1) = Eigen::Vector3d::UnitZ(), r.col(2) = n;
+  return Sim3(1.0, Eigen::Quaterniond(r), kBaseHalf * n + t * along + Eigen::Vector3d(0, 0, 0.8));
+}
+// Visible: in the excavated southeast corner (the last four of the south side).
+bool PanelVisible(int k) { return k / 40 == 0 && WorldFromPanel(k).translation.x() >= kDigX0; }
+
+// The documented positions: four corners and two mid-edge points per panel, surveyed to 1 mm.
+std::string PanelPositionsCsv(const std::vector<int>& panels, uint64_t seed) {
+  Rng rng(seed ^ 0x9e3779b97f4a7c15ull);
+  std::string csv = "panel,point,x,y,z,E,N,H,accuracy\n";
+  const Eigen::Vector3d points[6] = {{0, 0, 0}, {kPanelWidth, 0, 0}, {kPanelWidth, kPanelHeight, 0},
+                                     {0, kPanelHeight, 0}, {kPanelWidth / 2, 0, 0}, {kPanelWidth / 2, kPanelHeight, 0}};
+  const char* names[6] = {"bottom_left", "bottom_right", "top_right", "top_left", "bottom_mid", "top_mid"};
+  for (int k : panels) {
+    const Sim3 t = WorldFromPanel(k);
+    for (int j = 0; j < 6; ++j) {
+      const Eigen::Vector3d w = t * points[j] + 0.001 * Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal());
+      char line[256];
+      std::snprintf(line, sizeof(line), "P%03d,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,0.002\n", k + 1, names[j],
+                    points[j].x(), points[j].y(), points[j].z(), w.x(), w.y(), w.z());
+      csv += line;
+    }
+  }
+  return csv;
+}
+
 }  // namespace
 
 int RunDemo(const DemoArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out = fs::absolute(args.output_dir).lexically_normal();
   fs::create_directories(out / "inputs");
-  const double density = args.quick ? 4.0 : 40.0;
+  const double density = args.quick ? 10.0 : 40.0;
   LogInfo("candi demo: the bundled Borobudur example (building: a procedural stand-in for the scan, "
           "which is not public; foundation: examples/borobudur/foundation.dxf)");
   const PointCloud building = Building(args.seed, density);
@@ -194,18 +235,49 @@ int RunDemo(const DemoArgs& args) {
                            {"dxf", source_dir + "/examples/borobudur/foundation.dxf"},
                            {"count", args.quick ? 200000 : 4470000}, {"opacity", 0.6},
                            {"samples_per_side", args.quick ? 200 : 1000}, {"angular_steps", args.quick ? 36 : 90}};
+  // The reliefs: one synthetic old photo per panel (relief synth), through the shipped model.
+  std::vector<int> panels;
+  for (int k = 0; k < 160; ++k)
+    if (!args.quick || (k / 40 == 0 && k % 40 >= 28)) panels.push_back(k);  // quick: 8 hidden + 4 visible
+  ReliefSynthArgs synth;
+  synth.output_dir = (out / "inputs" / "panels").string();
+  synth.count = static_cast<int>(panels.size());
+  synth.width = 270;
+  synth.seed = args.seed;
+  RunReliefSynth(synth);
+  const std::string positions_csv = (out / "inputs" / "panel_positions.csv").string();
+  WriteFileAtomic(positions_csv, PanelPositionsCsv(panels, args.seed));
+  json panel_list = json::array();
+  for (size_t i = 0; i < panels.size(); ++i) {
+    char id[16], photo[48];
+    std::snprintf(id, sizeof(id), "P%03d", panels[i] + 1);
+    std::snprintf(photo, sizeof(photo), "panel_%04zu_photo.png", i);
+    panel_list.push_back({{"id", id}, {"photo", (fs::path(synth.output_dir) / photo).string()}});
+  }
+  json reliefs_layer = {{"name", "reliefs"}, {"kind", "relief"}, {"panels", panel_list},
+                        {"model", source_dir + "/examples/relief/relief_model.pt"}, {"placement", positions_csv},
+                        {"width_m", kPanelWidth}, {"opacity", 0.9}, {"highlight", true}};
+  LogInfo(std::to_string(panels.size()) + " relief panels (" +
+          std::to_string(std::count_if(panels.begin(), panels.end(), PanelVisible)) + " visible in the dig)");
   json scene = {{"candi_scene", 1}, {"name", "borobudur"}, {"seed", args.seed}};
   scene["render"] = {{"repeat_level", args.quick ? 32 : 100}, {"width", w}, {"height", h},
                      {"background", {255, 255, 255}}};
-  scene["layers"] = json::array({building_layer, foundation_layer});
+  scene["layers"] = json::array({building_layer, foundation_layer, reliefs_layer});
   const json overview = Camera({170, -230, 110}, {0, 0, -5}, 38, w, h);
-  // The southeast corner close up: the building (and the reliefs), not the hill around it.
-  const json corner_layers = json::array({"building"});
-  const json corner = Camera({74, -80, 7}, {50, -56.5, 1.5}, 40, w, h);
+  // The southeast corner close up: the building and the reliefs, not the hill around it; and the
+  // building alone, so the panels' share of each image can be measured. Opaque close-ups use 3-px
+  // points so that no gap lets a hidden panel through; see-through ones keep 1-px points, for
+  // which the opacity law holds.
+  const json corner_layers = json::array({"building", "reliefs"});
+  const json building_only = json::array({"building"});
+  const json corner = Camera({72, -84, 6}, {44, -56.5, 1.5}, 40, w, h);
   scene["views"] = {{{"name", "overview_opaque"}, {"camera", overview}, {"opaque", true}},
                     {{"name", "overview_transparent"}, {"camera", overview}},
-                    {{"name", "corner_opaque"}, {"camera", corner}, {"opaque", true}, {"layers", corner_layers}},
-                    {{"name", "corner_transparent"}, {"camera", corner}, {"layers", corner_layers}}};
+                    {{"name", "corner_opaque"}, {"camera", corner}, {"opaque", true}, {"layers", corner_layers}, {"point_size", 3}},
+                    {{"name", "corner_transparent"}, {"camera", corner}, {"layers", corner_layers}},
+                    {{"name", "corner_panels"}, {"camera", corner}, {"layers", corner_layers}, {"focus", true}, {"dim", 0.4}},
+                    {{"name", "corner_opaque_building"}, {"camera", corner}, {"opaque", true}, {"layers", building_only}, {"point_size", 3}},
+                    {{"name", "corner_transparent_building"}, {"camera", corner}, {"layers", building_only}}};
   const std::string scene_file = (out / "scene.json").string();
   WriteFileAtomic(scene_file, scene.dump(2) + "\n");
 
@@ -214,7 +286,7 @@ int RunDemo(const DemoArgs& args) {
   build.output = (out / "archive").string();
   const int code = RunBuild(build);
   if (code != kOk) return code;
-  for (const char* v : {"overview_opaque", "overview_transparent", "corner_opaque", "corner_transparent"}) {
+  for (const char* v : {"overview_opaque", "overview_transparent", "corner_opaque", "corner_transparent", "corner_panels"}) {
     std::error_code ec;
     fs::copy_file(out / "archive" / "renders" / (std::string(v) + ".png"), out / (std::string(v) + ".png"),
                   fs::copy_options::overwrite_existing, ec);

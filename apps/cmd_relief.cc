@@ -166,6 +166,8 @@ int RunReliefDataset(const ReliefDatasetArgs& a) {
   return kOk;
 }
 
+bool ReliefInProcess() { return true; }
+
 int RunReliefPredict(const ReliefPredictArgs& a) {
   relief::PredictOptions o;
   o.tiles.tile = a.tile;

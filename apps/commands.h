@@ -100,6 +100,9 @@ struct ReliefSynthArgs {
   bool no_tone = false, no_fading = false;
 };
 int RunReliefSynth(const ReliefSynthArgs& args);
+// True in the executable that holds the relief path (candi-relief): the Run Relief* functions above
+// run in this process. Elsewhere they are stubs, and callers (candi build) start candi-relief.
+bool ReliefInProcess();
 
 struct ReliefDatasetArgs {
   std::vector<std::string> inputs;    // scans (point files) or synthetic panels (*_photo.png, folders)

@@ -13,6 +13,7 @@ namespace {
 }  // namespace
 
 #if CANDI_STUB_RELIEF
+bool ReliefInProcess() { return false; }
 int RunReliefSynth(const ReliefSynthArgs&) { HandedOver("relief synth"); }
 int RunReliefDataset(const ReliefDatasetArgs&) { HandedOver("relief dataset"); }
 int RunReliefTrain(const ReliefTrainArgs&) { HandedOver("relief train"); }

@@ -22,7 +22,8 @@ namespace {
 // the shared libraries it needs (dynamic linking is most of a short call's time):
 //   candi        everything else (start-up ~0.1 s);
 //   candi-pcl    register and clean (PCL: its BIND_NOW libraries cost ~0.4 s to load);
-//   candi-relief the relief commands, and everything else too (libtorch: seconds to load).
+//   candi-relief the relief commands and the demo, and everything else too (libtorch: seconds
+//                to load).
 // cli.cc is the same in all three (every command's options and --help); an executable without a
 // command's code hands the call over, before parsing, to the sibling that has it (same folder,
 // same arguments).
@@ -39,6 +40,8 @@ Group CommandGroup(int argc, char** argv) {
     return i + 1 < argc && !std::strcmp(argv[i + 1], "place") ? kCore : kRelief;
   }
   if (!std::strcmp(command, "register") || !std::strcmp(command, "clean")) return kPcl;
+  // The demo predicts its relief panels' depth: in candi-relief, so libtorch loads once.
+  if (!std::strcmp(command, "demo")) return kRelief;
   if (!std::strcmp(command, "bench")) {
     for (++i; i < argc; ++i)
       if (!std::strcmp(argv[i], "relief")) return kRelief;

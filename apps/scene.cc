@@ -238,7 +238,7 @@ SceneLayer ParseLayer(const Node& n) {
 }
 
 SceneView ParseView(const Node& n, const std::set<std::string>& layer_names) {
-  n.ExpectObject({"name", "camera", "opaque", "layers", "focus", "focus_opacity", "dim", "opacity"});
+  n.ExpectObject({"name", "camera", "opaque", "layers", "focus", "focus_opacity", "dim", "opacity", "point_size"});
   SceneView v;
   if (!n.Has("name")) n.Fail("missing key \"name\"");
   v.name = n["name"].String();
@@ -268,6 +268,7 @@ SceneView ParseView(const Node& n, const std::set<std::string>& layer_names) {
   if (n.Has("focus")) v.focus = n["focus"].Bool();
   if (n.Has("focus_opacity")) v.focus_opacity = n["focus_opacity"].Number(0, 1, true);
   if (n.Has("dim")) v.dim = n["dim"].Number(0, 1, true);
+  if (n.Has("point_size")) v.point_size = n["point_size"].Number(1, 32);
   if (n.Has("opacity")) {
     const Node o = n["opacity"];
     if (!o.raw().is_object()) o.Fail("expected an object of layer name -> opacity");

@@ -17,7 +17,8 @@
 //              "focus": false,               true: highlighted layers at focus_opacity, the others
 //              "focus_opacity": 0.95,          at dim x their opacity
 //              "dim": 0.5,
-//              "opacity": {"a": 0.2}}],      per-view overrides of layer opacities
+//              "opacity": {"a": 0.2},        per-view overrides of layer opacities
+//              "point_size": 1}],            pixels, [1, 32] (close-ups of sparse layers)
 //   "layers": [{
 //     "name": "foundation",                  unique; [A-Za-z0-9_-]+ (it names files)
 //     "kind": "points" | "foundation" | "relief" | "photogrammetry",
@@ -95,6 +96,7 @@ struct SceneView {
   bool focus = false;
   double focus_opacity = 0.95, dim = 0.5;
   std::map<std::string, double> opacity;
+  double point_size = 1.0;          // pixels (candi render --point-size)
 };
 
 struct Scene {

@@ -1,41 +1,121 @@
-// `candi demo --quick`: the reduced Borobudur example end to end (what `make demo` runs, smaller).
+// `candi demo --quick`: the reduced Borobudur example end to end (what `make demo` runs, smaller):
+// 12 relief panels on the south foot (8 behind the encasement, 4 in the excavated corner).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/png_io.h"
+#include "render/camera.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
 namespace candi {
 namespace {
 
+using nlohmann::json;
 using testing::RunCandi;
 using testing::TempDir;
 
-TEST(DemoCli, QuickDemoBuildsTheExampleAndItsRenders) {
+// The demo's panel k on the south foot wall (y = -56.5): x from t to t + 2.7, z 0.8 to 1.72.
+struct PanelBox {
+  double x0, x1;
+};
+PanelBox SouthPanel(int k) {
+  const double t = -56.5 + 0.5 + 2.8 * k + 0.05;
+  return {t, t + 2.7};
+}
+
+// The pixel rectangle (shrunk by `margin` px) covering panel k as the view sees it.
+struct PixelRect {
+  int u0, u1, v0, v1;
+};
+PixelRect Project(const render::Camera& camera, int k, int margin) {
+  const render::Camera::Projector p = camera.MakeProjector();
+  const PanelBox b = SouthPanel(k);
+  double u0 = 1e9, u1 = -1e9, v0 = 1e9, v1 = -1e9;
+  for (double x : {b.x0, b.x1})
+    for (double z : {0.8, 1.72}) {
+      double u = 0, v = 0, d = 0;
+      EXPECT_TRUE(p.Project(Eigen::Vector3d(x, -56.5, z), &u, &v, &d));
+      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+  return {static_cast<int>(std::ceil(u0)) + margin, static_cast<int>(std::floor(u1)) - margin,
+          static_cast<int>(std::ceil(v0)) + margin, static_cast<int>(std::floor(v1)) - margin};
+}
+
+render::Camera LoadCamera(const std::string& path) {
+  const json j = json::parse(testing::ReadBytes(path));
+  render::Camera c;
+  c.width = j["width"], c.height = j["height"], c.fov_y_deg = j["fov_y_deg"];
+  for (int i = 0; i < 3; ++i) c.eye[i] = j["eye"][i], c.target[i] = j["target"][i], c.up[i] = j["up"][i];
+  return c;
+}
+
+// Pixels of `rect` where a and b differ by more than `tolerance` in some channel, and how many.
+std::pair<size_t, size_t> Differing(const Image8& a, const Image8& b, const PixelRect& r, int tolerance) {
+  size_t differ = 0, total = 0;
+  for (int v = std::max(r.v0, 0); v <= std::min(r.v1, a.height() - 1); ++v)
+    for (int u = std::max(r.u0, 0); u <= std::min(r.u1, a.width() - 1); ++u) {
+      ++total;
+      for (int c = 0; c < 3; ++c)
+        if (std::abs(int(a.at(u, v, c)) - int(b.at(u, v, c))) > tolerance) {
+          ++differ;
+          break;
+        }
+    }
+  return {differ, total};
+}
+
+TEST(DemoCli, QuickDemoHidesThePanelsBehindTheEncasementAndShowsThemSeeThrough) {
+  const std::string relief = std::string(CANDI_EXECUTABLE) + "-relief";
+  if (!testing::FileExists(relief)) GTEST_SKIP() << "the demo runs in candi-relief, not built here (CANDI_BUILD_RELIEF=OFF)";
   TempDir dir;
-  const testing::CommandResult r = RunCandi("-q demo --quick --width 160 --height 120 -o " + dir.File("demo"));
+  const testing::CommandResult r = RunCandi("-q demo --quick --width 320 --height 240 -o " + dir.File("demo"));
   ASSERT_EQ(r.code, 0) << r.output;
-  const nlohmann::json a = nlohmann::json::parse(testing::ReadBytes(dir.File("demo/archive/archive.json")));
-  ASSERT_GE(a["layers"].size(), 2u);
+  const json a = json::parse(testing::ReadBytes(dir.File("demo/archive/archive.json")));
+  ASSERT_EQ(a["layers"].size(), 3u);
   EXPECT_EQ(a["layers"][0]["name"], "building");
-  EXPECT_EQ(a["layers"][1]["name"], "foundation");
   EXPECT_EQ(a["layers"][1]["points"], 200000);
   EXPECT_EQ(a["layers"][1]["scanned"], false);
-  for (const char* v : {"overview_opaque", "overview_transparent", "corner_opaque", "corner_transparent"}) {
-    SCOPED_TRACE(v);
-    const PngImage png = ReadPng(dir.File(std::string("demo/") + v + ".png"));
-    EXPECT_EQ(png.image8.width(), 160);
-    // Something was drawn: not every pixel is the white background.
-    size_t drawn = 0;
-    for (size_t i = 0; i + 2 < png.image8.values().size(); i += 3)
-      drawn += png.image8.values()[i] < 250 || png.image8.values()[i + 1] < 250 || png.image8.values()[i + 2] < 250;
-    EXPECT_GT(drawn, 500u);
+  const json& reliefs = a["layers"][2];
+  EXPECT_EQ(reliefs["name"], "reliefs");
+  EXPECT_EQ(reliefs["scanned"], false);
+  ASSERT_EQ(reliefs["parameters"]["panels"].size(), 12u);
+  EXPECT_EQ(reliefs["parameters"]["misfits"], 0);
+  for (const json& p : reliefs["parameters"]["panels"]) EXPECT_LT(p["rms_mm"].get<double>(), 5.0) << p.dump();
+
+  const auto png = [&](const char* name) { return ReadPng(dir.File(std::string("demo/archive/renders/") + name + ".png")).image8; };
+  const Image8 opaque = png("corner_opaque"), opaque_building = png("corner_opaque_building");
+  const Image8 see_through = png("corner_transparent"), see_through_building = png("corner_transparent_building");
+  const render::Camera camera = LoadCamera(dir.File("demo/archive/renders/corner_opaque.view.json"));
+  // Hidden panels (south side 28..35, behind the encasement): the opaque render is the building's
+  // alone there; the see-through render shows them.
+  size_t hidden_changed = 0, hidden_total = 0, hidden_seen = 0;
+  for (int k = 30; k <= 35; ++k) {
+    const PixelRect rect = Project(camera, k, 1);
+    const auto o = Differing(opaque, opaque_building, rect, 8);
+    const auto t = Differing(see_through, see_through_building, rect, 8);
+    hidden_changed += o.first, hidden_total += o.second, hidden_seen += t.first;
   }
+  ASSERT_GT(hidden_total, 50u) << "the hidden panels' region is off the image";
+  EXPECT_LT(hidden_changed, hidden_total / 50) << "hidden panels show through the encasement";
+  EXPECT_GT(hidden_seen, hidden_total / 4) << "hidden panels do not show in the see-through render";
+  // The four in the dig (36..39) are visible in the opaque render too.
+  size_t visible_changed = 0, visible_total = 0;
+  for (int k = 36; k <= 39; ++k) {
+    const auto o = Differing(opaque, opaque_building, Project(camera, k, 1), 8);
+    visible_changed += o.first, visible_total += o.second;
+  }
+  ASSERT_GT(visible_total, 20u);
+  EXPECT_GT(visible_changed, visible_total / 3) << "the excavated panels are not visible";
+
+  for (const char* v : {"overview_opaque", "overview_transparent", "corner_opaque", "corner_transparent", "corner_panels"})
+    EXPECT_TRUE(testing::FileExists(dir.File(std::string("demo/") + v + ".png"))) << v;
   EXPECT_TRUE(testing::FileExists(dir.File("demo/scene.json")));
-  EXPECT_NE(r.out.find("foundation"), std::string::npos) << r.out;  // the layer table
+  EXPECT_NE(r.out.find("reliefs"), std::string::npos) << r.out;  // the layer table
 }
 
 }  // namespace
