@@ -145,14 +145,5 @@ TEST(Cli, RealFilesReportTheirCounts) {
   EXPECT_EQ(RunCandi("info " + dxf).code, 2);
 }
 
-TEST(Cli, DemoWritesAnImage) {
-  TempDir dir;
-  const Result r = RunCandi("demo -o " + dir.File("demo") + " --width 160 --height 120");
-  EXPECT_EQ(r.code, 0) << r.output;
-  EXPECT_TRUE(FileExists(dir.File("demo/builtin_spbr.png")));
-  EXPECT_TRUE(FileExists(dir.File("demo/builtin_opaque.png")));
-  EXPECT_NE(r.output.find("not built yet"), std::string::npos) << "the demo says what it is";
-}
-
 }  // namespace
 }  // namespace candi
