@@ -2,8 +2,9 @@
 // by its own path (a point file read; a foundation from its DXF; relief panels from photos through
 // the depth network, placed by Ceres; photogrammetry from a dense workspace, georeferenced), moved
 // by world_from_layer into the scene's one LocalFrame and written as:
-//   layers/<name>.ply      double world coordinates (shift as comment + sidecar when the scene is
-//                          georeferenced), colours, scalar_scene_layer (the layer index) and a quality copy
+//   layers/<name>.ply      double world coordinates (no shift, so every tool reads them as they are),
+//                          colours, scalar_scene_layer (the layer index; CloudCompare keeps it) and a
+//                          quality copy (MeshLab keeps that one)
 //   archive/               the render archive of every layer (candi pack)
 //   renders/<view>.png     one SPBR render per view, and its .view.json (repeatable)
 //   meshlab/               float local-coordinate PLYs, scene.mlp and shift.txt
@@ -11,9 +12,10 @@
 // Intermediate files go to work/. Every file is written atomically.
 #include <algorithm>
 #include <chrono>
-#include <map>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -245,6 +247,18 @@ size_t Place(const SceneLayer& l, uint16_t id, const LocalFrame& scene_frame, Po
   return dropped;
 }
 
+// A layer in double world coordinates and no shift, so that tools which ignore candi's shift
+// comment and sidecar (CloudCompare, PDAL, ...) read the real positions; the scene's frame is in
+// archive.json and meshlab/shift.txt. (Double keeps 10^-9 m at 10^7 m.)
+void WriteWorldPly(const std::string& path, const PointCloud& cloud) {
+  PointWriteOptions o;
+  o.precision = PositionPrecision::kFloat64;
+  const std::unique_ptr<PointWriter> writer =
+      OpenPointWriter(path, PointWriteSpec{cloud.schema, LocalFrame(), cloud.meta, cloud.size()}, o);
+  writer->Write(cloud);  // re-expressed from the scene's frame (exact for its integer origin)
+  writer->Close();
+}
+
 // A MeshLab project: float PLYs in local coordinates (MeshLab reads matrices as float, so world
 // coordinates of 10^6 m would lose centimetres) and the shift beside it.
 void WriteMeshlab(const Scene& scene, const std::vector<PointCloud>& clouds, const std::string& dir) {
@@ -310,7 +324,7 @@ int RunBuild(const BuildArgs& args) {
     dropped.push_back(Place(l, static_cast<uint16_t>(k), frame, &results[k].cloud));
     if (dropped.back() > 0) LogWarning("layer " + l.name + ": " + std::to_string(dropped.back()) + " points with NaN coordinates dropped");
     const std::string file = (out / "layers" / (l.name + ".ply")).string();
-    WritePointCloud(file, results[k].cloud);  // double, with the frame's shift when it has one
+    WriteWorldPly(file, results[k].cloud);
     layer_files.push_back(file);
     clouds.push_back(std::move(results[k].cloud));
   }

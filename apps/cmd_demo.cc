@@ -20,6 +20,7 @@
 
 #include "apps/commands.h"
 #include "core/atomic_file.h"
+#include "core/check.h"
 #include "core/log.h"
 #include "core/point_io.h"
 #include "core/rng.h"
@@ -219,7 +220,9 @@ std::string PanelPositionsCsv(const std::vector<int>& panels, uint64_t seed) {
 int RunDemo(const DemoArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out = fs::absolute(args.output_dir).lexically_normal();
-  fs::create_directories(out / "inputs");
+  std::error_code ec;
+  fs::create_directories(out / "inputs", ec);
+  if (ec) throw InputError(args.output_dir, "", "cannot create the output folder: " + ec.message());
   const double density = args.quick ? 10.0 : 40.0;
   LogInfo("candi demo: the bundled Borobudur example (building: a procedural stand-in for the scan, "
           "which is not public; foundation: examples/borobudur/foundation.dxf)");

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/output_folder.h"
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/log.h"
@@ -37,15 +38,6 @@ pg::SimilarityFitOptions Options(const GeorefArgs& a) {
   if (!(a.outlier_threshold >= 0)) throw std::invalid_argument("--outlier-threshold must be >= 0 m");
   o.Check();
   return o;
-}
-
-// The output's folder must exist before the work starts.
-void CheckOutputFolder(const std::string& output) {
-  const std::filesystem::path parent = std::filesystem::absolute(output).parent_path();
-  std::error_code ec;
-  if (!std::filesystem::is_directory(parent, ec)) {
-    throw InputError(output, "", "the output folder " + parent.string() + " does not exist");
-  }
 }
 
 std::string Fixed(double v, int digits = 4) {

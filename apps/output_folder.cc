@@ -14,7 +14,8 @@ void CheckOutputFolder(const std::string& output) {
   if (folder.empty()) folder = ".";
   std::error_code ec;
   if (!std::filesystem::is_directory(folder, ec)) {
-    throw InputError(output, "", "output folder '" + folder.string() + "' does not exist");
+    throw InputError(output, "", "output folder '" + folder.string() + "' " +
+                                     (std::filesystem::exists(folder, ec) ? "is not a folder" : "does not exist"));
   }
   if (::access(folder.c_str(), W_OK) != 0) {
     throw InputError(output, "", "output folder '" + folder.string() + "' is not writable");

@@ -20,6 +20,9 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev
+  # interop tests: the archive opened in the real tools (meshlabserver under xvfb-run, CloudCompare
+  # command line with QT_QPA_PLATFORM=offscreen); tests/interop_cli_test.cc
+  meshlab cloudcompare xvfb xauth
 )
 
 missing=()
