@@ -143,10 +143,9 @@ class Collector : public DL_CreationAdapter {
   std::string section_, entity_, previous_entity_;
 };
 
-// dxflib's integer parsing (DL_Dxf::toInt): strtol, then truncated to int.
-int DxflibInt(const std::string& text) {
-  return static_cast<int>(std::strtol(text.c_str(), nullptr, 10));
-}
+// A group code or count as a number (leading digits, like dxflib's parsing; a count beyond int
+// is kept whole so that it is refused, whatever dxflib would make of it).
+long long GroupInt(const std::string& text) { return std::strtoll(text.c_str(), nullptr, 10); }
 
 // Rejects what dxflib would read as garbage (binary DXF, files without DXF sections) and counts
 // it would allocate up front: dxflib sizes its arrays from an entity's declared counts
@@ -165,25 +164,29 @@ void CheckAsciiDxf(const std::string& path, size_t max_piece_vertices) {
     throw InputError(path, "", "not a DXF file (no SECTION in its first 4 KiB)");
   }
   size_t pos = 0, line = 0;
+  // As C strings: a line is cut at its first NUL ("LWPOLYLINE\0junk" is an LWPOLYLINE to
+  // dxflib), and a line starting with NUL leaves the previous value in place, as in dxflib.
   auto next_line = [&](std::string* out) {
     if (pos >= data.size()) return false;
     const size_t newline = data.find('\n', pos);
     const size_t end = std::min({newline == std::string::npos ? data.size() : newline + 1,
                                  pos + 1023, data.size()});
-    *out = data.substr(pos, end - pos);
-    const size_t first = out->find_first_not_of(" \t\r\n");
-    *out = first == std::string::npos
-               ? std::string()
-               : out->substr(first, out->find_last_not_of(" \t\r\n") - first + 1);
+    std::string text = data.substr(pos, end - pos);
     pos = end;
     ++line;
+    if (text[0] == '\0') return true;
+    text.resize(std::min(text.size(), text.find('\0')));
+    const size_t first = text.find_first_not_of(" \t\r\n");
+    *out = first == std::string::npos
+               ? std::string()
+               : text.substr(first, text.find_last_not_of(" \t\r\n") - first + 1);
     return true;
   };
   // Each declared item needs at least one group pair of 4 bytes ("10\n0\n") in the file.
   const size_t most_items = data.size() / 4;
   std::string code, value, entity;
   while (next_line(&code) && next_line(&value)) {
-    const int c = DxflibInt(code);
+    const long long c = GroupInt(code);
     if (c == 0) {
       entity = value;
       continue;
@@ -195,7 +198,7 @@ void CheckAsciiDxf(const std::string& path, size_t max_piece_vertices) {
     if (entity == "SPLINE" && c == 74) what = "fit points";
     if (entity == "LEADER" && c == 76) what = "vertices";
     if (!what) continue;
-    const int count = DxflibInt(value);
+    const long long count = GroupInt(value);
     if (count <= 0) continue;
     const size_t n = static_cast<size_t>(count);
     if (n > max_piece_vertices || n > most_items) {

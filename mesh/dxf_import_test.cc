@@ -157,10 +157,19 @@ TEST(ReadDxf, DeclaredVertexCountsBeyondTheLimitOrTheFileAreRefused) {
   big.replace(at, 6, "90\n50000\n");  // under the limit, but the file is ~300 bytes
   m = InputErrorMessage([&] { ReadText(dir, big); });
   EXPECT_NE(m.find("cannot hold them"), std::string::npos) << m;
-  // The same count written as dxflib reads it (strtol, then int): 2^32 + 3 is 3.
+  // dxflib reads lines as C strings: "LWPOLYLINE\0junk" is an LWPOLYLINE and its count counts
+  // (fuzz_dxf found a 20000000-vertex allocation this way; fuzz/regressions/dxf).
+  std::string nul = text;
+  nul.replace(at, 6, "90\n20000000\n");
+  const size_t entity = nul.find("LWPOLYLINE\n");
+  nul.replace(entity, 11, std::string("LWPOLYLINE\0\0junk\n", 17));
+  m = InputErrorMessage([&] { ReadText(dir, nul); });
+  EXPECT_NE(m.find("LWPOLYLINE declares 20000000 vertices"), std::string::npos) << m;
+  // A count beyond int is refused whole (not wrapped to 3).
   std::string wrapped = text;
   wrapped.replace(at, 6, "90\n4294967299\n");
-  EXPECT_EQ(ReadText(dir, wrapped).layers.at("A")[0].points.size(), 3u);
+  m = InputErrorMessage([&] { ReadText(dir, wrapped); });
+  EXPECT_NE(m.find("declares 4294967299 vertices"), std::string::npos) << m;
 }
 
 TEST(ReadDxf, PiecesOverTheVertexLimitAreRefused) {
