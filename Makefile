@@ -8,12 +8,16 @@ CTEST_FLAGS ?= --output-on-failure
 # left to `make test-all`.
 CTEST_EXCLUDE ?= -LE slow
 
-.PHONY: all deps configure build test test-all demo bench clean format
+.PHONY: all deps deps-fuzz configure build test test-all demo bench fuzz clean format
 
 all: build
 
 deps:
 	@bash scripts/deps.sh
+
+# clang and its runtimes, only for `make fuzz`.
+deps-fuzz:
+	@bash scripts/deps.sh fuzz
 
 $(BUILD_DIR)/build.ninja: | deps
 	@cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release -DCANDI_WERROR=ON $(CMAKE_FLAGS)
@@ -35,8 +39,14 @@ demo: build
 bench: build
 	@bash scripts/bench.sh $(BUILD_DIR)
 
+# libFuzzer targets of fuzz/ (clang, ASan + UBSan) in build-fuzz/, each run FUZZ_SECONDS (60) on
+# its corpus; `make test` only replays their seeds and regressions (GCC build, ctest label fuzz).
+FUZZ_SECONDS ?= 60
+fuzz: deps deps-fuzz
+	@FUZZ_SECONDS=$(FUZZ_SECONDS) bash scripts/fuzz.sh
+
 format:
 	@git ls-files '*.h' '*.cc' | xargs clang-format -i
 
 clean:
-	@rm -rf $(BUILD_DIR) demo_out
+	@rm -rf $(BUILD_DIR) build-fuzz demo_out

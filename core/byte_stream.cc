@@ -17,7 +17,8 @@ bool ByteStream::Ensure(size_t n) {
     begin_ = 0;
     end_ = left;
   }
-  const size_t want = std::max(n, block_size_);
+  // No larger than the rest of the file: a small file does not get a block-sized buffer.
+  const size_t want = std::max<size_t>(n, std::min<uint64_t>(block_size_, left + file_.remaining()));
   if (buffer_.size() < want) buffer_.resize(want);
   while (end_ < n) {
     const size_t got = file_.ReadSome(buffer_.data() + end_, buffer_.size() - end_);

@@ -555,6 +555,26 @@ TEST(LasBadInput, TruncatedFileNamesTheBytePosition) {
   EXPECT_NE(error.find("promises 10 points"), std::string::npos) << error;
 }
 
+// Issue 9's limit: a header claiming 10^12 points is refused against the file size at open,
+// before anything is allocated or read.
+TEST(LasBadInput, HeaderClaimingTenToTheTwelvePointsIsRefusedAtOpen) {
+  TempDir dir;
+  PointCloud cloud = MakePlainCloud(10, {});
+  const std::string path = dir.File("huge.las");
+  PointWriteOptions options;
+  options.las_version_minor = 4;
+  options.las_point_format = 6;
+  WritePointCloud(path, cloud, options);
+  std::string bytes = ReadBytes(path);
+  const uint64_t claimed = 1000000000000ull;
+  bytes.replace(247, 8, reinterpret_cast<const char*>(&claimed), 8);  // LAS 1.4 64-bit count
+  WriteBytes(path, bytes);
+  const std::string error = ErrorOf([&] { OpenLasReader(path); });
+  EXPECT_NE(error.find(path), std::string::npos) << error;
+  EXPECT_NE(error.find("promises 1000000000000 points"), std::string::npos) << error;
+  EXPECT_NE(error.find("byte " + std::to_string(bytes.size())), std::string::npos) << error;
+}
+
 TEST(LasBadInput, HeaderDefectsAreReported) {
   TempDir dir;
   const std::string valid = ValidSmallLas(dir);

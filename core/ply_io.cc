@@ -411,7 +411,10 @@ bool PlyReader::NextLine(std::vector<std::string_view>* tokens) {
   const char* nl = nullptr;
   while (true) {
     const auto* begin = reinterpret_cast<const char*>(stream_->data());
-    nl = static_cast<const char*>(std::memchr(begin + scanned, '\n', stream_->available() - scanned));
+    // (An empty stream has no buffer yet: memchr of a null pointer is undefined even for 0 bytes.)
+    nl = stream_->available() > scanned
+             ? static_cast<const char*>(std::memchr(begin + scanned, '\n', stream_->available() - scanned))
+             : nullptr;
     if (nl != nullptr) break;
     scanned = stream_->available();
     if (scanned > kMaxLine) Fail("line " + std::to_string(line_ + 1), "line longer than 1 MiB");
@@ -522,6 +525,13 @@ void PlyReader::SkipElement(const ply::Element& element) {
 }
 
 // Reads one face record's index list (other face properties are skipped).
+// A face's vertex index as stored (any PLY type, float lists included): a value that is not an
+// integer in int64's range becomes -1, which FaceCollector reports as outside the vertex range
+// (casting it would be undefined behaviour).
+int64_t VertexIndex(double v) {
+  return v >= -9.0e18 && v <= 9.0e18 && v == std::floor(v) ? static_cast<int64_t>(v) : -1;
+}
+
 class FaceCollector {
  public:
   FaceCollector(uint64_t vertex_count, std::vector<std::array<uint32_t, 3>>* faces)
@@ -599,7 +609,7 @@ std::string PlyReader::ReadFaceRecord(const ply::Element& element, int index_pro
       if (t + count > tokens->size()) Fail(position, "too few values in face list '" + p.name + "'");
       for (size_t j = 0; j < count; ++j, ++t) {
         const double v = ParseNumber((*tokens)[t], p.type, p.name.c_str());
-        if (static_cast<int>(k) == index_property) indices->push_back(static_cast<int64_t>(v));
+        if (static_cast<int>(k) == index_property) indices->push_back(VertexIndex(v));
       }
     }
     return position;
@@ -612,7 +622,7 @@ std::string PlyReader::ReadFaceRecord(const ply::Element& element, int index_pro
     if (!stream_->Ensure(count * size)) Fail(position, "file ends inside the faces");
     if (static_cast<int>(k) == index_property) {
       DecodeColumn(p.type, stream_->data(), size, count, swap_,
-                   [indices](size_t, auto v) { indices->push_back(static_cast<int64_t>(v)); });
+                   [indices](size_t, auto v) { indices->push_back(VertexIndex(static_cast<double>(v))); });
     }
     stream_->Consume(count * size);
   }

@@ -314,6 +314,39 @@ TEST(PlyBadInput, FaceIndexOutOfRange) {
   EXPECT_THROW(ReadPlyMesh(dir.File("f.ply")), InputError);
 }
 
+// Float index lists are legal PLY; 1e30, NaN or 1.5 used to be cast to int64 (undefined
+// behaviour, issue 9's fuzzing). They are now out-of-range indices, ascii and binary alike.
+TEST(PlyBadInput, NonIntegralFloatFaceIndicesAreOutOfRange) {
+  TempDir dir;
+  const std::string header =
+      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar float vertex_indices\nend_header\n";
+  for (const char* bad : {"1e30", "nan", "1.5", "-3e19"}) {
+    WriteBytes(dir.File("f.ply"), "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n3 0 1 " +
+                                      bad + "\n");
+    try {
+      ReadPlyMesh(dir.File("f.ply"));
+      ADD_FAILURE() << "accepted face index " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("vertex index -1 outside [0, 3)"), std::string::npos)
+          << e.what();
+    }
+  }
+  std::string binary = "ply\nformat binary_little_endian 1.0\n" + header;
+  const float body[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  binary.append(reinterpret_cast<const char*>(body), sizeof(body));
+  const float face[] = {0, 1, std::numeric_limits<float>::infinity()};
+  binary.push_back(3);
+  binary.append(reinterpret_cast<const char*>(face), sizeof(face));
+  WriteBytes(dir.File("b.ply"), binary);
+  EXPECT_THROW(ReadPlyMesh(dir.File("b.ply")), InputError);
+  std::string good = binary.substr(0, binary.size() - 4);
+  const float two = 2;
+  good.append(reinterpret_cast<const char*>(&two), 4);
+  WriteBytes(dir.File("g.ply"), good);
+  EXPECT_EQ(ReadPlyMesh(dir.File("g.ply")).faces.size(), 1u);
+}
+
 TEST(PlyWriterSafety, DestroyedWriterLeavesTheEarlierFileIntact) {
   TempDir dir;
   const PointCloud cloud = SurveyCloud(10);

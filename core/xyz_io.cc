@@ -257,7 +257,7 @@ class XyzReader : public PointReader {
 
 XyzReader::XyzReader(const std::string& path, bool pts, std::optional<Layout> layout,
                      bool scalar_fields)
-    : PointReader(path), file_(path), pts_(pts), buffer_(kBlockSize + kMaxLineLength + 2) {
+    : PointReader(path), file_(path), pts_(pts), buffer_(std::min<uint64_t>(kBlockSize + kMaxLineLength, file_.size()) + 2) {
   if (file_.size() == 0) throw InputError(path, "byte 0", "empty file");
   info_.format = pts ? PointFormat::kPts : PointFormat::kXyz;
   if (std::optional<LocalFrame> frame = ReadShiftSidecar(path)) info_.frame = *frame;

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <set>
 #include <stdexcept>
@@ -17,8 +19,6 @@
 namespace candi {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // A piece as the file gives it: drawing units, with a bulge per vertex.
 struct RawPiece {
@@ -53,7 +53,9 @@ class Collector : public DL_CreationAdapter {
     Start(mesh ? Pending::kPolylineMesh : Pending::kPolyline, (d.flags & 1) != 0);
   }
   void addVertex(const DL_VertexData& d) override {
-    if (pending_ == Pending::kPolyline) current_.vertices.emplace_back(d.x, d.y, d.bulge);
+    if (pending_ == Pending::kPolyline && Room(current_.vertices)) {
+      current_.vertices.emplace_back(d.x, d.y, d.bulge);
+    }
   }
   void addSpline(const DL_SplineData& d) override {
     Finish();
@@ -61,10 +63,10 @@ class Collector : public DL_CreationAdapter {
     Start(Pending::kSpline, (d.flags & 1) != 0);
   }
   void addControlPoint(const DL_ControlPointData& d) override {
-    control_.emplace_back(d.x, d.y, 0);
+    if (Room(control_)) control_.emplace_back(d.x, d.y, 0);
   }
   void addFitPoint(const DL_FitPointData& d) override {
-    current_.vertices.emplace_back(d.x, d.y, 0);
+    if (Room(current_.vertices)) current_.vertices.emplace_back(d.x, d.y, 0);
   }
   void endEntity() override { Finish(); }
   void endSequence() override { Finish(); }
@@ -90,7 +92,10 @@ class Collector : public DL_CreationAdapter {
   // Called once after parsing: the last entity may still be pending.
   void Flush() { Finish(); }
 
+  explicit Collector(size_t max_piece_vertices) : max_piece_vertices_(max_piece_vertices) {}
+
   int insunits = 0;
+  std::string too_many;  // the first piece over max_piece_vertices ("LWPOLYLINE on layer X")
   DxfEntityCounts model, blocks;
   size_t closed_polylines = 0;
   std::vector<RawPiece> pieces;
@@ -98,6 +103,16 @@ class Collector : public DL_CreationAdapter {
 
  private:
   bool Unused() { return in_block_ || getAttributes().isInPaperSpace(); }
+  // False (and the piece noted) once a piece holds max_piece_vertices: dxflib cannot be stopped
+  // from a callback without leaking its file, so the rest is ignored and ReadDxf refuses the file.
+  bool Room(const std::vector<Eigen::Vector3d>& vertices) {
+    if (vertices.size() < max_piece_vertices_) return true;
+    if (too_many.empty()) {
+      too_many = std::string(pending_ == Pending::kSpline ? "SPLINE" : "polyline") + " on layer '" +
+                 current_.layer + "'";
+    }
+    return false;
+  }
   DxfEntityCounts& Counts() { return Unused() ? blocks : model; }
   std::string Layer() { return getAttributes().getLayer(); }
 
@@ -120,6 +135,7 @@ class Collector : public DL_CreationAdapter {
     current_ = {};
   }
 
+  size_t max_piece_vertices_;
   Pending pending_ = Pending::kNone;
   RawPiece current_;
   std::vector<Eigen::Vector3d> control_;
@@ -127,22 +143,79 @@ class Collector : public DL_CreationAdapter {
   std::string section_, entity_, previous_entity_;
 };
 
-// Rejects what dxflib would read as garbage: binary DXF and files without DXF sections.
-void CheckAsciiDxf(const std::string& path) {
+// A group code or count as a number (leading digits, like dxflib's parsing; a count beyond int
+// is kept whole so that it is refused, whatever dxflib would make of it).
+long long GroupInt(const std::string& text) { return std::strtoll(text.c_str(), nullptr, 10); }
+
+// Rejects what dxflib would read as garbage (binary DXF, files without DXF sections) and counts
+// it would allocate up front: dxflib sizes its arrays from an entity's declared counts
+// (LWPOLYLINE 90 vertices, SPLINE 72 knots / 73 control points / 74 fit points, LEADER 76
+// vertices) before reading them, so a count of 10^9 in a small file would allocate 32 GB. Group
+// pairs are read as dxflib reads them (fgets of at most 1023 bytes, whitespace stripped).
+void CheckAsciiDxf(const std::string& path, size_t max_piece_vertices) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open the file");
-  std::string head(4096, '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<size_t>(in.gcount()));
+  const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string head = data.substr(0, 4096);
   if (head.rfind("AutoCAD Binary DXF", 0) == 0) {
     throw InputError(path, "", "binary DXF is not supported; save the drawing as ASCII DXF");
   }
   if (head.find("SECTION") == std::string::npos) {
     throw InputError(path, "", "not a DXF file (no SECTION in its first 4 KiB)");
   }
+  size_t pos = 0, line = 0;
+  // As C strings: a line is cut at its first NUL ("LWPOLYLINE\0junk" is an LWPOLYLINE to
+  // dxflib), and a line starting with NUL leaves the previous value in place, as in dxflib.
+  auto next_line = [&](std::string* out) {
+    if (pos >= data.size()) return false;
+    const size_t newline = data.find('\n', pos);
+    const size_t end = std::min({newline == std::string::npos ? data.size() : newline + 1,
+                                 pos + 1023, data.size()});
+    std::string text = data.substr(pos, end - pos);
+    pos = end;
+    ++line;
+    if (text[0] == '\0') return true;
+    text.resize(std::min(text.size(), text.find('\0')));
+    const size_t first = text.find_first_not_of(" \t\r\n");
+    *out = first == std::string::npos
+               ? std::string()
+               : text.substr(first, text.find_last_not_of(" \t\r\n") - first + 1);
+    return true;
+  };
+  // Each declared item needs at least one group pair of 4 bytes ("10\n0\n") in the file.
+  const size_t most_items = data.size() / 4;
+  std::string code, value, entity;
+  while (next_line(&code) && next_line(&value)) {
+    const long long c = GroupInt(code);
+    if (c == 0) {
+      entity = value;
+      continue;
+    }
+    const char* what = nullptr;
+    if (entity == "LWPOLYLINE" && c == 90) what = "vertices";
+    if (entity == "SPLINE" && c == 72) what = "knots";
+    if (entity == "SPLINE" && c == 73) what = "control points";
+    if (entity == "SPLINE" && c == 74) what = "fit points";
+    if (entity == "LEADER" && c == 76) what = "vertices";
+    if (!what) continue;
+    const long long count = GroupInt(value);
+    if (count <= 0) continue;
+    const size_t n = static_cast<size_t>(count);
+    if (n > max_piece_vertices || n > most_items) {
+      throw InputError(path, "line " + std::to_string(line),
+                       entity + " declares " + std::to_string(n) + " " + what + " (group code " +
+                           std::to_string(c) + "); " +
+                           (n > max_piece_vertices
+                                ? "more than the limit of " + std::to_string(max_piece_vertices) +
+                                      " vertices a piece (DxfReadOptions::max_piece_vertices)"
+                                : "the " + std::to_string(data.size()) +
+                                      "-byte file cannot hold them"));
+    }
+  }
 }
 
-Polyline2 ToMetres(const RawPiece& raw, double scale, double chord_tolerance) {
+Polyline2 ToMetres(const RawPiece& raw, double scale, double chord_tolerance,
+                    size_t max_vertices, const std::string& path) {
   Polyline2 out;
   out.closed = raw.closed;
   const size_t n = raw.vertices.size();
@@ -155,6 +228,13 @@ Polyline2 ToMetres(const RawPiece& raw, double scale, double chord_tolerance) {
     const std::vector<Eigen::Vector2d> arc =
         TessellateBulge(a.head<2>() * scale, b.head<2>() * scale, a.z(), chord_tolerance);
     out.points.insert(out.points.end(), arc.begin(), arc.end());
+    if (out.points.size() > max_vertices) {
+      throw InputError(path, "layer '" + raw.layer + "'",
+                       "a piece has more than " + std::to_string(max_vertices) +
+                           " vertices once its bulge arcs are tessellated (chord tolerance " +
+                           FormatDouble(chord_tolerance) +
+                           " m; DxfReadOptions::max_piece_vertices)");
+    }
   }
   if (raw.closed) out.points.pop_back();  // the closing arc ends on the first point
   return out;
@@ -170,6 +250,9 @@ void DxfReadOptions::Check() const {
   if (!(unitless_scale > 0) || !std::isfinite(unitless_scale)) {
     throw std::invalid_argument("DxfReadOptions::unitless_scale = " + FormatDouble(unitless_scale) +
                                 "; must be finite and > 0");
+  }
+  if (max_piece_vertices == 0) {
+    throw std::invalid_argument("DxfReadOptions::max_piece_vertices = 0; must be > 0");
   }
 }
 
@@ -240,11 +323,16 @@ std::vector<Eigen::Vector2d> TessellateBulge(const Eigen::Vector2d& a, const Eig
 
 DxfDrawing ReadDxf(const DxfReadOptions& options, const std::string& path) {
   options.Check();
-  CheckAsciiDxf(path);
-  Collector collector;
+  CheckAsciiDxf(path, options.max_piece_vertices);
+  Collector collector(options.max_piece_vertices);
   DL_Dxf dxf;
   if (!dxf.in(path, &collector)) throw InputError(path, "", "cannot open the file");
   collector.Flush();
+  if (!collector.too_many.empty()) {
+    throw InputError(path, collector.too_many,
+                     "more than " + std::to_string(options.max_piece_vertices) +
+                         " vertices in one piece (DxfReadOptions::max_piece_vertices)");
+  }
   DxfDrawing drawing;
   drawing.path = path;
   drawing.insunits = collector.insunits;
@@ -254,7 +342,8 @@ DxfDrawing ReadDxf(const DxfReadOptions& options, const std::string& path) {
   drawing.blocks = collector.blocks;
   drawing.closed_polylines = collector.closed_polylines;
   for (const RawPiece& raw : collector.pieces) {
-    Polyline2 piece = ToMetres(raw, drawing.metres_per_unit, options.chord_tolerance);
+    Polyline2 piece = ToMetres(raw, drawing.metres_per_unit, options.chord_tolerance,
+                               options.max_piece_vertices, path);
     if (!piece.points.empty()) drawing.layers[raw.layer].push_back(std::move(piece));
   }
   if (collector.control_polygons > 0) {

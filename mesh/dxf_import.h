@@ -8,7 +8,10 @@
 // Only model-space entities count; entities inside block definitions and in paper space are
 // counted separately and not used. Binary DXF is rejected (InputError saying so).
 // Failures: InputError naming the path: unreadable file, binary DXF, no DXF section structure,
-// unknown $INSUNITS code. Thread-safe (no shared state).
+// unknown $INSUNITS code, a piece over max_piece_vertices (declared, read, or after tessellating
+// bulges), a vertex/knot count the file cannot hold (named by line and group code: dxflib would
+// allocate it up front). Memory stays within a few times the file size plus the pieces' limit.
+// Thread-safe (no shared state).
 #pragma once
 
 #include <map>
@@ -22,6 +25,9 @@ namespace candi {
 struct DxfReadOptions {
   double chord_tolerance = 0.005;  // m, > 0: largest distance of a bulge arc from its chords
   double unitless_scale = 1.0;     // m per drawing unit when $INSUNITS is 0 or absent, > 0
+  // Vertices of one piece at most, > 0: a section profile needs thousands, not millions; a larger
+  // one (e.g. a polyline of 10^7 vertices) is refused with InputError instead of filling memory.
+  size_t max_piece_vertices = 1000000;
   void Check() const;              // throws std::invalid_argument naming the field
 };
 

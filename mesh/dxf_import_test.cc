@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -134,6 +135,63 @@ TEST(ReadDxf, BinaryNonDxfAndMissingFilesAreClearErrors) {
   EXPECT_NE(m.find("not a DXF"), std::string::npos) << m;
   m = InputErrorMessage([&] { ReadDxf({}, dir.File("none.dxf")); });
   EXPECT_NE(m.find(dir.File("none.dxf")), std::string::npos) << m;
+}
+
+// Issue 9's limit: dxflib allocates an LWPOLYLINE's declared vertex count (group 90) before
+// reading the vertices, so a declared 10^7 is refused before dxflib sees the file.
+TEST(ReadDxf, DeclaredVertexCountsBeyondTheLimitOrTheFileAreRefused) {
+  TempDir dir;
+  const std::string text =
+      DxfText().LwPolyline("A", {V(0, 0), V(1, 0), V(1, 1)}).Line("B", V(0, 0), V(2, 2)).str();
+  const size_t at = text.find("90\n3\n");
+  ASSERT_NE(at, std::string::npos);
+  std::string huge = text;
+  huge.replace(at, 6, "90\n10000000\n");
+  std::string m = InputErrorMessage([&] { ReadText(dir, huge); });
+  EXPECT_NE(m.find(dir.File("d.dxf")), std::string::npos) << m;
+  EXPECT_NE(m.find("LWPOLYLINE declares 10000000 vertices (group code 90)"), std::string::npos) << m;
+  EXPECT_NE(m.find("limit of 1000000"), std::string::npos) << m;
+  const size_t line = std::count(text.begin(), text.begin() + at, '\n') + 2;  // the count's line
+  EXPECT_NE(m.find("line " + std::to_string(line)), std::string::npos) << m;
+  std::string big = text;
+  big.replace(at, 6, "90\n50000\n");  // under the limit, but the file is ~300 bytes
+  m = InputErrorMessage([&] { ReadText(dir, big); });
+  EXPECT_NE(m.find("cannot hold them"), std::string::npos) << m;
+  // dxflib reads lines as C strings: "LWPOLYLINE\0junk" is an LWPOLYLINE and its count counts
+  // (fuzz_dxf found a 20000000-vertex allocation this way; fuzz/regressions/dxf).
+  std::string nul = text;
+  nul.replace(at, 6, "90\n20000000\n");
+  const size_t entity = nul.find("LWPOLYLINE\n");
+  nul.replace(entity, 11, std::string("LWPOLYLINE\0\0junk\n", 17));
+  m = InputErrorMessage([&] { ReadText(dir, nul); });
+  EXPECT_NE(m.find("LWPOLYLINE declares 20000000 vertices"), std::string::npos) << m;
+  // A count beyond int is refused whole (not wrapped to 3).
+  std::string wrapped = text;
+  wrapped.replace(at, 6, "90\n4294967299\n");
+  m = InputErrorMessage([&] { ReadText(dir, wrapped); });
+  EXPECT_NE(m.find("declares 4294967299 vertices"), std::string::npos) << m;
+}
+
+TEST(ReadDxf, PiecesOverTheVertexLimitAreRefused) {
+  TempDir dir;
+  DxfReadOptions o;
+  o.max_piece_vertices = 10;
+  std::vector<V> points;
+  for (int k = 0; k < 11; ++k) points.push_back(V(k, k % 2));
+  std::string m = InputErrorMessage([&] { ReadText(dir, DxfText().Polyline("P", points).str(), o); });
+  EXPECT_NE(m.find("layer 'P'"), std::string::npos) << m;
+  EXPECT_NE(m.find("more than 10 vertices"), std::string::npos) << m;
+  points.pop_back();
+  EXPECT_EQ(ReadText(dir, DxfText().Polyline("P", points).str(), o).layers.at("P")[0].points.size(),
+            10u);
+  // Two vertices, but a bulge of 10^9 (almost a full circle of a huge radius) tessellates into
+  // far more than 10 points.
+  m = InputErrorMessage(
+      [&] { ReadText(dir, DxfText().LwPolyline("Q", {V(0, 0), V(1, 0)}, {1e9}).str(), o); });
+  EXPECT_NE(m.find("layer 'Q'"), std::string::npos) << m;
+  EXPECT_NE(m.find("tessellated"), std::string::npos) << m;
+  o.max_piece_vertices = 0;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
 }
 
 // An independent count of entity types by section, from the raw group pairs.

@@ -257,8 +257,9 @@ ArchiveManifest ArchiveManifest::FromJson(const std::string& text, const std::st
     if (ch.file < 0 || static_cast<size_t>(ch.file) >= m.files.size()) {
       throw InputError(path, where, "file index " + std::to_string(ch.file) + " out of range");
     }
-    if (ch.count == 0 || ch.first != next || ch.offset % 8 != 0 ||
-        ch.offset + 8 * ch.count > m.files[ch.file].bytes || ch.offset + 8 * ch.count < ch.offset) {
+    const uint64_t file_bytes = m.files[ch.file].bytes;
+    if (ch.count == 0 || ch.first != next || ch.offset % 8 != 0 || ch.offset > file_bytes ||
+        ch.count > (file_bytes - ch.offset) / 8) {
       throw InputError(path, where, "count/first/offset inconsistent with the file sizes and the chunks before");
     }
     next += ch.count;

@@ -284,6 +284,28 @@ TEST_F(ArchiveDamage, MalformedManifestNamesTheField) {
   }
 }
 
+// 8 * count wrapped 64 bits (count 2^61 + 1 looked like 8 bytes) and passed the size check once;
+// the reader then allocated 2^61 points (found while writing fuzz/fuzz_archive.cc, issue 9).
+TEST(ArchiveManifest, ChunkCountBeyondItsFileIsRefused) {
+  ArchiveManifest m;
+  m.files = {{"data-00000.bin", 8}};
+  ArchiveChunk chunk;
+  chunk.count = (uint64_t{1} << 61) + 1;
+  chunk.quantizer = ChunkQuantizer::ForBox(Box3d{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()});
+  m.chunks = {chunk};
+  m.points = chunk.count;
+  try {
+    ArchiveManifest::FromJson(m.ToJson(), "manifest.json");
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("chunks[0]"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("file sizes"), std::string::npos) << e.what();
+  }
+  m.chunks[0].count = 1;
+  m.points = 1;
+  EXPECT_EQ(ArchiveManifest::FromJson(m.ToJson(), "manifest.json").chunks[0].count, 1u);
+}
+
 // ---- rendering ------------------------------------------------------------------------------
 
 // The in-memory reference: SpbrStreamRenderer fed every dequantized point in one piece.

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages candi builds and tests with, skipping those already present.
-# Idempotent and quiet; works as root or through sudo. Usage: scripts/deps.sh
+# Idempotent and quiet; works as root or through sudo.
+# Usage: scripts/deps.sh [fuzz]   (fuzz: only clang and its sanitizer/libFuzzer runtimes, for
+# `make fuzz`; `make test` does not need them)
 set -euo pipefail
 
 packages=(
@@ -24,6 +26,9 @@ packages=(
   # command line with QT_QPA_PLATFORM=offscreen); tests/interop_cli_test.cc
   meshlab cloudcompare xvfb xauth
 )
+if [[ ${1:-} == fuzz ]]; then
+  packages=(clang-14 libclang-rt-14-dev)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

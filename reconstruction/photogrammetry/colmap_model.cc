@@ -640,15 +640,20 @@ ColmapArray ReadColmapArray(const std::string& path) {
     }
     pos = amp + 1;
   }
-  const uint64_t count = static_cast<uint64_t>(array.width) * static_cast<uint64_t>(array.height) *
-                         static_cast<uint64_t>(array.channels);
   const uint64_t left = data.size() - pos;
-  if (count > left / 4 || count * 4 != left) {
+  // In 128 bits: three int32 fields can wrap 64 bits to a small count that the bytes match.
+  const unsigned __int128 wide = static_cast<unsigned __int128>(array.width) *
+                                 static_cast<unsigned __int128>(array.height) *
+                                 static_cast<unsigned __int128>(array.channels);
+  if (wide * 4 != left) {
     throw InputError(path, "byte " + std::to_string(pos),
                      "header " + std::to_string(array.width) + "x" + std::to_string(array.height) +
-                         "x" + std::to_string(array.channels) + " needs " + std::to_string(count) +
+                         "x" + std::to_string(array.channels) + " needs " +
+                         (wide >> 64 ? std::string("more than 2^64")
+                                     : std::to_string(static_cast<uint64_t>(wide))) +
                          " floats but " + std::to_string(left) + " bytes follow");
   }
+  const uint64_t count = static_cast<uint64_t>(wide);
   array.data.resize(count);
   std::memcpy(array.data.data(), data.data() + pos, count * 4);
   for (uint64_t i = 0; i < count; ++i) {

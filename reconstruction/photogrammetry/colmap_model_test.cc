@@ -271,6 +271,9 @@ TEST(ColmapArray, BadFilesNameThePosition) {
   ExpectInputError([&] { ReadColmapArray(path); }, {"byte 6", "needs 4 floats but 12 bytes follow"});
   WriteBytes(path, "1000000&1000000&1000&" + std::string(16, '\0'));  // 10^15 floats claimed
   ExpectInputError([&] { ReadColmapArray(path); }, {"needs 1000000000000000 floats"});
+  // 2^30 x 2^30 x 16 = 2^64 floats wraps to 0 in 64 bits and matched an empty body once.
+  WriteBytes(path, "1073741824&1073741824&16&");
+  ExpectInputError([&] { ReadColmapArray(path); }, {"byte 25", "needs more than 2^64 floats"});
   const float values[2] = {1.0f, std::numeric_limits<float>::quiet_NaN()};
   WriteBytes(path, "2&1&1&" + std::string(reinterpret_cast<const char*>(values), 8));
   ExpectInputError([&] { ReadColmapArray(path); }, {"byte 10", "non-finite"});
