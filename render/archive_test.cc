@@ -289,6 +289,7 @@ TEST_F(ArchiveDamage, MalformedManifestNamesTheField) {
 TEST(ArchiveManifest, ChunkCountBeyondItsFileIsRefused) {
   ArchiveManifest m;
   m.files = {{"data-00000.bin", 8}};
+  m.bounds = Box3d{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()};
   ArchiveChunk chunk;
   chunk.count = (uint64_t{1} << 61) + 1;
   chunk.quantizer = ChunkQuantizer::ForBox(Box3d{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()});
