@@ -5,8 +5,11 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <map>
 #include <memory>
 #include <stdexcept>
+#include <tuple>
 
 #include "apps/arg_parse.h"
 #include "apps/commands.h"
@@ -115,6 +118,30 @@ render::Camera InFrame(render::Camera c, const LocalFrame& frame) {
   return c;
 }
 
+// The local density of a point file does not depend on the view: renders of the same file in one
+// process (candi build renders each layer from several views) estimate it once. Keyed by the
+// file's canonical path, XYZ columns, size and modification time, so a rewritten file is estimated again;
+// the density options are the same for every render (AdjustInput sets only threads, which do
+// not change the result). Not thread-safe: commands run one at a time.
+const DensityResult& CachedDensity(const std::string& path, const std::string& columns,
+                                   const OpacityOptions& o, const PointCloud& cloud) {
+  namespace fs = std::filesystem;
+  using Key = std::tuple<std::string, std::string, uintmax_t, fs::file_time_type::rep>;
+  static std::map<Key, DensityResult> cache;
+  std::error_code ec;
+  const fs::path canonical = fs::canonical(path, ec);
+  const uintmax_t size = fs::file_size(path, ec);
+  const auto mtime = fs::last_write_time(path, ec).time_since_epoch().count();
+  static DensityResult uncached;
+  if (ec) return uncached = OpacityDensity(o, cloud);
+  const Key key{canonical.string(), columns, size, mtime};
+  auto it = cache.find(key);
+  if (it == cache.end() || it->second.density.size() != cloud.size()) {
+    it = cache.insert_or_assign(key, OpacityDensity(o, cloud)).first;
+  }
+  return it->second;
+}
+
 // Opacity control for input k (ALGORITHMS.md §1): the pixel footprint s is the camera's at its
 // target, so the law is met where the view is focused.
 void AdjustInput(const RenderArgs& a, const Plan& p, const render::Camera& world_camera, size_t k,
@@ -126,7 +153,7 @@ void AdjustInput(const RenderArgs& a, const Plan& p, const render::Camera& world
   o.pixel_size = world_camera.PixelFootprint((world_camera.target - world_camera.eye).norm());
   o.seed = a.seed;
   o.density.threads = a.threads;
-  OpacityResult r = AdjustOpacity(o, *cloud);
+  OpacityResult r = AdjustOpacity(o, *cloud, CachedDensity(a.inputs[k], a.columns, o, *cloud));
   LogInfo(a.inputs[k] + ": opacity " + FormatDouble(o.alpha) + " at pixel " + FormatDouble(o.pixel_size) +
           " m: " + std::to_string(r.summary.points_in) + " points -> " + std::to_string(r.summary.total_copies) +
           " copies (predicted alpha " + FormatDouble(r.summary.predicted_alpha) + ")");

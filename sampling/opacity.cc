@@ -173,7 +173,20 @@ void OpacityOptions::Check() const {
   density.Check();
 }
 
+DensityResult OpacityDensity(const OpacityOptions& options, const PointCloud& cloud) {
+  options.Check();
+  DensityOptions density_options = options.density;
+  density_options.weight_field = cloud.FindScalar(kMultiplicityField) ? kMultiplicityField : "";
+  return EstimateSurfaceDensity(density_options, cloud);
+}
+
 OpacityResult AdjustOpacity(const OpacityOptions& options, const PointCloud& cloud) {
+  if (cloud.empty()) return AdjustOpacity(options, cloud, DensityResult());
+  return AdjustOpacity(options, cloud, OpacityDensity(options, cloud));
+}
+
+OpacityResult AdjustOpacity(const OpacityOptions& options, const PointCloud& cloud,
+                            const DensityResult& density) {
   options.Check();
   OpacityResult result;
   OpacitySummary& s = result.summary;
@@ -183,9 +196,10 @@ OpacityResult AdjustOpacity(const OpacityOptions& options, const PointCloud& clo
     AddNote(&s, "empty input");
     return result;
   }
-  DensityOptions density_options = options.density;
-  density_options.weight_field = cloud.FindScalar(kMultiplicityField) ? kMultiplicityField : "";
-  const DensityResult density = EstimateSurfaceDensity(density_options, cloud);
+  if (density.density.size() != cloud.size()) {
+    throw std::invalid_argument("AdjustOpacity: " + std::to_string(density.density.size()) +
+                                " density values for " + std::to_string(cloud.size()) + " points");
+  }
   SetScales(options, cloud, density, &s);
   const std::vector<double> w = InputMultiplicity(cloud);
   std::vector<double> ratios(cloud.size());

@@ -104,5 +104,13 @@ struct OpacityResult {
 // must be finite and >= 0 (InputError otherwise); the field keeps its type.
 // An empty cloud gives an empty result. Failures: as EstimateSurfaceDensity.
 OpacityResult AdjustOpacity(const OpacityOptions& options, const PointCloud& cloud);
+// The same with the cloud's density already estimated (EstimateSurfaceDensity with
+// options.density, the weight field set as AdjustOpacity sets it): the density does not depend on
+// the view, so renders of one cloud from several views can share it. Same result, bit for bit.
+// Throws std::invalid_argument when `density` does not have one value per point.
+OpacityResult AdjustOpacity(const OpacityOptions& options, const PointCloud& cloud,
+                            const DensityResult& density);
+// The density AdjustOpacity(options, cloud) estimates.
+DensityResult OpacityDensity(const OpacityOptions& options, const PointCloud& cloud);
 
 }  // namespace candi
