@@ -46,7 +46,10 @@ void AddDemo(CLI::App& app, DemoArgs& a, std::function<int()>* run) {
   c->add_option("--width", a.width, "Image width in pixels")->check(CLI::Range(16, 16384));
   c->add_option("--height", a.height, "Image height in pixels")->check(CLI::Range(16, 16384));
   c->add_option("--seed", a.seed, "Random seed");
-  c->add_flag("--quick", a.quick, "The reduced scene (fewer points, L = 32), as CI runs it");
+  auto* quick = c->add_flag("--quick", a.quick, "The reduced scene (fewer points, L = 32), as CI runs it");
+  c->add_flag("--full", a.full, "Paper scale: all 160 relief panels through the network at the model's "
+              "resolution (default: the 156 hidden ones at their photos' own, 8x fewer tiles)")
+      ->excludes(quick);
   c->callback([run, &a] { *run = [&a] { return RunDemo(a); }; });
   c->footer("Example: candi demo -o demo_out");
 }

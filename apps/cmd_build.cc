@@ -124,7 +124,7 @@ LayerResult Relief(const SceneLayer& l, const std::string& work) {
       const std::string base = (fs::path(work) / (l.name + "_" + p.id)).string();
       ReliefPredictArgs predict;
       predict.photo = p.photo, predict.model = l.model, predict.output = base + "_depth.png";
-      predict.width_m = l.width_m;
+      predict.width_m = p.native_resolution ? 0.0 : l.width_m;  // 0: no resampling
       ReliefPointsArgs to_points;
       to_points.photo = p.photo, to_points.depth = predict.output, to_points.output = base + "_panel.ply";
       to_points.width_m = l.width_m;
@@ -135,7 +135,7 @@ LayerResult Relief(const SceneLayer& l, const std::string& work) {
       } else {
         const std::string w = FormatDouble(l.width_m);
         RunChild({relief_exe, "-q", "relief", "predict", p.photo, "--model", l.model, "-o", predict.output,
-                  "--width-m", w}, base + "_predict.log", "relief predict of " + p.photo);
+                  "--width-m", FormatDouble(predict.width_m)}, base + "_predict.log", "relief predict of " + p.photo);
         RunChild({relief_exe, "-q", "relief", "points", p.photo, predict.output, "-o", to_points.output,
                   "--width-m", w}, base + "_points.log", "relief points of " + p.photo);
       }
@@ -151,7 +151,8 @@ LayerResult Relief(const SceneLayer& l, const std::string& work) {
       r.cloud.colors.push_back(panel.schema.colors ? panel.colors[i] : Rgb8{200, 200, 200});
     }
     panels.push_back({{"id", p.id}, {"status", placement.status}, {"rms_mm", placement.rms_mm},
-                      {"max_mm", placement.max_mm}, {"points", panel.size()}});
+                      {"max_mm", placement.max_mm}, {"points", panel.size()},
+                      {"prediction", p.points.empty() ? (p.native_resolution ? "photo resolution" : "model resolution") : "given points"}});
     progress.Update(k + 1, l.panels.size());
   }
   progress.Finish();

@@ -40,6 +40,8 @@ struct DemoArgs {
   int width = 1024, height = 768;
   unsigned long long seed = 1;
   bool quick = false;                 // the reduced scene CI runs (fewer points, L = 32)
+  bool full = false;                  // paper scale: every panel through the network at the
+                                      // model's resolution (default: hidden panels at the photo's)
 };
 int RunDemo(const DemoArgs& args);
 

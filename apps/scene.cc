@@ -210,7 +210,7 @@ SceneLayer ParseLayer(const Node& n) {
       bool photos = false;
       for (size_t i = 0; i < panels.ArraySize(); ++i) {
         const Node p = panels[i];
-        p.ExpectObject({"id", "photo", "points"});
+        p.ExpectObject({"id", "photo", "points", "native_resolution"});
         if (!p.Has("id")) p.Fail("missing key \"id\"");
         ReliefPanelSpec spec;
         spec.id = p["id"].String();
@@ -219,6 +219,10 @@ SceneLayer ParseLayer(const Node& n) {
         if (p.Has("photo") == p.Has("points")) p.Fail("give exactly one of \"photo\" and \"points\"");
         if (p.Has("photo")) spec.photo = p["photo"].Path(true), photos = true;
         else spec.points = p["points"].Path(true);
+        if (p.Has("native_resolution")) {
+          if (!p.Has("photo")) p["native_resolution"].Fail("only for panels given by a photo");
+          spec.native_resolution = p["native_resolution"].Bool();
+        }
         l.panels.push_back(spec);
       }
       if (photos) l.model = require("model").Path(true);

@@ -30,7 +30,10 @@
 //     points:         "file": "scan.las", "columns": "xyzrgb" (XYZ/PTS only)
 //     foundation:     "dxf": "foundation.dxf", "sections": ["A", ...], "samples_per_side": 1000,
 //                     "angular_steps": 90, "density": 50 | "count": K, "mode": "auto"|"blend"|"sweep"
-//     relief:         "panels": [{"id": "P01", "photo": "p01.png" | "points": "p01.ply"}],
+//     relief:         "panels": [{"id": "P01", "photo": "p01.png" | "points": "p01.ply",
+//                                 "native_resolution": false}],  (true: the network runs at the
+//                                 photo's own pixels per metre instead of resampling it to the
+//                                 model's: coarser, faster; for panels seen only from afar)
 //                     "model": "relief_model.pt" (with photos), "width_m": 2.7,
 //                     "placement": "correspondences.csv" (panel ids as in "panels")
 //     photogrammetry: "dense": "dense.ply" | "workspace": "ws/" (runs candi dense),
@@ -59,6 +62,7 @@ struct ReliefPanelSpec {
   std::string id;
   std::string photo;   // absolute; exactly one of photo and points
   std::string points;
+  bool native_resolution = false;  // predict at the photo's own pixels per metre (no resampling)
 };
 
 struct SceneLayer {

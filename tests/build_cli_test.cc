@@ -167,6 +167,10 @@ TEST(BuildCli, SceneErrorsNameTheJsonPathOfTheCulprit) {
       {"repeat level 0", [](json& s) { s["render"]["repeat_level"] = 0; }, "/render/repeat_level: out of range"},
       {"huge image", [](json& s) { s["render"]["width"] = 100000; }, "/render/width: out of range"},
       {"NaN-like origin", [](json& s) { s["origin"] = {1, "x", 3}; }, "/origin/1: expected a number"},
+      {"native resolution without a photo", [](json& s) {
+         s["layers"][0] = {{"name", "reliefs"}, {"kind", "relief"}, {"placement", "wall.ply"},
+                           {"panels", {{{"id", "P1"}, {"points", "wall.ply"}, {"native_resolution", true}}}}};
+       }, "/layers/0/panels/0/native_resolution: only for panels given by a photo"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.what);

@@ -85,7 +85,12 @@ TEST(DemoCli, QuickDemoHidesThePanelsBehindTheEncasementAndShowsThemSeeThrough) 
   EXPECT_EQ(reliefs["scanned"], false);
   ASSERT_EQ(reliefs["parameters"]["panels"].size(), 12u);
   EXPECT_EQ(reliefs["parameters"]["misfits"], 0);
-  for (const json& p : reliefs["parameters"]["panels"]) EXPECT_LT(p["rms_mm"].get<double>(), 5.0) << p.dump();
+  size_t at_photo_resolution = 0;
+  for (const json& p : reliefs["parameters"]["panels"]) {
+    EXPECT_LT(p["rms_mm"].get<double>(), 5.0) << p.dump();
+    at_photo_resolution += p["prediction"] == "photo resolution";
+  }
+  EXPECT_EQ(at_photo_resolution, 8u) << "the hidden panels go through the network at their photos' resolution";
 
   const auto png = [&](const char* name) { return ReadPng(dir.File(std::string("demo/archive/renders/") + name + ".png")).image8; };
   const Image8 opaque = png("corner_opaque"), opaque_building = png("corner_opaque_building");
