@@ -8,7 +8,7 @@ CTEST_FLAGS ?= --output-on-failure
 # left to `make test-all`.
 CTEST_EXCLUDE ?= -LE slow
 
-.PHONY: all deps deps-fuzz configure build test test-all demo bench fuzz clean format
+.PHONY: all deps deps-fuzz configure build test test-all test-asan test-tsan demo bench fuzz clean format
 
 all: build
 
@@ -33,6 +33,16 @@ test: build
 test-all: build
 	@cd $(BUILD_DIR) && CANDI_SLOW_TESTS=1 ctest $(CTEST_FLAGS) -j $(JOBS)
 
+# The whole suite built with AddressSanitizer + UndefinedBehaviorSanitizer (build-asan/, GCC,
+# -O1 -g): every report fails its test. Slow: not part of `make test`.
+test-asan: deps
+	@bash scripts/sanitize.sh asan
+
+# ThreadSanitizer on the multi-threaded parts: the renderer (SPBR, streaming, archive) and the
+# dense stereo (PatchMatch, fusion), run with 2 threads (build-tsan/).
+test-tsan: deps
+	@bash scripts/sanitize.sh tsan
+
 demo: build
 	@$(BUILD_DIR)/apps/candi demo -o demo_out
 
@@ -49,4 +59,4 @@ format:
 	@git ls-files '*.h' '*.cc' | xargs clang-format -i
 
 clean:
-	@rm -rf $(BUILD_DIR) build-fuzz demo_out
+	@rm -rf $(BUILD_DIR) build-fuzz build-asan build-tsan demo_out

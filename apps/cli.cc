@@ -335,6 +335,8 @@ void AddBuild(CLI::App& app, BuildArgs& a, std::function<int()>* run) {
   c->add_option("scene", a.scene, "Scene JSON (format: apps/scene.h, README)")->required();
   c->add_option("-o,--output", a.output, "Archive folder")->required();
   c->add_option("--threads", a.threads, "Threads (0: all)")->check(CLI::Range(0, 256));
+  c->add_flag("--resume", a.resume, "Reuse what an earlier build into the same folder finished (its "
+              "digitized layers, archive and renders) where their inputs are unchanged");
   c->callback([run, &a] { *run = [&a] { return RunBuild(a); }; });
   c->footer("Example: candi build examples/borobudur/scene.json -o borobudur_archive");
 }

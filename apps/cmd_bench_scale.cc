@@ -3,6 +3,7 @@
 // processes of this executable (`candi pack`, `candi render`, `mpirun -np K candi render`), so
 // each one's wall time and peak resident memory (wait4) are its own. The MPI image is compared
 // with the one-process image pixel for pixel.
+#include <signal.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -20,6 +21,7 @@
 #include "apps/arg_parse.h"
 #include "apps/commands.h"
 #include "core/check.h"
+#include "core/interrupt.h"
 #include "core/png_io.h"
 #include "core/point_io.h"
 #include "core/progress.h"
@@ -48,6 +50,9 @@ ChildRun Run(const std::vector<std::string>& argv) {
   const pid_t pid = fork();
   CANDI_CHECK(pid >= 0) << "fork";
   if (pid == 0) {
+    sigset_t mask;  // candi's interrupt handler blocks these signals; the child handles its own
+    ChildSignalMask(&mask);
+    sigprocmask(SIG_SETMASK, &mask, nullptr);
     dup2(pipe_fd[1], 1);
     close(pipe_fd[0]);
     close(pipe_fd[1]);
@@ -59,6 +64,7 @@ ChildRun Run(const std::vector<std::string>& argv) {
     _exit(127);
   }
   close(pipe_fd[1]);
+  const int registered = RegisterChild(pid);  // stopped if candi is interrupted
   ChildRun r;
   char buffer[4096];
   ssize_t n;
@@ -67,6 +73,7 @@ ChildRun Run(const std::vector<std::string>& argv) {
   int status = 0;
   struct rusage usage {};
   wait4(pid, &status, 0, &usage);
+  UnregisterChild(registered);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.peak_mb = usage.ru_maxrss / 1024.0;

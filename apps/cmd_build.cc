@@ -10,6 +10,14 @@
 //   meshlab/               float local-coordinate PLYs, scene.mlp and shift.txt
 //   archive.json           provenance: sources and hashes, method, parameters, seed, version, counts
 // Intermediate files go to work/. Every file is written atomically.
+//
+// Resuming (--resume): every finished stage that is worth keeping (a digitized foundation, relief
+// or photogrammetry layer; the render archive; each render) leaves a checkpoint in
+// work/checkpoints/<stage>.json holding a key: the SHA-256 of what the stage depends on (candi's
+// version, the scene's JSON for it, the seed, the bytes of every input file, the keys of the
+// stages it uses). A resumed build redoes only stages whose key differs or whose outputs are
+// missing; archive.json marks what was reused ("resumed": true). An interrupted build (SIGINT,
+// core/interrupt.h) leaves finished stages complete and nothing half-written.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -17,6 +25,7 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -32,6 +41,7 @@
 #include "core/progress.h"
 #include "core/text_format.h"
 #include "reconstruction/photogrammetry/colmap_runner.h"
+#include "render/archive.h"
 #include "reconstruction/relief/relief_place.h"
 
 namespace candi::app {
@@ -206,6 +216,78 @@ LayerResult Digitize(const Scene& scene, const SceneLayer& l, const std::string&
   throw InternalError("unknown layer kind");
 }
 
+// Checkpoints of finished stages (see the top of the file).
+class Checkpoints {
+ public:
+  Checkpoints(const fs::path& dir, bool resume) : dir_(dir), resume_(resume) { fs::create_directories(dir); }
+
+  // The stage's checkpoint when resuming and its key matches (and every file in `outputs`
+  // exists), else nothing.
+  // Otherwise the checkpoint is removed: the stage is about to be redone, and its outputs may be
+  // replaced before its new checkpoint is written.
+  std::optional<json> Find(const std::string& stage, const std::string& key,
+                           const std::vector<fs::path>& outputs) const {
+    const fs::path file = dir_ / (stage + ".json");
+    std::error_code ec;
+    if (resume_ && fs::exists(file, ec)) {
+      const json j = json::parse(ReadFileToString(file.string()), nullptr, /*allow_exceptions=*/false);
+      bool complete = j.is_object() && j.value("key", "") == key;
+      for (const fs::path& o : outputs) complete = complete && fs::exists(o, ec);
+      if (complete) return j;
+    }
+    fs::remove(file, ec);
+    return std::nullopt;
+  }
+
+  // Records a finished stage (after its outputs are committed).
+  void Save(const std::string& stage, const std::string& key, json data) const {
+    data["key"] = key;
+    WriteFileAtomic((dir_ / (stage + ".json")).string(), data.dump(1) + "\n");
+  }
+
+ private:
+  fs::path dir_;
+  bool resume_;
+};
+
+// SHA-256 of files, each read once per build.
+class FileHashes {
+ public:
+  const std::string& operator()(const std::string& path) {
+    auto it = hashes_.find(path);
+    if (it == hashes_.end()) it = hashes_.emplace(path, Sha256OfFile(path)).first;
+    return it->second;
+  }
+
+ private:
+  std::map<std::string, std::string> hashes_;
+};
+
+std::string Key(const std::vector<std::string>& parts) {
+  std::string text = CANDI_VERSION;
+  for (const std::string& p : parts) text += "\n" + p;
+  return Sha256Hex(text);
+}
+
+// A digitized layer kept for a resumed build: its points (double precision, the source's frame)
+// and what archive.json says of it.
+void SaveLayer(const Checkpoints& checkpoints, const std::string& stage, const std::string& key,
+               const fs::path& points, const LayerResult& r) {
+  PointWriteOptions o;
+  o.precision = PositionPrecision::kFloat64;
+  WritePointCloud(points.string(), r.cloud, o);
+  checkpoints.Save(stage, key, {{"method", r.method}, {"parameters", r.parameters}, {"seconds", r.seconds}});
+}
+
+LayerResult LoadLayer(const json& checkpoint, const fs::path& points) {
+  LayerResult r;
+  r.cloud = ReadAny(points.string());
+  r.method = checkpoint.at("method").get<std::string>();
+  r.parameters = checkpoint.at("parameters");
+  r.seconds = checkpoint.at("seconds").get<double>();
+  return r;
+}
+
 // world_from_layer, the colour override, the scene's frame; NaN positions are dropped (counted).
 size_t Place(const SceneLayer& l, uint16_t id, const LocalFrame& scene_frame, PointCloud* cloud) {
   PointCloud& c = *cloud;
@@ -300,14 +382,38 @@ int RunBuild(const BuildArgs& args) {
   const std::string work = (out / "work").string();
   for (const char* sub : {"work", "layers", "renders"}) fs::create_directories(out / sub);
 
-  // 1. Digitize every layer, in world coordinates.
+  const Checkpoints checkpoints(out / "work" / "checkpoints", args.resume);
+  FileHashes hashes;
+  const json scene_json = json::parse(scene.text);  // valid: LoadScene parsed it
+  const std::string seed = std::to_string(scene.seed);
+
+  // 1. Digitize every layer, in world coordinates. A layer's key: its JSON, the seed, its inputs.
   std::vector<LayerResult> results;
+  std::vector<std::string> layer_keys;
+  std::vector<bool> layer_resumed;
   Box3d world_box;
-  for (const SceneLayer& l : scene.layers) {
-    LogInfo("layer " + l.name + " (" + LayerKindName(l.kind) + ")");
-    const auto t = std::chrono::steady_clock::now();
-    LayerResult r = Digitize(scene, l, work);
-    r.seconds = Seconds(t);
+  for (size_t k = 0; k < scene.layers.size(); ++k) {
+    const SceneLayer& l = scene.layers[k];
+    std::vector<std::string> parts = {"layer", scene_json["layers"][k].dump(), seed};
+    for (const std::string& s : l.Sources()) parts.push_back(hashes(s));
+    layer_keys.push_back(Key(parts));
+    // Point files are read, not digitized: nothing to keep.
+    const bool keep = l.kind != LayerKind::kPoints;
+    const std::string stage = "layer_" + l.name;
+    const fs::path kept = out / "work" / (l.name + "_digitized.ply");
+    LayerResult r;
+    const std::optional<json> checkpoint = keep ? checkpoints.Find(stage, layer_keys.back(), {kept}) : std::nullopt;
+    layer_resumed.push_back(checkpoint.has_value());
+    if (checkpoint) {
+      LogInfo("layer " + l.name + " (" + LayerKindName(l.kind) + "): resumed from " + kept.string());
+      r = LoadLayer(*checkpoint, kept);
+    } else {
+      LogInfo("layer " + l.name + " (" + LayerKindName(l.kind) + ")");
+      const auto t = std::chrono::steady_clock::now();
+      r = Digitize(scene, l, work);
+      r.seconds = Seconds(t);
+      if (keep) SaveLayer(checkpoints, stage, layer_keys.back(), kept, r);
+    }
     for (size_t i = 0; i < r.cloud.size(); ++i) {
       const Eigen::Vector3d w = l.world_from_layer * r.cloud.frame.ToWorld(r.cloud.positions[i]);
       if (w.allFinite()) world_box.Extend(w);
@@ -330,19 +436,34 @@ int RunBuild(const BuildArgs& args) {
     clouds.push_back(std::move(results[k].cloud));
   }
 
-  // 3. The render archive of every layer.
-  const auto t_pack = std::chrono::steady_clock::now();
+  // 3. The render archive of every layer (key: the layers' keys and the scene's origin).
+  std::vector<std::string> pack_parts = {"pack", scene_json.value("origin", json()).dump()};
+  pack_parts.insert(pack_parts.end(), layer_keys.begin(), layer_keys.end());
+  const std::string pack_key = Key(pack_parts);
   PackArgs pack;
   pack.inputs = layer_files;
   pack.output = (out / "archive").string();
-  if (RunPack(pack) != kOk) throw InputError(pack.output, "", "packing failed");
-  const double pack_seconds = Seconds(t_pack);
+  double pack_seconds = 0;
+  const std::optional<json> pack_checkpoint = checkpoints.Find("pack", pack_key, {out / "archive" / render::kArchiveManifest});
+  if (pack_checkpoint) {
+    LogInfo("render archive: resumed from " + pack.output);
+    pack_seconds = pack_checkpoint->at("seconds").get<double>();
+  } else {
+    const auto t_pack = std::chrono::steady_clock::now();
+    if (RunPack(pack) != kOk) throw InputError(pack.output, "", "packing failed");
+    pack_seconds = Seconds(t_pack);
+    checkpoints.Save("pack", pack_key, {{"seconds", pack_seconds}});
+  }
 
-  // 4. Renders.
+  // 4. Renders (key: the view's and the render settings' JSON, the seed, the keys of its layers).
   json views = json::array();
-  for (const SceneView& v : scene.views) {
+  for (size_t vi = 0; vi < scene.views.size(); ++vi) {
+    const SceneView& v = scene.views[vi];
     const auto t = std::chrono::steady_clock::now();
     RenderArgs r;
+    std::vector<std::string> parts = {"view", scene_json["views"][vi].dump(),
+                                      scene_json.value("render", json()).dump(), seed, pack_key};
+    if (!v.camera_file.empty()) parts.push_back(hashes(v.camera_file));
     for (size_t k = 0; k < scene.layers.size(); ++k) {
       const SceneLayer& l = scene.layers[k];
       if (!v.layers.empty() && std::find(v.layers.begin(), v.layers.end(), l.name) == v.layers.end()) continue;
@@ -368,11 +489,23 @@ int RunBuild(const BuildArgs& args) {
       r.view = view_file;
     }
     if (r.view.empty()) r.save_view = view_file;
-    if (RunRender(r) != kOk) throw InputError(r.output, "", "render failed");
+    const std::string key = Key(parts), stage = "view_" + v.name;
+    std::vector<fs::path> outputs = {r.output};
+    if (v.camera_file.empty()) outputs.push_back(view_file);
+    const std::optional<json> checkpoint = checkpoints.Find(stage, key, outputs);
+    double seconds = 0;
+    if (checkpoint) {
+      LogInfo("view " + v.name + ": resumed from " + r.output);
+      seconds = checkpoint->at("seconds").get<double>();
+    } else {
+      if (RunRender(r) != kOk) throw InputError(r.output, "", "render failed");
+      seconds = Seconds(t);
+      checkpoints.Save(stage, key, {{"seconds", seconds}});
+    }
     json alphas = json::object();
     for (size_t k = 0; k < r.alpha.size(); ++k) alphas[fs::path(r.inputs[k]).stem().string()] = r.alpha[k];
     views.push_back({{"name", v.name}, {"png", "renders/" + v.name + ".png"}, {"opaque", v.opaque},
-                     {"opacity", alphas}, {"seconds", Seconds(t)}});
+                     {"opacity", alphas}, {"seconds", seconds}, {"resumed", checkpoint.has_value()}});
   }
 
   // 5. MeshLab project, provenance.
@@ -382,7 +515,7 @@ int RunBuild(const BuildArgs& args) {
   for (size_t k = 0; k < scene.layers.size(); ++k) {
     const SceneLayer& l = scene.layers[k];
     json sources = json::array();
-    for (const std::string& s : l.Sources()) sources.push_back({{"path", s}, {"sha256", Sha256OfFile(s)}, {"bytes", fs::file_size(s)}});
+    for (const std::string& s : l.Sources()) sources.push_back({{"path", s}, {"sha256", hashes(s)}, {"bytes", fs::file_size(s)}});
     const Eigen::Matrix4d m = l.world_from_layer.ToMatrix();
     json matrix = json::array();
     for (int r = 0; r < 4; ++r) matrix.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
@@ -392,13 +525,15 @@ int RunBuild(const BuildArgs& args) {
                       {"method", results[k].method}, {"parameters", results[k].parameters},
                       {"sources", sources}, {"world_from_layer", matrix}, {"opacity", l.opacity},
                       {"highlight", l.highlight}, {"points", clouds[k].size()}, {"dropped_nan", dropped[k]},
-                      {"file", "layers/" + l.name + ".ply"}, {"seconds", results[k].seconds}});
+                      {"file", "layers/" + l.name + ".ply"}, {"seconds", results[k].seconds},
+                      {"resumed", static_cast<bool>(layer_resumed[k])}});
   }
   const json provenance = {
       {"candi_version", CANDI_VERSION}, {"scene", {{"path", scene.path}, {"sha256", Sha256Hex(scene.text)}}},
       {"name", scene.name}, {"seed", scene.seed},
       {"frame", {{"origin", {frame.origin.x(), frame.origin.y(), frame.origin.z()}}}},
       {"points", total}, {"layers", layers}, {"archive", "archive"}, {"pack_seconds", pack_seconds},
+      {"pack_resumed", pack_checkpoint.has_value()},
       {"views", views}, {"meshlab", "meshlab/scene.mlp"}, {"seconds", Seconds(start)}};
   WriteFileAtomic((out / "archive.json").string(), provenance.dump(2) + "\n");
 

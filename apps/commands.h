@@ -294,6 +294,7 @@ struct BuildArgs {
   std::string scene;                 // scene JSON (apps/scene.h)
   std::string output;                // archive folder (created; its parent must exist)
   int threads = 0;
+  bool resume = false;               // reuse the stages an earlier (interrupted) build finished
 };
 int RunBuild(const BuildArgs& args);
 

@@ -11,6 +11,7 @@
 
 #include "apps/commands.h"
 #include "core/check.h"
+#include "core/interrupt.h"
 
 namespace candi::app {
 int RunCli(int argc, char** argv);
@@ -80,6 +81,8 @@ int main(int argc, char** argv) {
   using namespace candi::app;
   const Group group = CommandGroup(argc, argv);
   if (!HasGroup(group)) return Exec(group == kPcl ? "candi-pcl" : "candi-relief", argv);
+  // Before any thread starts: an interrupt removes unfinished outputs and stops child processes.
+  candi::InstallInterruptHandler("candi");
   try {
     return RunCli(argc, argv);
   } catch (const candi::InputError& e) {

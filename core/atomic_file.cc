@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/check.h"
+#include "core/interrupt.h"
 
 namespace candi {
 
@@ -30,6 +31,7 @@ AtomicFile::AtomicFile(const std::string& path) : path_(path) {
     throw InputError(path, "", std::string("cannot create output: ") + std::strerror(err));
   }
   temp_path_ = pattern.data();
+  interrupt_id_ = RegisterTempPath(temp_path_);
   // mkstemp creates 0600; give the file the usual permissions (respecting umask).
   const mode_t mask = umask(0);
   umask(mask);
@@ -54,6 +56,8 @@ void AtomicFile::Discard() {
     file_ = nullptr;
   }
   if (!temp_path_.empty()) unlink(temp_path_.c_str());
+  UnregisterTempPath(interrupt_id_);
+  interrupt_id_ = -1;
 }
 
 void AtomicFile::Fail(const std::string& what, int err) {
@@ -95,17 +99,19 @@ void AtomicFile::Commit() {
   if (std::fclose(f) != 0) {
     const int err = errno;
     unlink(temp_path_.c_str());
+    UnregisterTempPath(interrupt_id_);
     committed_ = true;
     throw InputError(path_, "", std::string("close failed: ") + std::strerror(err) +
                                     " (the destination is unchanged)");
   }
-  if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
-    const int err = errno;
-    unlink(temp_path_.c_str());
-    committed_ = true;
-    throw InputError(path_, "", std::string("cannot rename into place: ") + std::strerror(err));
-  }
   committed_ = true;
+  CommitTempPath(interrupt_id_, [this] {
+    if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+      const int err = errno;
+      unlink(temp_path_.c_str());
+      throw InputError(path_, "", std::string("cannot rename into place: ") + std::strerror(err));
+    }
+  });
 }
 
 void WriteFileAtomic(const std::string& path, const std::string& contents) {

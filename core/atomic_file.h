@@ -4,6 +4,7 @@
 // flushes, checks every write, closes and renames it over the destination. If anything fails, or
 // the object is destroyed without Commit(), the temporary is removed and the destination is left
 // as it was. Errors throw InputError naming the path and the OS reason (disk full, permission).
+// An interrupt (core/interrupt.h) removes the temporary too.
 // Not thread-safe.
 #pragma once
 
@@ -42,6 +43,7 @@ class AtomicFile {
   FILE* file_ = nullptr;
   uint64_t written_ = 0;
   bool committed_ = false;
+  int interrupt_id_ = -1;  // core/interrupt.h: removed if the process is interrupted
 };
 
 // Writes `contents` to `path` atomically.

@@ -14,6 +14,7 @@
 #include <filesystem>
 
 #include "core/atomic_file.h"
+#include "core/interrupt.h"
 #include "core/binary_file.h"
 #include "core/check.h"
 #include "render/splat_cloud.h"
@@ -550,11 +551,13 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   }
   struct Cleanup {
     std::string dir;
+    int interrupt_id;  // core/interrupt.h: the folder is removed if the process is interrupted
     ~Cleanup() {
       std::error_code ignored;
       if (!dir.empty()) fs::remove_all(dir, ignored);
+      UnregisterTempPath(interrupt_id);
     }
-  } cleanup{temp};
+  } cleanup{temp, RegisterTempPath(temp)};
 
   auto run = [&] {
     Packer packer(options, temp, grid, total, progress);
@@ -588,8 +591,10 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
     manifest.sources.push_back(src);
   }
   WriteFileAtomic(temp + "/" + kArchiveManifest, manifest.ToJson());
-  Publish(temp, out_path.string());
-  cleanup.dir.clear();
+  CommitTempPath(cleanup.interrupt_id, [&] {
+    Publish(temp, out_path.string());
+    cleanup.dir.clear();
+  });
 
   summary.points = manifest.points;
   summary.chunks = manifest.chunks.size();

@@ -3,7 +3,8 @@
 # build-fuzz/ and runs each for FUZZ_SECONDS (default 60) on its corpus.
 # Usage: scripts/fuzz.sh [target...]   (default: every target; names as in fuzz/CMakeLists.txt)
 # Environment: FUZZ_SECONDS, FUZZ_BUILD_DIR (build-fuzz), FUZZ_MAX_LEN (65536: longer seeds are
-# truncated by libFuzzer), FUZZ_JOBS (ninja jobs, 2).
+# truncated by libFuzzer), FUZZ_JOBS (ninja jobs, 2), FUZZ_RUNS (stop a target after this many runs,
+# even before FUZZ_SECONDS; default: no limit).
 # Corpora: build-fuzz/corpus/<target> (grows, kept between runs) seeded from fuzz/corpus/<target>
 # (committed seeds), fuzz/regressions/<target> (past findings) and ../shared/data when present
 # (staged into build-fuzz/seeds/<target>). Findings (crash-*, leak-*, timeout-*, oom-*) land in
@@ -15,6 +16,7 @@ build=${FUZZ_BUILD_DIR:-build-fuzz}
 seconds=${FUZZ_SECONDS:-60}
 max_len=${FUZZ_MAX_LEN:-65536}
 jobs=${FUZZ_JOBS:-2}
+runs=${FUZZ_RUNS:--1}
 all_targets=(ply las xyz dxf colmap_bin colmap_text colmap_array scene archive)
 targets=("$@")
 [[ ${#targets[@]} -gt 0 ]] || targets=("${all_targets[@]}")
@@ -56,7 +58,7 @@ for t in "${targets[@]}"; do
   done
   echo "fuzz: $t for ${seconds} s" >&2
   # UBSan reports are findings: stop at the first (with a stack) so libFuzzer keeps the input.
-  if ! UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 "$build/fuzz/fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 \
+  if ! UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 "$build/fuzz/fuzz_$t" -max_total_time="$seconds" -runs="$runs" -rss_limit_mb=2048 -timeout=10 \
       -max_len="$max_len" -print_final_stats=1 -artifact_prefix="$findings/" \
       "$corpus" "${seeds[@]}" 2>"$build/fuzz_$t.log"; then
     failed+=("$t")

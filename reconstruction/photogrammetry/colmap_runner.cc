@@ -2,6 +2,7 @@
 #include "reconstruction/photogrammetry/colmap_runner.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -20,6 +21,7 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
+#include "core/interrupt.h"
 #include "core/log.h"
 #include "reconstruction/photogrammetry/colmap_model.h"
 
@@ -232,13 +234,26 @@ int RunLogged(const std::vector<std::string>& argv, const std::string& log_path,
   posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
   posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  // The child starts with no signal blocked (candi's interrupt handler blocks them in its own
+  // threads, core/interrupt.h) and is stopped with candi when it is interrupted.
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  sigset_t mask;
+  ChildSignalMask(&mask);
+  posix_spawnattr_setsigmask(&attributes, &mask);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK);
   pid_t pid = 0;
-  const int err = posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ);
+  const int err = posix_spawnp(&pid, args[0], &actions, &attributes, args.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
   if (err != 0) {
     throw InputError(argv[0], "", std::string("cannot run: ") + std::strerror(err) +
                                       " (log: " + log_path + ")");
   }
+  struct Registered {
+    int id;
+    ~Registered() { UnregisterChild(id); }
+  } registered{RegisterChild(pid)};
   const auto start = std::chrono::steady_clock::now();
   double next_beat = kHeartbeatSeconds;
   int status = 0;

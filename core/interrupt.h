@@ -1,0 +1,41 @@
+// Interrupts (SIGINT, SIGTERM, SIGHUP) of a long command: nothing half-written stays behind.
+//
+// InstallInterruptHandler() blocks these signals in the calling thread (and so in every thread
+// created after it) and waits for them on a thread of its own. When one arrives, that thread
+// takes the registry lock (so a commit in progress completes first), sends SIGTERM to the
+// registered child processes (COLMAP, candi-relief), removes every registered temporary file or
+// folder (an AtomicFile's, a pack's build folder), says so on stderr, and ends the process by the
+// same signal (exit status 128 + signal in a shell). Files already committed (renamed into place)
+// are complete and kept, so a command that can resume (`candi build --resume`) continues from
+// them. Without the handler (library use, tests), registration costs a lock and does nothing else.
+#pragma once
+
+#include <sys/types.h>
+
+#include <functional>
+#include <string>
+
+namespace candi {
+
+// Installs the handler (idempotent); call first thing in main(), before threads start. `program`
+// names the process in the message. Child processes must be started with the signals unblocked
+// (ChildSignalMask).
+void InstallInterruptHandler(const char* program);
+
+// The signal mask a child process should start with (empty: the handler's block is not inherited).
+void ChildSignalMask(sigset_t* mask);
+
+// A temporary file or folder to remove on interrupt; returns an id for UnregisterTempPath.
+int RegisterTempPath(const std::string& path);
+void UnregisterTempPath(int id);
+
+// A child process to stop on interrupt; returns an id for UnregisterChild.
+int RegisterChild(pid_t pid);
+void UnregisterChild(int id);
+
+// Runs `step` (the rename of temporary `id` into place) with the interrupt held off, then
+// unregisters `id` (also when `step` throws): the handler sees either the temporary or the
+// finished file, never half of the step.
+void CommitTempPath(int id, const std::function<void()>& step);
+
+}  // namespace candi

@@ -1,0 +1,61 @@
+// A preloaded library (LD_PRELOAD) that makes reads of one file fail mid-way, as a failing disk
+// or a dropped network share does: tests/fault_test.cc runs candi with it.
+//
+// CANDI_FAULT_READ=<path suffix>:<offset>  every read()/pread() of a file whose path ends with
+// the suffix that reaches byte <offset> or beyond fails with EIO (bytes before it read normally).
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+static int Faulty(int fd, off_t end) {
+  const char* spec = getenv("CANDI_FAULT_READ");
+  if (spec == NULL) return 0;
+  const char* colon = strrchr(spec, ':');
+  if (colon == NULL) return 0;
+  const size_t suffix_length = (size_t)(colon - spec);
+  const long long offset = atoll(colon + 1);
+  if (end <= offset) return 0;
+  char link[64], path[4096];
+  snprintf(link, sizeof(link), "/proc/self/fd/%d", fd);
+  const ssize_t n = readlink(link, path, sizeof(path) - 1);
+  if (n < 0 || (size_t)n < suffix_length) return 0;
+  return memcmp(path + n - suffix_length, spec, suffix_length) == 0;
+}
+
+typedef ssize_t (*PreadFn)(int, void*, size_t, off_t);
+typedef ssize_t (*ReadFn)(int, void*, size_t);
+
+static ssize_t FaultyPread(PreadFn* real, const char* name, int fd, void* buf, size_t count, off_t offset) {
+  if (*real == NULL) *real = (PreadFn)dlsym(RTLD_NEXT, name);
+  if (Faulty(fd, offset + (off_t)count)) {
+    errno = EIO;
+    return -1;
+  }
+  return (*real)(fd, buf, count, offset);
+}
+
+ssize_t pread(int fd, void* buf, size_t count, off_t offset) {
+  static PreadFn real = NULL;
+  return FaultyPread(&real, "pread", fd, buf, count, offset);
+}
+
+ssize_t pread64(int fd, void* buf, size_t count, off_t offset) {
+  static PreadFn real = NULL;
+  return FaultyPread(&real, "pread64", fd, buf, count, offset);
+}
+
+ssize_t read(int fd, void* buf, size_t count) {
+  static ReadFn real = NULL;
+  if (real == NULL) real = (ReadFn)dlsym(RTLD_NEXT, "read");
+  const off_t at = lseek(fd, 0, SEEK_CUR);
+  if (at >= 0 && Faulty(fd, at + (off_t)count)) {
+    errno = EIO;
+    return -1;
+  }
+  return real(fd, buf, count);
+}

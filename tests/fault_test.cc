@@ -1,0 +1,333 @@
+// Issue 9's fault injection: the failures a long job meets in the field, each on the real
+// executable. Every one must leave the outputs that existed before it intact (old or complete
+// new, never half-written, no temporary left behind), say what happened, and exit non-zero:
+//   - a read error mid-file (a preloaded library, tests/fault/fault_inject.c, fails read()/pread()
+//     of one file past a byte offset with EIO);
+//   - a full disk (a 1 MiB tmpfs, when the tests may mount one: root) and a file-size limit
+//     (RLIMIT_FSIZE, any user; writes fail with EFBIG the way they do with ENOSPC);
+//   - COLMAP killed (SIGKILL) in the middle of a stage of `candi sfm`;
+//   - SIGINT during `candi build`, then `candi build --resume` finishing the same archive.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/mount.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/png_io.h"
+#include "core/point_io.h"
+#include "tests/util/test_util.h"
+
+namespace candi {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::ReadBytes;
+using testing::TempDir;
+using testing::WriteBytes;
+
+// candi started in the background, its stdout and stderr going to files.
+class Process {
+ public:
+  // `setup` runs in the child between fork and exec (only async-signal-safe calls).
+  Process(const std::vector<std::string>& args, const std::string& log_dir,
+          const std::vector<std::string>& extra_env = {}, void (*setup)() = nullptr)
+      : out_(log_dir + "/stdout.txt"), err_(log_dir + "/stderr.txt") {
+    std::vector<std::string> argv = {CANDI_EXECUTABLE};
+    argv.insert(argv.end(), args.begin(), args.end());
+    std::vector<char*> cargv;
+    for (std::string& a : argv) cargv.push_back(a.data());
+    cargv.push_back(nullptr);
+    std::vector<std::string> env(extra_env);
+    for (char** e = environ; *e != nullptr; ++e) env.push_back(*e);
+    std::vector<char*> cenv;
+    for (std::string& e : env) cenv.push_back(e.data());
+    cenv.push_back(nullptr);
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int out = open(out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      const int err = open(err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(out, 1);
+      dup2(err, 2);
+      if (setup != nullptr) setup();
+      execve(cargv[0], cargv.data(), cenv.data());
+      _exit(127);
+    }
+  }
+  ~Process() {
+    if (pid_ > 0 && !waited_) {
+      kill(pid_, SIGKILL);
+      Wait();
+    }
+  }
+  pid_t pid() const { return pid_; }
+  bool Running() const {
+    if (pid_ <= 0 || waited_) return false;
+    siginfo_t info{};
+    return waitid(P_PID, pid_, &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid == 0;
+  }
+  int Wait() {  // the raw wait status
+    waitpid(pid_, &status_, 0);
+    waited_ = true;
+    return status_;
+  }
+  std::string Stdout() const { return ReadBytes(out_); }
+  std::string Stderr() const { return ReadBytes(err_); }
+
+ private:
+  std::string out_, err_;
+  pid_t pid_ = -1;
+  int status_ = 0;
+  bool waited_ = false;
+};
+
+// Runs candi to completion: {exit code (or 128 + signal), stderr}.
+std::pair<int, std::string> RunToEnd(const std::vector<std::string>& args, const std::string& log_dir,
+                                const std::vector<std::string>& env = {}, void (*setup)() = nullptr) {
+  Process p(args, log_dir, env, setup);
+  const int status = p.Wait();
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return {code, p.Stderr()};
+}
+
+// Every file under `dir` whose name holds candi's temporary marker.
+std::vector<std::string> Temporaries(const std::string& dir) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.path().filename().string().find(".candi-tmp-") != std::string::npos) found.push_back(e.path().string());
+  return found;
+}
+
+bool Contains(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
+
+// A binary PLY of n coloured points (~ 15 bytes each).
+void WriteCloud(const std::string& path, int n, uint32_t seed) {
+  PointCloud c;
+  c.schema.colors = true;
+  c.SetSchema(c.schema);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 10.0f);
+  for (int i = 0; i < n; ++i) {
+    c.positions.emplace_back(u(rng), u(rng), 0.1 * u(rng));
+    c.colors.push_back({static_cast<uint8_t>(i), 120, static_cast<uint8_t>(200 - i % 100)});
+  }
+  WritePointCloud(path, c);
+}
+
+std::string LogDir(const TempDir& dir) {
+  fs::create_directories(dir.File("logs"));
+  return dir.File("logs");
+}
+
+TEST(Fault, AReadErrorMidFileIsReportedAndTheOutputKept) {
+  TempDir dir;
+  WriteCloud(dir.File("in.ply"), 200000, 1);
+  WriteBytes(dir.File("out.ply"), "an earlier output\n");
+  const std::vector<std::string> env = {
+      "LD_PRELOAD=" CANDI_FAULT_INJECT_LIB, "CANDI_FAULT_READ=/in.ply:1000000",
+      // Under AddressSanitizer (make test-asan) the preloaded library comes before its runtime.
+      std::string("ASAN_OPTIONS=verify_asan_link_order=0:") + (getenv("ASAN_OPTIONS") ? getenv("ASAN_OPTIONS") : "")};
+  const auto [code, err] = RunToEnd({"convert", dir.File("in.ply"), dir.File("out.ply")}, LogDir(dir), env);
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_TRUE(Contains(err, dir.File("in.ply"))) << err;
+  EXPECT_TRUE(Contains(err, "read error: Input/output error")) << err;
+  EXPECT_TRUE(Contains(err, "byte ")) << "the position is named: " << err;
+  EXPECT_EQ(ReadBytes(dir.File("out.ply")), "an earlier output\n");
+  EXPECT_TRUE(Temporaries(dir.path()).empty());
+  // The same command without the fault succeeds: the failure was the injected one.
+  const auto [ok, ok_err] = RunToEnd({"convert", dir.File("in.ply"), dir.File("out.ply")}, LogDir(dir));
+  EXPECT_EQ(ok, 0) << ok_err;
+  EXPECT_EQ(ReadPointCloud(dir.File("out.ply")).size(), 200000u);
+}
+
+TEST(Fault, AFullDiskIsReportedAndTheOutputKept) {
+  TempDir dir;
+  WriteCloud(dir.File("in.ply"), 200000, 2);  // ~3 MB: more than the disk holds
+  const std::string disk = dir.File("disk");
+  fs::create_directories(disk);
+  if (mount("candi-test", disk.c_str(), "tmpfs", 0, "size=1m") != 0) {
+    GTEST_SKIP() << "cannot mount a small tmpfs here (" << std::strerror(errno)
+                 << "; needs root): the file-size-limit test covers write failures";
+  }
+  struct Unmount {
+    std::string path;
+    ~Unmount() { umount2(path.c_str(), MNT_DETACH); }
+  } unmount{disk};
+  WriteBytes(disk + "/out.ply", "an earlier output\n");
+  const auto [code, err] = RunToEnd({"convert", dir.File("in.ply"), disk + "/out.ply"}, LogDir(dir));
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_TRUE(Contains(err, disk + "/out.ply")) << err;
+  EXPECT_TRUE(Contains(err, "No space left on device")) << err;
+  EXPECT_TRUE(Contains(err, "the destination is unchanged")) << err;
+  EXPECT_EQ(ReadBytes(disk + "/out.ply"), "an earlier output\n");
+  EXPECT_TRUE(Temporaries(disk).empty());
+}
+
+void LimitFileSize() {  // in the child: writes beyond 1 MiB fail with EFBIG instead of SIGXFSZ
+  signal(SIGXFSZ, SIG_IGN);
+  struct rlimit limit = {1 << 20, 1 << 20};
+  setrlimit(RLIMIT_FSIZE, &limit);
+}
+
+// A scene of a point layer and a foundation layer (the bundled drawing, few points), `views` views.
+json FaultScene(int views) {
+  json scene = json::parse(R"({
+    "candi_scene": 1, "seed": 3,
+    "render": {"repeat_level": 64, "width": 320, "height": 240},
+    "layers": [
+      {"name": "cloud", "kind": "points", "file": "cloud.ply", "opacity": 0.5},
+      {"name": "hill", "kind": "foundation", "dxf": "FOUNDATION", "sections": ["D"],
+       "samples_per_side": 40, "angular_steps": 12, "count": 20000, "opacity": 0.4,
+       "world_from_layer": {"scale": 0.0001, "translation": [5, 5, -3]}}]})");
+  scene["layers"][1]["dxf"] = fs::absolute("examples/borobudur/foundation.dxf").string();
+  scene["views"] = json::array();
+  for (int v = 0; v < views; ++v) scene["views"].push_back({{"name", "v" + std::to_string(v)}});
+  return scene;
+}
+
+TEST(Fault, AFileSizeLimitDuringBuildKeepsTheEarlierArchive) {
+  TempDir dir;
+  WriteCloud(dir.File("cloud.ply"), 20000, 3);
+  WriteBytes(dir.File("scene.json"), FaultScene(1).dump());
+  const auto [built, built_err] = RunToEnd({"build", dir.File("scene.json"), "-o", dir.File("out")}, LogDir(dir));
+  ASSERT_EQ(built, 0) << built_err;
+  const std::string manifest = ReadBytes(dir.File("out/archive.json"));
+  const std::string layer = ReadBytes(dir.File("out/layers/cloud.ply"));
+
+  WriteCloud(dir.File("cloud.ply"), 200000, 4);  // its layer file now outgrows the limit
+  const auto [code, err] = RunToEnd({"build", dir.File("scene.json"), "-o", dir.File("out")}, LogDir(dir), {}, LimitFileSize);
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_TRUE(Contains(err, "write failed: File too large")) << err;
+  EXPECT_TRUE(Contains(err, "the destination is unchanged")) << err;
+  EXPECT_EQ(ReadBytes(dir.File("out/archive.json")), manifest);
+  EXPECT_EQ(ReadBytes(dir.File("out/layers/cloud.ply")), layer);
+  EXPECT_NO_THROW(ReadPointCloud(dir.File("out/layers/hill.ply")));
+  EXPECT_TRUE(Temporaries(dir.path()).empty());
+}
+
+// The pid of a child of `parent` whose command line holds `word`, or 0.
+pid_t FindChild(pid_t parent, const std::string& word) {
+  for (const auto& e : fs::directory_iterator("/proc")) {
+    const std::string name = e.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(e.path() / "stat");
+    std::string line;
+    if (!std::getline(stat, line)) continue;
+    const size_t close = line.rfind(')');
+    if (close == std::string::npos) continue;
+    char state = 0;
+    int ppid = 0;
+    if (std::sscanf(line.c_str() + close + 1, " %c %d", &state, &ppid) != 2 || ppid != parent) continue;
+    std::string cmdline = ReadBytes((e.path() / "cmdline").string());
+    if (Contains(cmdline, word)) return static_cast<pid_t>(std::stol(name));
+  }
+  return 0;
+}
+
+bool HaveColmap() { return std::system("command -v colmap >/dev/null 2>&1") == 0; }
+
+TEST(Fault, ColmapKilledMidStageIsReported) {
+  if (!HaveColmap()) GTEST_SKIP() << "COLMAP is not installed (scripts/deps.sh installs it)";
+  TempDir dir;
+  fs::create_directories(dir.File("photos"));
+  std::mt19937 rng(5);
+  for (int k = 0; k < 3; ++k) {  // textured photos: features to extract, then to match
+    Image8 img(320, 240, 3);
+    for (int y = 0; y < 240; ++y)
+      for (int x = 0; x < 320; ++x)
+        for (int c = 0; c < 3; ++c) img.at(x, y, c) = static_cast<uint8_t>((((x + 7 * k) / 8 * 37 + y / 8 * 91 + c * 50) % 251) ^ (rng() & 31));
+    WritePng(dir.File("photos/p" + std::to_string(k) + ".png"), img);
+  }
+  Process p({"sfm", dir.File("photos"), "-o", dir.File("ws")}, LogDir(dir));
+  pid_t victim = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (victim == 0 && p.Running() && std::chrono::steady_clock::now() < deadline) {
+    victim = FindChild(p.pid(), "_matcher");
+    if (victim == 0) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ASSERT_NE(victim, 0) << "COLMAP's matcher never started: " << p.Stderr();
+  kill(victim, SIGKILL);
+  const int status = p.Wait();
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  const std::string err = p.Stderr();
+  EXPECT_TRUE(Contains(err, "_matcher was killed by signal 9")) << err;
+  EXPECT_TRUE(Contains(err, "logs/")) << "the log is named: " << err;
+  // The stage before it finished and is kept: the features in the database, its log.
+  EXPECT_GT(fs::file_size(dir.File("ws/database.db")), 10000u);
+  EXPECT_TRUE(Contains(ReadBytes(dir.File("ws/logs/feature_extractor.log")), "Elapsed time"));
+  EXPECT_TRUE(Temporaries(dir.path()).empty());
+}
+
+TEST(Fault, AnInterruptedBuildLeavesFinishedFilesAndResumes) {
+  TempDir dir;
+  WriteCloud(dir.File("cloud.ply"), 100000, 6);
+  WriteBytes(dir.File("scene.json"), FaultScene(4).dump());
+  // The reference: one uninterrupted build.
+  const auto [ref, ref_err] = RunToEnd({"build", dir.File("scene.json"), "-o", dir.File("ref")}, LogDir(dir));
+  ASSERT_EQ(ref, 0) << ref_err;
+
+  // Interrupted once the first view is rendered (three are left, ~0.25 s each).
+  Process p({"build", dir.File("scene.json"), "-o", dir.File("out")}, LogDir(dir));
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(300);
+  while (!fs::exists(dir.File("out/work/checkpoints/view_v0.json")) && p.Running() &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  kill(p.pid(), SIGINT);
+  const int status = p.Wait();
+  const std::string err = p.Stderr();
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the build ended before the interrupt: " << err;
+  EXPECT_EQ(WTERMSIG(status), SIGINT);
+  EXPECT_TRUE(Contains(err, "interrupted by SIGINT")) << err;
+  EXPECT_TRUE(Temporaries(dir.path()).empty());
+  EXPECT_FALSE(fs::exists(dir.File("out/archive.json"))) << "the build did not finish";
+  // What it finished is complete.
+  EXPECT_EQ(ReadBytes(dir.File("out/layers/hill.ply")), ReadBytes(dir.File("ref/layers/hill.ply")));
+  EXPECT_TRUE(ReadPng(dir.File("out/renders/v0.png")).image8 == ReadPng(dir.File("ref/renders/v0.png")).image8);
+
+  // Resumed: the foundation and the first view are reused, the rest done; the same archive.
+  const auto [code, resumed_err] = RunToEnd({"build", dir.File("scene.json"), "-o", dir.File("out"), "--resume"}, LogDir(dir));
+  ASSERT_EQ(code, 0) << resumed_err;
+  EXPECT_TRUE(Contains(resumed_err, "layer hill (foundation): resumed")) << resumed_err;
+  EXPECT_TRUE(Contains(resumed_err, "view v0: resumed")) << resumed_err;
+  EXPECT_FALSE(Contains(resumed_err, "view v3: resumed")) << resumed_err;
+  const json a = json::parse(ReadBytes(dir.File("out/archive.json")));
+  EXPECT_EQ(a["layers"][1]["resumed"], true);
+  EXPECT_EQ(a["views"][0]["resumed"], true);
+  EXPECT_EQ(a["views"][3]["resumed"], false);
+  for (const char* layer : {"cloud", "hill"})
+    EXPECT_EQ(ReadBytes(dir.File(std::string("out/layers/") + layer + ".ply")),
+              ReadBytes(dir.File(std::string("ref/layers/") + layer + ".ply"))) << layer;
+  for (int v = 0; v < 4; ++v) {
+    const std::string png = "/renders/v" + std::to_string(v) + ".png";
+    EXPECT_TRUE(ReadPng(dir.File("out" + png)).image8 == ReadPng(dir.File("ref" + png)).image8) << png;
+  }
+
+  // A changed input is not resumed: the foundation's count.
+  json scene = FaultScene(4);
+  scene["layers"][1]["count"] = 21000;
+  WriteBytes(dir.File("scene.json"), scene.dump());
+  const auto [again, again_err] = RunToEnd({"build", dir.File("scene.json"), "-o", dir.File("out"), "--resume"}, LogDir(dir));
+  ASSERT_EQ(again, 0) << again_err;
+  EXPECT_FALSE(Contains(again_err, "layer hill (foundation): resumed")) << again_err;
+  EXPECT_FALSE(Contains(again_err, "view v0: resumed")) << again_err;
+  EXPECT_EQ(ReadPointCloud(dir.File("out/layers/hill.ply")).size(), 21000u);
+}
+
+}  // namespace
+}  // namespace candi
