@@ -14,8 +14,8 @@
 // Resuming (--resume): every finished stage that is worth keeping (a digitized foundation, relief
 // or photogrammetry layer; the render archive; each render) leaves a checkpoint in
 // work/checkpoints/<stage>.json holding a key: the SHA-256 of what the stage depends on (candi's
-// version, the scene's JSON for it, the seed, the bytes of every input file, the keys of the
-// stages it uses). A resumed build redoes only stages whose key differs or whose outputs are
+// version, the scene's JSON for it, the seed, the bytes of every input file (a dense workspace:
+// its files' names, sizes and times), the keys of the stages it uses). A resumed build redoes only stages whose key differs or whose outputs are
 // missing; archive.json marks what was reused ("resumed": true). An interrupted build (SIGINT,
 // core/interrupt.h) leaves finished stages complete and nothing half-written.
 #include <algorithm>
@@ -222,9 +222,8 @@ class Checkpoints {
   Checkpoints(const fs::path& dir, bool resume) : dir_(dir), resume_(resume) { fs::create_directories(dir); }
 
   // The stage's checkpoint when resuming and its key matches (and every file in `outputs`
-  // exists), else nothing.
-  // Otherwise the checkpoint is removed: the stage is about to be redone, and its outputs may be
-  // replaced before its new checkpoint is written.
+  // exists). Otherwise nothing, and the checkpoint is removed: the stage is about to be redone,
+  // and its outputs may be replaced before its new checkpoint is written.
   std::optional<json> Find(const std::string& stage, const std::string& key,
                            const std::vector<fs::path>& outputs) const {
     const fs::path file = dir_ / (stage + ".json");
@@ -262,6 +261,23 @@ class FileHashes {
  private:
   std::map<std::string, std::string> hashes_;
 };
+
+// A folder's fingerprint for a key: every file's relative path, size and modification time (a
+// dense workspace holds gigabytes of images and maps; reading them all would cost minutes).
+std::string FolderFingerprint(const std::string& dir) {
+  std::vector<std::string> entries;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!it->is_regular_file(ec)) continue;
+    const auto mtime = fs::last_write_time(it->path(), ec).time_since_epoch().count();
+    entries.push_back(fs::relative(it->path(), dir, ec).string() + " " + std::to_string(it->file_size(ec)) + " " +
+                      std::to_string(mtime));
+  }
+  std::sort(entries.begin(), entries.end());
+  std::string text;
+  for (const std::string& e : entries) text += e + "\n";
+  return Sha256Hex(text);
+}
 
 std::string Key(const std::vector<std::string>& parts) {
   std::string text = CANDI_VERSION;
@@ -396,6 +412,7 @@ int RunBuild(const BuildArgs& args) {
     const SceneLayer& l = scene.layers[k];
     std::vector<std::string> parts = {"layer", scene_json["layers"][k].dump(), seed};
     for (const std::string& s : l.Sources()) parts.push_back(hashes(s));
+    if (!l.workspace.empty()) parts.push_back(FolderFingerprint(l.workspace));
     layer_keys.push_back(Key(parts));
     // Point files are read, not digitized: nothing to keep.
     const bool keep = l.kind != LayerKind::kPoints;

@@ -137,6 +137,18 @@ Json Vec(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); 
 template <typename T>
 T Get(const Json& j, const char* key, const std::string& path, const std::string& where) {
   if (!j.is_object() || !j.contains(key)) throw InputError(path, where, std::string("missing field '") + key + "'");
+  if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
+    // Integers must be written as integers that fit: JSON numbers beyond 64 bits parse as double,
+    // and converting those (or fractions) to an integer is undefined.
+    const Json& v = j.at(key);
+    const bool fits = std::is_unsigned_v<T>
+                          ? v.is_number_unsigned() && v.get<uint64_t>() <= std::numeric_limits<T>::max()
+                          : v.is_number_integer() && (v.is_number_unsigned()
+                                                          ? v.get<uint64_t>() <= static_cast<uint64_t>(std::numeric_limits<T>::max())
+                                                          : v.get<int64_t>() >= std::numeric_limits<T>::min() &&
+                                                                v.get<int64_t>() <= std::numeric_limits<T>::max());
+    if (!fits) throw InputError(path, where + "." + key, "expected an integer in [" + std::to_string(std::numeric_limits<T>::min()) + ", " + std::to_string(std::numeric_limits<T>::max()) + "], got " + v.dump());
+  }
   try {
     return j.at(key).get<T>();
   } catch (const Json::exception& e) {
@@ -240,7 +252,13 @@ ArchiveManifest ArchiveManifest::FromJson(const std::string& text, const std::st
     ch.first = Get<uint64_t>(c, "first", path, where);
     ch.quantizer.box.min = GetVec(c, "min", path, where);
     ch.quantizer.box.max = GetVec(c, "max", path, where);
-    const std::vector<int> bits = Get<std::vector<int>>(c, "bits", path, where);
+    const Json& bits_json = Get<Json>(c, "bits", path, where);
+    std::vector<int> bits;
+    for (size_t a = 0; bits_json.is_array() && a < bits_json.size(); ++a) {
+      if (!bits_json[a].is_number_unsigned() || bits_json[a].get<uint64_t>() > kArchiveMaxAxisBits)
+        throw InputError(path, where + ".bits", "expected integers in [0, " + std::to_string(kArchiveMaxAxisBits) + "]");
+      bits.push_back(bits_json[a].get<int>());
+    }
     const std::vector<double> step = Get<std::vector<double>>(c, "step", path, where);
     if (bits.size() != 3 || step.size() != 3) throw InputError(path, where, "bits and step need 3 entries");
     int total = 0;

@@ -307,6 +307,34 @@ TEST(ArchiveManifest, ChunkCountBeyondItsFileIsRefused) {
   EXPECT_EQ(ArchiveManifest::FromJson(m.ToJson(), "manifest.json").chunks[0].count, 1u);
 }
 
+// A count of 20 digits parses as a double (beyond 64 bits); converting it to an integer was
+// undefined behaviour (UBSan, found by fuzz_archive, issue 9). Fractions and negative counts too.
+TEST(ArchiveManifest, IntegersThatDoNotFitAreRefused) {
+  ArchiveManifest m;
+  m.files = {{"data-00000.bin", 8}};
+  m.bounds = Box3d{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()};
+  ArchiveChunk chunk;
+  chunk.count = 1;
+  chunk.quantizer = ChunkQuantizer::ForBox(Box3d{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()});
+  m.chunks = {chunk};
+  m.points = 1;
+  const std::string good = m.ToJson();
+  ASSERT_EQ(ArchiveManifest::FromJson(good, "manifest.json").points, 1u);
+  const std::string field = "\"points\": 1";
+  ASSERT_NE(good.find(field), std::string::npos);
+  for (const std::string bad : {"23058430092136939530", "1.5", "-1", "1e300"}) {
+    std::string text = good;
+    text.replace(text.find(field), field.size(), "\"points\": " + bad);
+    try {
+      ArchiveManifest::FromJson(text, "manifest.json");
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("manifest.points"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("expected an integer"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // ---- rendering ------------------------------------------------------------------------------
 
 // The in-memory reference: SpbrStreamRenderer fed every dequantized point in one piece.
