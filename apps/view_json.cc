@@ -1,6 +1,8 @@
 #include "apps/view_json.h"
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
@@ -37,6 +39,10 @@ double Number(const std::string& path, const json& j, const std::string& key) {
 
 int Integer(const std::string& path, const json& j, const std::string& key) {
   if (!j.is_number_integer()) Bad(path, "/" + key, "expected an integer");
+  const bool fits = j.is_number_unsigned() ? j.get<uint64_t>() <= static_cast<uint64_t>(std::numeric_limits<int>::max())
+                                           : j.get<int64_t>() >= std::numeric_limits<int>::min() &&
+                                                 j.get<int64_t>() <= std::numeric_limits<int>::max();
+  if (!fits) Bad(path, "/" + key, "out of range: " + j.dump());
   return j.get<int>();
 }
 

@@ -120,6 +120,11 @@ TEST(RenderCli, BadViewFilesAreExitTwoNamingTheKeyAndPreviewRendersKEnsembles) {
   r = RunCandi("render " + s.back + " -o " + s.dir.File("x.png") + " --view " + s.dir.File("typo.json"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("ortho_heigth"), std::string::npos) << r.output;
+  // 2^32 + 1 used to wrap to a 1-pixel width.
+  WriteBytes(s.dir.File("wide.json"), R"({"projection": "orthographic", "width": 4294967297, "height": 8})");
+  r = RunCandi("render " + s.back + " -o " + s.dir.File("x.png") + " --view " + s.dir.File("wide.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("/width: out of range"), std::string::npos) << r.output;
   EXPECT_FALSE(FileExists(s.dir.File("x.png")));
   r = RunCandi("render " + s.Inputs() + " -o " + s.dir.File("p.png") + " --view " + s.view + " -L 50 --preview 3");
   ASSERT_EQ(r.code, 0) << r.output;
