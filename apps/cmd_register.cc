@@ -43,6 +43,8 @@ Rigid3 ReadTransform(const std::string& path) {
     j = nlohmann::json::parse(ReadFileToString(path));
   } catch (const nlohmann::json::parse_error& e) {
     throw InputError(path, "byte " + std::to_string(e.byte), "not JSON: " + std::string(e.what()));
+  } catch (const nlohmann::json::exception& e) {  // e.g. a number beyond double's range
+    throw InputError(path, "", "not JSON: " + std::string(e.what()));
   }
   const nlohmann::json& m = j.is_object() ? j.value("fixed_from_moving", nlohmann::json()) : j;
   Eigen::Matrix4d t;

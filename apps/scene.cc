@@ -314,6 +314,8 @@ Scene LoadScene(const std::string& path) {
     j = json::parse(scene.text);
   } catch (const json::parse_error& e) {
     throw InputError(path, "byte " + std::to_string(e.byte), std::string("not valid JSON: ") + e.what());
+  } catch (const json::exception& e) {  // e.g. a number beyond double's range (out_of_range)
+    throw InputError(path, "", std::string("not valid JSON: ") + e.what());
   }
   const Node root(scene.path, j, "");
   root.ExpectObject({"candi_scene", "name", "origin", "seed", "render", "views", "layers"});

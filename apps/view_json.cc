@@ -54,6 +54,8 @@ render::Camera LoadView(const std::string& path) {
     j = json::parse(ReadFileToString(path));
   } catch (const json::parse_error& e) {
     Bad(path, "byte " + std::to_string(e.byte), std::string("not valid JSON: ") + e.what());
+  } catch (const json::exception& e) {  // e.g. a number beyond double's range (out_of_range)
+    Bad(path, "", std::string("not valid JSON: ") + e.what());
   }
   if (!j.is_object()) Bad(path, "/", "expected a JSON object");
   render::Camera c;

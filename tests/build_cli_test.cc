@@ -187,6 +187,12 @@ TEST(BuildCli, SceneErrorsNameTheJsonPathOfTheCulprit) {
   const Result r = RunCandi("build " + dir.File("broken.json") + " -o " + dir.File("out"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("not valid JSON"), std::string::npos) << r.output;
+  // A number beyond double's range (JSON allows it; the parser throws out_of_range, which was an
+  // internal error, exit 3, until fuzz_scene found it).
+  testing::WriteBytes(dir.File("huge.json"), "{\"candi_scene\": 1e99999}");
+  const Result huge = RunCandi("build " + dir.File("huge.json") + " -o " + dir.File("out"));
+  EXPECT_EQ(huge.code, 2) << huge.output;
+  EXPECT_NE(huge.output.find("huge.json: not valid JSON"), std::string::npos) << huge.output;
   EXPECT_EQ(RunCandi("build " + dir.File("missing.json") + " -o " + dir.File("out")).code, 2);
   WriteScene(dir.File("scene.json"), BaseScene());
   const Result unwritable = RunCandi("build " + dir.File("scene.json") + " -o " + dir.File("no/such/folder/out"));
