@@ -124,6 +124,9 @@ namespace {
 struct TempPoint {  // 28 bytes: local-frame position and colour, in cell files and in memory
   double x, y, z;
   uint32_t rgb;
+  // By value: a reference to a member of a packed struct may be misaligned (undefined behaviour
+  // that UBSan reports where Eigen's constructors take `const double&`).
+  Eigen::Vector3d Position() const { return Eigen::Vector3d(double{x}, double{y}, double{z}); }
 };
 #pragma pack(pop)
 static_assert(sizeof(TempPoint) == 28, "TempPoint must be packed");
@@ -368,12 +371,12 @@ class Packer {
     tbb::parallel_for(size_t{0}, n, [&](size_t k) {
       const auto [a, b] = ranges_[k];
       Box3d box;
-      for (size_t i = a; i < b; ++i) box.Extend(Eigen::Vector3d(sorted_[i].x, sorted_[i].y, sorted_[i].z));
+      for (size_t i = a; i < b; ++i) box.Extend(sorted_[i].Position());
       ArchiveChunk& c = made[k];
       c.quantizer = ChunkQuantizer::ForBox(box);
       c.count = b - a;
       for (size_t i = a; i < b; ++i) {
-        words_[i] = c.quantizer.Encode(Eigen::Vector3d(sorted_[i].x, sorted_[i].y, sorted_[i].z), sorted_[i].rgb);
+        words_[i] = c.quantizer.Encode(sorted_[i].Position(), sorted_[i].rgb);
       }
       c.hash = ArchiveHash(&words_[a], 8 * (b - a));
     });
