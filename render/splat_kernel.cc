@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "core/simd.h"
+
 namespace candi::render {
 
 void BandBuffer::Reset(int w, int r) {
@@ -105,13 +107,13 @@ __attribute__((always_inline)) inline void SplatLoop(const KernelTransform& t, c
   }
 }
 
-__attribute__((target_clones("avx2", "default")))
+CANDI_TARGET_CLONES_AVX2
 void SplatLoopU16(const KernelTransform& t, const KernelProjection& p, const uint16_t* x, const uint16_t* y,
                   const uint16_t* z, const uint32_t* colors, size_t n, BandBuffer* band) {
   SplatLoop(t, p, x, y, z, colors, n, band);
 }
 
-__attribute__((target_clones("avx2", "default")))
+CANDI_TARGET_CLONES_AVX2
 void SplatLoopF32(const KernelTransform& t, const KernelProjection& p, const float* x, const float* y,
                   const float* z, const uint32_t* colors, size_t n, BandBuffer* band) {
   SplatLoop(t, p, x, y, z, colors, n, band);

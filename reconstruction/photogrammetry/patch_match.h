@@ -81,6 +81,10 @@ struct PatchMatchResult {
   uint64_t total_pixels = 0;
 };
 
+// An RGB image resampled to width x height by area averaging (OpenCV's INTER_AREA), as PatchMatch
+// resamples its inputs for resolution_scale < 1.
+Image8 ResampleArea(const Image8& rgb, int width, int height);
+
 // Runs PatchMatch on every image as reference, then the consistency filter. Throws
 // std::invalid_argument for bad options, InputError-free (inputs come from the caller); an image
 // whose camera is invalid or whose size differs from its camera throws InternalError (CANDI_CHECK).
