@@ -114,11 +114,15 @@ void AddBench(CLI::App& app, BenchArgs& a, std::function<int()>* run) {
   c->add_option("--width", a.width, "Image width")->check(CLI::Range(16, 8192));
   c->add_option("--height", a.height, "Image height")->check(CLI::Range(16, 8192));
   c->add_option("--threads", a.threads, "Threads (0: all)")->check(CLI::Range(0, 256));
+  c->add_option("--data", a.data, "dense: the shared data folder; runs candi dense on its Sceaux photos "
+                "against its OpenMVS cloud instead of the synthetic table");
+  c->add_option("--scale", a.scale, "dense --data: resolution scale")->check(CLI::Range(0.05, 1.0));
+  c->add_option("--iterations", a.iterations, "dense --data: PatchMatch rounds")->check(CLI::Range(1, 50));
   c->callback([run, &a, c] {
     if (!c->get_subcommands().empty()) return;  // `bench relief`, `bench scale` (got_subcommand throws for absent ones)
     *run = [&a] { return RunBench(a); };
   });
-  c->footer("Example: candi bench render --points 1000000");
+  c->footer("Example: candi bench render --points 1000000; candi bench dense --data ../shared/data --threads 2");
 }
 
 

@@ -16,7 +16,7 @@ namespace candi::app {
 
 int RunBench(const BenchArgs& args) {
   if (args.what == "foundation") return RunBenchFoundation();
-  if (args.what == "dense") return RunBenchDense(args);
+  if (args.what == "dense") return args.data.empty() ? RunBenchDense(args) : RunBenchDenseSceaux(args);
   const PointCloud scene = render::LayeredSheets(args.points, 4, 7);
   std::printf("SPBR accuracy vs time: %llu points (4 sheets, alpha 0.5 each), %dx%d, %d thread(s)\n",
               static_cast<unsigned long long>(args.points), args.width, args.height, args.threads);

@@ -87,6 +87,9 @@ struct BenchArgs {
   unsigned long long points = 1000000;
   int width = 256, height = 256;
   int threads = 1;
+  std::string data;                   // dense: ../shared/data -> the Sceaux comparison with OpenMVS
+  double scale = 0.5;                 // dense --data: PatchMatch resolution scale
+  int iterations = 3;                 // dense --data: PatchMatch rounds
 };
 int RunBench(const BenchArgs& args);
 int RunBenchFoundation();  // `candi bench foundation`: accuracy vs time of N and M, paper scale
@@ -222,6 +225,7 @@ struct DenseArgs {
 };
 int RunDense(const DenseArgs& args);
 int RunBenchDense(const BenchArgs& args);  // `candi bench dense`
+int RunBenchDenseSceaux(const BenchArgs& args);  // `candi bench dense --data DIR` (cmd_bench_sceaux.cc)
 // candi register / candi clean (cmd_register.cc, cmd_clean.cc): ICP and cleaning with PCL.
 struct RegisterArgs {
   std::string moving, fixed, output;
