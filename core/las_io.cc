@@ -1,7 +1,5 @@
 #include "core/las_io.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,6 +14,7 @@
 #include "core/las_columns.h"
 #include "core/las_header.h"
 #include "core/log.h"
+#include "core/parallel.h"
 
 namespace candi {
 
@@ -224,7 +223,7 @@ size_t LasReader::Read(size_t max_points, PointCloud* chunk) {
   // Blocks decode independently (each writes its own range of the chunk), so they run in
   // parallel; the result does not depend on the thread count.
   const size_t blocks = (n + kBlockRecords - 1) / kBlockRecords;
-  tbb::parallel_for(size_t{0}, blocks, [&](size_t b) {
+  ParallelFor(size_t{0}, blocks, [&](size_t b) {
     const size_t first = b * kBlockRecords;
     DecodeBlock(buffer_.data() + first * length, std::min(kBlockRecords, n - first), first, chunk);
   });

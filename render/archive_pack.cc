@@ -3,7 +3,7 @@
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <tbb/parallel_for.h>
+#include <tbb/blocked_range.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -17,6 +17,7 @@
 #include "core/interrupt.h"
 #include "core/binary_file.h"
 #include "core/check.h"
+#include "core/parallel.h"
 #include "render/splat_cloud.h"
 
 namespace candi::render {
@@ -247,12 +248,12 @@ class Packer {
     const size_t n = points->size();
     if (n == 0) return;
     keys_.resize(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+    ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) keys_[i] = {grid_.Code((*points)[i]), i};
     });
     RadixSort(&keys_, &scratch_, level);
     sorted_.resize(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+    ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) sorted_[i] = (*points)[keys_[i].index];
     });
     ranges_.clear();
@@ -368,7 +369,7 @@ class Packer {
     const size_t n = ranges_.size();
     std::vector<ArchiveChunk> made(n);
     words_.resize(sorted_.size());
-    tbb::parallel_for(size_t{0}, n, [&](size_t k) {
+    ParallelFor(size_t{0}, n, [&](size_t k) {
       const auto [a, b] = ranges_[k];
       Box3d box;
       for (size_t i = a; i < b; ++i) box.Extend(sorted_[i].Position());

@@ -1,7 +1,6 @@
 #include "render/archive_render.h"
 
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -12,6 +11,7 @@
 #include <string>
 
 #include "core/check.h"
+#include "core/parallel.h"
 #include "render/splat_cloud.h"
 #include "render/splat_kernel.h"
 
@@ -178,7 +178,7 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
         const size_t n = bj - bi;
         if (staged.size() < n) staged.resize(n);
         // Stage: decode each chunk's points of the resident ensembles, grouped by ensemble.
-        tbb::parallel_for(size_t{0}, n, [&](size_t j) {
+        ParallelFor(size_t{0}, n, [&](size_t j) {
           const size_t chunk = visible[bi + j];
           const ArchiveChunk& c = m.chunks[chunk];
           const uint64_t* words = archive.ChunkWords(chunk, options.verify);
@@ -211,7 +211,7 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
           archive.Release(chunk);
         });
         // Splat: each resident ensemble draws its points of every staged chunk.
-        tbb::parallel_for(0, K, [&](int k) {
+        ParallelFor(0, K, [&](int k) {
           for (size_t j = 0; j < n; ++j) {
             const StagedChunk& s = staged[j];
             const uint64_t a = s.offsets[k], e = s.offsets[k + 1];
@@ -233,7 +233,7 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
         if (progress) progress(done, total_work);
       }
       // Drain the pass's ensembles into the sums.
-      tbb::parallel_for(0, K, [&](int k) {
+      ParallelFor(0, K, [&](int k) {
         ThreadSums& t = sums.local();
         if (first + k == 0) {
           buffers[k].Drain([&](uint32_t p, uint64_t key) {

@@ -1,7 +1,6 @@
 #include "render/spbr.h"
 
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -12,6 +11,7 @@
 #include <string>
 
 #include "core/check.h"
+#include "core/parallel.h"
 #include "render/splat_kernel.h"
 
 namespace candi::render {
@@ -171,11 +171,11 @@ SpbrResult RenderSpbr(const SpbrOptions& options, const Camera& camera, const Sp
   tbb::enumerable_thread_specific<ThreadFrame> frames(camera.width, camera.height);
   std::atomic<int> done{0};
   auto body = [&] {
-    tbb::parallel_for(size_t{0}, cloud.blocks.size(), [&](size_t k) {
+    ParallelFor(size_t{0}, cloud.blocks.size(), [&](size_t k) {
       frame.visible[k] = RowsOf(projector, camera, cloud.blocks[k], margin).visible;
     });
     // Ensembles are independent: each thread draws whole ensembles into its own frame.
-    tbb::parallel_for(0, result.ensembles, [&](int e) {
+    ParallelFor(0, result.ensembles, [&](int e) {
       RenderEnsemble(frame, e, &frames.local());
       const int d = ++done;
       if (progress) progress(d, result.ensembles);

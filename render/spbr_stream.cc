@@ -1,7 +1,6 @@
 #include "render/spbr_stream.h"
 
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -11,6 +10,7 @@
 #include <string>
 
 #include "core/check.h"
+#include "core/parallel.h"
 #include "render/splat_cloud.h"
 #include "render/splat_kernel.h"
 
@@ -159,7 +159,7 @@ void SpbrStreamRenderer::Add(const PointCloud& chunk) {
   }
   m.next_index += chunk.size();
   m.Run([&] {
-    tbb::parallel_for(0, m.last - m.first, [&](int k) {
+    ParallelFor(0, m.last - m.first, [&](int k) {
       Staged& s = m.staged[k];
       if (s.x.empty()) return;
       if (m.options.point_size == 1.0) {
@@ -181,7 +181,7 @@ void SpbrStreamRenderer::EndPass() {
   Impl& m = *impl_;
   CANDI_CHECK(m.pass >= 0) << "EndPass before BeginPass";
   m.Run([&] {
-    tbb::parallel_for(0, m.last - m.first, [&](int k) {
+    ParallelFor(0, m.last - m.first, [&](int k) {
       ThreadSums& t = m.sums.local();
       if (m.first + k == 0) {
         m.buffers[k].Drain([&](uint32_t p, uint64_t key) {

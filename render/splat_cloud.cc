@@ -1,7 +1,6 @@
 #include "render/splat_cloud.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
@@ -10,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/check.h"
+#include "core/parallel.h"
 
 namespace candi::render {
 
@@ -74,7 +74,7 @@ inline uint32_t Morton30(const Eigen::Vector3f& p, const Eigen::Vector3f& lo, co
 std::vector<uint32_t> SortByCode(const std::vector<uint32_t>& codes) {
   const size_t n = codes.size();
   std::vector<uint64_t> a(n), b(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
+  ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) a[i] = uint64_t{codes[i]} << 32 | i;
   });
   for (int shift : {32, 47}) {
@@ -86,7 +86,7 @@ std::vector<uint32_t> SortByCode(const std::vector<uint32_t>& codes) {
   }
   std::vector<uint64_t>().swap(b);
   std::vector<uint32_t> order(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
+  ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) order[i] = static_cast<uint32_t>(a[i]);
   });
   return order;
@@ -96,7 +96,7 @@ std::vector<uint32_t> SortByCode(const std::vector<uint32_t>& codes) {
 template <typename T>
 std::vector<T> Permuted(std::vector<T>* v, const std::vector<uint32_t>& order) {
   std::vector<T> out(order.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 65536), [&](const tbb::blocked_range<size_t>& r) {
+  ParallelFor(tbb::blocked_range<size_t>(0, order.size(), 65536), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k < r.end(); ++k) out[k] = (*v)[order[k]];
   });
   std::vector<T>().swap(*v);
@@ -147,7 +147,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   for (const Source& s : located.sources) {
     const PointCloud& c = *s.cloud;
     const bool weights = options.use_multiplicity && s.multiplicity != nullptr;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, c.size(), 65536), [&](const tbb::blocked_range<size_t>& r) {
+    ParallelFor(tbb::blocked_range<size_t>(0, c.size(), 65536), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) {
         const Eigen::Vector3d p = c.positions[i] + s.shift;
         if (!p.allFinite()) {
@@ -174,7 +174,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   std::vector<uint32_t> codes(n);
   const Eigen::Vector3f lo = out.bounds.min.cast<float>();
   const Eigen::Vector3f inv_cell = (1024.0 / out.bounds.Extent().array().max(1e-9)).matrix().cast<float>();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
+  ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) codes[i] = Morton30(local[i], lo, inv_cell);
   });
   // From here on, points are numbered in Morton order (rank k); order[k] is the input index,
@@ -189,7 +189,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   // Copies per ensemble (counting sort); within an ensemble, Morton order.
   const int L = options.repeat_level;
   std::vector<uint32_t> first_ensemble(n);  // in Morton order
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
+  ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k < r.end(); ++k) first_ensemble[k] = EnsembleOf(options.seed, order[k], L);
   });
   std::vector<uint64_t> start(L + 1, 0);
@@ -232,7 +232,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   out.qy.resize(copies);
   out.qz.resize(copies);
   out.colors.resize(copies);
-  tbb::parallel_for(size_t{0}, out.blocks.size(), [&](size_t k) {
+  ParallelFor(size_t{0}, out.blocks.size(), [&](size_t k) {
     SplatBlock& block = out.blocks[k];
     float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
                    std::numeric_limits<float>::max()};

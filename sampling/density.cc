@@ -1,7 +1,6 @@
 #include "sampling/density.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
@@ -17,6 +16,7 @@
 
 #include "core/check.h"
 #include "core/log.h"
+#include "core/parallel.h"
 #include "core/rng.h"
 #include "sampling/cube_section.h"
 
@@ -109,7 +109,7 @@ template <typename Body>
 void ForEachBlock(int threads, size_t n, const ProgressCallback& progress, const Body& body) {
   std::atomic<uint64_t> done{0};
   auto run = [&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kBlock),
+    ParallelFor(tbb::blocked_range<size_t>(0, n, kBlock),
                       [&](const tbb::blocked_range<size_t>& r) {
                         body(r.begin(), r.end());
                         if (progress) progress(done += r.size(), n);

@@ -1,7 +1,6 @@
 #include "sampling/surface_sampling.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <Eigen/Geometry>
@@ -11,6 +10,7 @@
 #include <stdexcept>
 
 #include "core/check.h"
+#include "core/parallel.h"
 #include "core/rng.h"
 #include "core/text_format.h"
 
@@ -89,7 +89,7 @@ void CountDraws(const AliasTable& table, uint64_t seed, size_t begin, size_t end
 template <typename Body>
 void ParallelBlocks(int threads, size_t n, const Body& body) {
   auto run = [&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain),
+    ParallelFor(tbb::blocked_range<size_t>(0, n, kGrain),
                       [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
   };
   if (threads > 0) {

@@ -4,7 +4,8 @@
 #         UndefinedBehaviorSanitizer in build-asan/; any report fails its test.
 #   tsan  ThreadSanitizer in build-tsan/ on the multi-threaded code: the renderer's tests
 #         (SPBR, streaming, archive render) and the dense stereo's (PatchMatch, fusion), with
-#         2 threads.
+#         2 threads; then a canary race that must be reported (scripts/sanitize/tsan.supp
+#         suppresses TBB's uninstrumented internals only).
 # Environment: SANITIZE_JOBS (ninja and ctest jobs, nproc), CTEST_FLAGS.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -41,6 +42,17 @@ case $kind in
     ./build-tsan/render/candi_render_test --gtest_filter='Spbr*:*Stream*:*Archive*:*Splat*'
     ./build-tsan/reconstruction/photogrammetry/candi_photogrammetry_test \
       --gtest_filter='PatchMatch*:Fusion*:*Dense*-SfmDense.*'
+    # The canary: a race between two loop bodies must still be reported under these suppressions
+    # (needs 2 hardware threads).
+    canary=build-tsan/tsan_canary.log
+    ./build-tsan/render/candi_render_test --gtest_also_run_disabled_tests \
+      --gtest_filter='TsanCanary.*' >"$canary" 2>&1 || true
+    if grep -q "WARNING: ThreadSanitizer: data race" "$canary" && grep -q "splat_cloud_test.cc" "$canary"; then
+      echo "tsan: clean; the canary race between two loop bodies was reported, as it must be"
+    else
+      echo "tsan: the canary race was not reported, so the suppressions hide real races ($canary)" >&2
+      exit 1
+    fi
     ;;
   *) echo "scripts/sanitize.sh: unknown kind '$kind' (asan or tsan)" >&2; exit 1 ;;
 esac

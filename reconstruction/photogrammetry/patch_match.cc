@@ -14,10 +14,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "core/check.h"
+#include "core/parallel.h"
 #include "core/rng.h"
 #include "core/simd.h"
 
@@ -321,11 +321,21 @@ class ReferenceMatcher {
         const double c = Cost(x, y, *win, p);
         if (c < best_cost) best_cost = c, best = p;
       };
+      // Propagation copies planes, so neighbours often carry this pixel's plane or each other's:
+      // each distinct plane is costed once (costing a repeat again could not change the plane kept).
+      const Plane* seen[9] = {&planes_[i]};
+      int n_seen = 1;
       for (int k = 0; k < 8; ++k) {
         const int qx = x + kNx[k], qy = y + kNy[k];
         if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
         const Plane& q = planes_[static_cast<size_t>(qy) * w + qx];
-        if (q.depth > 0) Try(q);
+        if (!(q.depth > 0)) continue;
+        bool repeat = false;
+        for (int j = 0; j < n_seen && !repeat; ++j)
+          repeat = seen[j]->depth == q.depth && seen[j]->normal == q.normal;
+        if (repeat) continue;
+        seen[n_seen++] = &q;
+        Try(q);
       }
       // Refinement: perturbations shrinking with the round, plus fresh random depth and normal.
       const double spread = 0.5 * std::pow(0.5, round);
@@ -385,7 +395,7 @@ class ReferenceMatcher {
 // Runs f(y) for every row, in parallel; f must only write row y's state.
 template <typename F>
 void ForRows(int height, const F& f) {
-  tbb::parallel_for(tbb::blocked_range<int>(0, height, 4), [&](const tbb::blocked_range<int>& r) {
+  ParallelFor(tbb::blocked_range<int>(0, height, 4), [&](const tbb::blocked_range<int>& r) {
     RefWindow win;
     for (int y = r.begin(); y < r.end(); ++y) f(y, &win);
   });
@@ -423,7 +433,7 @@ DepthNormalMap MatchReference(const PatchMatchOptions& o, const std::vector<View
 // its point back at the same pixel (forward-backward reprojection) and depth.
 void FilterMaps(const PatchMatchOptions& o, std::vector<DepthNormalMap>* maps) {
   const std::vector<DepthNormalMap> raw = *maps;  // read-only snapshot: order-independent
-  tbb::parallel_for(size_t{0}, maps->size(), [&](size_t r) {
+  ParallelFor(size_t{0}, maps->size(), [&](size_t r) {
     DepthNormalMap& m = (*maps)[r];
     const PinholeCamera& cam = m.camera;
     for (int y = 0; y < cam.height; ++y) {
