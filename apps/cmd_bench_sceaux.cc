@@ -19,6 +19,7 @@
 
 #include "apps/commands.h"
 #include "core/check.h"
+#include "core/interrupt.h"
 #include "core/jpeg_io.h"
 #include "core/point_io.h"
 #include "reconstruction/photogrammetry/colmap_model.h"
@@ -97,13 +98,15 @@ int RunBenchDenseSceaux(const BenchArgs& args) {
   }
   const pg::ColmapModel model = pg::ReadColmapModel(sparse);
   const std::string temp = (fs::temp_directory_path() / ("candi_bench_sceaux_" + std::to_string(::getpid()))).string();
-  struct Cleanup {
+  struct Cleanup {  // removed at the end, by an exception, or by an interrupt (core/interrupt.h)
     std::string dir;
+    int id;
     ~Cleanup() {
+      UnregisterTempPath(id);
       std::error_code ec;
       fs::remove_all(dir, ec);
     }
-  } cleanup{temp};
+  } cleanup{temp, RegisterTempPath(temp)};
 
   const auto t_prep = std::chrono::steady_clock::now();
   const std::string workspace = PrepareWorkspace(model, photos, sparse, temp);
