@@ -186,34 +186,43 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   multiplicity = Permuted(&multiplicity, order);
   if (progress) progress(n / 2, n);
 
-  // Copies per ensemble (counting sort); within an ensemble, Morton order.
+  // Copies per ensemble (a counting sort); within an ensemble, Morton order. The Morton ranks
+  // are cut into chunks counted and filled in parallel: chunk c's copies of ensemble e go after
+  // those of chunks 0..c-1, so the result does not depend on the thread count. The chunk count is
+  // capped so that the chunks x L counters stay small for large L.
   const int L = options.repeat_level;
-  std::vector<uint32_t> first_ensemble(n);  // in Morton order
-  ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k < r.end(); ++k) first_ensemble[k] = EnsembleOf(options.seed, order[k], L);
+  const size_t chunks = std::clamp<size_t>(n / 65536, 1, std::max<size_t>(1, (size_t{1} << 22) / L));
+  const size_t per_chunk = (n + chunks - 1) / chunks;
+  std::vector<uint64_t> offset(chunks * static_cast<size_t>(L), 0);  // counts, then fill positions
+  auto for_each_copy = [&](size_t c, auto&& f) {
+    const size_t end = std::min(n, (c + 1) * per_chunk);
+    for (size_t k = c * per_chunk; k < end; ++k) {
+      const int m = multiplicity[k];
+      if (m == 1) f(EnsembleOf(options.seed, order[k], L), k);
+      else ForEachEnsemble(options.seed, order[k], m, L, [&](int e) { f(e, k); });
+    }
+  };
+  ParallelFor(size_t{0}, chunks, [&](size_t c) {
+    uint64_t* count = offset.data() + c * L;
+    for_each_copy(c, [&](int e, size_t) { ++count[e]; });
   });
   std::vector<uint64_t> start(L + 1, 0);
-  for (size_t k = 0; k < n; ++k) {
-    const int e0 = first_ensemble[k], m = multiplicity[k];
-    if (m == 1) {
-      ++start[e0 + 1];
-      continue;
+  for (int e = 0; e < L; ++e) {
+    uint64_t at = start[e];
+    for (size_t c = 0; c < chunks; ++c) {
+      const uint64_t count = offset[c * L + e];
+      offset[c * L + e] = at;
+      at += count;
     }
-    ForEachEnsemble(options.seed, order[k], m, L, [&](int e) { ++start[e + 1]; });
+    start[e + 1] = at;
   }
-  for (int e = 0; e < L; ++e) start[e + 1] += start[e];
   const uint64_t copies = start[L];
-  std::vector<uint32_t> source(copies);  // Morton rank of each copy, ensemble by ensemble
-  std::vector<uint64_t> fill(start.begin(), start.end() - 1);
-  for (size_t k = 0; k < n; ++k) {
-    const int e0 = first_ensemble[k], m = multiplicity[k];
-    if (m == 1) {
-      source[fill[e0]++] = static_cast<uint32_t>(k);
-      continue;
-    }
-    ForEachEnsemble(options.seed, order[k], m, L, [&](int e) { source[fill[e]++] = static_cast<uint32_t>(k); });
-  }
-  std::vector<uint32_t>().swap(first_ensemble);
+  std::vector<uint32_t, DefaultInitAllocator<uint32_t>> source(copies);  // Morton rank of each copy
+  ParallelFor(size_t{0}, chunks, [&](size_t c) {
+    uint64_t* fill = offset.data() + c * L;
+    for_each_copy(c, [&](int e, size_t k) { source[fill[e]++] = static_cast<uint32_t>(k); });
+  });
+  std::vector<uint64_t>().swap(offset);
 
   // Blocks: cut each ensemble, quantize each block on its own bounding box.
   out.ensemble_blocks.assign(L + 1, 0);

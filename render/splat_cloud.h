@@ -13,7 +13,9 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/box.h"
@@ -45,14 +47,32 @@ struct SplatBlock {
   uint32_t count;
 };
 
+// A std::allocator that leaves trivially constructible elements uninitialized (no zero fill):
+// arrays that are written in full right after they are sized.
+template <typename T>
+struct DefaultInitAllocator : std::allocator<T> {
+  template <typename U>
+  struct rebind {
+    using other = DefaultInitAllocator<U>;
+  };
+  using std::allocator<T>::allocator;
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
+    else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+template <typename T>
+using UninitVector = std::vector<T, DefaultInitAllocator<T>>;
+
 struct SplatCloud {
   int repeat_level = 1;
   uint64_t seed = 0;
   LocalFrame frame;           // world = position + frame.origin
   Box3d bounds;               // of all points, render frame
   uint64_t source_points = 0; // points in the inputs (multiplicity 0 included)
-  std::vector<uint16_t> qx, qy, qz;  // one entry per point copy
-  std::vector<uint32_t> colors;             // 0x00RRGGBB
+  UninitVector<uint16_t> qx, qy, qz;  // one entry per point copy
+  UninitVector<uint32_t> colors;             // 0x00RRGGBB
   std::vector<SplatBlock> blocks;           // ensemble by ensemble
   std::vector<uint64_t> ensemble_blocks;    // L + 1 offsets into blocks
 
@@ -72,7 +92,9 @@ inline int EnsembleOf(uint64_t seed, uint64_t index, int repeat_level) {
 
 // Calls f(e) for each ensemble of point `index` when it has m copies (m clamped to [0, L]):
 // m = 1 gives EnsembleOf; m >= L every ensemble; otherwise a uniformly random m-subset of [0, L)
-// drawn with Floyd's algorithm from a seeded hash of (index, step), in no particular order.
+// drawn with Floyd's algorithm from a seeded hash of (index, step), in no particular order. For
+// m > L / 2 the L - m ensembles left out are drawn instead (the complement of a uniform subset is
+// uniform), so a point costs min(m, L - m) hashes.
 // Random subsets matter: with consecutive ensembles (e0, e0+1, ...) two points' copies would
 // overlap by a random fraction that does not shrink as L grows, leaving an image error that more
 // ensembles never remove; random subsets overlap as independent draws do. Uses a thread-local
@@ -93,13 +115,21 @@ void ForEachEnsemble(uint64_t seed, uint64_t index, int m, int repeat_level, F&&
   if (taken.size() < static_cast<size_t>(L + 63) / 64) taken.assign((L + 63) / 64, 0);
   thread_local std::vector<int> chosen;
   chosen.clear();
+  const bool complement = 2 * m > L;
+  const int draw = complement ? L - m : m;
   const uint64_t stream = HashIndex(seed, index, 0x5e1ec7);
-  for (int j = L - m; j < L; ++j) {
+  for (int j = L - draw; j < L; ++j) {
     const uint64_t h = Mix64(stream ^ static_cast<uint64_t>(j));
     const int t = static_cast<int>(((h >> 32) * static_cast<uint64_t>(j + 1)) >> 32);  // [0, j]
     const int e = (taken[t >> 6] >> (t & 63)) & 1 ? j : t;
     taken[e >> 6] |= uint64_t{1} << (e & 63);
     chosen.push_back(e);
+  }
+  if (complement) {
+    for (int e = 0; e < L; ++e)
+      if (!((taken[e >> 6] >> (e & 63)) & 1)) f(e);
+    for (int e : chosen) taken[e >> 6] &= ~(uint64_t{1} << (e & 63));
+    return;
   }
   for (int e : chosen) {
     taken[e >> 6] &= ~(uint64_t{1} << (e & 63));

@@ -43,6 +43,32 @@ TEST(ForEachEnsemble, DistinctInRangeAndEdges) {
   }
 }
 
+// Each ensemble, and each pair of ensembles, is chosen as often as in a uniform m-subset: m / L
+// and m (m - 1) / (L (L - 1)), for m drawn directly (m <= L / 2) and through its complement.
+TEST(ForEachEnsemble, SubsetsAreUniformBothWays) {
+  const int L = 10, n = 20000;
+  for (int m : {3, 5, 6, 8, 9}) {
+    std::vector<int> single(L, 0);
+    std::vector<std::vector<int>> pair(L, std::vector<int>(L, 0));
+    for (int i = 0; i < n; ++i) {
+      const std::vector<int> e = Ensembles(11, i, m, L);
+      ASSERT_EQ(e.size(), static_cast<size_t>(m));
+      for (int a : e) {
+        ++single[a];
+        for (int b : e) pair[a][b] += a != b;
+      }
+    }
+    const double p1 = static_cast<double>(m) / L, p2 = p1 * (m - 1) / (L - 1);
+    for (int a = 0; a < L; ++a) {
+      EXPECT_NEAR(single[a] / double(n), p1, 0.015) << "m " << m << " ensemble " << a;
+      for (int b = 0; b < L; ++b) {
+        if (a == b) continue;
+        EXPECT_NEAR(pair[a][b] / double(n), p2, 0.02) << "m " << m << " pair " << a << "," << b;
+      }
+    }
+  }
+}
+
 // Two points with m1 and m2 copies share, on average over point pairs, m1 m2 / L ensembles, and
 // the spread of the shared count is that of independent (hypergeometric) draws: it shrinks
 // relative to the mean as L grows. Consecutive ensembles would give a spread ~ the mean itself.
