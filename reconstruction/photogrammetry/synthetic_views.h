@@ -1,11 +1,14 @@
-// Synthetic multi-view stereo scene rendered by candi itself: a terraced block (two boxes at
-// different heights and a slanted ramp face) on a ground plane — a small stand-in for a temple
-// corner — with a seeded procedural solid texture, lit by one directional Lambertian light, seen by
-// N pinhole cameras on an arc looking at it. Each image is ray-cast exactly (supersampled pixel
-// area); only projection, texture, the light and optional Gaussian noise are simulated.
+// Synthetic multi-view stereo scenes rendered by candi itself: convex solids with a seeded
+// procedural solid texture, lit by one directional Lambertian light, seen by pinhole cameras. Each
+// image is ray-cast exactly (supersampled pixel area); only projection, texture, the light, painted
+// survey targets and optional Gaussian noise are simulated.
 //
-// World frame: metres, z up, the ground is z = 0, the block is centred on the origin (about
-// 3.2 x 2 x 0.9 m). Thread-safety: the functions are pure; results depend only on the options.
+// The default scene (RenderSyntheticViews(options), the scoring functions): a terraced block (two
+// boxes at different heights and a slanted ramp face) on a ground plane — a small stand-in for a
+// temple corner — seen by N cameras on an arc. World frame: metres, z up, the ground is z = 0, the
+// block is centred on the origin (about 3.2 x 2 x 0.9 m). Other scenes and cameras (candi demo's
+// southeast corner): RenderSyntheticScene.
+// Thread-safety: the functions are pure; results depend only on their arguments.
 #pragma once
 
 #include <cstdint>
@@ -31,8 +34,38 @@ struct SyntheticViewsOptions {
   double noise_sigma = 0;          // Gaussian image noise, grey levels (0-255 scale), >= 0
   bool textureless = false;        // constant albedo (degenerate case for tests)
   uint64_t seed = 1;               // texture and noise
+  std::string name_prefix = "view";  // images are <prefix>_NNN.png
   void Check() const;
 };
+
+// A convex solid {X : n_i . X <= d_i for every i} (unit n_i) with an albedo (RGB in [0, 1]).
+struct SyntheticSolid {
+  std::vector<std::pair<Eigen::Vector3d, double>> planes;
+  Eigen::Vector3d albedo = Eigen::Vector3d::Constant(0.7);
+};
+// The axis-aligned box [lo, hi].
+SyntheticSolid SyntheticBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3d& albedo);
+
+// A survey target painted on a surface: a disc of this radius around `center` (a point on the
+// surface), in four black and white quadrants, as total-station photo targets are.
+struct SyntheticMarker {
+  std::string name;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double radius = 0.1;
+};
+
+struct SyntheticScene {
+  std::vector<SyntheticSolid> solids;               // their union is the scene
+  Eigen::Vector3d light = Eigen::Vector3d(0.45, -0.55, 0.70).normalized();  // towards the light
+  std::vector<SyntheticMarker> markers;
+  // The distance along origin + t * direction (t in direction's units) to the first surface, or a
+  // negative value when the ray misses.
+  double RayHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const;
+  // True when `point` (on a surface) is in the camera's frame and not hidden by the scene.
+  bool Sees(const PinholeCamera& camera, const Eigen::Vector3d& point) const;
+};
+// The default scene (the terraced block).
+const SyntheticScene& TerracedBlockScene();
 
 struct SyntheticView {
   std::string name;        // "view_NNN.png"
@@ -41,8 +74,16 @@ struct SyntheticView {
   ImageF depth;            // true camera-frame depth at each pixel centre, metres; 0 = no surface
 };
 
-// Renders the views (in arc order).
+// Renders the default scene's views (in arc order).
 std::vector<SyntheticView> RenderSyntheticViews(const SyntheticViewsOptions& options);
+// Renders `scene` from `cameras` (each with its own size); of `options`, only texture_cell,
+// supersample, noise_sigma, textureless, seed and name_prefix are used. Views in parallel.
+std::vector<SyntheticView> RenderSyntheticScene(const SyntheticScene& scene,
+                                                const std::vector<PinholeCamera>& cameras,
+                                                const SyntheticViewsOptions& options);
+// A pinhole camera at `eye` looking at `target` (z up), with this horizontal field of view.
+PinholeCamera LookAtCamera(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, int width,
+                           int height, double fov_degrees);
 
 // The distance along the ray origin + t * direction (direction need not be unit; t in its units)
 // to the first surface of the scene, or a negative value when the ray misses.
