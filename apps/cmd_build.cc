@@ -26,6 +26,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <unordered_map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -175,30 +176,72 @@ LayerResult Relief(const SceneLayer& l, const std::string& work) {
 }
 
 LayerResult Photogrammetry(const Scene& scene, const SceneLayer& l, const std::string& work) {
-  std::string dense = l.dense;
+  std::string dense = l.dense, workspace = l.workspace;
   LayerResult r;
   r.method = "scanned: photogrammetry (dense multi-view stereo)";
-  if (!l.workspace.empty()) {
+  if (!l.images.empty()) {
+    SfmArgs sfm;
+    sfm.images = l.images;
+    sfm.workspace = (fs::path(work) / (l.name + "_sfm")).string();
+    sfm.max_image_size = l.max_image_size;
+    sfm.max_features = l.max_features;
+    sfm.overwrite = true;
+    if (RunSfm(sfm) != kOk) throw InputError(l.images, "", "structure from motion failed");
+    workspace = (fs::path(sfm.workspace) / "dense").string();
+    r.method = "scanned: photogrammetry (COLMAP structure from motion, dense multi-view stereo)";
+    r.parameters["sfm"] = {{"max_image_size", sfm.max_image_size}, {"max_features", sfm.max_features},
+                           {"camera_model", sfm.camera_model}, {"workspace", sfm.workspace}};
+  }
+  if (!workspace.empty()) {
     DenseArgs d;
-    d.workspace = l.workspace;
+    d.workspace = workspace;
     d.output = (fs::path(work) / (l.name + "_dense.ply")).string();
     d.no_maps = true;
     d.seed = scene.seed;
-    if (RunDense(d) != kOk) throw InputError(l.workspace, "", "dense stereo failed");
+    d.resolution_scale = l.resolution_scale;
+    d.iterations = l.iterations;
+    if (RunDense(d) != kOk) throw InputError(workspace, "", "dense stereo failed");
     dense = d.output;
-    r.parameters["dense"] = {{"iterations", d.iterations}, {"window", d.window}, {"views", d.views}};
+    r.parameters["dense"] = {{"iterations", d.iterations}, {"window", d.window}, {"views", d.views},
+                             {"resolution_scale", d.resolution_scale}};
   }
   if (!l.targets.empty()) {
     GeorefArgs g;
     g.input = dense;
     g.targets = l.targets;
+    if (!l.picks.empty()) g.picks = l.picks, g.model = (fs::path(workspace) / "sparse").string();
     g.output = (fs::path(work) / (l.name + "_georef.ply")).string();
     if (RunGeoref(g) != kOk) throw InputError(l.targets, "", "georeferencing failed");
     dense = g.output;
     r.parameters["georeferenced_by"] = l.targets;
+    const json report = json::parse(ReadFileToString(g.output + ".georef.json"));
+    r.parameters["georef"] = {{"rmse_m", report["rmse"]}, {"scale", report["survey_from_model"]["scale"]},
+                              {"converged", report["converged"]}, {"warnings", report["warnings"]}};
+    if (!l.picks.empty()) r.parameters["picks"] = l.picks;
   }
   r.cloud = ReadAny(dense);
   return r;
+}
+
+// Drops the points of `target` in the voxels (edge `voxel`, render-frame coordinates) that hold
+// >= 3 points of `by`: close-range data superseding a coarse scan where it has data. Both clouds
+// are in the same frame. Returns the number of points dropped.
+size_t ReplaceWhereCovered(const PointCloud& by, double voxel, PointCloud* target) {
+  auto key = [voxel](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d c = (p / voxel).array().floor();
+    // 21 bits per axis around 0: +-2^20 voxels (a 0.5 m voxel covers +-524 km).
+    auto axis = [](double v) { return static_cast<uint64_t>(std::clamp(v, -1048576.0, 1048575.0) + 1048576.0); };
+    return axis(c.x()) << 42 | axis(c.y()) << 21 | axis(c.z());
+  };
+  std::unordered_map<uint64_t, uint32_t> counts;
+  for (const Eigen::Vector3d& p : by.positions)
+    if (p.allFinite()) ++counts[key(p)];
+  std::vector<uint8_t> keep(target->size(), 1);
+  for (size_t i = 0; i < target->size(); ++i) {
+    const auto it = counts.find(key(target->positions[i]));
+    keep[i] = it == counts.end() || it->second < 3;
+  }
+  return target->Keep(keep);
 }
 
 LayerResult Digitize(const Scene& scene, const SceneLayer& l, const std::string& work) {
@@ -307,29 +350,18 @@ LayerResult LoadLayer(const json& checkpoint, const fs::path& points) {
 // world_from_layer, the colour override, the scene's frame; NaN positions are dropped (counted).
 size_t Place(const SceneLayer& l, uint16_t id, const LocalFrame& scene_frame, PointCloud* cloud) {
   PointCloud& c = *cloud;
-  size_t kept = 0, dropped = 0;
+  std::vector<uint8_t> finite(c.size(), 1);
   for (size_t i = 0; i < c.size(); ++i) {
     const Eigen::Vector3d world = l.world_from_layer * c.frame.ToWorld(c.positions[i]);
-    if (!world.allFinite()) {
-      ++dropped;
-      continue;
-    }
-    if (kept != i) {  // compact every present array
-      c.positions[kept] = c.positions[i];
-      if (c.schema.colors) c.colors[kept] = c.colors[i];
-      if (c.schema.alphas) c.alphas[kept] = c.alphas[i];
-      if (c.schema.normals) c.normals[kept] = c.normals[i];
-      if (c.schema.layers) c.layers[kept] = c.layers[i];
-      for (ScalarField& f : c.scalars) f.Set(kept, f.Get(i));
-    }
-    c.positions[kept] = scene_frame.ToLocal(world);
+    finite[i] = world.allFinite();
+    if (!finite[i]) continue;
+    c.positions[i] = scene_frame.ToLocal(world);
     if (c.schema.normals) {
-      const Eigen::Vector3d n = l.world_from_layer.rotation * c.normals[kept].cast<double>();
-      c.normals[kept] = n.cast<float>();
+      const Eigen::Vector3d n = l.world_from_layer.rotation * c.normals[i].cast<double>();
+      c.normals[i] = n.cast<float>();
     }
-    ++kept;
   }
-  c.Resize(kept);
+  const size_t dropped = c.Keep(finite);
   c.frame = scene_frame;
   PointSchema schema = c.schema;
   schema.colors = true;
@@ -447,6 +479,22 @@ int RunBuild(const BuildArgs& args) {
     const SceneLayer& l = scene.layers[k];
     dropped.push_back(Place(l, static_cast<uint16_t>(k), frame, &results[k].cloud));
     if (dropped.back() > 0) LogWarning("layer " + l.name + ": " + std::to_string(dropped.back()) + " points with NaN coordinates dropped");
+  }
+  // Layers that supersede others where they have points (in scene order).
+  std::vector<json> replaced(scene.layers.size(), json::object());
+  for (size_t k = 0; k < scene.layers.size(); ++k) {
+    for (const std::string& name : scene.layers[k].replaces) {
+      const size_t t = static_cast<size_t>(
+          std::find_if(scene.layers.begin(), scene.layers.end(), [&](const SceneLayer& l) { return l.name == name; }) -
+          scene.layers.begin());
+      const size_t n = ReplaceWhereCovered(results[k].cloud, scene.layers[k].replace_voxel, &results[t].cloud);
+      replaced[t][scene.layers[k].name] = n;
+      LogInfo("layer " + scene.layers[k].name + " replaces " + std::to_string(n) + " points of layer " + name +
+              " (" + FormatDouble(scene.layers[k].replace_voxel) + " m cubes)");
+    }
+  }
+  for (size_t k = 0; k < scene.layers.size(); ++k) {
+    const SceneLayer& l = scene.layers[k];
     const std::string file = (out / "layers" / (l.name + ".ply")).string();
     WriteWorldPly(file, results[k].cloud);
     layer_files.push_back(file);
@@ -542,6 +590,7 @@ int RunBuild(const BuildArgs& args) {
                       {"method", results[k].method}, {"parameters", results[k].parameters},
                       {"sources", sources}, {"world_from_layer", matrix}, {"opacity", l.opacity},
                       {"highlight", l.highlight}, {"points", clouds[k].size()}, {"dropped_nan", dropped[k]},
+                      {"replaces", l.replaces}, {"replaced_by", replaced[k]},
                       {"file", "layers/" + l.name + ".ply"}, {"seconds", results[k].seconds},
                       {"resumed", static_cast<bool>(layer_resumed[k])}});
   }

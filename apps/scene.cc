@@ -1,6 +1,7 @@
 #include "apps/scene.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -164,20 +165,32 @@ SceneLayer ParseLayer(const Node& n) {
   l.name = n["name"].String();
   if (!ValidName(l.name)) n["name"].Fail("a layer name is 1-64 characters of A-Z a-z 0-9 _ - (it names files)");
   l.kind = ParseKind(n["kind"]);
-  std::set<std::string> known = {"name", "kind", "world_from_layer", "color", "opacity", "highlight"};
+  std::set<std::string> known = {"name", "kind", "world_from_layer", "color", "opacity", "highlight", "replaces",
+                                 "replace_voxel"};
   switch (l.kind) {
     case LayerKind::kPoints: known.insert({"file", "columns"}); break;
     case LayerKind::kFoundation:
       known.insert({"dxf", "sections", "samples_per_side", "angular_steps", "density", "count", "mode"});
       break;
     case LayerKind::kRelief: known.insert({"panels", "model", "placement", "width_m"}); break;
-    case LayerKind::kPhotogrammetry: known.insert({"dense", "workspace", "targets"}); break;
+    case LayerKind::kPhotogrammetry:
+      known.insert({"dense", "workspace", "images", "targets", "picks", "max_image_size", "max_features", "resolution_scale",
+                     "iterations"});
+      break;
   }
   n.ExpectObject(known);
   if (n.Has("world_from_layer")) l.world_from_layer = ParseTransform(n["world_from_layer"]);
   if (n.Has("color")) l.color = n["color"].Colour();
   if (n.Has("opacity")) l.opacity = n["opacity"].Number(0, 1, true);
   if (n.Has("highlight")) l.highlight = n["highlight"].Bool();
+  if (n.Has("replaces")) {
+    const Node r = n["replaces"];
+    for (size_t i = 0; i < r.ArraySize(); ++i) l.replaces.push_back(r[i].String());  // checked by LoadScene
+  }
+  if (n.Has("replace_voxel")) {
+    if (!n.Has("replaces")) n["replace_voxel"].Fail("only with \"replaces\"");
+    l.replace_voxel = n["replace_voxel"].Number(0, 1000, true);
+  }
   auto require = [&](const char* key) {
     if (!n.Has(key)) n.Fail(std::string("a ") + LayerKindName(l.kind) + " layer needs \"" + key + "\"");
     return n[key];
@@ -231,12 +244,28 @@ SceneLayer ParseLayer(const Node& n) {
       if (n.Has("width_m")) l.width_m = n["width_m"].Number(0, 1000, true);
       break;
     }
-    case LayerKind::kPhotogrammetry:
-      if (n.Has("dense") == n.Has("workspace")) n.Fail("a photogrammetry layer needs exactly one of \"dense\" and \"workspace\"");
+    case LayerKind::kPhotogrammetry: {
+      const int sources = n.Has("dense") + n.Has("workspace") + n.Has("images");
+      if (sources != 1) n.Fail("a photogrammetry layer needs exactly one of \"dense\", \"workspace\" and \"images\"");
       if (n.Has("dense")) l.dense = n["dense"].Path(true);
-      else l.workspace = n["workspace"].Path(true, true);
+      else if (n.Has("workspace")) l.workspace = n["workspace"].Path(true, true);
+      else l.images = n["images"].Path(true, true);
       if (n.Has("targets")) l.targets = n["targets"].Path(true);
+      if (n.Has("picks")) {
+        if (!n.Has("targets")) n["picks"].Fail("picks need \"targets\" (the surveyed coordinates)");
+        if (n.Has("dense")) n["picks"].Fail("picks need the cameras: give \"images\" or \"workspace\", not \"dense\"");
+        l.picks = n["picks"].Path(true);
+      }
+      for (const char* key : {"max_image_size", "max_features"})
+        if (n.Has(key) && !n.Has("images")) n[key].Fail("only with \"images\" (it sets structure from motion)");
+      if (n.Has("max_image_size")) l.max_image_size = static_cast<int>(n["max_image_size"].Integer(64, 100000));
+      if (n.Has("max_features")) l.max_features = static_cast<int>(n["max_features"].Integer(64, 1000000));
+      for (const char* key : {"resolution_scale", "iterations"})
+        if (n.Has(key) && n.Has("dense")) n[key].Fail("dense stereo options need \"images\" or \"workspace\"");
+      if (n.Has("resolution_scale")) l.resolution_scale = n["resolution_scale"].Number(0, 1, true);
+      if (n.Has("iterations")) l.iterations = static_cast<int>(n["iterations"].Integer(1, 100));
       break;
+    }
   }
   return l;
 }
@@ -299,8 +328,16 @@ std::string LayerKindName(LayerKind kind) {
 
 std::vector<std::string> SceneLayer::Sources() const {
   std::vector<std::string> s;
-  for (const std::string* p : {&file, &dxf, &model, &placement, &dense, &targets})
+  for (const std::string* p : {&file, &dxf, &model, &placement, &dense, &targets, &picks})
     if (!p->empty()) s.push_back(*p);
+  if (!images.empty()) {
+    std::vector<std::string> photos;
+    std::error_code ec;
+    for (fs::directory_iterator it(images, ec), end; !ec && it != end; it.increment(ec))
+      if (it->is_regular_file(ec)) photos.push_back(it->path().string());
+    std::sort(photos.begin(), photos.end());
+    s.insert(s.end(), photos.begin(), photos.end());
+  }
   for (const ReliefPanelSpec& p : panels) s.push_back(p.photo.empty() ? p.points : p.photo);
   return s;
 }
@@ -352,6 +389,14 @@ Scene LoadScene(const std::string& path) {
     scene.layers.push_back(ParseLayer(layers[i]));
     if (!names.insert(scene.layers.back().name).second)
       layers[i]["name"].Fail("layer name \"" + scene.layers.back().name + "\" repeats");
+  }
+  for (size_t i = 0; i < scene.layers.size(); ++i) {
+    for (size_t r = 0; r < scene.layers[i].replaces.size(); ++r) {
+      const std::string& other = scene.layers[i].replaces[r];
+      const Node at = layers[i]["replaces"][r];
+      if (!names.count(other)) at.Fail("no layer named \"" + other + "\"");
+      if (other == scene.layers[i].name) at.Fail("a layer cannot replace itself");
+    }
   }
   if (root.Has("views")) {
     const Node views = root["views"];

@@ -27,6 +27,10 @@
 //     "color": [r, g, b],                    override every point's colour
 //     "opacity": 0.5,                        target opacity in (0, 1] (default 1: every point)
 //     "highlight": false,
+//     "replaces": ["building"],              this layer supersedes those where it has points:
+//     "replace_voxel": 0.5,                    their points in the cubes (metres, world frame)
+//                                              holding >= 3 of this layer's points are dropped
+//                                              (close-range data over a coarse scan)
 //     points:         "file": "scan.las", "columns": "xyzrgb" (XYZ/PTS only)
 //     foundation:     "dxf": "foundation.dxf", "sections": ["A", ...], "samples_per_side": 1000,
 //                     "angular_steps": 90, "density": 50 | "count": K, "mode": "auto"|"blend"|"sweep"
@@ -36,8 +40,14 @@
 //                                 model's: coarser, faster; for panels seen only from afar)
 //                     "model": "relief_model.pt" (with photos), "width_m": 2.7,
 //                     "placement": "correspondences.csv" (panel ids as in "panels")
-//     photogrammetry: "dense": "dense.ply" | "workspace": "ws/" (runs candi dense),
-//                     "targets": "targets.csv" (georeference, candi georef's format)
+//     photogrammetry: "dense": "dense.ply" | "workspace": "ws/" (runs candi dense) |
+//                     "images": "photos/" (runs candi sfm, then candi dense),
+//                     "targets": "targets.csv" (georeference, candi georef's format),
+//                     "picks": "picks.csv" (the targets picked in the photos, name,image,u,v in
+//                     the undistorted images; with images or workspace),
+//                     "max_image_size": 1600, "max_features": 4096 (SIFT, images),
+//                     "resolution_scale": 1, "iterations": 3
+//                     (dense stereo; images or workspace)
 //   }]
 // }
 // Unknown keys, wrong types, missing files and bad values throw InputError naming the scene file
@@ -86,7 +96,13 @@ struct SceneLayer {
   std::string model, placement;
   double width_m = 2.7;
   // photogrammetry
-  std::string dense, workspace, targets;
+  std::string dense, workspace, images, targets, picks;
+  int max_image_size = 1600, max_features = 4096;  // sfm (images)
+  double resolution_scale = 1.0;  // dense stereo (images, workspace)
+  int iterations = 3;
+  // Layers this one supersedes (see the format above).
+  std::vector<std::string> replaces;
+  double replace_voxel = 0.5;
   // Every input file of the layer (absolute), for provenance.
   std::vector<std::string> Sources() const;
 };

@@ -54,6 +54,26 @@ void PointCloud::Resize(size_t n) {
   for (ScalarField& f : scalars) f.Resize(n);
 }
 
+size_t PointCloud::Keep(const std::vector<uint8_t>& keep) {
+  CANDI_CHECK(keep.size() == size()) << keep.size() << " flags for " << size() << " points";
+  size_t kept = 0;
+  for (size_t i = 0; i < keep.size(); ++i) {
+    if (!keep[i]) continue;
+    if (kept != i) {  // compact every present array
+      positions[kept] = positions[i];
+      if (schema.colors) colors[kept] = colors[i];
+      if (schema.alphas) alphas[kept] = alphas[i];
+      if (schema.normals) normals[kept] = normals[i];
+      if (schema.layers) layers[kept] = layers[i];
+      for (ScalarField& f : scalars) f.Set(kept, f.Get(i));
+    }
+    ++kept;
+  }
+  const size_t removed = size() - kept;
+  Resize(kept);
+  return removed;
+}
+
 void PointCloud::Reserve(size_t n) {
   positions.reserve(n);
   if (schema.colors) colors.reserve(n);

@@ -110,6 +110,9 @@ struct PointCloud {
   void SetSchema(const PointSchema& new_schema);
   void Resize(size_t n);   // every present array to n entries
   void Reserve(size_t n);
+  // Keeps the points whose flag is non-zero (in order; keep.size() == size()); returns how many
+  // were removed.
+  size_t Keep(const std::vector<uint8_t>& keep);
   void Clear();            // size 0; schema, frame and meta kept
   // Adds a scalar field (zero-filled) and returns its index; throws if the name exists.
   int AddScalarField(const std::string& name, ScalarType type = ScalarType::kFloat32);

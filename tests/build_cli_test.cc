@@ -2,6 +2,7 @@
 // and the scene file's errors (each names the JSON path of the culprit).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -125,6 +126,35 @@ TEST(BuildCli, TwoLayerSceneGivesLayersArchiveRendersProvenanceAndMeshlab) {
 }
 
 // Each bad key, type, path and value: exit code 2 and the JSON path in the message.
+// A layer that replaces another drops the other's points in the 0.5 m cubes it covers (close
+// range over a coarse scan), at survey coordinates; provenance counts them.
+TEST(BuildCli, ReplacingLayerDropsTheCoveredPointsOfTheOther) {
+  TempDir dir;
+  WriteSurveyWall(dir.File("wall.ply"));  // x = 0.0007 + 0.01 i, i < 400; z = 0.01 j, j < 200
+  PointCloud fine;
+  fine.frame.origin = Eigen::Vector3d(416000, 9168000, 250);
+  for (int i = 0; i < 100; ++i)  // x in [0.0057, 1.9857], 2 cm grid: the first four 0.5 m columns
+    for (int j = 0; j < 100; ++j) fine.positions.emplace_back(0.0057 + 0.02 * i, 5.003, 0.02 * j);
+  WritePointCloud(dir.File("fine.ply"), fine);
+  json scene = json::parse(R"({"candi_scene": 1, "seed": 3,
+    "render": {"repeat_level": 4, "width": 64, "height": 48},
+    "layers": [{"name": "wall", "kind": "points", "file": "wall.ply"},
+               {"name": "fine", "kind": "points", "file": "fine.ply", "replaces": ["wall"]}]})");
+  WriteScene(dir.File("scene.json"), scene);
+  const Result r = RunCandi("-q build " + dir.File("scene.json") + " -o " + dir.File("out"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const json a = json::parse(testing::ReadBytes(dir.File("out/archive.json")));
+  EXPECT_EQ(a["layers"][0]["points"], 40000) << "the wall's points at x < 2 m are replaced";
+  EXPECT_EQ(a["layers"][0]["replaced_by"]["fine"], 40000);
+  EXPECT_EQ(a["layers"][1]["points"], 10000);
+  EXPECT_EQ(a["layers"][1]["replaces"], json::array({"wall"}));
+  const PointCloud wall = ReadPointCloud(dir.File("out/layers/wall.ply"));
+  ASSERT_EQ(wall.size(), 40000u);
+  double min_x = 1e300;
+  for (size_t i = 0; i < wall.size(); ++i) min_x = std::min(min_x, wall.WorldPosition(i).x());
+  EXPECT_NEAR(min_x, 416002.0007, 1e-6) << "the survival starts at the first uncovered cube, mm kept";
+}
+
 TEST(BuildCli, SceneErrorsNameTheJsonPathOfTheCulprit) {
   TempDir dir;
   WriteSurveyWall(dir.File("wall.ply"));
@@ -167,6 +197,42 @@ TEST(BuildCli, SceneErrorsNameTheJsonPathOfTheCulprit) {
       {"repeat level 0", [](json& s) { s["render"]["repeat_level"] = 0; }, "/render/repeat_level: out of range"},
       {"huge image", [](json& s) { s["render"]["width"] = 100000; }, "/render/width: out of range"},
       {"NaN-like origin", [](json& s) { s["origin"] = {1, "x", 3}; }, "/origin/1: expected a number"},
+      {"replaces an unknown layer", [](json& s) { s["layers"][0]["replaces"] = {"moat"}; },
+       "/layers/0/replaces/0: no layer named \"moat\""},
+      {"replaces itself", [](json& s) { s["layers"][0]["replaces"] = {"wall"}; },
+       "/layers/0/replaces/0: a layer cannot replace itself"},
+      {"replace_voxel alone", [](json& s) { s["layers"][0]["replace_voxel"] = 0.5; },
+       "/layers/0/replace_voxel: only with \"replaces\""},
+      {"replace_voxel 0", [](json& s) { s["layers"][0]["replaces"] = {"hill"}, s["layers"][0]["replace_voxel"] = 0; },
+       "/layers/0/replace_voxel: out of range"},
+      {"two photogrammetry sources", [](json& s) {
+         s["layers"][0] = {{"name", "wall"}, {"kind", "photogrammetry"}, {"dense", "wall.ply"}, {"images", "."}};
+       }, "/layers/0: a photogrammetry layer needs exactly one of \"dense\", \"workspace\" and \"images\""},
+      {"images not a folder", [](json& s) {
+         s["layers"][0] = {{"name", "wall"}, {"kind", "photogrammetry"}, {"images", "wall.ply"}};
+       }, "/layers/0/images: not a folder"},
+      {"picks without targets", [](json& s) {
+         s["layers"][0] = {{"name", "wall"}, {"kind", "photogrammetry"}, {"images", "."}, {"picks", "wall.ply"}};
+       }, "/layers/0/picks: picks need \"targets\""},
+      {"picks without cameras", [](json& s) {
+         s["layers"][0] = {{"name", "wall"}, {"kind", "photogrammetry"}, {"dense", "wall.ply"}, {"targets", "wall.ply"},
+                           {"picks", "wall.ply"}};
+       }, "/layers/0/picks: picks need the cameras"},
+      {"max_image_size without images", [](json& s) {
+         s["layers"][0] = {{"name", "wall"}, {"kind", "photogrammetry"}, {"workspace", "."}, {"max_image_size", 480}};
+       }, "/layers/0/max_image_size: only with \"images\""},
+      {"max_features on a dense cloud", [](json& s) {
+         s["layers"][0] = {{"name", "wall"}, {"kind", "photogrammetry"}, {"dense", "wall.ply"}, {"max_features", 512}};
+       }, "/layers/0/max_features: only with \"images\""},
+      {"max_image_size 10", [](json& s) {
+         s["layers"][0] = {{"name", "wall"}, {"kind", "photogrammetry"}, {"images", "."}, {"max_image_size", 10}};
+       }, "/layers/0/max_image_size: out of range"},
+      {"stereo options on a dense cloud", [](json& s) {
+         s["layers"][0] = {{"name", "wall"}, {"kind", "photogrammetry"}, {"dense", "wall.ply"}, {"iterations", 2}};
+       }, "/layers/0/iterations: dense stereo options need"},
+      {"resolution_scale 2", [](json& s) {
+         s["layers"][0] = {{"name", "wall"}, {"kind", "photogrammetry"}, {"images", "."}, {"resolution_scale", 2}};
+       }, "/layers/0/resolution_scale: out of range"},
       {"native resolution without a photo", [](json& s) {
          s["layers"][0] = {{"name", "reliefs"}, {"kind", "relief"}, {"placement", "wall.ply"},
                            {"panels", {{{"id", "P1"}, {"points", "wall.ply"}, {"native_resolution", true}}}}};
