@@ -9,8 +9,12 @@
 // comes from examples/borobudur/foundation.dxf through the foundation path. The reliefs: 160
 // Karmawibhangga panels on the original foot wall (156 hidden behind the encasement, 4 visible in
 // the dig), each from a synthetic old photo (relief synth) through the shipped depth model,
-// placed by Ceres from a documented-positions CSV (1 mm survey noise). The demo writes the
-// scene file it builds (out/scene.json), so every step can be repeated with `candi build`.
+// placed by Ceres from a documented-positions CSV (1 mm survey noise). The close range: the
+// excavated corner photographed (photos candi renders of a solid model of the corner, with eight
+// painted total-station targets), reconstructed by COLMAP structure from motion and candi's dense
+// stereo, georeferenced on the targets picked in the photos, and merged over the coarse scan (it
+// replaces the scan's points where it has its own). The demo writes the scene file it builds
+// (out/scene.json), so every step can be repeated with `candi build`.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -25,6 +29,7 @@
 #include "core/point_io.h"
 #include "core/rng.h"
 #include "core/transform.h"
+#include "reconstruction/photogrammetry/synthetic_views.h"
 
 namespace candi::app {
 
@@ -215,6 +220,81 @@ std::string PanelPositionsCsv(const std::vector<int>& panels, uint64_t seed) {
   return csv;
 }
 
+// The close-range survey of the excavated southeast corner. The solid model matches the stand-in
+// (Building) there: the ground, the encasement with the dig, the original foot wall behind it, the
+// thin east end of the dig, the two lowest platforms and a balustrade; eight targets painted on
+// the surfaces (their centres lie on them).
+photogrammetry::SyntheticScene CornerScene() {
+  using photogrammetry::SyntheticBox;
+  photogrammetry::SyntheticScene s;
+  const Eigen::Vector3d stone(0.86, 0.79, 0.66), soil(0.70, 0.62, 0.50);
+  const double e = kEncasementHalf, a0 = kBaseHalf, h = kFootHeight;
+  s.solids = {SyntheticBox({20, -95, -1}, {100, -20, 0}, soil),               // the ground
+              SyntheticBox({20, -e, 0}, {kDigX0, -20, h}, stone),             // the encasement west of the dig
+              SyntheticBox({kDigX0, -a0, 0}, {e, -20, h}, stone),             // the foot and the encasement east
+              SyntheticBox({e - 0.2, -e, 0}, {e, -a0, h}, stone),             // the dig's east end
+              SyntheticBox({20, -51, h}, {51, -20, h + 3.4}, stone),          // first platform
+              SyntheticBox({20, -50.7, h + 3.4}, {50.7, -20, h + 4.6}, stone),  // its balustrade
+              SyntheticBox({20, -45.5, h + 3.4}, {45.5, -20, h + 6.8}, stone)};  // second platform
+  s.light = Eigen::Vector3d(0.55, -0.5, 0.67).normalized();  // morning sun from the south-east
+  s.markers = {{"T1", {46.0, -a0, 3.5}, 0.15},  {"T2", {55.5, -a0, 3.5}, 0.15}, {"T3", {50.0, -58.8, 0}, 0.15},
+               {"T4", {57.5, -59.0, 0}, 0.15},  {"T5", {40.0, -e, 2.5}, 0.15},   {"T6", {43.0, -e, 1.0}, 0.15},
+               {"T7", {45.0, -62.5, 0}, 0.15},  {"T8", {58.0, -62.5, 0}, 0.15}};
+  return s;
+}
+
+// Renders the corner photos into DIR/photos and writes the targets' surveyed coordinates (1 mm
+// noise; T3 and T8 are check targets) and where they are picked in the photos (0.3 px noise).
+struct CornerSurvey {
+  std::string photos, targets, picks;
+  int count = 0, width = 0, height = 0;
+};
+CornerSurvey SurveyCorner(const fs::path& dir, bool quick, uint64_t seed) {
+  const photogrammetry::SyntheticScene scene = CornerScene();
+  CornerSurvey c;
+  c.count = quick ? 8 : 10;
+  c.width = quick ? 360 : 480;
+  c.height = c.width * 3 / 4;
+  std::vector<photogrammetry::PinholeCamera> cameras;
+  for (int k = 0; k < c.count; ++k) {  // a walk along the dig, 8 m in front of the encasement
+    const double x = 38.0 + 26.0 * k / (c.count - 1);
+    cameras.push_back(photogrammetry::LookAtCamera({x, -68.0, 2.2 + 0.4 * (k % 2)},
+                                                   {0.8 * x + 0.2 * 52.4, -57.0, 1.6}, c.width, c.height, 62));
+  }
+  photogrammetry::SyntheticViewsOptions o;
+  o.texture_cell = 0.07;
+  o.supersample = 2;
+  o.seed = seed;
+  o.name_prefix = "corner";
+  const std::vector<photogrammetry::SyntheticView> views = photogrammetry::RenderSyntheticScene(scene, cameras, o);
+  c.photos = (dir / "photos").string();
+  photogrammetry::WriteSyntheticImages(views, c.photos);
+  Rng rng(seed ^ 0x7a26e75ull);
+  std::string targets = "name,E,N,H,role,accuracy\n", picks = "name,image,u,v\n";
+  char line[256];
+  for (const photogrammetry::SyntheticMarker& m : scene.markers) {
+    const Eigen::Vector3d p = m.center + 0.001 * Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal());
+    const bool check = m.name == "T3" || m.name == "T8";
+    std::snprintf(line, sizeof(line), "%s,%.4f,%.4f,%.4f,%s,0.002\n", m.name.c_str(), p.x(), p.y(), p.z(),
+                  check ? "check" : "control");
+    targets += line;
+    for (const photogrammetry::SyntheticView& v : views) {
+      if (!scene.Sees(v.camera, m.center)) continue;
+      const Eigen::Vector2d uv = v.camera.Project(v.camera.ToCamera(m.center));
+      const double margin = 8;
+      if (uv.x() < margin || uv.y() < margin || uv.x() > c.width - margin || uv.y() > c.height - margin) continue;
+      std::snprintf(line, sizeof(line), "%s,%s,%.2f,%.2f\n", m.name.c_str(), v.name.c_str(),
+                    uv.x() + 0.3 * rng.Normal(), uv.y() + 0.3 * rng.Normal());
+      picks += line;
+    }
+  }
+  c.targets = (dir / "targets.csv").string();
+  c.picks = (dir / "picks.csv").string();
+  WriteFileAtomic(c.targets, targets);
+  WriteFileAtomic(c.picks, picks);
+  return c;
+}
+
 }  // namespace
 
 int RunDemo(const DemoArgs& args) {
@@ -267,17 +347,28 @@ int RunDemo(const DemoArgs& args) {
                         {"width_m", kPanelWidth}, {"opacity", 0.9}, {"highlight", true}};
   LogInfo(std::to_string(panels.size()) + " relief panels (" +
           std::to_string(std::count_if(panels.begin(), panels.end(), PanelVisible)) + " visible in the dig)");
+  // The close range: the excavated corner through sfm + dense, over the coarse scan. Reduced to
+  // fit the demo's time: 10 photos of 480x360, 1024 SIFT features each, two PatchMatch rounds at
+  // 0.75 of the photos' resolution (quick: 8 photos of 360x270, stereo at half resolution).
+  const CornerSurvey survey = SurveyCorner(out / "inputs" / "corner", args.quick, args.seed);
+  json corner_layer = {{"name", "corner"}, {"kind", "photogrammetry"}, {"images", survey.photos},
+                       {"targets", survey.targets}, {"picks", survey.picks}, {"max_image_size", survey.width},
+                       {"max_features", 1024}, {"resolution_scale", args.quick ? 0.5 : 0.75}, {"iterations", 2},
+                       {"opacity", 0.25},
+                       {"replaces", {"building"}}, {"replace_voxel", 0.5}};
+  LogInfo("close range: " + std::to_string(survey.count) + " photos of the excavated corner, " +
+          std::to_string(survey.width) + "x" + std::to_string(survey.height));
   json scene = {{"candi_scene", 1}, {"name", "borobudur"}, {"seed", args.seed}};
   scene["render"] = {{"repeat_level", args.quick ? 32 : 100}, {"width", w}, {"height", h},
                      {"background", {255, 255, 255}}};
-  scene["layers"] = json::array({building_layer, foundation_layer, reliefs_layer});
+  scene["layers"] = json::array({building_layer, foundation_layer, reliefs_layer, corner_layer});
   const json overview = Camera({170, -230, 110}, {0, 0, -5}, 38, w, h);
-  // The southeast corner close up: the building and the reliefs, not the hill around it; and the
-  // building alone, so the panels' share of each image can be measured. Opaque close-ups use 3-px
+  // The southeast corner close up: the building, the close range and the reliefs, not the hill
+  // around it; and the same without the reliefs, so the panels' share of each image can be measured. Opaque close-ups use 3-px
   // points so that no gap lets a hidden panel through; see-through ones keep 1-px points, for
   // which the opacity law holds.
-  const json corner_layers = json::array({"building", "reliefs"});
-  const json building_only = json::array({"building"});
+  const json corner_layers = json::array({"building", "corner", "reliefs"});
+  const json building_only = json::array({"building", "corner"});
   const json corner = Camera({72, -84, 6}, {44, -56.5, 1.5}, 40, w, h);
   scene["views"] = {{{"name", "overview_opaque"}, {"camera", overview}, {"opaque", true}},
                     {{"name", "overview_transparent"}, {"camera", overview}},

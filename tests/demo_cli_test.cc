@@ -1,13 +1,16 @@
 // `candi demo --quick`: the reduced Borobudur example end to end (what `make demo` runs, smaller):
-// 12 relief panels on the south foot (8 behind the encasement, 4 in the excavated corner).
+// 12 relief panels on the south foot (8 behind the encasement, 4 in the excavated corner), and the
+// corner's close range through COLMAP structure from motion and dense stereo.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "core/png_io.h"
+#include "core/point_io.h"
 #include "render/camera.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
@@ -76,7 +79,7 @@ TEST(DemoCli, QuickDemoHidesThePanelsBehindTheEncasementAndShowsThemSeeThrough) 
   const testing::CommandResult r = RunCandi("-q demo --quick --width 320 --height 240 -o " + dir.File("demo"));
   ASSERT_EQ(r.code, 0) << r.output;
   const json a = json::parse(testing::ReadBytes(dir.File("demo/archive/archive.json")));
-  ASSERT_EQ(a["layers"].size(), 3u);
+  ASSERT_EQ(a["layers"].size(), 4u);
   EXPECT_EQ(a["layers"][0]["name"], "building");
   EXPECT_EQ(a["layers"][1]["points"], 200000);
   EXPECT_EQ(a["layers"][1]["scanned"], false);
@@ -91,6 +94,29 @@ TEST(DemoCli, QuickDemoHidesThePanelsBehindTheEncasementAndShowsThemSeeThrough) 
     at_photo_resolution += p["prediction"] == "photo resolution";
   }
   EXPECT_EQ(at_photo_resolution, 8u) << "the hidden panels go through the network at their photos' resolution";
+
+  // The close range: photos -> sfm -> dense -> georeferenced on the picked targets, over the scan.
+  const json& corner = a["layers"][3];
+  EXPECT_EQ(corner["name"], "corner");
+  EXPECT_EQ(corner["scanned"], true);
+  EXPECT_NE(corner["method"].get<std::string>().find("structure from motion"), std::string::npos) << corner.dump();
+  EXPECT_GT(corner["points"].get<int>(), 5000) << corner.dump();
+  const json& georef = corner["parameters"]["georef"];
+  EXPECT_EQ(georef["converged"], true) << georef.dump();
+  EXPECT_GE(georef["rmse_m"]["control"]["count"].get<int>(), 3) << georef.dump();
+  EXPECT_LT(georef["rmse_m"]["control"]["3d"].get<double>(), 0.03) << georef.dump();
+  EXPECT_GT(a["layers"][0]["replaced_by"]["corner"].get<int>(), 1000) << "the close range replaces the scan in the dig";
+  // Its points on the exposed foot wall (y = -56.5) lie on it: the whole chain's accuracy.
+  const PointCloud close_range = ReadPointCloud(dir.File("demo/archive/layers/corner.ply"));
+  std::vector<double> off_wall;
+  for (size_t i = 0; i < close_range.size(); ++i) {
+    const Eigen::Vector3d p = close_range.WorldPosition(i);
+    if (p.x() > 46 && p.x() < 55 && p.z() > 0.3 && p.z() < 3.7 && std::abs(p.y() + 56.5) < 0.5)
+      off_wall.push_back(std::abs(p.y() + 56.5));
+  }
+  ASSERT_GT(off_wall.size(), 300u) << "too few close-range points on the foot wall";
+  std::nth_element(off_wall.begin(), off_wall.begin() + off_wall.size() / 2, off_wall.end());
+  EXPECT_LT(off_wall[off_wall.size() / 2], 0.03) << "median distance of the close range to the foot wall, m";
 
   const auto png = [&](const char* name) { return ReadPng(dir.File(std::string("demo/archive/renders/") + name + ".png")).image8; };
   const Image8 opaque = png("corner_opaque"), opaque_building = png("corner_opaque_building");
