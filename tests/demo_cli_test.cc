@@ -116,7 +116,8 @@ TEST(DemoCli, QuickDemoHidesThePanelsBehindTheEncasementAndShowsThemSeeThrough) 
   }
   ASSERT_GT(off_wall.size(), 300u) << "too few close-range points on the foot wall";
   std::nth_element(off_wall.begin(), off_wall.begin() + off_wall.size() / 2, off_wall.end());
-  EXPECT_LT(off_wall[off_wall.size() / 2], 0.03) << "median distance of the close range to the foot wall, m";
+  // Measured 1.8 cm (quick) and 2.0 cm (the full demo): half a stereo pixel at 11 m.
+  EXPECT_LT(off_wall[off_wall.size() / 2], 0.04) << "median distance of the close range to the foot wall, m";
 
   const auto png = [&](const char* name) { return ReadPng(dir.File(std::string("demo/archive/renders/") + name + ".png")).image8; };
   const Image8 opaque = png("corner_opaque"), opaque_building = png("corner_opaque_building");
