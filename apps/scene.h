@@ -28,7 +28,7 @@
 //     "opacity": 0.5,                        target opacity in (0, 1] (default 1: every point)
 //     "highlight": false,
 //     "replaces": ["building"],              this layer supersedes those where it has points:
-//     "replace_voxel": 0.5,                    their points in the cubes (metres, world frame)
+//     "replace_voxel": 0.5,                    their points in the cubes (metres, on the scene frame's grid)
 //                                              holding >= 3 of this layer's points are dropped
 //                                              (close-range data over a coarse scan)
 //     points:         "file": "scan.las", "columns": "xyzrgb" (XYZ/PTS only)
