@@ -223,9 +223,9 @@ LayerResult Photogrammetry(const Scene& scene, const SceneLayer& l, const std::s
   return r;
 }
 
-// Drops the points of `target` in the voxels (edge `voxel`, the scene frame's local coordinates) that hold
-// >= 3 points of `by`: close-range data superseding a coarse scan where it has data. Both clouds
-// are in the same frame. Returns the number of points dropped.
+// Drops the points of `target` in the voxels (edge `voxel`, on the scene frame's local grid) that
+// hold >= 3 points of `by`: close-range data superseding a coarse scan where it has data. Both
+// clouds are in the scene's frame. Returns the number of points dropped.
 size_t ReplaceWhereCovered(const PointCloud& by, double voxel, PointCloud* target) {
   auto key = [voxel](const Eigen::Vector3d& p) {
     const Eigen::Vector3d c = (p / voxel).array().floor();
