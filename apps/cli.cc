@@ -97,8 +97,8 @@ void AddRender(CLI::App& app, RenderArgs& a, std::function<int()>* run) {
   c->add_option("--point-size", a.point_size, "Point size in pixels (>= 1; stochastic rounding)");
   c->add_option("--preview", a.preview, "Render only the first k ensembles (progressive preview)");
   c->add_option("--mode", a.mode, "auto, memory (fast, 10 B/point) or stream (bounded memory)");
-  c->add_option("--memory-budget", a.memory_mb, "Stream mode: MB of z-buffers resident per pass");
-  c->add_option("--chunk-budget", a.chunk_budget_mb, "Archive input: MB of chunks in flight");
+  c->add_option("--memory-budget", a.memory_mb, "Stream mode and archives: MB of z-buffers resident per pass (12 B per pixel and ensemble)");
+  c->add_option("--chunk-budget", a.chunk_budget_mb, "Archive input: MB of chunks mapped at once (8 B a point)");
   c->add_option("--columns", a.columns, "XYZ/PTS column spec");
   c->callback([run, &a] { *run = [&a] { return RunRender(a); }; });
   c->footer("Example: candi render building.ply foundation.ply -o site.png -L 100 --alpha 0.3,0.8");

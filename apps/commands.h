@@ -76,8 +76,8 @@ struct RenderArgs {
   double point_size = 1.0;
   int preview = 0;                    // > 0: only the first k ensembles
   std::string mode = "auto";          // auto | memory | stream
-  double memory_mb = 1024;            // stream mode: z-buffers resident per pass
-  double chunk_budget_mb = 256;       // archive input: chunks in flight (28 bytes a point)
+  double memory_mb = 2048;            // stream mode and archives: z-buffers resident per pass
+  double chunk_budget_mb = 256;       // archive input: chunks mapped at once (8 bytes a point)
   std::string columns;                // XYZ/PTS inputs
 };
 int RunRender(const RenderArgs& args);

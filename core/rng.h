@@ -17,9 +17,13 @@ inline uint64_t Mix64(uint64_t z) {
   return z ^ (z >> 31);
 }
 
+// The part of HashIndex that depends on the seed and stream only, for loops to hoist:
+// HashIndex(seed, index, stream) == Mix64(HashStreamKey(seed, stream) ^ index).
+inline uint64_t HashStreamKey(uint64_t seed, uint64_t stream = 0) { return Mix64(seed ^ Mix64(stream)); }
+
 // A stateless random value for item `index` in stream `stream` under `seed`.
 inline uint64_t HashIndex(uint64_t seed, uint64_t index, uint64_t stream = 0) {
-  return Mix64(Mix64(seed ^ Mix64(stream)) ^ index);
+  return Mix64(HashStreamKey(seed, stream) ^ index);
 }
 
 // Uniform double in [0, 1) from the top 53 bits.

@@ -353,14 +353,32 @@ const uint64_t* Archive::ChunkWords(size_t chunk, bool verify) const {
   return reinterpret_cast<const uint64_t*>(base);
 }
 
-void Archive::Release(size_t chunk) const {
-  const ArchiveChunk& c = manifest_.chunks[chunk];
-  const long page = sysconf(_SC_PAGESIZE);
-  const uint64_t begin = (c.offset + page - 1) / page * page;  // whole pages inside the chunk
-  const uint64_t end = (c.offset + 8 * c.count) / page * page;
-  if (end > begin) {
-    madvise(static_cast<uint8_t*>(maps_[c.file].data) + begin, end - begin, MADV_DONTNEED);
+void Archive::Release(std::vector<size_t> chunks) const {
+  const uint64_t page = static_cast<uint64_t>(sysconf(_SC_PAGESIZE));
+  std::sort(chunks.begin(), chunks.end(), [&](size_t a, size_t b) {
+    const ArchiveChunk &x = manifest_.chunks[a], &y = manifest_.chunks[b];
+    return std::make_pair(x.file, x.offset) < std::make_pair(y.file, y.offset);
+  });
+  // One call per run of adjacent chunks, over the whole pages inside it (a page shared with a
+  // chunk outside the run stays).
+  auto advise = [&](int file, uint64_t begin, uint64_t end) {
+    begin = (begin + page - 1) / page * page;
+    end = end / page * page;
+    if (end > begin) madvise(static_cast<uint8_t*>(maps_[file].data) + begin, end - begin, MADV_DONTNEED);
+  };
+  int file = -1;
+  uint64_t begin = 0, end = 0;
+  for (size_t k : chunks) {
+    CANDI_CHECK_LT(k, manifest_.chunks.size());
+    const ArchiveChunk& c = manifest_.chunks[k];
+    if (c.file == file && c.offset == end) {
+      end += 8 * c.count;
+      continue;
+    }
+    if (file >= 0) advise(file, begin, end);
+    file = c.file, begin = c.offset, end = c.offset + 8 * c.count;
   }
+  if (file >= 0) advise(file, begin, end);
 }
 
 void Archive::ReadChunk(size_t chunk, PointCloud* out, bool verify) const {

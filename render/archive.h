@@ -116,8 +116,11 @@ class Archive {
   // The chunk's words (count of them), mapped. With `verify`, hashes them first and throws
   // InputError naming the data file, the chunk and its offset when they do not match.
   const uint64_t* ChunkWords(size_t chunk, bool verify) const;
-  // Lets the kernel drop the chunk's mapped pages (bounded resident memory while streaming).
-  void Release(size_t chunk) const;
+  // Lets the kernel drop the chunks' mapped pages (bounded resident memory while streaming).
+  // Chunks adjacent in a data file are released by one call: each call makes the kernel flush
+  // the TLBs of every thread of the process.
+  void Release(size_t chunk) const { Release(std::vector<size_t>{chunk}); }
+  void Release(std::vector<size_t> chunks) const;
   // Decodes a chunk into a PointCloud in the archive's frame (positions dequantized, colours).
   void ReadChunk(size_t chunk, PointCloud* out, bool verify = true) const;
   // Every point, dequantized (tests; small archives).

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -70,15 +71,6 @@ bool BoxMayBeVisible(const Camera::Projector& p, const Camera& camera, const Box
 
 namespace {
 
-// The points of one chunk staged for the resident ensembles, grouped by ensemble.
-struct StagedChunk {
-  std::vector<uint32_t> slot;       // per point: resident ensemble - first, or ~0
-  std::vector<uint64_t> offsets;    // K + 1
-  std::vector<float> x, y, z;
-  std::vector<uint32_t> color;
-  std::vector<uint64_t> index;      // archive index (point sizes > 1)
-};
-
 struct ThreadSums {
   Accumulator sums;
   std::array<uint64_t, 256> first_grey{};
@@ -104,7 +96,6 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   const int e_begin = options.ensemble_begin, e_end = options.ensemble_end == 0 ? L : options.ensemble_end;
   const ArchiveManifest& m = archive.manifest();
   const int w = camera.width, h = camera.height;
-  const bool sized = options.point_size != 1.0;
 
   // Transform and projection exactly as SpbrStreamRenderer's (bit-identical images).
   const Camera::Projector projector = camera.MakeProjector();
@@ -118,7 +109,25 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
                                     static_cast<float>(projector.cy), static_cast<float>(projector.near),
                                     true, w, h, 0, h};
 
-  // Resident ensembles per pass.
+  // Visible chunks; each must fit the chunk budget.
+  const double margin = std::ceil(options.point_size) + 2.0;
+  std::vector<size_t> visible;
+  uint64_t visible_points = 0;
+  for (size_t k = 0; k < m.chunks.size(); ++k) {
+    if (!BoxMayBeVisible(projector, camera, m.chunks[k].quantizer.box, margin)) continue;
+    if (m.chunks[k].count * kChunkBytesPerPoint > options.chunk_budget) {
+      throw std::invalid_argument("chunk budget " + std::to_string(options.chunk_budget) + " bytes is smaller than chunk " +
+                                  std::to_string(k) + " of " + archive.directory() + " (" +
+                                  std::to_string(m.chunks[k].count) + " points need " +
+                                  std::to_string(m.chunks[k].count * kChunkBytesPerPoint) + " bytes)");
+    }
+    visible.push_back(k);
+    visible_points += m.chunks[k].count;
+  }
+
+  // Resident ensembles (12 bytes a pixel each) and passes; the threads share the ensembles of a
+  // pass, each drawing its own range of them from every visible point, so no z-buffer is held
+  // twice and none is merged.
   const double frame_bytes = 12.0 * w * h;
   if (options.memory_budget < frame_bytes) {
     throw std::invalid_argument("memory budget " + std::to_string(options.memory_budget >> 20) +
@@ -128,131 +137,103 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   const int count = e_end - e_begin;
   const int per_pass = static_cast<int>(
       std::clamp(std::floor(options.memory_budget / frame_bytes), 1.0, static_cast<double>(std::max(count, 1))));
-  const int passes = count == 0 ? 0 : (count + per_pass - 1) / per_pass;
+  const int passes = count == 0 || visible.empty() ? 0 : (count + per_pass - 1) / per_pass;
+  int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+  threads = std::clamp(threads, 1, per_pass);
 
-  // Visible chunks, and the batches that fit the chunk budget.
-  const uint64_t per_point = kChunkBytesPerPoint + (sized ? 8 : 0);
-  const double margin = std::ceil(options.point_size) + 2.0;
-  std::vector<size_t> visible;
-  uint64_t visible_points = 0;
-  for (size_t k = 0; k < m.chunks.size(); ++k) {
-    if (!BoxMayBeVisible(projector, camera, m.chunks[k].quantizer.box, margin)) continue;
-    if (m.chunks[k].count * per_point > options.chunk_budget) {
-      throw std::invalid_argument("chunk budget " + std::to_string(options.chunk_budget) + " bytes is smaller than chunk " +
-                                  std::to_string(k) + " of " + archive.directory() + " (" +
-                                  std::to_string(m.chunks[k].count) + " points need " +
-                                  std::to_string(m.chunks[k].count * per_point) + " bytes)");
-    }
-    visible.push_back(k);
-    visible_points += m.chunks[k].count;
-  }
-  std::vector<std::pair<size_t, size_t>> batches;  // ranges of `visible`
+  // Groups of visible chunks within the chunk budget (and 64 a thread, for progress): a group's
+  // chunks are drawn, then released together (one TLB flush per run of adjacent chunks).
+  std::vector<std::pair<size_t, size_t>> groups;
   for (size_t i = 0; i < visible.size();) {
     size_t j = i;
     uint64_t bytes = 0;
-    while (j < visible.size() && bytes + m.chunks[visible[j]].count * per_point <= options.chunk_budget) {
-      bytes += m.chunks[visible[j]].count * per_point;
+    while (j < visible.size() && j - i < static_cast<size_t>(64 * threads) &&
+           bytes + m.chunks[visible[j]].count * kChunkBytesPerPoint <= options.chunk_budget) {
+      bytes += m.chunks[visible[j]].count * kChunkBytesPerPoint;
       ++j;
     }
-    batches.push_back({i, j});
+    groups.push_back({i, j});
     i = j;
   }
 
-  std::unique_ptr<tbb::task_arena> arena;
-  if (options.threads > 0) arena = std::make_unique<tbb::task_arena>(options.threads);
+  tbb::task_arena arena(threads);
+  std::unique_ptr<EnsembleBuffers> buffers;
+  if (passes > 0) buffers = std::make_unique<EnsembleBuffers>(w, h, per_pass);
   tbb::enumerable_thread_specific<ThreadSums> sums(w, h);
-  std::vector<BandBuffer> buffers;
-  std::vector<StagedChunk> staged;
-  uint64_t copies = 0, done = 0;
+  std::vector<uint64_t> copies(threads, 0);
+  uint64_t done = 0;
   const uint64_t total_work = visible_points * static_cast<uint64_t>(passes);
 
-  auto run = [&] {
+  arena.execute([&] {
     for (int pass = 0; pass < passes; ++pass) {
       const int first = e_begin + pass * per_pass, last = std::min(e_end, first + per_pass);
       const int K = last - first;
-      buffers.resize(K);
-      for (BandBuffer& buf : buffers) {
-        if (buf.width != w || buf.rows != h) buf.Reset(w, h);
-      }
-      for (const auto& [bi, bj] : batches) {
-        const size_t n = bj - bi;
-        if (staged.size() < n) staged.resize(n);
-        // Stage: decode each chunk's points of the resident ensembles, grouped by ensemble.
-        ParallelFor(size_t{0}, n, [&](size_t j) {
-          const size_t chunk = visible[bi + j];
-          const ArchiveChunk& c = m.chunks[chunk];
-          const uint64_t* words = archive.ChunkWords(chunk, options.verify);
-          StagedChunk& s = staged[j];
-          s.slot.resize(c.count);
-          s.offsets.assign(K + 1, 0);
-          for (uint64_t i = 0; i < c.count; ++i) {
-            const int e = EnsembleOf(options.seed, c.first + i, L);
-            const bool in = e >= first && e < last;
-            s.slot[i] = in ? static_cast<uint32_t>(e - first) : ~uint32_t{0};
-            if (in) ++s.offsets[e - first + 1];
-          }
-          for (int k = 0; k < K; ++k) s.offsets[k + 1] += s.offsets[k];
-          const uint64_t staged_count = s.offsets[K];
-          s.x.resize(staged_count), s.y.resize(staged_count), s.z.resize(staged_count);
-          s.color.resize(staged_count);
-          if (sized) s.index.resize(staged_count);
-          std::vector<uint64_t> next(s.offsets.begin(), s.offsets.end() - 1);
-          const ChunkQuantizer& q = c.quantizer;
-          for (uint64_t i = 0; i < c.count; ++i) {
-            if (s.slot[i] == ~uint32_t{0}) continue;
-            const uint64_t at = next[s.slot[i]]++;
-            const Eigen::Vector3d p = q.Decode(words[i]);
-            s.x[at] = static_cast<float>(p.x());
-            s.y[at] = static_cast<float>(p.y());
-            s.z[at] = static_cast<float>(p.z());
-            s.color[at] = ChunkQuantizer::Color(words[i]);
-            if (sized) s.index[at] = c.first + i;
-          }
-          archive.Release(chunk);
-        });
-        // Splat: each resident ensemble draws its points of every staged chunk.
-        ParallelFor(0, K, [&](int k) {
-          for (size_t j = 0; j < n; ++j) {
-            const StagedChunk& s = staged[j];
-            const uint64_t a = s.offsets[k], e = s.offsets[k + 1];
-            if (a == e) continue;
-            if (!sized) {
-              SplatPoints(transform, projection, &s.x[a], &s.y[a], &s.z[a], &s.color[a], e - a, &buffers[k]);
-            } else {
-              for (uint64_t i = a; i < e; ++i) {
-                SplatPointsSized(transform, projection, &s.x[i], &s.y[i], &s.z[i], &s.color[i], 1,
-                                 {options.point_size, options.seed, s.index[i]}, &buffers[k]);
-              }
+      // Thread t draws the pass's ensembles [K t / T, K (t + 1) / T) and checks the hashes of
+      // every T-th chunk (a corrupt chunk fails the render whichever thread reads it first).
+      auto share = [&](int t, int* begin, int* end) {
+        *begin = static_cast<int>(static_cast<int64_t>(K) * t / threads);
+        *end = static_cast<int>(static_cast<int64_t>(K) * (t + 1) / threads);
+      };
+      auto chunks_of = [&](size_t group) {
+        return std::vector<size_t>(visible.begin() + groups[group].first, visible.begin() + groups[group].second);
+      };
+      for (size_t gi = 0; gi < groups.size(); ++gi) {
+        const auto [g, g_end] = groups[gi];
+        ParallelFor(0, threads, [&](int t) {
+          int k0, k1;
+          share(t, &k0, &k1);
+          if (k0 == k1) {  // no ensembles here (a last pass smaller than the threads): check only
+            for (size_t j = g; j < g_end; ++j) {
+              if (options.verify && j % threads == static_cast<size_t>(t)) archive.ChunkWords(visible[j], true);
             }
+            return;
+          }
+          buffers->Prepare(k0, k1);
+          EnsembleSelection selection;
+          selection.seed = options.seed;
+          selection.repeat_level = L;
+          selection.first = first + k0;
+          selection.count = k1 - k0;
+          selection.base = k0;
+          selection.point_size = options.point_size;
+          for (size_t j = g; j < g_end; ++j) {
+            const ArchiveChunk& c = m.chunks[visible[j]];
+            QuantizedPoints points;
+            points.words = archive.ChunkWords(visible[j], options.verify && j % threads == static_cast<size_t>(t));
+            points.count = c.count;
+            points.first_index = c.first;
+            for (int a = 0; a < 3; ++a) {
+              points.min[a] = c.quantizer.box.min[a];
+              points.step[a] = c.quantizer.step[a];
+              points.bits[a] = c.quantizer.bits[a];
+            }
+            copies[t] += SplatQuantized(transform, projection, points, selection, buffers.get());
           }
         });
-        for (size_t j = 0; j < n; ++j) {
-          copies += staged[j].offsets[K];
-          done += m.chunks[visible[bi + j]].count;
-        }
+        archive.Release(chunks_of(gi));
+        for (size_t j = g; j < g_end; ++j) done += m.chunks[visible[j]].count;
         if (progress) progress(done, total_work);
       }
-      // Drain the pass's ensembles into the sums.
+      // The pass's ensembles into the sums.
       ParallelFor(0, K, [&](int k) {
         ThreadSums& t = sums.local();
         if (first + k == 0) {
-          buffers[k].Drain([&](uint32_t p, uint64_t key) {
+          buffers->Drain(k, [&](uint32_t p, uint64_t key) {
             t.sums.Add(p, key);
             ++t.first_grey[Grey(key)];
           });
         } else {
-          buffers[k].Drain([&](uint32_t p, uint64_t key) { t.sums.Add(p, key); });
+          buffers->Drain(k, [&](uint32_t p, uint64_t key) { t.sums.Add(p, key); });
         }
       });
     }
-  };
-  if (arena) arena->execute(run); else run();
+  });
 
   SpbrResult result;
   result.repeat_level = L;
   result.ensembles = L;
   result.seed = options.seed;
-  result.copies = copies;
+  for (uint64_t c : copies) result.copies += c;
   result.sums = Accumulator(w, h);
   for (const ThreadSums& t : sums) {
     result.sums.Merge(t.sums);
@@ -264,6 +245,7 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
     stats_out->chunks_visible = visible.size();
     stats_out->points_visible = visible_points;
     stats_out->passes = passes;
+    stats_out->threads = threads;
     stats_out->seconds = result.milliseconds / 1000;
   }
   return result;

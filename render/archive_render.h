@@ -26,11 +26,11 @@ struct ArchiveRenderOptions {
   int repeat_level = 100;                       // L, >= 1
   uint64_t seed = 1;
   double point_size = 1.0;                      // pixels, in [1, 64]
-  // Bytes for resident z-buffers (12 bytes a pixel per ensemble): ensembles beyond it take
-  // further passes over the chunks.
+  // Bytes for resident z-buffers (12 bytes a pixel per ensemble, shared by the threads): the
+  // ensembles beyond it take further passes over the chunks.
   uint64_t memory_budget = uint64_t{1} << 30;
-  // Bytes for chunks in flight: kChunkBytesPerPoint a point (mapped data, ensemble ids, staged
-  // float positions and colours; 8 more with point_size > 1). Must hold the largest visible chunk.
+  // Bytes of chunks mapped at once (kChunkBytesPerPoint a point). Must hold the largest visible
+  // chunk.
   uint64_t chunk_budget = uint64_t{256} << 20;
   int threads = 0;                              // 0: as TBB allows
   int ensemble_begin = 0, ensemble_end = 0;     // ensembles drawn here; end 0 = L
@@ -38,12 +38,13 @@ struct ArchiveRenderOptions {
   void Check() const;
 };
 
-inline constexpr uint64_t kChunkBytesPerPoint = 28;
+inline constexpr uint64_t kChunkBytesPerPoint = 8;
 
 struct ArchiveRenderStats {
   uint64_t chunks = 0, chunks_visible = 0;
   uint64_t points_visible = 0;   // points in visible chunks (read once per pass)
   int passes = 0;
+  int threads = 0;                // threads that drew (each its share of a pass's ensembles)
   double seconds = 0;
 };
 

@@ -401,6 +401,39 @@ TEST_F(ArchiveRender, EqualsInMemoryRenderOfDequantizedPointsBitForBit) {
   }
 }
 
+TEST_F(ArchiveRender, ThreadsPassesAndBudgetsGiveTheSameImage) {
+  // The threads share a pass's ensembles: the thread count (capped by the ensembles resident),
+  // the passes and the chunk budget (chunks per group) must not change a bit.
+  const Camera camera = ObliqueView(archive_->manifest().bounds, 96, 72);
+  for (double size : {1.0, 3.5}) {
+    const SpbrResult ref = Reference(*archive_, camera, 10, 3, size);
+    struct Case {
+      int threads;
+      uint64_t memory, chunk;
+      int expect_threads, expect_passes;
+    };
+    const uint64_t frame = 12 * 96 * 72, chunk = 1024 * kChunkBytesPerPoint;
+    for (const Case& c : {Case{1, 10 * frame, 1 * chunk, 1, 1}, Case{2, 20 * frame, 2 * chunk, 2, 1},
+                          Case{3, 20 * frame, 8 * chunk, 3, 1}, Case{3, 6 * frame, 2 * chunk, 3, 2},
+                          Case{2, 1 * frame, 8 * chunk, 1, 10}, Case{3, 2 * frame, 8 * chunk, 2, 5}}) {
+      ArchiveRenderOptions o;
+      o.repeat_level = 10;
+      o.seed = 3;
+      o.point_size = size;
+      o.threads = c.threads;
+      o.memory_budget = c.memory;
+      o.chunk_budget = c.chunk;
+      ArchiveRenderStats stats;
+      const SpbrResult r = RenderArchive(o, camera, *archive_, nullptr, &stats);
+      EXPECT_EQ(stats.threads, c.expect_threads) << c.threads << " threads, " << c.memory / frame << " frames";
+      EXPECT_EQ(stats.passes, c.expect_passes) << c.threads << " threads, " << c.memory / frame << " frames";
+      EXPECT_TRUE(r.sums == ref.sums) << "size " << size << ", " << c.threads << " threads";
+      EXPECT_EQ(r.first_ensemble_grey, ref.first_ensemble_grey);
+      EXPECT_EQ(r.copies, ref.copies);
+    }
+  }
+}
+
 TEST_F(ArchiveRender, EnsembleSharesAddUpToTheWhole) {
   const Camera camera = ObliqueView(archive_->manifest().bounds, 80, 60);
   ArchiveRenderOptions o;

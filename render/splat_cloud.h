@@ -86,8 +86,11 @@ inline uint32_t PackColor(Rgb8 c) {
 
 // The ensemble of point `index` under `seed`, in [0, L): the high bits of a seeded hash scaled
 // by L (Lemire's multiply-shift), independent of threads and chunking.
+inline int EnsembleOfHash(uint64_t hash, int repeat_level) {
+  return static_cast<int>(((hash >> 32) * static_cast<uint64_t>(repeat_level)) >> 32);
+}
 inline int EnsembleOf(uint64_t seed, uint64_t index, int repeat_level) {
-  return static_cast<int>(((HashIndex(seed, index) >> 32) * static_cast<uint64_t>(repeat_level)) >> 32);
+  return EnsembleOfHash(HashIndex(seed, index), repeat_level);
 }
 
 // Calls f(e) for each ensemble of point `index` when it has m copies (m clamped to [0, L]):

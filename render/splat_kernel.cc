@@ -1,8 +1,17 @@
 #include "render/splat_kernel.h"
 
-#include <cstring>
+#include <sys/mman.h>
+#include <unistd.h>
 
+#include <cstring>
+#include <new>
+
+#include "core/check.h"
 #include "core/simd.h"
+
+#ifndef MADV_POPULATE_WRITE
+#define MADV_POPULATE_WRITE 23  // Linux 5.14
+#endif
 
 namespace candi::render {
 
@@ -119,10 +128,10 @@ void SplatLoopF32(const KernelTransform& t, const KernelProjection& p, const flo
   SplatLoop(t, p, x, y, z, colors, n, band);
 }
 
-// A footprint centred on (u, v), clipped to the band: a side x side square, or the pixels whose
-// centres lie within disc_radius when that is > 0.
-void SplatFootprint(const KernelProjection& p, float u, float v, int side, float disc_radius,
-                    uint64_t key, BandBuffer* band) {
+// Calls f(pixel_in_band) for each pixel of a footprint centred on (u, v), clipped to the band: a
+// side x side square, or the pixels whose centres lie within disc_radius when that is > 0.
+template <typename F>
+inline void ForFootprint(const KernelProjection& p, float u, float v, int side, float disc_radius, F&& f) {
   int x0, x1, y0, y1;  // inclusive pixel ranges before clipping
   if (disc_radius > 0.0f) {
     x0 = static_cast<int>(std::floor(u - disc_radius));
@@ -144,37 +153,149 @@ void SplatFootprint(const KernelProjection& p, float u, float v, int side, float
         const float dx = x + 0.5f - u, dy = y + 0.5f - v;
         if (dx * dx + dy * dy > r2) continue;
       }
-      const uint32_t q = static_cast<uint32_t>((y - p.row0) * p.width + x);
-      uint64_t& slot = band->keys[q];
-      if (slot == kEmptyKey) band->filled[band->filled_count++] = q;
-      slot = std::min(slot, key);
+      f(static_cast<uint32_t>((y - p.row0) * p.width + x));
     }
   }
+}
+
+// The stochastic rounding of a point size (see SizedSplat).
+struct SizedShape {
+  int k;          // whole pixels
+  double p_up;    // probability of a (k+1)-pixel square
+  bool disc;      // above 3 pixels: a disc of `radius`
+  float radius;
+  explicit SizedShape(double size)
+      : k(static_cast<int>(std::floor(size))),
+        p_up((size - k) * (2 * k + (size - k)) / (2 * k + 1)),
+        disc(size > 3.0),
+        radius(disc ? static_cast<float>(size / std::sqrt(M_PI)) : 0.0f) {}
+};
+
+// One sized point: calls f(pixel_in_band, key) for each pixel of its footprint.
+template <typename F>
+inline void SplatSizedOne(const KernelTransform& t, const KernelProjection& p, float X, float Y, float Z,
+                          uint32_t color, const SizedShape& shape, uint64_t seed, uint64_t index, F&& f) {
+  const float cx = t.a[0] * X + t.a[1] * Y + t.a[2] * Z + t.b[0];
+  const float cy = t.a[3] * X + t.a[4] * Y + t.a[5] * Z + t.b[1];
+  const float cz = t.a[6] * X + t.a[7] * Y + t.a[8] * Z + t.b[2];
+  if (!(cz > p.near)) return;
+  const float s = p.perspective ? p.focal / cz : p.focal;
+  const float u = p.cx + s * cx, v = p.cy + s * cy;
+  if (!(std::abs(u) < 1e7f && std::abs(v) < 1e7f)) return;
+  const bool up = !shape.disc && ToUnit(HashIndex(seed, index, 0x5157)) < shape.p_up;
+  uint32_t bits;
+  std::memcpy(&bits, &cz, sizeof(bits));
+  const uint64_t key = static_cast<uint64_t>(bits) << 32 | color;
+  ForFootprint(p, u, v, shape.k + (up ? 1 : 0), shape.radius, [&](uint32_t q) { f(q, key); });
 }
 
 template <typename T>
 void SplatPointsSizedImpl(const KernelTransform& t, const KernelProjection& p, const T* x,
                           const T* y, const T* z, const uint32_t* colors, size_t n,
                           const SizedSplat& sized, BandBuffer* band) {
-  const int k = static_cast<int>(std::floor(sized.size));
-  const double f = sized.size - k;
-  const double p_up = f * (2 * k + f) / (2 * k + 1);
-  const bool disc = sized.size > 3.0;
-  const float radius = disc ? static_cast<float>(sized.size / std::sqrt(M_PI)) : 0.0f;
+  const SizedShape shape(sized.size);
   for (size_t i = 0; i < n; ++i) {
-    const float X = static_cast<float>(x[i]), Y = static_cast<float>(y[i]), Z = static_cast<float>(z[i]);
-    const float cx = t.a[0] * X + t.a[1] * Y + t.a[2] * Z + t.b[0];
-    const float cy = t.a[3] * X + t.a[4] * Y + t.a[5] * Z + t.b[1];
-    const float cz = t.a[6] * X + t.a[7] * Y + t.a[8] * Z + t.b[2];
-    if (!(cz > p.near)) continue;
-    const float s = p.perspective ? p.focal / cz : p.focal;
-    const float u = p.cx + s * cx, v = p.cy + s * cy;
-    if (!(std::abs(u) < 1e7f && std::abs(v) < 1e7f)) continue;
-    const bool up = !disc && ToUnit(HashIndex(sized.seed, sized.first_index + i, 0x5157)) < p_up;
-    uint32_t bits;
-    std::memcpy(&bits, &cz, sizeof(bits));
-    SplatFootprint(p, u, v, k + (up ? 1 : 0), radius, static_cast<uint64_t>(bits) << 32 | colors[i], band);
+    SplatSizedOne(t, p, static_cast<float>(x[i]), static_cast<float>(y[i]), static_cast<float>(z[i]), colors[i],
+                  shape, sized.seed, sized.first_index + i, [&](uint32_t q, uint64_t key) {
+                    uint64_t& slot = band->keys[q];
+                    if (slot == kEmptyKey) band->filled[band->filled_count++] = q;
+                    slot = std::min(slot, key);
+                  });
   }
+}
+
+// Exact conversion of an integer below 2^52 to double, in integer and double operations that
+// vectorize (AVX2 has no 64-bit integer conversion): the value placed in the mantissa of 2^52.
+inline double SmallU64ToDouble(uint64_t q) {
+  const uint64_t bits = q | 0x4330000000000000ULL;
+  double d;
+  std::memcpy(&d, &bits, sizeof(d));
+  return d - 4503599627370496.0;  // 2^52
+}
+
+// The inverted z-test (EnsembleBuffers): keep the larger stored value; list pixels drawn first.
+__attribute__((always_inline)) inline void TestInverted(uint32_t p, uint64_t stored, uint64_t* __restrict keys,
+                                                        uint32_t* __restrict filled, size_t* count) {
+  const uint64_t old = keys[p];
+  keys[p] = stored > old ? stored : old;
+  filled[*count] = p;
+  *count += old == 0;
+}
+
+template <bool kPerspective>
+__attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTransform& t, const KernelProjection& p,
+                                                               const QuantizedPoints& in,
+                                                               const EnsembleSelection& sel, EnsembleBuffers* out) {
+  const uint64_t hash_key = HashStreamKey(sel.seed);
+  const uint64_t L = static_cast<uint64_t>(sel.repeat_level);
+  const uint32_t first = static_cast<uint32_t>(sel.first), K = static_cast<uint32_t>(sel.count);
+  const uint32_t spare = out->spare();
+  const int b0 = in.bits[0], b1 = in.bits[1];
+  const uint64_t m0 = (uint64_t{1} << in.bits[0]) - 1, m1 = (uint64_t{1} << in.bits[1]) - 1;
+  const uint64_t m2 = (uint64_t{1} << in.bits[2]) - 1;
+  const double min0 = in.min[0], min1 = in.min[1], min2 = in.min[2];
+  const double s0 = in.step[0], s1 = in.step[1], s2 = in.step[2];
+  const bool sized = sel.point_size != 1.0;
+  const SizedShape shape(sel.point_size);
+  uint64_t* keys = out->keys(sel.base);
+  uint32_t* filled = out->filled(sel.base);
+  size_t* counts = out->counts() + sel.base;
+  const size_t stride = static_cast<size_t>(spare) + 1;
+  uint32_t ensemble[kBatch], chosen[kBatch], chosen_ensemble[kBatch], color[kBatch], pixel[kBatch];
+  float x[kBatch], y[kBatch], z[kBatch];
+  uint64_t key[kBatch];
+  uint64_t drawn = 0;
+  for (uint64_t s = 0; s < in.count; s += kBatch) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(kBatch, in.count - s));
+    const uint64_t* words = in.words + s;
+    const uint64_t index0 = in.first_index + s;
+    // The ensembles, relative to the first resident one (those before it wrap to >= K).
+    for (size_t i = 0; i < n; ++i) {
+      const uint64_t h = Mix64(hash_key ^ (index0 + i));
+      ensemble[i] = static_cast<uint32_t>(((h >> 32) * L) >> 32) - first;
+    }
+    size_t m = 0;
+    for (size_t i = 0; i < n; ++i) {
+      chosen[m] = static_cast<uint32_t>(i);
+      chosen_ensemble[m] = ensemble[i];
+      m += ensemble[i] < K;
+    }
+    for (size_t j = 0; j < m; ++j) {
+      const uint64_t w = words[chosen[j]];
+      const uint64_t q = w >> 24;
+      x[j] = static_cast<float>(min0 + SmallU64ToDouble(q & m0) * s0);
+      y[j] = static_cast<float>(min1 + SmallU64ToDouble((q >> b0) & m1) * s1);
+      z[j] = static_cast<float>(min2 + SmallU64ToDouble((q >> (b0 + b1)) & m2) * s2);
+      color[j] = static_cast<uint32_t>(w & 0xffffff);
+    }
+    drawn += m;
+    if (sized) {
+      for (size_t j = 0; j < m; ++j) {
+        const uint32_t k = chosen_ensemble[j];
+        uint64_t* kk = keys + k * stride;
+        uint32_t* ff = filled + k * stride;
+        SplatSizedOne(t, p, x[j], y[j], z[j], color[j], shape, sel.seed, index0 + chosen[j],
+                      [&](uint32_t q, uint64_t k64) {
+                        const uint64_t old = kk[q];
+                        if (old == 0) ff[counts[k]++] = q;
+                        kk[q] = std::max(old, ~k64);
+                      });
+      }
+      continue;
+    }
+    ProjectBatch<kPerspective>(t, p, spare, x, y, z, color, m, pixel, key);
+    for (size_t j = 0; j < m; ++j) {
+      const uint32_t k = chosen_ensemble[j];
+      TestInverted(pixel[j], ~key[j], keys + k * stride, filled + k * stride, counts + k);
+    }
+  }
+  return drawn;
+}
+
+CANDI_TARGET_CLONES_AVX2
+uint64_t SplatQuantizedImpl(const KernelTransform& t, const KernelProjection& p, const QuantizedPoints& in,
+                            const EnsembleSelection& sel, EnsembleBuffers* out) {
+  return p.perspective ? SplatQuantizedLoop<true>(t, p, in, sel, out) : SplatQuantizedLoop<false>(t, p, in, sel, out);
 }
 
 }  // namespace
@@ -196,6 +317,74 @@ void SplatPointsSized(const KernelTransform& t, const KernelProjection& p, const
                       const float* y, const float* z, const uint32_t* colors, size_t n,
                       const SizedSplat& sized, BandBuffer* band) {
   SplatPointsSizedImpl(t, p, x, y, z, colors, n, sized, band);
+}
+
+uint64_t SplatQuantized(const KernelTransform& t, const KernelProjection& p, const QuantizedPoints& points,
+                        const EnsembleSelection& selection, EnsembleBuffers* buffers) {
+  CANDI_CHECK(selection.base >= 0 && selection.count >= 0 &&
+              selection.base + selection.count <= buffers->ensembles());
+  CANDI_CHECK(p.row0 == 0 && static_cast<size_t>(p.row1) * p.width == buffers->spare());
+  return SplatQuantizedImpl(t, p, points, selection, buffers);
+}
+
+EnsembleBuffers::EnsembleBuffers(int width, int height, int ensembles)
+    : ensembles_(ensembles),
+      pixels_(static_cast<size_t>(width) * height),
+      counts_(ensembles, 0),
+      prepared_(ensembles, 0) {
+  CANDI_CHECK_LT(0, ensembles);
+  key_bytes_ = sizeof(uint64_t) * (pixels_ + 1) * ensembles;
+  filled_bytes_ = sizeof(uint32_t) * (pixels_ + 1) * ensembles;
+  // Anonymous mappings are zero pages until written: no fill, and untouched pages cost nothing.
+  const int flags = MAP_PRIVATE | MAP_ANONYMOUS;
+  void* k = mmap(nullptr, key_bytes_, PROT_READ | PROT_WRITE, flags, -1, 0);
+  if (k == MAP_FAILED) throw std::bad_alloc();
+  void* f = mmap(nullptr, filled_bytes_, PROT_READ | PROT_WRITE, flags, -1, 0);
+  if (f == MAP_FAILED) {
+    munmap(k, key_bytes_);
+    throw std::bad_alloc();
+  }
+  keys_ = static_cast<uint64_t*>(k);
+  filled_ = static_cast<uint32_t*>(f);
+  for (int e = 0; e < ensembles; ++e) keys(e)[pixels_] = ~uint64_t{0};  // the spare slots
+}
+
+void EnsembleBuffers::Prepare(int begin, int end) {
+  CANDI_CHECK(begin >= 0 && begin <= end && end <= ensembles_);
+  while (begin < end && prepared_[begin]) ++begin;
+  while (end > begin && prepared_[end - 1]) --end;
+  if (begin == end) return;
+  const uintptr_t page = static_cast<uintptr_t>(sysconf(_SC_PAGESIZE));
+  auto populate = [&](void* from, void* to) {
+    const uintptr_t a = reinterpret_cast<uintptr_t>(from) / page * page;
+    const uintptr_t b = (reinterpret_cast<uintptr_t>(to) + page - 1) / page * page;
+    if (madvise(reinterpret_cast<void*>(a), b - a, MADV_POPULATE_WRITE) != 0) {
+      // Kernels before 5.14: a write to each page that changes nothing (an atomic or of 0 is a
+      // write fault, so no zero page; other threads may be drawing on a shared boundary page).
+      for (uintptr_t q = a; q < b; q += page) __atomic_fetch_or(reinterpret_cast<uint8_t*>(q), 0, __ATOMIC_RELAXED);
+    }
+  };
+  populate(keys(begin), keys(end));
+  populate(filled(begin), filled(end));
+  for (int k = begin; k < end; ++k) prepared_[k] = 1;
+}
+
+EnsembleBuffers::~EnsembleBuffers() {
+  munmap(keys_, key_bytes_);
+  munmap(filled_, filled_bytes_);
+}
+
+void EnsembleBuffers::Absorb(int k, EnsembleBuffers* other) {
+  CANDI_CHECK(other->pixels_ == pixels_ && k < ensembles_ && k < other->ensembles_);
+  uint64_t* mine = keys(k);
+  uint32_t* list = filled(k);
+  size_t count = counts_[k];
+  other->Drain(k, [&](uint32_t p, uint64_t key) {
+    const uint64_t old = mine[p];
+    if (old == 0) list[count++] = p;
+    mine[p] = std::max(old, ~key);
+  });
+  counts_[k] = count;
 }
 
 }  // namespace candi::render

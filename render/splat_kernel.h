@@ -79,4 +79,80 @@ void SplatPointsSized(const KernelTransform& t, const KernelProjection& p, const
                       const float* y, const float* z, const uint32_t* colors, size_t n,
                       const SizedSplat& sized, BandBuffer* band);
 
+// The resident ensembles of one thread of the archive renderer. Keys are stored inverted (~key:
+// 0 is empty and the nearest point holds the largest value), so the buffers are fresh anonymous
+// pages, zero without a fill, and only the pages a view draws are ever faulted in. Per ensemble:
+// pixels + 1 key slots (the last is the spare slot, holding ~0: never empty, never listed) and
+// the pixels drawn since the last drain. Not thread-safe.
+class EnsembleBuffers {
+ public:
+  EnsembleBuffers(int width, int height, int ensembles);
+  ~EnsembleBuffers();
+  EnsembleBuffers(const EnsembleBuffers&) = delete;
+  EnsembleBuffers& operator=(const EnsembleBuffers&) = delete;
+
+  int ensembles() const { return ensembles_; }
+  uint32_t spare() const { return static_cast<uint32_t>(pixels_); }
+  uint64_t* keys(int k) { return keys_ + static_cast<size_t>(k) * (pixels_ + 1); }
+  uint32_t* filled(int k) { return filled_ + static_cast<size_t>(k) * (pixels_ + 1); }
+  size_t* counts() { return counts_.data(); }
+  // Moves ensemble k of `other` (same size) into this one's, the nearer key per pixel, and
+  // empties other's.
+  void Absorb(int k, EnsembleBuffers* other);
+  // Faults in ensembles [begin, end) writable, so that drawing them takes no page faults: a
+  // first read of a fresh page would map the shared zero page, and the write after it would
+  // then replace it and make the kernel flush the TLBs of every thread of the process. Call it
+  // from the thread that draws them; ensembles already prepared are skipped.
+  void Prepare(int begin, int end);
+  // Calls f(pixel, key) for every pixel ensemble k drew, and empties them: cost ~ pixels drawn.
+  template <typename F>
+  void Drain(int k, F&& f) {
+    uint64_t* key = keys(k);
+    const uint32_t* list = filled(k);
+    for (size_t i = 0; i < counts_[k]; ++i) {
+      const uint32_t p = list[i];
+      f(p, ~key[p]);
+      key[p] = 0;
+    }
+    counts_[k] = 0;
+  }
+
+ private:
+  int ensembles_ = 0;
+  size_t pixels_ = 0;
+  size_t key_bytes_ = 0, filled_bytes_ = 0;
+  uint64_t* keys_ = nullptr;
+  uint32_t* filled_ = nullptr;
+  std::vector<size_t> counts_;
+  std::vector<char> prepared_;
+};
+
+// Quantized points of a render archive chunk: 8-byte words holding the colour (0x00RRGGBB) in
+// the low 24 bits, then x, y, z with bits[0..2] bits each. Decoded exactly as
+// ChunkQuantizer::Decode (min + q * step, in double), then rounded to float.
+struct QuantizedPoints {
+  const uint64_t* words = nullptr;
+  uint64_t count = 0;
+  uint64_t first_index = 0;  // archive index of words[0]
+  double min[3] = {0, 0, 0};
+  double step[3] = {0, 0, 0};
+  int bits[3] = {0, 0, 0};
+};
+
+// Which points a call draws: point i belongs to ensemble EnsembleOf(seed, first_index + i, L);
+// those of ensembles [first, first + count) are drawn into buffers' ensemble (e - first + base).
+struct EnsembleSelection {
+  uint64_t seed = 1;
+  int repeat_level = 1;
+  int first = 0, count = 0;
+  int base = 0;              // base + count <= buffers->ensembles()
+  double point_size = 1.0;   // as SizedSplat, with the archive index as the point's index
+};
+
+// Decodes, selects, projects and z-tests the points in one pass (perspective or orthographic as
+// `p` says; the whole image, rows [0, height)) and returns how many were drawn (in view or not).
+// The keys equal SplatPoints' / SplatPointsSized's for the same float positions.
+uint64_t SplatQuantized(const KernelTransform& t, const KernelProjection& p, const QuantizedPoints& points,
+                    const EnsembleSelection& selection, EnsembleBuffers* buffers);
+
 }  // namespace candi::render

@@ -131,7 +131,7 @@ TEST_F(ArchiveCli, DamagedArchivesAndTooSmallBudgetsAreClearErrors) {
   r = RunCandi("render " + Render(d + "/short", d + "/x"));
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("cannot open archive data file"), std::string::npos) << r.output;
-  r = RunCandi("render " + Render(d + "/arc", d + "/x") + " --chunk-budget 0.01");
+  r = RunCandi("render " + Render(d + "/arc", d + "/x") + " --chunk-budget 0.001");
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_NE(r.output.find("chunk budget"), std::string::npos) << r.output;
   EXPECT_FALSE(FileExists(d + "/x.png"));
