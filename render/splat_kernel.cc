@@ -31,11 +31,12 @@ constexpr size_t kBatch = 256;
 // Phase 1, vectorizable: camera coordinates, the pixel in the band (the spare slot when off the
 // band, behind the near plane or NaN) and the key: the depth's float bits (positive depths order
 // as their bits) above the colour.
-template <bool kPerspective, typename T>
+// With kTiled, the pixel index is EnsembleBuffers' tiled one (tiles_x tiles a row of tiles).
+template <bool kPerspective, bool kTiled = false, typename T>
 __attribute__((always_inline)) inline void ProjectBatch(const KernelTransform& t, const KernelProjection& p, uint32_t spare,
                   const T* __restrict x, const T* __restrict y, const T* __restrict z,
                   const uint32_t* __restrict colors, size_t n, uint32_t* __restrict pixel,
-                  uint64_t* __restrict key) {
+                  uint64_t* __restrict key, uint32_t tiles_x = 0) {
   // Everything in locals: the outputs are arrays the compiler would otherwise assume to alias
   // the parameters, which keeps it from vectorizing.
   const float a0 = t.a[0], a1 = t.a[1], a2 = t.a[2], a3 = t.a[3], a4 = t.a[4], a5 = t.a[5];
@@ -57,7 +58,8 @@ __attribute__((always_inline)) inline void ProjectBatch(const KernelTransform& t
     // Clamped before converting: a float outside int's range must not reach the conversion.
     const int iu = static_cast<int>(std::min(std::max(u, 0.0f), w - 1.0f));
     const int iv = static_cast<int>(std::min(std::max(v, r0), r1 - 1.0f)) - row0;
-    pixel[i] = valid ? static_cast<uint32_t>(iv * width + iu) : spare;
+    const uint32_t index = kTiled ? EnsembleBuffers::TiledIndex(iu, iv, tiles_x) : static_cast<uint32_t>(iv * width + iu);
+    pixel[i] = valid ? index : spare;
     depth[i] = cz;
   }
   for (size_t i = 0; i < n; ++i) {
@@ -128,7 +130,7 @@ void SplatLoopF32(const KernelTransform& t, const KernelProjection& p, const flo
   SplatLoop(t, p, x, y, z, colors, n, band);
 }
 
-// Calls f(pixel_in_band) for each pixel of a footprint centred on (u, v), clipped to the band: a
+// Calls f(x, row_in_band) for each pixel of a footprint centred on (u, v), clipped to the band: a
 // side x side square, or the pixels whose centres lie within disc_radius when that is > 0.
 template <typename F>
 inline void ForFootprint(const KernelProjection& p, float u, float v, int side, float disc_radius, F&& f) {
@@ -153,7 +155,7 @@ inline void ForFootprint(const KernelProjection& p, float u, float v, int side, 
         const float dx = x + 0.5f - u, dy = y + 0.5f - v;
         if (dx * dx + dy * dy > r2) continue;
       }
-      f(static_cast<uint32_t>((y - p.row0) * p.width + x));
+      f(x, y - p.row0);
     }
   }
 }
@@ -171,7 +173,7 @@ struct SizedShape {
         radius(disc ? static_cast<float>(size / std::sqrt(M_PI)) : 0.0f) {}
 };
 
-// One sized point: calls f(pixel_in_band, key) for each pixel of its footprint.
+// One sized point: calls f(x, row_in_band, key) for each pixel of its footprint.
 template <typename F>
 inline void SplatSizedOne(const KernelTransform& t, const KernelProjection& p, float X, float Y, float Z,
                           uint32_t color, const SizedShape& shape, uint64_t seed, uint64_t index, F&& f) {
@@ -186,7 +188,7 @@ inline void SplatSizedOne(const KernelTransform& t, const KernelProjection& p, f
   uint32_t bits;
   std::memcpy(&bits, &cz, sizeof(bits));
   const uint64_t key = static_cast<uint64_t>(bits) << 32 | color;
-  ForFootprint(p, u, v, shape.k + (up ? 1 : 0), shape.radius, [&](uint32_t q) { f(q, key); });
+  ForFootprint(p, u, v, shape.k + (up ? 1 : 0), shape.radius, [&](int x, int y) { f(x, y, key); });
 }
 
 template <typename T>
@@ -196,7 +198,8 @@ void SplatPointsSizedImpl(const KernelTransform& t, const KernelProjection& p, c
   const SizedShape shape(sized.size);
   for (size_t i = 0; i < n; ++i) {
     SplatSizedOne(t, p, static_cast<float>(x[i]), static_cast<float>(y[i]), static_cast<float>(z[i]), colors[i],
-                  shape, sized.seed, sized.first_index + i, [&](uint32_t q, uint64_t key) {
+                  shape, sized.seed, sized.first_index + i, [&](int x, int y, uint64_t key) {
+                    const uint32_t q = static_cast<uint32_t>(y * p.width + x);
                     uint64_t& slot = band->keys[q];
                     if (slot == kEmptyKey) band->filled[band->filled_count++] = q;
                     slot = std::min(slot, key);
@@ -229,7 +232,7 @@ __attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTr
   const uint64_t hash_key = HashStreamKey(sel.seed);
   const uint64_t L = static_cast<uint64_t>(sel.repeat_level);
   const uint32_t first = static_cast<uint32_t>(sel.first), K = static_cast<uint32_t>(sel.count);
-  const uint32_t spare = out->spare();
+  const uint32_t spare = out->spare(), tiles_x = out->tiles_x();
   const int b0 = in.bits[0], b1 = in.bits[1];
   const uint64_t m0 = (uint64_t{1} << in.bits[0]) - 1, m1 = (uint64_t{1} << in.bits[1]) - 1;
   const uint64_t m2 = (uint64_t{1} << in.bits[2]) - 1;
@@ -240,7 +243,7 @@ __attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTr
   uint64_t* keys = out->keys(sel.base);
   uint32_t* filled = out->filled(sel.base);
   size_t* counts = out->counts() + sel.base;
-  const size_t stride = static_cast<size_t>(spare) + 1;
+  const size_t stride = out->stride();
   uint32_t ensemble[kBatch], chosen[kBatch], chosen_ensemble[kBatch], color[kBatch], pixel[kBatch];
   float x[kBatch], y[kBatch], z[kBatch];
   uint64_t key[kBatch];
@@ -275,7 +278,8 @@ __attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTr
         uint64_t* kk = keys + k * stride;
         uint32_t* ff = filled + k * stride;
         SplatSizedOne(t, p, x[j], y[j], z[j], color[j], shape, sel.seed, index0 + chosen[j],
-                      [&](uint32_t q, uint64_t k64) {
+                      [&](int px, int py, uint64_t k64) {
+                        const uint32_t q = EnsembleBuffers::TiledIndex(px, py, tiles_x);
                         const uint64_t old = kk[q];
                         if (old == 0) ff[counts[k]++] = q;
                         kk[q] = std::max(old, ~k64);
@@ -283,7 +287,7 @@ __attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTr
       }
       continue;
     }
-    ProjectBatch<kPerspective>(t, p, spare, x, y, z, color, m, pixel, key);
+    ProjectBatch<kPerspective, true>(t, p, spare, x, y, z, color, m, pixel, key, tiles_x);
     for (size_t j = 0; j < m; ++j) {
       const uint32_t k = chosen_ensemble[j];
       TestInverted(pixel[j], ~key[j], keys + k * stride, filled + k * stride, counts + k);
@@ -323,18 +327,21 @@ uint64_t SplatQuantized(const KernelTransform& t, const KernelProjection& p, con
                         const EnsembleSelection& selection, EnsembleBuffers* buffers) {
   CANDI_CHECK(selection.base >= 0 && selection.count >= 0 &&
               selection.base + selection.count <= buffers->ensembles());
-  CANDI_CHECK(p.row0 == 0 && static_cast<size_t>(p.row1) * p.width == buffers->spare());
+  CANDI_CHECK(p.row0 == 0 && p.row1 == buffers->height() && p.width == buffers->width());
   return SplatQuantizedImpl(t, p, points, selection, buffers);
 }
 
 EnsembleBuffers::EnsembleBuffers(int width, int height, int ensembles)
     : ensembles_(ensembles),
-      pixels_(static_cast<size_t>(width) * height),
+      width_(width),
+      height_(height),
+      tiles_x_(static_cast<uint32_t>((width + kTileWidth - 1) / kTileWidth)),
+      pixels_(static_cast<size_t>(tiles_x_) * ((height + kTileHeight - 1) / kTileHeight) * kTileWidth * kTileHeight),
       counts_(ensembles, 0),
       prepared_(ensembles, 0) {
   CANDI_CHECK_LT(0, ensembles);
-  key_bytes_ = sizeof(uint64_t) * (pixels_ + 1) * ensembles;
-  filled_bytes_ = sizeof(uint32_t) * (pixels_ + 1) * ensembles;
+  key_bytes_ = sizeof(uint64_t) * stride() * ensembles;
+  filled_bytes_ = sizeof(uint32_t) * stride() * ensembles;
   // Anonymous mappings are zero pages until written: no fill, and untouched pages cost nothing.
   const int flags = MAP_PRIVATE | MAP_ANONYMOUS;
   void* k = mmap(nullptr, key_bytes_, PROT_READ | PROT_WRITE, flags, -1, 0);
@@ -374,17 +381,5 @@ EnsembleBuffers::~EnsembleBuffers() {
   munmap(filled_, filled_bytes_);
 }
 
-void EnsembleBuffers::Absorb(int k, EnsembleBuffers* other) {
-  CANDI_CHECK(other->pixels_ == pixels_ && k < ensembles_ && k < other->ensembles_);
-  uint64_t* mine = keys(k);
-  uint32_t* list = filled(k);
-  size_t count = counts_[k];
-  other->Drain(k, [&](uint32_t p, uint64_t key) {
-    const uint64_t old = mine[p];
-    if (old == 0) list[count++] = p;
-    mine[p] = std::max(old, ~key);
-  });
-  counts_[k] = count;
-}
 
 }  // namespace candi::render

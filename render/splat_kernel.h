@@ -79,11 +79,12 @@ void SplatPointsSized(const KernelTransform& t, const KernelProjection& p, const
                       const float* y, const float* z, const uint32_t* colors, size_t n,
                       const SizedSplat& sized, BandBuffer* band);
 
-// The resident ensembles of one thread of the archive renderer. Keys are stored inverted (~key:
-// 0 is empty and the nearest point holds the largest value), so the buffers are fresh anonymous
-// pages, zero without a fill, and only the pages a view draws are ever faulted in. Per ensemble:
-// pixels + 1 key slots (the last is the spare slot, holding ~0: never empty, never listed) and
-// the pixels drawn since the last drain. Not thread-safe.
+// The resident ensembles of the archive renderer. Keys are stored inverted (~key: 0 is empty and
+// the nearest point holds the largest value), so the buffers are fresh anonymous pages, zero
+// without a fill. Pixels are stored in tiles of 32 x 16 (one 4 KB page of keys), so the compact
+// screen footprint of a chunk's points touches few pages of each ensemble. Per ensemble: slots()
+// key slots plus the spare slot (holding ~0: never empty, never listed), and the slots drawn
+// since the last drain. Threads may draw different ensembles at once.
 class EnsembleBuffers {
  public:
   EnsembleBuffers(int width, int height, int ensembles);
@@ -91,14 +92,31 @@ class EnsembleBuffers {
   EnsembleBuffers(const EnsembleBuffers&) = delete;
   EnsembleBuffers& operator=(const EnsembleBuffers&) = delete;
 
+  static constexpr int kTileWidth = 32, kTileHeight = 16;
+  // The slot of pixel (x, y) when a row of tiles holds tiles_x of them.
+  static uint32_t TiledIndex(int x, int y, uint32_t tiles_x) {
+    const uint32_t tile = static_cast<uint32_t>(y / kTileHeight) * tiles_x + static_cast<uint32_t>(x / kTileWidth);
+    return tile * (kTileWidth * kTileHeight) + static_cast<uint32_t>((y % kTileHeight) * kTileWidth + x % kTileWidth);
+  }
+  // The row-major pixel y * width + x of a slot.
+  uint32_t PixelOf(uint32_t slot) const {
+    const uint32_t tile = slot / (kTileWidth * kTileHeight), within = slot % (kTileWidth * kTileHeight);
+    const uint32_t x = (tile % tiles_x_) * kTileWidth + within % kTileWidth;
+    const uint32_t y = (tile / tiles_x_) * kTileHeight + within / kTileWidth;
+    return y * static_cast<uint32_t>(width_) + x;
+  }
+
   int ensembles() const { return ensembles_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  uint32_t tiles_x() const { return tiles_x_; }
   uint32_t spare() const { return static_cast<uint32_t>(pixels_); }
-  uint64_t* keys(int k) { return keys_ + static_cast<size_t>(k) * (pixels_ + 1); }
-  uint32_t* filled(int k) { return filled_ + static_cast<size_t>(k) * (pixels_ + 1); }
+  // Slots from one ensemble to the next: whole tiles plus one for the spare slot, so every
+  // ensemble's keys start on a page.
+  size_t stride() const { return pixels_ + kTileWidth * kTileHeight; }
+  uint64_t* keys(int k) { return keys_ + static_cast<size_t>(k) * stride(); }
+  uint32_t* filled(int k) { return filled_ + static_cast<size_t>(k) * stride(); }
   size_t* counts() { return counts_.data(); }
-  // Moves ensemble k of `other` (same size) into this one's, the nearer key per pixel, and
-  // empties other's.
-  void Absorb(int k, EnsembleBuffers* other);
   // Faults in ensembles [begin, end) writable, so that drawing them takes no page faults: a
   // first read of a fresh page would map the shared zero page, and the write after it would
   // then replace it and make the kernel flush the TLBs of every thread of the process. Call it
@@ -110,16 +128,18 @@ class EnsembleBuffers {
     uint64_t* key = keys(k);
     const uint32_t* list = filled(k);
     for (size_t i = 0; i < counts_[k]; ++i) {
-      const uint32_t p = list[i];
-      f(p, ~key[p]);
-      key[p] = 0;
+      const uint32_t slot = list[i];
+      f(PixelOf(slot), ~key[slot]);
+      key[slot] = 0;
     }
     counts_[k] = 0;
   }
 
  private:
   int ensembles_ = 0;
-  size_t pixels_ = 0;
+  int width_ = 0, height_ = 0;
+  uint32_t tiles_x_ = 0;
+  size_t pixels_ = 0;  // slots: whole tiles
   size_t key_bytes_ = 0, filled_bytes_ = 0;
   uint64_t* keys_ = nullptr;
   uint32_t* filled_ = nullptr;
