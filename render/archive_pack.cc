@@ -163,28 +163,77 @@ struct Keyed {
   uint64_t index;
 };
 
-// LSD radix sort by code on the bits below the first `level` levels (the ones above are equal).
-// 11-bit digits: 2048 buckets keep the scatter's write streams in the caches and the TLB (with
-// 16-bit digits, 65536 streams made every write a miss).
-void RadixSort(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int level) {
-  constexpr int kDigit = 11;
-  constexpr uint64_t kMask = (uint64_t{1} << kDigit) - 1;
-  const int bits = 63 - 3 * level;
-  scratch->resize(keys->size());
-  std::vector<uint64_t> count(size_t{1} << kDigit);
-  for (int shift = 0; shift < bits; shift += kDigit) {
-    std::fill(count.begin(), count.end(), 0);
-    for (const Keyed& k : *keys) ++count[(k.code >> shift) & kMask];
-    if (*std::max_element(count.begin(), count.end()) == keys->size()) continue;  // one bucket
-    uint64_t sum = 0;
-    for (uint64_t& c : count) {
-      const uint64_t n = c;
+// LSD radix sort of keys[a, b) by the code's bits [0, bits), stable, with `temp` as scratch of
+// the same range: 8-bit digits, a digit whose values are all equal skipped. The range is small
+// (one bucket of SortByCode), so the passes stay in the cache.
+void LocalRadixSort(Keyed* keys, Keyed* temp, size_t n, int bits) {
+  uint32_t count[256];
+  Keyed *from = keys, *to = temp;
+  for (int shift = 0; shift < bits; shift += 8) {
+    std::fill(count, count + 256, 0u);
+    for (size_t i = 0; i < n; ++i) ++count[(from[i].code >> shift) & 0xff];
+    if (*std::max_element(count, count + 256) == n) continue;  // one value: already in order
+    uint32_t sum = 0;
+    for (uint32_t& c : count) {
+      const uint32_t m = c;
       c = sum;
-      sum += n;
+      sum += m;
     }
-    for (const Keyed& k : *keys) (*scratch)[count[(k.code >> shift) & kMask]++] = k;
-    keys->swap(*scratch);
+    for (size_t i = 0; i < n; ++i) to[count[(from[i].code >> shift) & 0xff]++] = from[i];
+    std::swap(from, to);
   }
+  if (from != keys) std::copy(from, from + n, keys);
+}
+
+// Stable sort by code on the bits below the first `level` levels (the ones above are equal):
+// one parallel pass buckets the keys by their top 11 remaining bits (slices of the input counted
+// and scattered in parallel, in order, so the result does not depend on the threads), then every
+// bucket is sorted on the rest in the cache, buckets in parallel. Five memory-bound passes of a
+// plain LSD sort become one.
+void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int level) {
+  const int bits = 63 - 3 * level;
+  const size_t n = keys->size();
+  if (bits <= 0 || n < 2) return;
+  constexpr int kTopBits = 11;
+  const int top = std::min(kTopBits, bits), shift = bits - top;
+  const size_t buckets = size_t{1} << top;
+  constexpr size_t kSlices = 16;
+  scratch->resize(n);
+  std::vector<uint64_t> count(kSlices * buckets, 0);
+  auto slice = [&](size_t s) { return std::pair<size_t, size_t>{n * s / kSlices, n * (s + 1) / kSlices}; };
+  const Keyed* in = keys->data();
+  ParallelFor(size_t{0}, kSlices, [&](size_t s) {
+    const auto [a, b] = slice(s);
+    uint64_t* c = &count[s * buckets];
+    for (size_t i = a; i < b; ++i) ++c[(in[i].code >> shift) & (buckets - 1)];
+  });
+  std::vector<uint64_t> bucket_start(buckets + 1, 0);
+  uint64_t sum = 0;
+  for (size_t k = 0; k < buckets; ++k) {
+    bucket_start[k] = sum;
+    for (size_t s = 0; s < kSlices; ++s) {
+      const uint64_t m = count[s * buckets + k];
+      count[s * buckets + k] = sum;
+      sum += m;
+    }
+  }
+  bucket_start[buckets] = sum;
+  Keyed* out = scratch->data();
+  ParallelFor(size_t{0}, kSlices, [&](size_t s) {
+    const auto [a, b] = slice(s);
+    uint64_t* c = &count[s * buckets];
+    for (size_t i = a; i < b; ++i) out[c[(in[i].code >> shift) & (buckets - 1)]++] = in[i];
+  });
+  // Each bucket sorted from scratch back into keys.
+  Keyed* result = keys->data();
+  ParallelFor(tbb::blocked_range<size_t>(0, buckets, 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const size_t a = bucket_start[k], m = bucket_start[k + 1] - a;
+      if (m == 0) continue;
+      LocalRadixSort(out + a, result + a, m, shift);  // sorted in out + a ...
+      std::copy(out + a, out + a + m, result + a);     // ... then moved into keys
+    }
+  });
 }
 
 class CellFile {
@@ -255,7 +304,7 @@ class Packer {
     ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) keys_[i] = {grid_.Code((*points)[i]), i};
     });
-    RadixSort(&keys_, &scratch_, level);
+    SortByCode(&keys_, &scratch_, level);
     sorted_.resize(n);
     ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) sorted_[i] = (*points)[keys_[i].index];
