@@ -82,6 +82,94 @@ inline int Grey(uint64_t key) {
   return (299 * r + 587 * g + 114 * b + 500) / 1000;
 }
 
+// Transform and projection exactly as SpbrStreamRenderer's (bit-identical images).
+struct Kernel {
+  KernelTransform transform;
+  KernelProjection projection;
+};
+Kernel MakeKernel(const Camera::Projector& projector, int w, int h) {
+  Kernel k;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) k.transform.a[3 * r + c] = static_cast<float>(projector.rotation(r, c));
+  }
+  const Eigen::Vector3d b = -(projector.rotation * projector.eye);
+  for (int r = 0; r < 3; ++r) k.transform.b[r] = static_cast<float>(b[r]);
+  k.projection = {static_cast<float>(projector.focal), static_cast<float>(projector.cx),
+                  static_cast<float>(projector.cy), static_cast<float>(projector.near), true, w, h, 0, h};
+  return k;
+}
+
+// The chunks whose boxes may draw a pixel; each must fit the chunk budget.
+std::vector<size_t> VisibleChunks(const ArchiveRenderOptions& options, const Camera& camera,
+                                  const Camera::Projector& projector, const Archive& archive, uint64_t* points) {
+  const ArchiveManifest& m = archive.manifest();
+  const double margin = std::ceil(options.point_size) + 2.0;
+  std::vector<size_t> visible;
+  *points = 0;
+  for (size_t k = 0; k < m.chunks.size(); ++k) {
+    if (!BoxMayBeVisible(projector, camera, m.chunks[k].quantizer.box, margin)) continue;
+    const uint64_t bytes = m.chunks[k].count * kChunkBytesPerPoint;
+    if (bytes > options.chunk_budget) {
+      throw std::invalid_argument("chunk budget " + std::to_string(options.chunk_budget) + " bytes is smaller than chunk " +
+                                  std::to_string(k) + " of " + archive.directory() + " (" +
+                                  std::to_string(m.chunks[k].count) + " points need " + std::to_string(bytes) +
+                                  " bytes)");
+    }
+    visible.push_back(k);
+    *points += m.chunks[k].count;
+  }
+  return visible;
+}
+
+// Groups of the visible chunks (ranges of `visible`) within the chunk budget and of at most
+// `most` chunks: a group's chunks are drawn, then released together (one TLB flush per run of
+// adjacent chunks), and progress is reported between groups.
+std::vector<std::pair<size_t, size_t>> ChunkGroups(const std::vector<size_t>& visible, const ArchiveManifest& m,
+                                                   uint64_t budget, size_t most) {
+  std::vector<std::pair<size_t, size_t>> groups;
+  for (size_t i = 0; i < visible.size();) {
+    size_t j = i;
+    uint64_t bytes = 0;
+    while (j < visible.size() && j - i < most && bytes + m.chunks[visible[j]].count * kChunkBytesPerPoint <= budget) {
+      bytes += m.chunks[visible[j]].count * kChunkBytesPerPoint;
+      ++j;
+    }
+    groups.push_back({i, j});
+    i = j;
+  }
+  return groups;
+}
+
+QuantizedPoints PointsOf(const ArchiveChunk& c, const uint64_t* words) {
+  QuantizedPoints points;
+  points.words = words;
+  points.count = c.count;
+  points.first_index = c.first;
+  for (int a = 0; a < 3; ++a) {
+    points.min[a] = c.quantizer.box.min[a];
+    points.step[a] = c.quantizer.step[a];
+    points.bits[a] = c.quantizer.bits[a];
+  }
+  return points;
+}
+
+// One thread's share of a group: the chunks visible[g, g_end) drawn into the resident ensembles
+// `selection` picks; the thread checks the hashes of the chunks j with j % threads == t (a
+// corrupt chunk fails the render whichever thread reads it first). Returns the points drawn.
+uint64_t DrawShare(const Archive& archive, const std::vector<size_t>& visible, size_t g, size_t g_end, int t,
+                   int threads, bool verify, const Kernel& kernel, const EnsembleSelection& selection,
+                   EnsembleBuffers* buffers) {
+  uint64_t drawn = 0;
+  for (size_t j = g; j < g_end; ++j) {
+    const bool check = verify && j % threads == static_cast<size_t>(t);
+    const uint64_t* words = archive.ChunkWords(visible[j], check);
+    if (selection.count == 0) continue;  // no ensembles here (a last pass smaller than the threads)
+    drawn += SplatQuantized(kernel.transform, kernel.projection, PointsOf(archive.manifest().chunks[visible[j]], words),
+                            selection, buffers);
+  }
+  return drawn;
+}
+
 }  // namespace
 
 SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& camera, const Archive& archive,
@@ -96,34 +184,10 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   const int e_begin = options.ensemble_begin, e_end = options.ensemble_end == 0 ? L : options.ensemble_end;
   const ArchiveManifest& m = archive.manifest();
   const int w = camera.width, h = camera.height;
-
-  // Transform and projection exactly as SpbrStreamRenderer's (bit-identical images).
   const Camera::Projector projector = camera.MakeProjector();
-  KernelTransform transform;
-  for (int r = 0; r < 3; ++r) {
-    for (int k = 0; k < 3; ++k) transform.a[3 * r + k] = static_cast<float>(projector.rotation(r, k));
-  }
-  const Eigen::Vector3d b = -(projector.rotation * projector.eye);
-  for (int r = 0; r < 3; ++r) transform.b[r] = static_cast<float>(b[r]);
-  const KernelProjection projection{static_cast<float>(projector.focal), static_cast<float>(projector.cx),
-                                    static_cast<float>(projector.cy), static_cast<float>(projector.near),
-                                    true, w, h, 0, h};
-
-  // Visible chunks; each must fit the chunk budget.
-  const double margin = std::ceil(options.point_size) + 2.0;
-  std::vector<size_t> visible;
+  const Kernel kernel = MakeKernel(projector, w, h);
   uint64_t visible_points = 0;
-  for (size_t k = 0; k < m.chunks.size(); ++k) {
-    if (!BoxMayBeVisible(projector, camera, m.chunks[k].quantizer.box, margin)) continue;
-    if (m.chunks[k].count * kChunkBytesPerPoint > options.chunk_budget) {
-      throw std::invalid_argument("chunk budget " + std::to_string(options.chunk_budget) + " bytes is smaller than chunk " +
-                                  std::to_string(k) + " of " + archive.directory() + " (" +
-                                  std::to_string(m.chunks[k].count) + " points need " +
-                                  std::to_string(m.chunks[k].count * kChunkBytesPerPoint) + " bytes)");
-    }
-    visible.push_back(k);
-    visible_points += m.chunks[k].count;
-  }
+  const std::vector<size_t> visible = VisibleChunks(options, camera, projector, archive, &visible_points);
 
   // Resident ensembles (12 bytes a pixel each) and passes; the threads share the ensembles of a
   // pass, each drawing its own range of them from every visible point, so no z-buffer is held
@@ -140,21 +204,7 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   const int passes = count == 0 || visible.empty() ? 0 : (count + per_pass - 1) / per_pass;
   int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
   threads = std::clamp(threads, 1, per_pass);
-
-  // Groups of visible chunks within the chunk budget (and 64 a thread, for progress): a group's
-  // chunks are drawn, then released together (one TLB flush per run of adjacent chunks).
-  std::vector<std::pair<size_t, size_t>> groups;
-  for (size_t i = 0; i < visible.size();) {
-    size_t j = i;
-    uint64_t bytes = 0;
-    while (j < visible.size() && j - i < static_cast<size_t>(64 * threads) &&
-           bytes + m.chunks[visible[j]].count * kChunkBytesPerPoint <= options.chunk_budget) {
-      bytes += m.chunks[visible[j]].count * kChunkBytesPerPoint;
-      ++j;
-    }
-    groups.push_back({i, j});
-    i = j;
-  }
+  const auto groups = ChunkGroups(visible, m, options.chunk_budget, static_cast<size_t>(64 * threads));
 
   tbb::task_arena arena(threads);
   std::unique_ptr<EnsembleBuffers> buffers;
@@ -166,29 +216,12 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
 
   arena.execute([&] {
     for (int pass = 0; pass < passes; ++pass) {
-      const int first = e_begin + pass * per_pass, last = std::min(e_end, first + per_pass);
-      const int K = last - first;
-      // Thread t draws the pass's ensembles [K t / T, K (t + 1) / T) and checks the hashes of
-      // every T-th chunk (a corrupt chunk fails the render whichever thread reads it first).
-      auto share = [&](int t, int* begin, int* end) {
-        *begin = static_cast<int>(static_cast<int64_t>(K) * t / threads);
-        *end = static_cast<int>(static_cast<int64_t>(K) * (t + 1) / threads);
-      };
-      auto chunks_of = [&](size_t group) {
-        return std::vector<size_t>(visible.begin() + groups[group].first, visible.begin() + groups[group].second);
-      };
-      for (size_t gi = 0; gi < groups.size(); ++gi) {
-        const auto [g, g_end] = groups[gi];
-        ParallelFor(0, threads, [&](int t) {
-          int k0, k1;
-          share(t, &k0, &k1);
-          if (k0 == k1) {  // no ensembles here (a last pass smaller than the threads): check only
-            for (size_t j = g; j < g_end; ++j) {
-              if (options.verify && j % threads == static_cast<size_t>(t)) archive.ChunkWords(visible[j], true);
-            }
-            return;
-          }
-          buffers->Prepare(k0, k1);
+      const int first = e_begin + pass * per_pass, K = std::min(e_end, first + per_pass) - first;
+      for (const auto& [g, g_end] : groups) {
+        // Thread t draws the pass's ensembles [K t / T, K (t + 1) / T).
+        ParallelFor(0, threads, [&, g = g, g_end = g_end](int t) {
+          const int k0 = static_cast<int>(int64_t{K} * t / threads), k1 = static_cast<int>(int64_t{K} * (t + 1) / threads);
+          if (k1 > k0) buffers->Prepare(k0, k1);
           EnsembleSelection selection;
           selection.seed = options.seed;
           selection.repeat_level = L;
@@ -196,21 +229,9 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
           selection.count = k1 - k0;
           selection.base = k0;
           selection.point_size = options.point_size;
-          for (size_t j = g; j < g_end; ++j) {
-            const ArchiveChunk& c = m.chunks[visible[j]];
-            QuantizedPoints points;
-            points.words = archive.ChunkWords(visible[j], options.verify && j % threads == static_cast<size_t>(t));
-            points.count = c.count;
-            points.first_index = c.first;
-            for (int a = 0; a < 3; ++a) {
-              points.min[a] = c.quantizer.box.min[a];
-              points.step[a] = c.quantizer.step[a];
-              points.bits[a] = c.quantizer.bits[a];
-            }
-            copies[t] += SplatQuantized(transform, projection, points, selection, buffers.get());
-          }
+          copies[t] += DrawShare(archive, visible, g, g_end, t, threads, options.verify, kernel, selection, buffers.get());
         });
-        archive.Release(chunks_of(gi));
+        archive.Release(std::vector<size_t>(visible.begin() + g, visible.begin() + g_end));
         for (size_t j = g; j < g_end; ++j) done += m.chunks[visible[j]].count;
         if (progress) progress(done, total_work);
       }

@@ -28,7 +28,7 @@ struct ArchiveRenderOptions {
   double point_size = 1.0;                      // pixels, in [1, 64]
   // Bytes for resident z-buffers (12 bytes a pixel per ensemble, shared by the threads): the
   // ensembles beyond it take further passes over the chunks.
-  uint64_t memory_budget = uint64_t{1} << 30;
+  uint64_t memory_budget = uint64_t{2} << 30;  // L = 100 at 1024² in one pass
   // Bytes of chunks mapped at once (kChunkBytesPerPoint a point). Must hold the largest visible
   // chunk.
   uint64_t chunk_budget = uint64_t{256} << 20;

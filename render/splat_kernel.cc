@@ -225,54 +225,68 @@ __attribute__((always_inline)) inline void TestInverted(uint32_t p, uint64_t sto
   *count += old == 0;
 }
 
-template <bool kPerspective>
-__attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTransform& t, const KernelProjection& p,
-                                                               const QuantizedPoints& in,
-                                                               const EnsembleSelection& sel, EnsembleBuffers* out) {
-  const uint64_t hash_key = HashStreamKey(sel.seed);
-  const uint64_t L = static_cast<uint64_t>(sel.repeat_level);
-  const uint32_t first = static_cast<uint32_t>(sel.first), K = static_cast<uint32_t>(sel.count);
-  const uint32_t spare = out->spare(), tiles_x = out->tiles_x();
+// The points of a batch whose ensemble (the seeded hash of the archive index, scaled by L) is
+// one of [first, first + K): their positions in the batch and their ensembles - first.
+__attribute__((always_inline)) inline size_t SelectBatch(uint64_t hash_key, uint64_t L, uint32_t first, uint32_t K,
+                                                         uint64_t index0, size_t n, uint32_t* __restrict chosen,
+                                                         uint32_t* __restrict chosen_ensemble) {
+  uint32_t ensemble[kBatch];
+  for (size_t i = 0; i < n; ++i) {  // relative to `first`: those before it wrap to >= K
+    const uint64_t h = Mix64(hash_key ^ (index0 + i));
+    ensemble[i] = static_cast<uint32_t>(((h >> 32) * L) >> 32) - first;
+  }
+  size_t m = 0;
+  for (size_t i = 0; i < n; ++i) {
+    chosen[m] = static_cast<uint32_t>(i);
+    chosen_ensemble[m] = ensemble[i];
+    m += ensemble[i] < K;
+  }
+  return m;
+}
+
+// Positions (ChunkQuantizer::Decode, then float) and colours of the chosen words.
+__attribute__((always_inline)) inline void DecodeBatch(const QuantizedPoints& in, const uint64_t* __restrict words,
+                                                       const uint32_t* __restrict chosen, size_t m, float* __restrict x,
+                                                       float* __restrict y, float* __restrict z,
+                                                       uint32_t* __restrict color) {
   const int b0 = in.bits[0], b1 = in.bits[1];
   const uint64_t m0 = (uint64_t{1} << in.bits[0]) - 1, m1 = (uint64_t{1} << in.bits[1]) - 1;
   const uint64_t m2 = (uint64_t{1} << in.bits[2]) - 1;
   const double min0 = in.min[0], min1 = in.min[1], min2 = in.min[2];
   const double s0 = in.step[0], s1 = in.step[1], s2 = in.step[2];
-  const bool sized = sel.point_size != 1.0;
+  for (size_t j = 0; j < m; ++j) {
+    const uint64_t w = words[chosen[j]];
+    const uint64_t q = w >> 24;
+    x[j] = static_cast<float>(min0 + SmallU64ToDouble(q & m0) * s0);
+    y[j] = static_cast<float>(min1 + SmallU64ToDouble((q >> b0) & m1) * s1);
+    z[j] = static_cast<float>(min2 + SmallU64ToDouble((q >> (b0 + b1)) & m2) * s2);
+    color[j] = static_cast<uint32_t>(w & 0xffffff);
+  }
+}
+
+template <bool kPerspective>
+__attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTransform& t, const KernelProjection& p,
+                                                                   const QuantizedPoints& in,
+                                                                   const EnsembleSelection& sel, EnsembleBuffers* out) {
+  const uint64_t hash_key = HashStreamKey(sel.seed);
+  const uint32_t spare = out->spare(), tiles_x = out->tiles_x();
   const SizedShape shape(sel.point_size);
   uint64_t* keys = out->keys(sel.base);
   uint32_t* filled = out->filled(sel.base);
   size_t* counts = out->counts() + sel.base;
   const size_t stride = out->stride();
-  uint32_t ensemble[kBatch], chosen[kBatch], chosen_ensemble[kBatch], color[kBatch], pixel[kBatch];
+  uint32_t chosen[kBatch], chosen_ensemble[kBatch], color[kBatch], pixel[kBatch];
   float x[kBatch], y[kBatch], z[kBatch];
   uint64_t key[kBatch];
   uint64_t drawn = 0;
   for (uint64_t s = 0; s < in.count; s += kBatch) {
     const size_t n = static_cast<size_t>(std::min<uint64_t>(kBatch, in.count - s));
-    const uint64_t* words = in.words + s;
     const uint64_t index0 = in.first_index + s;
-    // The ensembles, relative to the first resident one (those before it wrap to >= K).
-    for (size_t i = 0; i < n; ++i) {
-      const uint64_t h = Mix64(hash_key ^ (index0 + i));
-      ensemble[i] = static_cast<uint32_t>(((h >> 32) * L) >> 32) - first;
-    }
-    size_t m = 0;
-    for (size_t i = 0; i < n; ++i) {
-      chosen[m] = static_cast<uint32_t>(i);
-      chosen_ensemble[m] = ensemble[i];
-      m += ensemble[i] < K;
-    }
-    for (size_t j = 0; j < m; ++j) {
-      const uint64_t w = words[chosen[j]];
-      const uint64_t q = w >> 24;
-      x[j] = static_cast<float>(min0 + SmallU64ToDouble(q & m0) * s0);
-      y[j] = static_cast<float>(min1 + SmallU64ToDouble((q >> b0) & m1) * s1);
-      z[j] = static_cast<float>(min2 + SmallU64ToDouble((q >> (b0 + b1)) & m2) * s2);
-      color[j] = static_cast<uint32_t>(w & 0xffffff);
-    }
+    const size_t m = SelectBatch(hash_key, static_cast<uint64_t>(sel.repeat_level), static_cast<uint32_t>(sel.first),
+                                 static_cast<uint32_t>(sel.count), index0, n, chosen, chosen_ensemble);
+    DecodeBatch(in, in.words + s, chosen, m, x, y, z, color);
     drawn += m;
-    if (sized) {
+    if (sel.point_size != 1.0) {
       for (size_t j = 0; j < m; ++j) {
         const uint32_t k = chosen_ensemble[j];
         uint64_t* kk = keys + k * stride;
