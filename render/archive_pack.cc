@@ -167,15 +167,15 @@ struct Keyed {
 // the same range: 8-bit digits, a digit whose values are all equal skipped. The range is small
 // (one bucket of SortByCode), so the passes stay in the cache.
 void LocalRadixSort(Keyed* keys, Keyed* temp, size_t n, int bits) {
-  uint32_t count[256];
+  uint64_t count[256];
   Keyed *from = keys, *to = temp;
   for (int shift = 0; shift < bits; shift += 8) {
-    std::fill(count, count + 256, 0u);
+    std::fill(count, count + 256, uint64_t{0});
     for (size_t i = 0; i < n; ++i) ++count[(from[i].code >> shift) & 0xff];
     if (*std::max_element(count, count + 256) == n) continue;  // one value: already in order
-    uint32_t sum = 0;
-    for (uint32_t& c : count) {
-      const uint32_t m = c;
+    uint64_t sum = 0;
+    for (uint64_t& c : count) {
+      const uint64_t m = c;
       c = sum;
       sum += m;
     }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -177,6 +178,59 @@ TEST(Archive, RoundTripWithinBoundInMortonChunksInMemoryAndExternalSortAgree) {
   // The manifest records the source.
   ASSERT_EQ(m.sources.size(), 1u);
   EXPECT_EQ(m.sources[0].points, 30000u);
+}
+
+// True when a precedes b in Morton (Z) order of the 21-bit grid cells ia, ib: the axis whose
+// coordinates differ in the highest bit decides (Chan's comparison; independent of the packer's
+// bit spreading). z is the most significant axis of a 3-bit group, as in the packer's codes.
+bool MortonLess(const std::array<uint32_t, 3>& a, const std::array<uint32_t, 3>& b) {
+  int axis = 2;
+  uint32_t top = a[2] ^ b[2];
+  for (int k : {1, 0}) {
+    const uint32_t d = a[k] ^ b[k];
+    if (top < d && top < (top ^ d)) axis = k, top = d;  // d's highest bit is above top's
+  }
+  return a[axis] < b[axis];
+}
+
+TEST(Archive, PointsAreInMortonOrderForAnyThreadCount) {
+  TempDir dir;
+  const PointCloud cloud = IndexedCloud(20000, Eigen::Vector3d(600000, 5100000, 90));
+  PackOptions o;
+  o.chunk_points = 256;
+  for (int threads : {1, 2}) {
+    o.threads = threads;
+    PackArchive(o, {CloudInput(cloud)}, dir.path() + "/t" + std::to_string(threads));
+  }
+  EXPECT_EQ(ReadBytes(dir.path() + "/t1/data-00000.bin"), ReadBytes(dir.path() + "/t2/data-00000.bin"));
+  // The points come in Morton order of their original positions on the packer's grid (21 bits
+  // per axis over the bounds); ties keep the input order.
+  const Archive archive(dir.path() + "/t2");
+  const PointCloud all = archive.ReadAll();
+  const Box3d& box = archive.manifest().bounds;
+  auto cell = [&](uint64_t i) {
+    const Eigen::Vector3d p = cloud.positions[i] + (cloud.frame.origin - archive.manifest().frame.origin);
+    std::array<uint32_t, 3> q;
+    for (int a = 0; a < 3; ++a) {
+      const double scale = std::ldexp(1.0, 21) / (box.max[a] - box.min[a]);
+      q[a] = static_cast<uint32_t>(std::clamp((p[a] - box.min[a]) * scale, 0.0, std::ldexp(1.0, 21) - 1));
+    }
+    return q;
+  };
+  auto index = [&](size_t k) {
+    const Rgb8 c = all.colors[k];
+    return uint64_t{c.r} << 16 | uint64_t{c.g} << 8 | c.b;
+  };
+  size_t ties = 0;
+  for (size_t k = 1; k < all.size(); ++k) {
+    const auto a = cell(index(k - 1)), b = cell(index(k));
+    ASSERT_FALSE(MortonLess(b, a)) << "points " << k - 1 << " and " << k << " out of Morton order";
+    if (a == b) {
+      ++ties;
+      ASSERT_LT(index(k - 1), index(k)) << "a tie out of input order at " << k;
+    }
+  }
+  EXPECT_LT(ties, all.size() / 10);  // the check compares cells, not one cell throughout
 }
 
 TEST(Archive, PacksPlyFilesRecordingTheirHashes) {
