@@ -170,7 +170,7 @@ int RunBenchScale(const BenchScaleArgs& args) {
       packed.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     std::error_code ec;
-    fs::remove(ply, ec);
+    if (!args.keep) fs::remove(ply, ec);
     if (packed.code != 0) {
       std::printf("%12llu pack failed (exit %d)\n", static_cast<unsigned long long>(n), packed.code);
       ++failures;

@@ -1,6 +1,7 @@
 #include "render/archive_pack.h"
 
 #include <fcntl.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <tbb/blocked_range.h>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <future>
 
 #include "core/atomic_file.h"
 #include "core/interrupt.h"
@@ -266,6 +268,29 @@ class CellFile {
     buffer_.shrink_to_fit();
   }
   uint64_t count() const { return count_ + buffer_.size(); }
+  // The flushed points, memory-mapped (read-only) while the Mapping lives.
+  class Mapping {
+   public:
+    Mapping(void* data, size_t bytes) : data_(data), bytes_(bytes) {}
+    ~Mapping() {
+      if (data_) munmap(data_, bytes_);
+    }
+    Mapping(const Mapping&) = delete;
+    Mapping& operator=(const Mapping&) = delete;
+    const TempPoint* points() const { return static_cast<const TempPoint*>(data_); }
+
+   private:
+    void* data_;
+    size_t bytes_;
+  };
+  Mapping Map() const {
+    const size_t bytes = static_cast<size_t>(count_) * sizeof(TempPoint);
+    if (bytes == 0) return Mapping(nullptr, 0);
+    void* p = mmap(nullptr, bytes, PROT_READ, MAP_PRIVATE, fd_, 0);
+    if (p == MAP_FAILED) throw InputError(path_, "", std::string("cannot map cell file: ") + std::strerror(errno));
+    madvise(p, bytes, MADV_SEQUENTIAL);
+    return Mapping(p, bytes);
+  }
   // Reads points [from, from + n) (after Flush).
   void Read(uint64_t from, size_t n, TempPoint* out) const {
     size_t left = n * sizeof(TempPoint);
@@ -287,6 +312,9 @@ class CellFile {
   std::vector<TempPoint> buffer_;
 };
 
+// Cells routed, and cell files read back, by this many parallel slices.
+constexpr size_t kRouteSlices = 4;
+
 // A source of points in batches: returns false at the end.
 using Batches = std::function<bool(std::vector<TempPoint>*)>;
 
@@ -297,17 +325,16 @@ class Packer {
       : o_(o), dir_(dir), grid_(grid), total_(total), progress_(progress) {}
 
   // Sorts points (all of one cell at `level`) in memory and writes their chunks.
-  void AddCell(std::vector<TempPoint>* points, int level) {
-    const size_t n = points->size();
+  void AddCell(const TempPoint* points, size_t n, int level) {
     if (n == 0) return;
     keys_.resize(n);
     ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) keys_[i] = {grid_.Code((*points)[i]), i};
+      for (size_t i = r.begin(); i < r.end(); ++i) keys_[i] = {grid_.Code(points[i]), i};
     });
     SortByCode(&keys_, &scratch_, level);
     sorted_.resize(n);
     ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) sorted_[i] = (*points)[keys_[i].index];
+      for (size_t i = r.begin(); i < r.end(); ++i) sorted_[i] = points[keys_[i].index];
     });
     ranges_.clear();
     Cut(0, n, level);
@@ -323,7 +350,7 @@ class Packer {
         for (size_t i = 0; i < batch.size(); i += o_.chunk_points) {
           std::vector<TempPoint> part(batch.begin() + i,
                                       batch.begin() + std::min<size_t>(batch.size(), i + o_.chunk_points));
-          AddCell(&part, kMortonBits);
+          AddCell(part.data(), part.size(), kMortonBits);
         }
       }
       return;
@@ -344,7 +371,13 @@ class Packer {
           cell[i] = static_cast<uint16_t>(Prefix(grid_.Code(batch[i]), level + k) & (cells - 1));
         }
       });
-      for (size_t i = 0; i < batch.size(); ++i) files[cell[i]]->Add(batch[i]);
+      // Every slice of the cells appends its points (in batch order, so the files do not depend
+      // on the threads) and writes them: the page-cache copies run in parallel.
+      ParallelFor(size_t{0}, kRouteSlices, [&](size_t slice) {
+        for (size_t i = 0; i < batch.size(); ++i) {
+          if (cell[i] % kRouteSlices == slice) files[cell[i]]->Add(batch[i]);
+        }
+      });
     }
     for (auto& f : files) f->Flush();
     for (size_t c = 0; c < cells; ++c) {
@@ -355,10 +388,13 @@ class Packer {
         continue;
       }
       if (n <= o_.memory_points) {
-        cell_.resize(n);
-        f.Read(0, n, cell_.data());
-        files[c].reset();  // delete the file before sorting: disk stays ~ one copy of the input
-        AddCell(&cell_, level + k);
+        {
+          // Mapped, not copied out of the page cache; the file is deleted as soon as it is
+          // sorted, so disk stays ~ one copy of the input.
+          const CellFile::Mapping mapped = f.Map();
+          AddCell(mapped.points(), static_cast<size_t>(n), level + k);
+        }
+        files[c].reset();
       } else {
         uint64_t next = 0;
         const size_t batch_points = std::max<size_t>(1, o_.memory_points / 4);
@@ -476,7 +512,7 @@ class Packer {
   uint64_t total_;
   ProgressCallback progress_;
   std::vector<Keyed> keys_, scratch_;
-  std::vector<TempPoint> sorted_, cell_;
+  std::vector<TempPoint> sorted_;
   std::vector<uint64_t> words_;
   std::vector<std::pair<size_t, size_t>> ranges_;
   std::vector<ArchiveChunk> chunks_;
@@ -573,6 +609,24 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   ArchiveManifest manifest;
   manifest.chunk_points = options.chunk_points;
 
+  // The input files' hashes for the manifest, read on another thread while pass 1 (one thread)
+  // reads the points. The future's destructor waits for it if packing fails.
+  struct SourceHashes {
+    std::vector<uint64_t> hash, bytes;
+    double seconds = 0;
+  };
+  std::future<SourceHashes> source_hashes = std::async(std::launch::async, [&inputs] {
+    const auto t0 = std::chrono::steady_clock::now();
+    SourceHashes h;
+    h.hash.resize(inputs.size(), 0);
+    h.bytes.resize(inputs.size(), 0);
+    for (size_t k = 0; k < inputs.size(); ++k) {
+      if (!inputs[k].path.empty()) h.hash[k] = HashFile(inputs[k].path, &h.bytes[k]);
+    }
+    h.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return h;
+  });
+
   // Pass 1: bounds and counts (headers when they state both).
   Box3d world;
   uint64_t total = 0;
@@ -596,6 +650,10 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   }
   for (uint64_t c : counts) total += c;
   if (total == 0 || world.IsEmpty()) throw InputError("nothing to pack: the inputs hold no points");
+  auto since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
+  summary.bounds_seconds = since(start);
   manifest.frame = RenderFrameFor(world);
   MortonGrid grid;
   const Box3d local = world.Translated(-manifest.frame.origin);
@@ -630,7 +688,7 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
       std::vector<TempPoint> all, batch;
       all.reserve(total);
       while (batches(&batch)) all.insert(all.end(), batch.begin(), batch.end());
-      packer.AddCell(&all, 0);
+      packer.AddCell(all.data(), all.size(), 0);
     } else {
       packer.Spill([&batches](std::vector<TempPoint>* out) { return batches(out); }, total, 0);
     }
@@ -638,7 +696,9 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
     summary.spilled_points = packer.spilled();
     for (int a = 0; a < 3; ++a) summary.max_error[a] = packer.max_error()[a];
   };
+  const auto sort_start = std::chrono::steady_clock::now();
   if (arena) arena->execute(run); else run();
+  summary.sort_seconds = since(sort_start);
 
   manifest.points = manifest.chunks.empty() ? 0 : manifest.chunks.back().first + manifest.chunks.back().count;
   if (manifest.points != total) {
@@ -647,13 +707,16 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
                                                   " on the first (did a file change?)");
   }
   manifest.bounds = local;
+  const SourceHashes hashes = source_hashes.get();
   for (size_t k = 0; k < inputs.size(); ++k) {
     ArchiveSource src;
     src.path = inputs[k].path.empty() ? inputs[k].name : inputs[k].path;
     src.points = counts[k];
-    if (!inputs[k].path.empty()) src.hash = HashFile(inputs[k].path, &src.bytes);
+    src.hash = hashes.hash[k];
+    src.bytes = hashes.bytes[k];
     manifest.sources.push_back(src);
   }
+  summary.hash_seconds = hashes.seconds;
   WriteFileAtomic(temp + "/" + kArchiveManifest, manifest.ToJson());
   CommitTempPath(cleanup.interrupt_id, [&] {
     Publish(temp, out_path.string());

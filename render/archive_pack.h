@@ -50,6 +50,9 @@ struct PackSummary {
   uint64_t points = 0, chunks = 0, files = 0, bytes = 0;
   uint64_t spilled_points = 0;  // points that went through cell files on disk (external sort)
   double seconds = 0;           // whole pack, including bounds and hashing
+  // Its stages: the bounds (pass 1), reading, sorting and writing the chunks (pass 2), and
+  // hashing the input files for the manifest (on another thread, during pass 1).
+  double bounds_seconds = 0, sort_seconds = 0, hash_seconds = 0;
   double max_error[3] = {0, 0, 0};  // largest quantization step / 2 over the chunks, m
 };
 
