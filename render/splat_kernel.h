@@ -82,9 +82,9 @@ void SplatPointsSized(const KernelTransform& t, const KernelProjection& p, const
 // The resident ensembles of the archive renderer. Keys are stored inverted (~key: 0 is empty and
 // the nearest point holds the largest value), so the buffers are fresh anonymous pages, zero
 // without a fill. Pixels are stored in tiles of 32 x 16 (one 4 KB page of keys), so the compact
-// screen footprint of a chunk's points touches few pages of each ensemble. Per ensemble: slots()
-// key slots plus the spare slot (holding ~0: never empty, never listed), and the slots drawn
-// since the last drain. Threads may draw different ensembles at once.
+// screen footprint of a chunk's points touches few pages of each ensemble. Per ensemble: stride()
+// key slots, the whole tiles then the spare slot (holding ~0: never empty, never listed), and the
+// slots drawn since the last drain. Threads may draw different ensembles at once.
 class EnsembleBuffers {
  public:
   EnsembleBuffers(int width, int height, int ensembles);
@@ -173,6 +173,6 @@ struct EnsembleSelection {
 // `p` says; the whole image, rows [0, height)) and returns how many were drawn (in view or not).
 // The keys equal SplatPoints' / SplatPointsSized's for the same float positions.
 uint64_t SplatQuantized(const KernelTransform& t, const KernelProjection& p, const QuantizedPoints& points,
-                    const EnsembleSelection& selection, EnsembleBuffers* buffers);
+                        const EnsembleSelection& selection, EnsembleBuffers* buffers);
 
 }  // namespace candi::render
