@@ -153,15 +153,18 @@ QuantizedPoints PointsOf(const ArchiveChunk& c, const uint64_t* words) {
   return points;
 }
 
-// One thread's share of a group: the chunks visible[g, g_end) drawn into the resident ensembles
-// `selection` picks; the thread checks the hashes of the chunks j with j % threads == t (a
-// corrupt chunk fails the render whichever thread reads it first). Returns the points drawn.
-uint64_t DrawShare(const Archive& archive, const std::vector<size_t>& visible, size_t g, size_t g_end, int t,
-                   int threads, bool verify, const Kernel& kernel, const EnsembleSelection& selection,
-                   EnsembleBuffers* buffers) {
+// One thread's share of a group. The threads form `replicas` groups, each drawing every
+// replicas-th chunk into its own copy of the z-buffers; within a replica, `sharers` threads
+// split the ensembles (`selection`: this thread's). Thread t = sharer * replicas + replica; it
+// checks the hashes of the chunks it is the first to read in its replica's turn (a corrupt chunk
+// fails the render whichever thread reads it first). Returns the points drawn.
+uint64_t DrawShare(const Archive& archive, const std::vector<size_t>& visible, size_t g, size_t g_end, int replica,
+                   int replicas, int sharer, int sharers, bool verify, const Kernel& kernel,
+                   const EnsembleSelection& selection, EnsembleBuffers* buffers) {
   uint64_t drawn = 0;
   for (size_t j = g; j < g_end; ++j) {
-    const bool check = verify && j % threads == static_cast<size_t>(t);
+    if (j % replicas != static_cast<size_t>(replica)) continue;
+    const bool check = verify && (j / replicas) % sharers == static_cast<size_t>(sharer);
     const uint64_t* words = archive.ChunkWords(visible[j], check);
     if (selection.count == 0) continue;  // no ensembles here (a last pass smaller than the threads)
     drawn += SplatQuantized(kernel.transform, kernel.projection, PointsOf(archive.manifest().chunks[visible[j]], words),
@@ -189,9 +192,12 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   uint64_t visible_points = 0;
   const std::vector<size_t> visible = VisibleChunks(options, camera, projector, archive, &visible_points);
 
-  // Resident ensembles (12 bytes a pixel each) and passes; the threads share the ensembles of a
+  // Resident ensembles (12 bytes a pixel each) and passes. The threads share the ensembles of a
   // pass, each drawing its own range of them from every visible point, so no z-buffer is held
-  // twice and none is merged.
+  // twice and none is merged. With fewer ensembles than threads (opaque renders, small L, a
+  // rank's small share) that would idle threads: then, budget permitting, every thread draws its
+  // share of the chunks into its own copy of all the z-buffers, min-merged at the end (the image
+  // does not change: the nearest key per pixel is the nearest of the copies').
   const double frame_bytes = 12.0 * w * h;
   if (options.memory_budget < frame_bytes) {
     throw std::invalid_argument("memory budget " + std::to_string(options.memory_budget >> 20) +
@@ -202,13 +208,19 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   const int per_pass = static_cast<int>(
       std::clamp(std::floor(options.memory_budget / frame_bytes), 1.0, static_cast<double>(std::max(count, 1))));
   const int passes = count == 0 || visible.empty() ? 0 : (count + per_pass - 1) / per_pass;
-  int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
-  threads = std::clamp(threads, 1, per_pass);
+  const int wanted = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+  int replicas = 1, sharers = std::clamp(wanted, 1, per_pass);
+  if (passes == 1 && wanted > per_pass) {
+    const double copies_fit = std::floor(options.memory_budget / (frame_bytes * per_pass));
+    replicas = static_cast<int>(std::clamp(copies_fit, 1.0, static_cast<double>(std::min<size_t>(wanted, visible.size()))));
+    if (replicas > 1) sharers = 1;
+  }
+  const int threads = replicas * sharers;
   const auto groups = ChunkGroups(visible, m, options.chunk_budget, static_cast<size_t>(64 * threads));
 
   tbb::task_arena arena(threads);
-  std::unique_ptr<EnsembleBuffers> buffers;
-  if (passes > 0) buffers = std::make_unique<EnsembleBuffers>(w, h, per_pass);
+  std::vector<std::unique_ptr<EnsembleBuffers>> buffers(passes > 0 ? replicas : 0);
+  for (auto& b : buffers) b = std::make_unique<EnsembleBuffers>(w, h, per_pass);
   tbb::enumerable_thread_specific<ThreadSums> sums(w, h);
   std::vector<uint64_t> copies(threads, 0);
   uint64_t done = 0;
@@ -218,10 +230,13 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
     for (int pass = 0; pass < passes; ++pass) {
       const int first = e_begin + pass * per_pass, K = std::min(e_end, first + per_pass) - first;
       for (const auto& [g, g_end] : groups) {
-        // Thread t draws the pass's ensembles [K t / T, K (t + 1) / T).
         ParallelFor(0, threads, [&, g = g, g_end = g_end](int t) {
-          const int k0 = static_cast<int>(int64_t{K} * t / threads), k1 = static_cast<int>(int64_t{K} * (t + 1) / threads);
-          if (k1 > k0) buffers->Prepare(k0, k1);
+          // Sharer s of a replica draws the pass's ensembles [K s / S, K (s + 1) / S).
+          const int replica = t % replicas, sharer = t / replicas;
+          const int k0 = static_cast<int>(int64_t{K} * sharer / sharers);
+          const int k1 = static_cast<int>(int64_t{K} * (sharer + 1) / sharers);
+          EnsembleBuffers* mine = buffers[replica].get();
+          if (k1 > k0) mine->Prepare(k0, k1);
           EnsembleSelection selection;
           selection.seed = options.seed;
           selection.repeat_level = L;
@@ -229,22 +244,24 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
           selection.count = k1 - k0;
           selection.base = k0;
           selection.point_size = options.point_size;
-          copies[t] += DrawShare(archive, visible, g, g_end, t, threads, options.verify, kernel, selection, buffers.get());
+          copies[t] += DrawShare(archive, visible, g, g_end, replica, replicas, sharer, sharers, options.verify, kernel,
+                                 selection, mine);
         });
         archive.Release(std::vector<size_t>(visible.begin() + g, visible.begin() + g_end));
         for (size_t j = g; j < g_end; ++j) done += m.chunks[visible[j]].count;
         if (progress) progress(done, total_work);
       }
-      // The pass's ensembles into the sums.
+      // The pass's ensembles (the copies merged first) into the sums.
       ParallelFor(0, K, [&](int k) {
+        for (int r = 1; r < replicas; ++r) buffers[0]->Absorb(k, buffers[r].get());
         ThreadSums& t = sums.local();
         if (first + k == 0) {
-          buffers->Drain(k, [&](uint32_t p, uint64_t key) {
+          buffers[0]->Drain(k, [&](uint32_t p, uint64_t key) {
             t.sums.Add(p, key);
             ++t.first_grey[Grey(key)];
           });
         } else {
-          buffers->Drain(k, [&](uint32_t p, uint64_t key) { t.sums.Add(p, key); });
+          buffers[0]->Drain(k, [&](uint32_t p, uint64_t key) { t.sums.Add(p, key); });
         }
       });
     }
@@ -267,6 +284,7 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
     stats_out->points_visible = visible_points;
     stats_out->passes = passes;
     stats_out->threads = threads;
+    stats_out->replicas = replicas;
     stats_out->seconds = result.milliseconds / 1000;
   }
   return result;

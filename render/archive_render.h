@@ -44,7 +44,8 @@ struct ArchiveRenderStats {
   uint64_t chunks = 0, chunks_visible = 0;
   uint64_t points_visible = 0;   // points in visible chunks (read once per pass)
   int passes = 0;
-  int threads = 0;                // threads that drew (each its share of a pass's ensembles)
+  int threads = 0;                // threads that drew
+  int replicas = 1;               // copies of the z-buffers (fewer ensembles than threads), merged
   double seconds = 0;
 };
 

@@ -488,6 +488,38 @@ TEST_F(ArchiveRender, ThreadsPassesAndBudgetsGiveTheSameImage) {
   }
 }
 
+TEST_F(ArchiveRender, FewerEnsemblesThanThreadsDrawMergedCopiesBitForBit) {
+  // Opaque and small-L renders: the threads draw their own chunks into copies of the z-buffers,
+  // merged at the end; the budget decides how many copies fit.
+  const Camera camera = ObliqueView(archive_->manifest().bounds, 88, 66);
+  const uint64_t frame = 12 * 88 * 66;
+  struct Case {
+    int L;
+    uint64_t memory;
+    int expect_threads, expect_replicas;
+  };
+  for (double size : {1.0, 2.5}) {
+    for (const Case& c : {Case{1, 20 * frame, 3, 3}, Case{2, 20 * frame, 3, 3}, Case{2, 3 * frame, 2, 1},
+                          Case{1, 2 * frame, 2, 2}}) {
+      const SpbrResult ref = Reference(*archive_, camera, c.L, 11, size);
+      ArchiveRenderOptions o;
+      o.repeat_level = c.L;
+      o.seed = 11;
+      o.point_size = size;
+      o.threads = 3;
+      o.memory_budget = c.memory;
+      ArchiveRenderStats stats;
+      const SpbrResult r = RenderArchive(o, camera, *archive_, nullptr, &stats);
+      EXPECT_EQ(stats.threads, c.expect_threads) << "L " << c.L << ", " << c.memory / frame << " frames";
+      EXPECT_EQ(stats.replicas, c.expect_replicas) << "L " << c.L << ", " << c.memory / frame << " frames";
+      EXPECT_EQ(stats.passes, 1);
+      EXPECT_TRUE(r.sums == ref.sums) << "L " << c.L << ", size " << size;
+      EXPECT_EQ(r.first_ensemble_grey, ref.first_ensemble_grey);
+      EXPECT_EQ(r.copies, ref.copies);
+    }
+  }
+}
+
 TEST_F(ArchiveRender, EnsembleSharesAddUpToTheWhole) {
   const Camera camera = ObliqueView(archive_->manifest().bounds, 80, 60);
   ArchiveRenderOptions o;

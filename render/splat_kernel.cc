@@ -390,6 +390,24 @@ void EnsembleBuffers::Prepare(int begin, int end) {
   for (int k = begin; k < end; ++k) prepared_[k] = 1;
 }
 
+void EnsembleBuffers::Absorb(int k, EnsembleBuffers* other) {
+  CANDI_CHECK(other->width_ == width_ && other->height_ == height_ && k < ensembles_ && k < other->ensembles_);
+  uint64_t* mine = keys(k);
+  uint64_t* theirs = other->keys(k);
+  uint32_t* list = filled(k);
+  const uint32_t* their_list = other->filled(k);
+  size_t count = counts_[k];
+  for (size_t i = 0; i < other->counts_[k]; ++i) {  // slots: the same layout in both
+    const uint32_t slot = their_list[i];
+    const uint64_t old = mine[slot];
+    if (old == 0) list[count++] = slot;
+    mine[slot] = std::max(old, theirs[slot]);
+    theirs[slot] = 0;
+  }
+  counts_[k] = count;
+  other->counts_[k] = 0;
+}
+
 EnsembleBuffers::~EnsembleBuffers() {
   munmap(keys_, key_bytes_);
   munmap(filled_, filled_bytes_);

@@ -122,6 +122,9 @@ class EnsembleBuffers {
   // then replace it and make the kernel flush the TLBs of every thread of the process. Call it
   // from the thread that draws them; ensembles already prepared are skipped.
   void Prepare(int begin, int end);
+  // Moves ensemble k of `other` (the same size) into this one's, the nearer key per pixel, and
+  // empties other's.
+  void Absorb(int k, EnsembleBuffers* other);
   // Calls f(pixel, key) for every pixel ensemble k drew, and empties them: cost ~ pixels drawn.
   template <typename F>
   void Drain(int k, F&& f) {
