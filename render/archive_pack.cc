@@ -165,9 +165,9 @@ struct Keyed {
   uint64_t index;
 };
 
-// LSD radix sort of keys[a, b) by the code's bits [0, bits), stable, with `temp` as scratch of
-// the same range: 8-bit digits, a digit whose values are all equal skipped. The range is small
-// (one bucket of SortByCode), so the passes stay in the cache.
+// LSD radix sort of keys[0, n) by the code's bits [0, bits), stable, with temp[0, n) as
+// scratch: 8-bit digits, a digit whose values are all equal skipped. The range is small (one
+// bucket of SortByCode), so the passes stay in the cache.
 void LocalRadixSort(Keyed* keys, Keyed* temp, size_t n, int bits) {
   uint64_t count[256];
   Keyed *from = keys, *to = temp;
@@ -312,7 +312,7 @@ class CellFile {
   std::vector<TempPoint> buffer_;
 };
 
-// Cells routed, and cell files read back, by this many parallel slices.
+// Points are routed to their cell files by this many parallel slices of the cells.
 constexpr size_t kRouteSlices = 4;
 
 // A source of points in batches: returns false at the end.
