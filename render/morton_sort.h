@@ -1,0 +1,25 @@
+// Stable sort of (code, index) keys by the low bits of the code, for the render archive's
+// packer (Morton codes whose high bits are already equal within a cell).
+//
+// One parallel pass buckets the keys by their top 11 bits to be sorted (fixed slices of the
+// input counted and scattered in parallel, in order, so the result does not depend on the
+// threads), then every bucket is sorted on the rest in the cache (8-bit LSD digits, a digit whose
+// values are all equal skipped), buckets in parallel: one memory-bound pass instead of the five
+// of a plain LSD radix sort.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+namespace candi::render {
+
+struct Keyed {
+  uint64_t code;
+  uint64_t index;  // the key's position in the input, say
+};
+
+// Sorts *keys stably by code & (2^bits - 1) (the bits above must be equal: they are not looked
+// at); *scratch is resized and used as scratch. bits in [0, 64].
+void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits);
+
+}  // namespace candi::render

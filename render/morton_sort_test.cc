@@ -1,0 +1,70 @@
+#include "render/morton_sort.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "core/rng.h"
+
+namespace candi::render {
+namespace {
+
+// n keys whose codes have `bits` random low bits (few distinct values when `values` is small,
+// so ties are common) over a common high part; index = input position.
+std::vector<Keyed> RandomKeys(size_t n, int bits, uint64_t values, uint64_t seed) {
+  Rng rng(seed);
+  const uint64_t low_mask = bits >= 64 ? ~uint64_t{0} : (uint64_t{1} << bits) - 1;
+  const uint64_t high = 0x5a5aull << 48 & ~low_mask;
+  std::vector<Keyed> keys(n);
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t v = values ? HashIndex(seed, rng.Below(values)) : rng.Next();
+    keys[i] = {high | (v & low_mask), i};
+  }
+  return keys;
+}
+
+std::vector<Keyed> Reference(std::vector<Keyed> keys, int bits) {
+  const uint64_t mask = bits >= 64 ? ~uint64_t{0} : (uint64_t{1} << bits) - 1;
+  std::stable_sort(keys.begin(), keys.end(),
+                   [mask](const Keyed& a, const Keyed& b) { return (a.code & mask) < (b.code & mask); });
+  return keys;
+}
+
+bool Same(const std::vector<Keyed>& a, const std::vector<Keyed>& b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](const Keyed& x, const Keyed& y) {
+           return x.code == y.code && x.index == y.index;
+         });
+}
+
+TEST(SortByCode, EqualsAStableSortForAnyBitsSizeAndThreads) {
+  struct Case {
+    size_t n;
+    int bits;
+    uint64_t values;  // 0: all distinct (random)
+  };
+  for (const Case& c : {Case{0, 54, 0}, Case{1, 54, 0}, Case{2, 0, 0}, Case{1000, 5, 0}, Case{5000, 11, 0},
+                        Case{5000, 12, 0}, Case{30000, 54, 0}, Case{30000, 63, 7}, Case{30000, 64, 0},
+                        Case{100000, 40, 300}, Case{20000, 54, 1}}) {
+    const std::vector<Keyed> input = RandomKeys(c.n, c.bits, c.values, 17 + c.n + c.bits);
+    const std::vector<Keyed> expected = Reference(input, c.bits);
+    for (int threads : {1, 2}) {
+      std::vector<Keyed> keys = input, scratch;
+      tbb::task_arena(threads).execute([&] { SortByCode(&keys, &scratch, c.bits); });
+      EXPECT_TRUE(Same(keys, expected)) << c.n << " keys, " << c.bits << " bits, " << c.values << " values, "
+                                        << threads << " threads";
+    }
+  }
+}
+
+TEST(SortByCode, LooksOnlyAtTheLowBits) {
+  // Codes that differ above `bits` keep their input order when their low bits tie.
+  std::vector<Keyed> keys = {{0x300, 0}, {0x101, 1}, {0x200, 2}, {0x001, 3}}, scratch;
+  SortByCode(&keys, &scratch, 8);
+  const std::vector<uint64_t> order = {0, 2, 1, 3};
+  for (size_t i = 0; i < keys.size(); ++i) EXPECT_EQ(keys[i].index, order[i]) << i;
+}
+
+}  // namespace
+}  // namespace candi::render
