@@ -27,6 +27,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <unordered_map>
+#include <unordered_set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -223,23 +224,43 @@ LayerResult Photogrammetry(const Scene& scene, const SceneLayer& l, const std::s
   return r;
 }
 
-// Drops the points of `target` in the voxels (edge `voxel`, on the scene frame's local grid) that
-// hold >= 3 points of `by`: close-range data superseding a coarse scan where it has data. Both
-// clouds are in the scene's frame. Returns the number of points dropped.
+// Drops the points of `target` that `by` covers: their voxel (edge `voxel`, on the scene frame's
+// local grid) holds >= 3 points of `by`, and a point of `by` lies in their fine cell (edge
+// voxel / 8) or one of the 26 around it. The second test keeps a few stray points of `by` from
+// cutting a hole in a surface of `target` they do not cover (the demo's close range had stray
+// points on the encasement, and hidden panels showed through the holes). Close-range data
+// supersedes a coarse scan where it has data. Both clouds are in the scene's frame. Returns the
+// number of points dropped.
 size_t ReplaceWhereCovered(const PointCloud& by, double voxel, PointCloud* target) {
-  auto key = [voxel](const Eigen::Vector3d& p) {
-    const Eigen::Vector3d c = (p / voxel).array().floor();
-    // 21 bits per axis around 0: +-2^20 voxels (a 0.5 m voxel covers +-524 km).
-    auto axis = [](double v) { return static_cast<uint64_t>(std::clamp(v, -1048576.0, 1048575.0) + 1048576.0); };
+  using Cell = Eigen::Array<int64_t, 3, 1>;
+  auto cell = [](const Eigen::Vector3d& p, double size) -> Cell {
+    // Clamped to +-2^20 cells (a 0.5 m voxel's fine cells cover +-65 km).
+    return (p / size).array().floor().max(-1048576.0).min(1048575.0).cast<int64_t>();
+  };
+  auto key = [](const Cell& c) {  // 21 bits per axis
+    auto axis = [](int64_t v) { return static_cast<uint64_t>(v + 1048576) & 0x1fffff; };
     return axis(c.x()) << 42 | axis(c.y()) << 21 | axis(c.z());
   };
+  const double fine = voxel / 8;
   std::unordered_map<uint64_t, uint32_t> counts;
-  for (const Eigen::Vector3d& p : by.positions)
-    if (p.allFinite()) ++counts[key(p)];
+  std::unordered_set<uint64_t> occupied;
+  for (const Eigen::Vector3d& p : by.positions) {
+    if (!p.allFinite()) continue;
+    ++counts[key(cell(p, voxel))];
+    occupied.insert(key(cell(p, fine)));
+  }
+  auto near_by = [&](const Eigen::Vector3d& p) {
+    const Cell c = cell(p, fine);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz)
+          if (occupied.count(key(c + Cell(dx, dy, dz)))) return true;
+    return false;
+  };
   std::vector<uint8_t> keep(target->size(), 1);
   for (size_t i = 0; i < target->size(); ++i) {
-    const auto it = counts.find(key(target->positions[i]));
-    keep[i] = it == counts.end() || it->second < 3;
+    const auto it = counts.find(key(cell(target->positions[i], voxel)));
+    keep[i] = it == counts.end() || it->second < 3 || !near_by(target->positions[i]);
   }
   return target->Keep(keep);
 }

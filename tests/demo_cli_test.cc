@@ -138,6 +138,8 @@ TEST(DemoCli, QuickDemoHidesThePanelsBehindTheEncasementAndShowsThemSeeThrough) 
     hidden_changed += o.first, hidden_total += o.second, hidden_seen += t.first;
   }
   ASSERT_GT(hidden_total, 50u) << "the hidden panels' region is off the image";
+  std::printf("hidden panels' region: %zu of %zu pixels differ in the opaque render, %zu in the see-through one\n",
+              hidden_changed, hidden_total, hidden_seen);
   EXPECT_LT(hidden_changed, hidden_total / 50) << "hidden panels show through the encasement";
   EXPECT_GT(hidden_seen, hidden_total / 4) << "hidden panels do not show in the see-through render";
   // The four in the dig (36..39) are visible in the opaque render too.
