@@ -125,7 +125,20 @@ TEST(BuildCli, TwoLayerSceneGivesLayersArchiveRendersProvenanceAndMeshlab) {
   EXPECT_TRUE(ReadPng(dir.File("out/renders/all.png")).image8 == ReadPng(dir.File("out2/renders/all.png")).image8);
 }
 
-// Each bad key, type, path and value: exit code 2 and the JSON path in the message.
+// Builds the scene {wall.ply (written by the caller), `name` replacing it} and returns its
+// archive.json (an empty object, after a test failure, when the build fails).
+json BuildWallReplacedBy(const TempDir& dir, const std::string& name, const PointCloud& cloud) {
+  WritePointCloud(dir.File(name + ".ply"), cloud);
+  json scene = json::parse(R"({"candi_scene": 1, "seed": 3,
+    "render": {"repeat_level": 4, "width": 64, "height": 48},
+    "layers": [{"name": "wall", "kind": "points", "file": "wall.ply"}]})");
+  scene["layers"].push_back({{"name", name}, {"kind", "points"}, {"file", name + ".ply"}, {"replaces", {"wall"}}});
+  WriteScene(dir.File("scene.json"), scene);
+  const Result r = RunCandi("-q build " + dir.File("scene.json") + " -o " + dir.File("out"));
+  EXPECT_EQ(r.code, 0) << r.output;
+  return r.code == 0 ? json::parse(testing::ReadBytes(dir.File("out/archive.json"))) : json::object();
+}
+
 // A layer that replaces another drops the other's points in the 0.5 m cubes it covers (close
 // range over a coarse scan), at survey coordinates; provenance counts them.
 TEST(BuildCli, ReplacingLayerDropsTheCoveredPointsOfTheOther) {
@@ -135,15 +148,8 @@ TEST(BuildCli, ReplacingLayerDropsTheCoveredPointsOfTheOther) {
   fine.frame.origin = Eigen::Vector3d(416000, 9168000, 250);
   for (int i = 0; i < 100; ++i)  // x in [0.0057, 1.9857], 2 cm grid: the first four 0.5 m columns
     for (int j = 0; j < 100; ++j) fine.positions.emplace_back(0.0057 + 0.02 * i, 5.003, 0.02 * j);
-  WritePointCloud(dir.File("fine.ply"), fine);
-  json scene = json::parse(R"({"candi_scene": 1, "seed": 3,
-    "render": {"repeat_level": 4, "width": 64, "height": 48},
-    "layers": [{"name": "wall", "kind": "points", "file": "wall.ply"},
-               {"name": "fine", "kind": "points", "file": "fine.ply", "replaces": ["wall"]}]})");
-  WriteScene(dir.File("scene.json"), scene);
-  const Result r = RunCandi("-q build " + dir.File("scene.json") + " -o " + dir.File("out"));
-  ASSERT_EQ(r.code, 0) << r.output;
-  const json a = json::parse(testing::ReadBytes(dir.File("out/archive.json")));
+  const json a = BuildWallReplacedBy(dir, "fine", fine);
+  ASSERT_FALSE(a.empty());
   EXPECT_EQ(a["layers"][0]["points"], 40000) << "the wall's points at x < 2 m are replaced";
   EXPECT_EQ(a["layers"][0]["replaced_by"]["fine"], 40000);
   EXPECT_EQ(a["layers"][1]["points"], 10000);
@@ -155,6 +161,25 @@ TEST(BuildCli, ReplacingLayerDropsTheCoveredPointsOfTheOther) {
   EXPECT_NEAR(min_x, 416002.0007, 1e-6) << "the survival starts at the first uncovered cube, mm kept";
 }
 
+TEST(BuildCli, StrayPointsOfTheReplacingLayerCutNoHole) {
+  // Three stray close-range points in one 0.5 m cube of the wall (2 500 wall points there) drop
+  // only the wall's points near them (within ~voxel / 8), not the whole cube.
+  TempDir dir;
+  WriteSurveyWall(dir.File("wall.ply"));
+  PointCloud stray;
+  stray.frame.origin = Eigen::Vector3d(416000, 9168000, 250);
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(3.2, 5.0, 0.5), Eigen::Vector3d(3.21, 5.0, 0.5),
+                                   Eigen::Vector3d(3.2, 5.0, 0.51)})
+    stray.positions.push_back(p);
+  const json a = BuildWallReplacedBy(dir, "stray", stray);
+  ASSERT_FALSE(a.empty());
+  const int replaced = a["layers"][0]["replaced_by"]["stray"].get<int>();
+  EXPECT_GT(replaced, 0) << "the wall's points at the stray points are replaced";
+  EXPECT_LT(replaced, 500) << "a few stray points emptied their whole cube";
+  EXPECT_EQ(a["layers"][0]["points"].get<int>(), 80000 - replaced);
+}
+
+// Each bad key, type, path and value: exit code 2 and the JSON path in the message.
 TEST(BuildCli, SceneErrorsNameTheJsonPathOfTheCulprit) {
   TempDir dir;
   WriteSurveyWall(dir.File("wall.ply"));
