@@ -5,8 +5,8 @@
 //     milliseconds and RMSE to the exact image;
 //  4. the big frame: 1.5 * 10^8 points, L = 100, 1024^2, two threads: seconds, bytes per point.
 // Medians of 3 runs. Usage: render_bench [--quick] [--big N] (N points for section 4; 0 skips)
-// [--section K]... (only these sections); render_bench --profile N L: one 1024^2 render of N
-// points at L, one thread (for profilers).
+// [--section K]... (only these sections); render_bench --profile N L [R]: R (1) 1024^2 renders
+// of N points at L, one thread, their median (for profilers).
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -142,11 +142,14 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--section") && i + 1 < argc) sections.push_back(std::atoi(argv[++i]));
   }
   for (int i = 1; i + 2 < argc; ++i) {
-    if (!std::strcmp(argv[i], "--profile")) {  // one render for profilers: --profile N L
+    if (!std::strcmp(argv[i], "--profile")) {  // renders for profilers: --profile N L [R]
       const PointCloud cloud = TerracedSolid(std::strtoull(argv[i + 1], nullptr, 10), 1);
       const SplatCloud splats = Build(cloud, std::atoi(argv[i + 2]));
       const Camera camera = ObliqueView(splats.bounds, 1024, 1024);
-      std::printf("%.1f ms\n", RenderMs(splats, camera, 1, 1));
+      const int runs = i + 3 < argc ? std::max(1, std::atoi(argv[i + 3])) : 1;
+      std::vector<double> ms;
+      for (int r = 0; r < runs; ++r) ms.push_back(RenderMs(splats, camera, 1, 1));
+      std::printf("%.1f ms (median of %d; fastest %.1f ms)\n", Median(ms), runs, *std::min_element(ms.begin(), ms.end()));
       return 0;
     }
   }

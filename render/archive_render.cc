@@ -73,14 +73,9 @@ namespace {
 
 struct ThreadSums {
   Accumulator sums;
-  std::array<uint64_t, 256> first_grey{};
+  GreyHistogram first_grey{};
   ThreadSums(int w, int h) : sums(w, h) {}
 };
-
-inline int Grey(uint64_t key) {
-  const int r = (key >> 16) & 0xff, g = (key >> 8) & 0xff, b = key & 0xff;
-  return (299 * r + 587 * g + 114 * b + 500) / 1000;
-}
 
 // Transform and projection exactly as SpbrStreamRenderer's (bit-identical images).
 struct Kernel {
@@ -255,14 +250,7 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
       ParallelFor(0, K, [&](int k) {
         for (int r = 1; r < replicas; ++r) buffers[0]->Absorb(k, buffers[r].get());
         ThreadSums& t = sums.local();
-        if (first + k == 0) {
-          buffers[0]->Drain(k, [&](uint32_t p, uint64_t key) {
-            t.sums.Add(p, key);
-            ++t.first_grey[Grey(key)];
-          });
-        } else {
-          buffers[0]->Drain(k, [&](uint32_t p, uint64_t key) { t.sums.Add(p, key); });
-        }
+        buffers[0]->DrainInto(k, &t.sums, first + k == 0 ? &t.first_grey : nullptr);
       });
     }
   });

@@ -6,6 +6,7 @@
 // does not depend on the order points arrive in.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <vector>
@@ -30,6 +31,15 @@ inline uint64_t PackKey(float depth, Rgb8 c) {
 
 // Exact sums over ensembles: per pixel R, G, B sums and the number of ensembles with a point.
 // uint32 holds 16.8 M ensembles of full white: far beyond any repeat level.
+// Pixels of one ensemble per grey level (the brightness gain's percentile is read from it).
+using GreyHistogram = std::array<uint64_t, 256>;
+
+// The grey level (Rec. 601 luma, rounded) of a key's colour.
+inline int KeyGrey(uint64_t key) {
+  const int r = (key >> 16) & 0xff, g = (key >> 8) & 0xff, b = key & 0xff;
+  return (299 * r + 587 * g + 114 * b + 500) / 1000;
+}
+
 struct Accumulator {
   int width = 0, height = 0;
   std::vector<uint32_t> sums;  // 4 per pixel: R, G, B, hits

@@ -81,11 +81,6 @@ BlockRows RowsOf(const Camera::Projector& p, const Camera& camera, const SplatBl
   return rows;
 }
 
-inline int Grey(uint64_t key) {
-  const int r = (key >> 16) & 0xff, g = (key >> 8) & 0xff, b = key & 0xff;
-  return (299 * r + 587 * g + 114 * b + 500) / 1000;
-}
-
 struct Frame {
   const SpbrOptions& options;
   const Camera& camera;
@@ -114,7 +109,7 @@ double DepthOffset(const Camera::Projector& p, const Box3d& bounds) {
 struct ThreadFrame {
   BandBuffer keys;
   Accumulator sums;
-  std::array<uint64_t, 256> first_grey{};
+  GreyHistogram first_grey{};
   ThreadFrame(int w, int h) : sums(w, h) { keys.Reset(w, h); }
 };
 
@@ -140,15 +135,7 @@ void RenderEnsemble(const Frame& f, int e, ThreadFrame* t) {
       SplatPointsSized(tr, kp, x, y, z, c, b.count, {f.options.point_size, f.cloud.seed, b.begin}, &t->keys);
     }
   }
-  Accumulator& sums = t->sums;
-  if (e == 0) {
-    t->keys.Drain([&](uint32_t p, uint64_t key) {
-      sums.Add(p, key);
-      ++t->first_grey[Grey(key)];
-    });
-  } else {
-    t->keys.Drain([&](uint32_t p, uint64_t key) { sums.Add(p, key); });
-  }
+  t->keys.DrainInto(&t->sums, e == 0 ? &t->first_grey : nullptr);
 }
 
 }  // namespace
@@ -188,11 +175,14 @@ SpbrResult RenderSpbr(const SpbrOptions& options, const Camera& camera, const Sp
     body();
   }
   // Integer sums: the merged result is the same whichever thread drew which ensemble.
-  result.sums = Accumulator(camera.width, camera.height);
-  for (const ThreadFrame& t : frames) {
-    result.sums.Merge(t.sums);
+  // The first thread's sums become the result's (no fresh frame to fault in and add to).
+  bool first = true;
+  for (ThreadFrame& t : frames) {
+    if (first) result.sums = std::move(t.sums); else result.sums.Merge(t.sums);
+    first = false;
     for (int i = 0; i < 256; ++i) result.first_ensemble_grey[i] += t.first_grey[i];
   }
+  if (first) result.sums = Accumulator(camera.width, camera.height);  // no ensemble drawn
   result.milliseconds =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;

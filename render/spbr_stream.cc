@@ -45,14 +45,9 @@ struct Staged {
 
 struct ThreadSums {
   Accumulator sums;
-  std::array<uint64_t, 256> first_grey{};
+  GreyHistogram first_grey{};
   ThreadSums(int w, int h) : sums(w, h) {}
 };
-
-inline int Grey(uint64_t key) {
-  const int r = (key >> 16) & 0xff, g = (key >> 8) & 0xff, b = key & 0xff;
-  return (299 * r + 587 * g + 114 * b + 500) / 1000;
-}
 
 }  // namespace
 
@@ -183,14 +178,7 @@ void SpbrStreamRenderer::EndPass() {
   m.Run([&] {
     ParallelFor(0, m.last - m.first, [&](int k) {
       ThreadSums& t = m.sums.local();
-      if (m.first + k == 0) {
-        m.buffers[k].Drain([&](uint32_t p, uint64_t key) {
-          t.sums.Add(p, key);
-          ++t.first_grey[Grey(key)];
-        });
-      } else {
-        m.buffers[k].Drain([&](uint32_t p, uint64_t key) { t.sums.Add(p, key); });
-      }
+      m.buffers[k].DrainInto(&t.sums, m.first + k == 0 ? &t.first_grey : nullptr);
     });
   });
   m.pass = -1;

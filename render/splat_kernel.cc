@@ -15,6 +15,52 @@
 
 namespace candi::render {
 
+namespace {
+
+// Drains the slots list[0, n): adds each slot's key (key_of(stored)) to the sums of its pixel
+// (pixel_of(slot)), counts its grey level when `grey` is given, and stores `empty` in it. The
+// sums of an ensemble's pixels lie scattered over a 16-byte-per-pixel frame, so the loads would
+// wait on cache misses in turn: the pixel of the slot kAhead places on is computed first, kept in
+// a ring, and its sums and key prefetched (~20 % of a 10^7-point frame at L = 100).
+template <typename PixelOf, typename KeyOf>
+void DrainSlots(uint64_t* keys, const uint32_t* list, size_t n, uint64_t empty, PixelOf pixel_of, KeyOf key_of,
+                Accumulator* sums, GreyHistogram* grey) {
+  constexpr size_t kAhead = 64;
+  uint32_t ring[kAhead];
+  uint32_t* s = sums->sums.data();
+  const size_t lead = std::min(n, kAhead);
+  for (size_t i = 0; i < lead; ++i) ring[i] = pixel_of(list[i]);
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t slot = list[i];
+    const uint32_t pixel = ring[i % kAhead];
+    if (i + kAhead < n) {
+      const uint32_t next = list[i + kAhead];
+      const uint32_t p = pixel_of(next);
+      ring[i % kAhead] = p;
+      __builtin_prefetch(&s[4 * size_t{p}], 1);
+      __builtin_prefetch(&keys[next], 1);
+    }
+    const uint64_t key = key_of(keys[slot]);
+    sums->Add(pixel, key);
+    if (grey) ++(*grey)[KeyGrey(key)];
+    keys[slot] = empty;
+  }
+}
+
+}  // namespace
+
+void BandBuffer::DrainInto(Accumulator* sums, GreyHistogram* grey) {
+  DrainSlots(keys.data(), filled.data(), filled_count, kEmptyKey, [](uint32_t slot) { return slot; },
+             [](uint64_t key) { return key; }, sums, grey);
+  filled_count = 0;
+}
+
+void EnsembleBuffers::DrainInto(int k, Accumulator* sums, GreyHistogram* grey) {
+  DrainSlots(keys(k), filled(k), counts_[k], 0, [this](uint32_t slot) { return PixelOf(slot); },
+             [](uint64_t key) { return ~key; }, sums, grey);
+  counts_[k] = 0;
+}
+
 void BandBuffer::Reset(int w, int r) {
   width = w;
   rows = r;
@@ -368,6 +414,10 @@ EnsembleBuffers::EnsembleBuffers(int width, int height, int ensembles)
   keys_ = static_cast<uint64_t*>(k);
   filled_ = static_cast<uint32_t*>(f);
   for (int e = 0; e < ensembles; ++e) keys(e)[pixels_] = ~uint64_t{0};  // the spare slots
+  tile_origin_.resize(pixels_ / (kTileWidth * kTileHeight));
+  for (uint32_t t = 0; t < tile_origin_.size(); ++t) {
+    tile_origin_[t] = (t / tiles_x_) * kTileHeight * static_cast<uint32_t>(width) + (t % tiles_x_) * kTileWidth;
+  }
 }
 
 void EnsembleBuffers::Prepare(int begin, int end) {

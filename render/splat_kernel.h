@@ -45,16 +45,10 @@ struct BandBuffer {
   size_t filled_count = 0;
   void Reset(int w, int r);
   uint32_t spare() const { return static_cast<uint32_t>(width * rows); }
-  // Calls f(pixel_in_band, key) for every drawn pixel and empties them: cost ~ pixels drawn.
-  template <typename F>
-  void Drain(F&& f) {
-    for (size_t i = 0; i < filled_count; ++i) {
-      const uint32_t p = filled[i];
-      f(p, keys[p]);
-      keys[p] = kEmptyKey;
-    }
-    filled_count = 0;
-  }
+  // Adds every drawn pixel's colour to `sums` (pixel p of the band is pixel p of `sums`: a band
+  // of the whole image), counts its grey level in `grey` when given, and empties the pixels:
+  // cost ~ pixels drawn.
+  void DrainInto(Accumulator* sums, GreyHistogram* grey);
 };
 
 // Splats n one-pixel points (positions x, y, z; colours 0x00RRGGBB) into the band.
@@ -100,10 +94,9 @@ class EnsembleBuffers {
   }
   // The row-major pixel y * width + x of a slot.
   uint32_t PixelOf(uint32_t slot) const {
-    const uint32_t tile = slot / (kTileWidth * kTileHeight), within = slot % (kTileWidth * kTileHeight);
-    const uint32_t x = (tile % tiles_x_) * kTileWidth + within % kTileWidth;
-    const uint32_t y = (tile / tiles_x_) * kTileHeight + within / kTileWidth;
-    return y * static_cast<uint32_t>(width_) + x;
+    const uint32_t within = slot % (kTileWidth * kTileHeight);
+    return tile_origin_[slot / (kTileWidth * kTileHeight)] + (within / kTileWidth) * static_cast<uint32_t>(width_) +
+           within % kTileWidth;
   }
 
   int ensembles() const { return ensembles_; }
@@ -125,24 +118,16 @@ class EnsembleBuffers {
   // Moves ensemble k of `other` (the same size) into this one's, the nearer key per pixel, and
   // empties other's.
   void Absorb(int k, EnsembleBuffers* other);
-  // Calls f(pixel, key) for every pixel ensemble k drew, and empties them: cost ~ pixels drawn.
-  template <typename F>
-  void Drain(int k, F&& f) {
-    uint64_t* key = keys(k);
-    const uint32_t* list = filled(k);
-    for (size_t i = 0; i < counts_[k]; ++i) {
-      const uint32_t slot = list[i];
-      f(PixelOf(slot), ~key[slot]);
-      key[slot] = 0;
-    }
-    counts_[k] = 0;
-  }
+  // Adds the colour of every pixel ensemble k drew to `sums`, counts its grey level in `grey`
+  // when given, and empties the pixels: cost ~ pixels drawn.
+  void DrainInto(int k, Accumulator* sums, GreyHistogram* grey);
 
  private:
   int ensembles_ = 0;
   int width_ = 0, height_ = 0;
   uint32_t tiles_x_ = 0;
   size_t pixels_ = 0;  // slots: whole tiles
+  std::vector<uint32_t> tile_origin_;  // per tile: the row-major pixel of its top-left corner
   size_t key_bytes_ = 0, filled_bytes_ = 0;
   uint64_t* keys_ = nullptr;
   uint32_t* filled_ = nullptr;
