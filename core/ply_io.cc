@@ -9,11 +9,15 @@
 #include "core/byte_stream.h"
 #include "core/check.h"
 #include "core/log.h"
+#include "core/parallel.h"
 #include "core/ply_header.h"
 
 namespace candi {
 
 namespace {
+
+// Binary vertices decode in blocks of this many, in parallel.
+constexpr size_t kDecodeBlock = 4096;
 
 using ply::Type;
 
@@ -91,7 +95,8 @@ void Assign(const Column& c, size_t i, V v, PointCloud* chunk) {
 
 // Decodes column c of n compact records into chunk points [0, n). The role switch sits outside
 // the loops: each branch instantiates a tight loop per type.
-void DecodeInto(const Column& c, const uint8_t* records, size_t stride, size_t n, bool swap,
+// Decodes records[0, n) into the chunk's points [first, first + n).
+void DecodeInto(const Column& c, const uint8_t* records, size_t stride, size_t n, bool swap, size_t first,
                 PointCloud* chunk) {
   const uint8_t* base = records + c.offset;
   auto run = [&](auto store) { DecodeColumn(c.type, base, stride, n, swap, store); };
@@ -99,30 +104,30 @@ void DecodeInto(const Column& c, const uint8_t* records, size_t stride, size_t n
     case Role::kSkip: break;
     case Role::kX: case Role::kY: case Role::kZ: {
       const int k = c.role == Role::kX ? 0 : c.role == Role::kY ? 1 : 2;
-      Eigen::Vector3d* p = chunk->positions.data();
+      Eigen::Vector3d* p = chunk->positions.data() + first;
       run([p, k](size_t i, auto v) { p[i][k] = static_cast<double>(v); });
       break;
     }
     case Role::kNx: case Role::kNy: case Role::kNz: {
       const int k = c.role == Role::kNx ? 0 : c.role == Role::kNy ? 1 : 2;
-      Eigen::Vector3f* nrm = chunk->normals.data();
+      Eigen::Vector3f* nrm = chunk->normals.data() + first;
       run([nrm, k](size_t i, auto v) { nrm[i][k] = static_cast<float>(v); });
       break;
     }
     case Role::kScalar: {
       ScalarField& field = chunk->scalars[c.scalar];
       if (field.spec.type == ScalarType::kFloat32) {
-        float* out = field.f32.data();
+        float* out = field.f32.data() + first;
         run([out](size_t i, auto v) { out[i] = static_cast<float>(v); });
       } else {
-        double* out = field.f64.data();
+        double* out = field.f64.data() + first;
         run([out](size_t i, auto v) { out[i] = static_cast<double>(v); });
       }
       break;
     }
     case Role::kR: case Role::kG: case Role::kB: case Role::kA: {
       // Byte offset of the channel inside Rgb8 (r, g, b), or the alpha array.
-      uint8_t* out = c.role == Role::kA ? chunk->alphas.data() : &chunk->colors.data()->r;
+      uint8_t* out = c.role == Role::kA ? chunk->alphas.data() + first : &(chunk->colors.data() + first)->r;
       const size_t step = c.role == Role::kA ? 1 : sizeof(Rgb8);
       out += c.role == Role::kG ? 1 : c.role == Role::kB ? 2 : 0;
       const Type type = c.type;
@@ -134,7 +139,7 @@ void DecodeInto(const Column& c, const uint8_t* records, size_t stride, size_t n
       break;
     }
     default:
-      run([&c, chunk](size_t i, auto v) { Assign(c, i, v, chunk); });
+      run([&c, chunk, first](size_t i, auto v) { Assign(c, first + i, v, chunk); });
   }
 }
 
@@ -151,7 +156,7 @@ void DecodeXyzRows(const uint8_t* base, size_t stride, size_t n, Eigen::Vector3d
 }
 
 void DecodeFastPaths(const std::vector<Column>& columns, const uint8_t* records, size_t stride,
-                     size_t n, PointCloud* chunk, std::vector<bool>* done) {
+                     size_t n, size_t first, PointCloud* chunk, std::vector<bool>* done) {
   auto find = [&](Role role) -> int {
     for (size_t k = 0; k < columns.size(); ++k) if (columns[k].role == role) return static_cast<int>(k);
     return -1;
@@ -164,9 +169,9 @@ void DecodeFastPaths(const std::vector<Column>& columns, const uint8_t* records,
   };
   const int x = find(Role::kX), y = find(Role::kY), z = find(Role::kZ);
   if (adjacent(x, y, z, Type::kFloat32)) {
-    DecodeXyzRows<float>(records + columns[x].offset, stride, n, chunk->positions.data());
+    DecodeXyzRows<float>(records + columns[x].offset, stride, n, chunk->positions.data() + first);
   } else if (adjacent(x, y, z, Type::kFloat64)) {
-    DecodeXyzRows<double>(records + columns[x].offset, stride, n, chunk->positions.data());
+    DecodeXyzRows<double>(records + columns[x].offset, stride, n, chunk->positions.data() + first);
   }
   if (adjacent(x, y, z, Type::kFloat32) || adjacent(x, y, z, Type::kFloat64)) {
     (*done)[x] = (*done)[y] = (*done)[z] = true;
@@ -174,7 +179,7 @@ void DecodeFastPaths(const std::vector<Column>& columns, const uint8_t* records,
   const int r = find(Role::kR), g = find(Role::kG), b = find(Role::kB);
   if (adjacent(r, g, b, Type::kUint8)) {
     const uint8_t* base = records + columns[r].offset;
-    Rgb8* out = chunk->colors.data();
+    Rgb8* out = chunk->colors.data() + first;
     for (size_t i = 0; i < n; ++i) std::memcpy(&out[i], base + i * stride, 3);
     (*done)[r] = (*done)[g] = (*done)[b] = true;
   }
@@ -351,11 +356,17 @@ size_t PlyReader::ReadBinary(size_t n, PointCloud* chunk) {
     records = compact_.data();
   }
   chunk->Resize(n);
-  std::vector<bool> done(columns_.size(), false);
-  if (!swap_) DecodeFastPaths(columns_, records, stride, n, chunk, &done);
-  for (size_t k = 0; k < columns_.size(); ++k) {
-    if (!done[k]) DecodeInto(columns_[k], records, stride, n, swap_, chunk);
-  }
+  // Blocks of records decode independently (each into its own range of the chunk), so they run
+  // in parallel; the result does not depend on the thread count.
+  const size_t blocks = (n + kDecodeBlock - 1) / kDecodeBlock;
+  ParallelFor(size_t{0}, blocks, [&](size_t b) {
+    const size_t first = b * kDecodeBlock, m = std::min(kDecodeBlock, n - first);
+    std::vector<bool> done(columns_.size(), false);
+    if (!swap_) DecodeFastPaths(columns_, records + first * stride, stride, m, first, chunk, &done);
+    for (size_t k = 0; k < columns_.size(); ++k) {
+      if (!done[k]) DecodeInto(columns_[k], records + first * stride, stride, m, swap_, first, chunk);
+    }
+  });
   if (!vertex.HasLists()) stream_->Consume(n * stride);
   return n;
 }

@@ -8,6 +8,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -168,29 +169,24 @@ class CellFile {
     if (fd_ >= 0) close(fd_);
     if (!path_.empty()) unlink(path_.c_str());
   }
-  void Add(const TempPoint& p) {
-    buffer_.push_back(p);
-    if (buffer_.size() == kBuffer) Flush();
-  }
-  void Flush() {
-    if (buffer_.empty()) return;
+  // Appends n points to the file.
+  void Append(const TempPoint* points, size_t n) {
+    if (n == 0) return;
     if (fd_ < 0) {
       fd_ = open(path_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
       if (fd_ < 0) throw InputError(path_, "", std::string("cannot create cell file: ") + std::strerror(errno));
     }
-    const char* p = reinterpret_cast<const char*>(buffer_.data());
-    size_t left = buffer_.size() * sizeof(TempPoint);
+    const char* p = reinterpret_cast<const char*>(points);
+    size_t left = n * sizeof(TempPoint);
     while (left > 0) {
-      const ssize_t n = write(fd_, p, left);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) throw InputError(path_, "", std::string("cannot write cell file: ") + std::strerror(errno));
-      p += n, left -= static_cast<size_t>(n);
+      const ssize_t w = write(fd_, p, left);
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0) throw InputError(path_, "", std::string("cannot write cell file: ") + std::strerror(errno));
+      p += w, left -= static_cast<size_t>(w);
     }
-    count_ += buffer_.size();
-    buffer_.clear();
-    buffer_.shrink_to_fit();
+    count_ += n;
   }
-  uint64_t count() const { return count_ + buffer_.size(); }
+  uint64_t count() const { return count_; }
   // The flushed points, memory-mapped (read-only) while the Mapping lives.
   class Mapping {
    public:
@@ -214,7 +210,7 @@ class CellFile {
     madvise(p, bytes, MADV_SEQUENTIAL);
     return Mapping(p, bytes);
   }
-  // Reads points [from, from + n) (after Flush).
+  // Reads points [from, from + n).
   void Read(uint64_t from, size_t n, TempPoint* out) const {
     size_t left = n * sizeof(TempPoint);
     char* p = reinterpret_cast<char*>(out);
@@ -228,15 +224,17 @@ class CellFile {
   }
 
  private:
-  static constexpr size_t kBuffer = 2048;  // 56 KB per cell
   std::string path_;
   int fd_ = -1;
   uint64_t count_ = 0;
-  std::vector<TempPoint> buffer_;
 };
 
-// Points are routed to their cell files by this many parallel slices of the cells.
-constexpr size_t kRouteSlices = 4;
+// Pass 1 bounds and pass 2 converts the points in parallel blocks of this many.
+constexpr size_t kBoundsBlock = size_t{1} << 14;
+
+// Points are routed to their cells in pieces of this many (the pieces do not depend on the
+// thread count, so neither do the cell files).
+constexpr size_t kRoutePiece = size_t{1} << 16;
 
 // A source of points in batches: returns false at the end.
 using Batches = std::function<bool(std::vector<TempPoint>*)>;
@@ -285,24 +283,44 @@ class Packer {
     const std::string stem = dir_ + "/cell-L" + std::to_string(level) + "-" + std::to_string(spill_id_++) + "-";
     for (size_t c = 0; c < cells; ++c) files[c] = std::make_unique<CellFile>(stem + std::to_string(c) + ".tmp");
     std::vector<TempPoint> batch;
-    std::vector<uint16_t> cell;
+    UninitVector<TempPoint> grouped;
+    UninitVector<uint16_t> cell;
+    std::vector<uint64_t> at;  // per piece and cell: where the piece's points of the cell go
+    std::vector<uint64_t> start(cells + 1);
     while (source(&batch)) {
       spilled_ += batch.size();
-      cell.resize(batch.size());
-      ParallelFor(tbb::blocked_range<size_t>(0, batch.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
+      // A counting sort of the batch by cell, stable (pieces in order, points in order within
+      // a piece), then one write per cell: each point is copied once and written once.
+      const size_t n = batch.size(), pieces = (n + kRoutePiece - 1) / kRoutePiece;
+      cell.resize(n);
+      at.assign(pieces * cells, 0);
+      ParallelFor(size_t{0}, pieces, [&](size_t piece) {
+        uint64_t* count = &at[piece * cells];
+        for (size_t i = piece * kRoutePiece; i < std::min(n, (piece + 1) * kRoutePiece); ++i) {
           cell[i] = static_cast<uint16_t>(Prefix(grid_.Code(batch[i]), level + k) & (cells - 1));
+          ++count[cell[i]];
         }
       });
-      // Every slice of the cells appends its points (in batch order, so the files do not depend
-      // on the threads) and writes them: the page-cache copies run in parallel.
-      ParallelFor(size_t{0}, kRouteSlices, [&](size_t slice) {
-        for (size_t i = 0; i < batch.size(); ++i) {
-          if (cell[i] % kRouteSlices == slice) files[cell[i]]->Add(batch[i]);
+      uint64_t sum = 0;
+      for (size_t c = 0; c < cells; ++c) {
+        start[c] = sum;
+        for (size_t piece = 0; piece < pieces; ++piece) {
+          const uint64_t m = at[piece * cells + c];
+          at[piece * cells + c] = sum;
+          sum += m;
         }
+      }
+      start[cells] = sum;
+      grouped.resize(n);
+      ParallelFor(size_t{0}, pieces, [&](size_t piece) {
+        uint64_t* next = &at[piece * cells];
+        for (size_t i = piece * kRoutePiece; i < std::min(n, (piece + 1) * kRoutePiece); ++i) grouped[next[cell[i]]++] = batch[i];
+      });
+      // The page-cache copies of different cells run in parallel.
+      ParallelFor(size_t{0}, cells, [&](size_t c) {
+        files[c]->Append(grouped.data() + start[c], static_cast<size_t>(start[c + 1] - start[c]));
       });
     }
-    for (auto& f : files) f->Flush();
     for (size_t c = 0; c < cells; ++c) {
       CellFile& f = *files[c];
       const uint64_t n = f.count();
@@ -467,12 +485,16 @@ class InputBatches {
       const Eigen::Vector3d shift = chunk_.frame.origin - frame_.origin;
       out->resize(n);
       const uint32_t fallback = PackColor(default_color_);
-      bool finite = true;
-      for (size_t i = 0; i < n; ++i) {
-        const Eigen::Vector3d p = chunk_.positions[i] + shift;
-        finite &= std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
-        (*out)[i] = {p.x(), p.y(), p.z(), chunk_.schema.colors ? PackColor(chunk_.colors[i]) : fallback};
-      }
+      std::atomic<bool> finite{true};
+      ParallelFor(tbb::blocked_range<size_t>(0, n, kBoundsBlock), [&](const tbb::blocked_range<size_t>& r) {
+        bool ok = true;
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const Eigen::Vector3d p = chunk_.positions[i] + shift;
+          ok &= std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+          (*out)[i] = {p.x(), p.y(), p.z(), chunk_.schema.colors ? PackColor(chunk_.colors[i]) : fallback};
+        }
+        if (!ok) finite = false;
+      });
       if (!finite) {
         for (size_t i = 0; i < n; ++i) {
           if (!chunk_.positions[i].allFinite()) {
@@ -563,12 +585,20 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
       continue;
     }
     PointCloud chunk;
+    std::vector<Box3d> boxes;
     while (reader->Read(1 << 20, &chunk) > 0) {
-      for (const Eigen::Vector3d& p : chunk.positions) {
-        if (!p.allFinite()) continue;  // reported with its index in pass 2
-        world.Extend(chunk.frame.ToWorld(p));
-      }
-      counts[k] += chunk.size();
+      // Per block of points, in parallel; min and max do not depend on the order.
+      const size_t n = chunk.size(), blocks = (n + kBoundsBlock - 1) / kBoundsBlock;
+      boxes.assign(blocks, Box3d());
+      ParallelFor(size_t{0}, blocks, [&](size_t b) {
+        for (size_t i = b * kBoundsBlock; i < std::min(n, (b + 1) * kBoundsBlock); ++i) {
+          const Eigen::Vector3d& p = chunk.positions[i];
+          if (!p.allFinite()) continue;  // reported with its index in pass 2
+          boxes[b].Extend(chunk.frame.ToWorld(p));
+        }
+      });
+      for (const Box3d& box : boxes) world.Extend(box);
+      counts[k] += n;
     }
   }
   for (uint64_t c : counts) total += c;
