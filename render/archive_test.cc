@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <limits>
 
 #include "core/atomic_file.h"
@@ -93,6 +94,28 @@ TEST(ChunkQuantizer, SinglePointAndFlatChunksAreExact) {
   EXPECT_EQ(f.bits[1], 20);
   EXPECT_EQ(f.bits[2], 0);
   EXPECT_EQ(f.Decode(f.Encode(Eigen::Vector3d(0.3, 0.7, 5), 0)).z(), 5.0);
+}
+
+TEST(ChunkQuantizer, RoundsToTheNearestStepAndHalfStepsToEven) {
+  // x over [0, 2^24 - 1] with 24 bits: a step of exactly 1, so q must be nearbyint(x).
+  Box3d box;
+  box.Extend(Eigen::Vector3d(0, 0, 0));
+  box.Extend(Eigen::Vector3d(16777215.0, 0, 0));
+  const ChunkQuantizer q = ChunkQuantizer::ForBox(box);
+  ASSERT_EQ(q.bits[0], 24);
+  ASSERT_EQ(q.step[0], 1.0);
+  auto encoded = [&](double x) { return static_cast<double>(q.Encode(Eigen::Vector3d(x, 0, 0), 0) >> 24); };
+  EXPECT_EQ(encoded(2.5), 2.0);  // ties to even, not away from zero
+  EXPECT_EQ(encoded(3.5), 4.0);
+  EXPECT_EQ(encoded(0.49999999999999994), 0.0);
+  EXPECT_EQ(encoded(16777214.5), 16777214.0);
+  EXPECT_EQ(encoded(-0.4), 0.0);         // clamped into the box
+  EXPECT_EQ(encoded(16777215.4), 16777215.0);
+  Rng rng(3);
+  for (int i = 0; i < 100000; ++i) {
+    const double x = i % 2 ? std::floor(rng.Uniform(0, 16777215)) + 0.5 : rng.Uniform(0, 16777215);
+    ASSERT_EQ(encoded(x), std::nearbyint(x)) << std::setprecision(17) << x;
+  }
 }
 
 // A cloud whose colour encodes the point's index (n < 2^24), shifted to survey coordinates.
