@@ -572,35 +572,38 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
     return h;
   });
 
-  // Pass 1: bounds and counts (headers when they state both).
+  // Pass 1: bounds and counts (headers when they state both), in the arena like pass 2.
   Box3d world;
   uint64_t total = 0;
   std::vector<uint64_t> counts(inputs.size(), 0);
-  for (size_t k = 0; k < inputs.size(); ++k) {
-    auto reader = inputs[k].open();
-    const PointFileInfo& info = reader->info();
-    if (info.header_bounds && info.count != kUnknownCount) {
-      counts[k] = info.count;
-      if (info.count > 0) world.Extend(*info.header_bounds);
-      continue;
+  auto pass1 = [&] {
+    for (size_t k = 0; k < inputs.size(); ++k) {
+      auto reader = inputs[k].open();
+      const PointFileInfo& info = reader->info();
+      if (info.header_bounds && info.count != kUnknownCount) {
+        counts[k] = info.count;
+        if (info.count > 0) world.Extend(*info.header_bounds);
+        continue;
+      }
+      PointCloud chunk;
+      std::vector<Box3d> boxes;
+      while (reader->Read(1 << 20, &chunk) > 0) {
+        // Per block of points, in parallel; min and max do not depend on the order.
+        const size_t n = chunk.size(), blocks = (n + kBoundsBlock - 1) / kBoundsBlock;
+        boxes.assign(blocks, Box3d());
+        ParallelFor(size_t{0}, blocks, [&](size_t b) {
+          for (size_t i = b * kBoundsBlock; i < std::min(n, (b + 1) * kBoundsBlock); ++i) {
+            const Eigen::Vector3d& p = chunk.positions[i];
+            if (!p.allFinite()) continue;  // reported with its index in pass 2
+            boxes[b].Extend(chunk.frame.ToWorld(p));
+          }
+        });
+        for (const Box3d& box : boxes) world.Extend(box);
+        counts[k] += n;
+      }
     }
-    PointCloud chunk;
-    std::vector<Box3d> boxes;
-    while (reader->Read(1 << 20, &chunk) > 0) {
-      // Per block of points, in parallel; min and max do not depend on the order.
-      const size_t n = chunk.size(), blocks = (n + kBoundsBlock - 1) / kBoundsBlock;
-      boxes.assign(blocks, Box3d());
-      ParallelFor(size_t{0}, blocks, [&](size_t b) {
-        for (size_t i = b * kBoundsBlock; i < std::min(n, (b + 1) * kBoundsBlock); ++i) {
-          const Eigen::Vector3d& p = chunk.positions[i];
-          if (!p.allFinite()) continue;  // reported with its index in pass 2
-          boxes[b].Extend(chunk.frame.ToWorld(p));
-        }
-      });
-      for (const Box3d& box : boxes) world.Extend(box);
-      counts[k] += n;
-    }
-  }
+  };
+  if (arena) arena->execute(pass1); else pass1();
   for (uint64_t c : counts) total += c;
   if (total == 0 || world.IsEmpty()) throw InputError("nothing to pack: the inputs hold no points");
   auto since = [](std::chrono::steady_clock::time_point t) {
