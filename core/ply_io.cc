@@ -1,6 +1,7 @@
 #include "core/ply_io.h"
 
 #include <algorithm>
+#include <atomic>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -324,10 +325,18 @@ void PlyReader::CheckFinite(size_t n, const PointCloud& chunk, uint64_t first) c
   // failure.
   constexpr uint64_t kExponent = 0x7ff0000000000000ULL;
   const auto* bits = reinterpret_cast<const uint64_t*>(chunk.positions.data());
-  uint64_t bad = 0;
-  // Adding one to an all-ones exponent carries into the sign bit: add/and/or vectorize.
-  for (size_t j = 0; j < 3 * n; ++j) bad |= ((bits[j] & kExponent) + (1ULL << 52)) & (1ULL << 63);
-  if (bad == 0) return;
+  // Adding one to an all-ones exponent carries into the sign bit: add/and/or vectorize. Blocks
+  // in parallel; the first bad vertex is then found in order, so the message does not depend on
+  // the threads.
+  std::atomic<bool> any_bad{false};
+  ParallelFor(size_t{0}, (n + kDecodeBlock - 1) / kDecodeBlock, [&](size_t b) {
+    uint64_t bad = 0;
+    for (size_t j = 3 * b * kDecodeBlock; j < 3 * std::min(n, (b + 1) * kDecodeBlock); ++j) {
+      bad |= ((bits[j] & kExponent) + (1ULL << 52)) & (1ULL << 63);
+    }
+    if (bad) any_bad = true;
+  });
+  if (!any_bad) return;
   for (size_t i = 0; i < n; ++i) {
     if (!chunk.positions[i].allFinite()) {
       Fail("vertex " + std::to_string(first + i), "coordinate is NaN or infinite");

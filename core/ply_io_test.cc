@@ -280,6 +280,15 @@ TEST(PlyBadInput, NanCoordinate) {
   bytes.replace(bytes.size() - 4, 4, reinterpret_cast<const char*>(&inf), 4);
   WriteBytes(dir.File("i.ply"), bytes);
   ExpectInputError(dir.File("i.ply"), "vertex 1");
+  // Vertices are decoded and checked in parallel blocks: of two bad vertices in different
+  // blocks, the first is named, whatever the threads.
+  std::string many = MinimalBinaryPly(50000, 50000);
+  const size_t header = many.size() - 50000 * 12;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  many.replace(header + 41000 * 12 + 4, 4, reinterpret_cast<const char*>(&nan), 4);
+  many.replace(header + 9000 * 12 + 8, 4, reinterpret_cast<const char*>(&inf), 4);
+  WriteBytes(dir.File("many.ply"), many);
+  ExpectInputError(dir.File("many.ply"), "vertex 9000: coordinate is NaN or infinite");
 }
 
 TEST(PlyBadInput, WrongMagicAndMissingEndHeader) {

@@ -237,7 +237,7 @@ constexpr size_t kBoundsBlock = size_t{1} << 14;
 constexpr size_t kRoutePiece = size_t{1} << 16;
 
 // A source of points in batches: returns false at the end.
-using Batches = std::function<bool(std::vector<TempPoint>*)>;
+using Batches = std::function<bool(UninitVector<TempPoint>*)>;
 
 class Packer {
  public:
@@ -266,11 +266,11 @@ class Packer {
   // next Morton levels, then handles each cell in Morton order.
   void Spill(const Batches& source, uint64_t count, int level) {
     if (level >= kMortonBits) {  // every code equal: any order is Morton order
-      std::vector<TempPoint> batch;
+      UninitVector<TempPoint> batch;
       while (source(&batch)) {
         for (size_t i = 0; i < batch.size(); i += o_.chunk_points) {
-          std::vector<TempPoint> part(batch.begin() + i,
-                                      batch.begin() + std::min<size_t>(batch.size(), i + o_.chunk_points));
+          UninitVector<TempPoint> part(batch.begin() + i,
+                                       batch.begin() + std::min<size_t>(batch.size(), i + o_.chunk_points));
           AddCell(part.data(), part.size(), kMortonBits);
         }
       }
@@ -282,7 +282,7 @@ class Packer {
     std::vector<std::unique_ptr<CellFile>> files(cells);
     const std::string stem = dir_ + "/cell-L" + std::to_string(level) + "-" + std::to_string(spill_id_++) + "-";
     for (size_t c = 0; c < cells; ++c) files[c] = std::make_unique<CellFile>(stem + std::to_string(c) + ".tmp");
-    std::vector<TempPoint> batch;
+    UninitVector<TempPoint> batch;
     UninitVector<TempPoint> grouped;
     UninitVector<uint16_t> cell;
     std::vector<uint64_t> at;  // per piece and cell: where the piece's points of the cell go
@@ -340,7 +340,7 @@ class Packer {
         uint64_t next = 0;
         const size_t batch_points = std::max<size_t>(1, o_.memory_points / 4);
         Spill(
-            [&](std::vector<TempPoint>* out) {
+            [&](UninitVector<TempPoint>* out) {
               if (next >= n) return false;
               const size_t m = static_cast<size_t>(std::min<uint64_t>(batch_points, n - next));
               out->resize(m);
@@ -453,7 +453,7 @@ class Packer {
   uint64_t total_;
   ProgressCallback progress_;
   std::vector<Keyed> keys_, scratch_;
-  std::vector<TempPoint> sorted_;
+  UninitVector<TempPoint> sorted_;
   std::vector<uint64_t> words_;
   std::vector<std::pair<size_t, size_t>> ranges_;
   std::vector<ArchiveChunk> chunks_;
@@ -469,7 +469,7 @@ class InputBatches {
  public:
   InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color)
       : inputs_(inputs), frame_(frame), default_color_(default_color) {}
-  bool operator()(std::vector<TempPoint>* out) {
+  bool operator()(UninitVector<TempPoint>* out) {
     out->clear();
     while (true) {
       if (!reader_) {
@@ -641,12 +641,12 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
     Packer packer(options, temp, grid, total, progress);
     InputBatches batches(inputs, manifest.frame, options.default_color);
     if (total <= options.memory_points) {
-      std::vector<TempPoint> all, batch;
+      UninitVector<TempPoint> all, batch;
       all.reserve(total);
       while (batches(&batch)) all.insert(all.end(), batch.begin(), batch.end());
       packer.AddCell(all.data(), all.size(), 0);
     } else {
-      packer.Spill([&batches](std::vector<TempPoint>* out) { return batches(out); }, total, 0);
+      packer.Spill([&batches](UninitVector<TempPoint>* out) { return batches(out); }, total, 0);
     }
     packer.Finish(&manifest);
     summary.spilled_points = packer.spilled();
