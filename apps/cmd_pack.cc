@@ -32,13 +32,13 @@ int RunPack(const PackArgs& args) {
   const render::PackSummary s = render::PackArchive(o, inputs, args.output, progress.Callback());
   progress.Finish();
   std::printf("%s: %llu points in %llu chunks, %llu data file(s), %.2f bytes/point, %.1f s (%.1f M points/s: "
-              "bounds %.1f s, sort and write %.1f s; input hashes %.1f s during the bounds)%s; largest quantization error %.3g, "
-              "%.3g, %.3g mm\n",
+              "bounds %.1f s, sort and write %.1f s; input hashes %.1f s during the bounds)%s, %zu-byte records; "
+              "largest quantization error %.3g, %.3g, %.3g mm\n",
               args.output.c_str(), static_cast<unsigned long long>(s.points),
               static_cast<unsigned long long>(s.chunks), static_cast<unsigned long long>(s.files),
               s.points ? static_cast<double>(s.bytes) / s.points : 0.0, s.seconds, s.points / s.seconds / 1e6,
               s.bounds_seconds, s.sort_seconds, s.hash_seconds, s.spilled_points ? ", sorted on disk" : "",
-              1e3 * s.max_error[0], 1e3 * s.max_error[1], 1e3 * s.max_error[2]);
+              s.record_bytes, 1e3 * s.max_error[0], 1e3 * s.max_error[1], 1e3 * s.max_error[2]);
   return kOk;
 }
 

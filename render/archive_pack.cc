@@ -15,6 +15,9 @@
 #include <cstring>
 #include <filesystem>
 #include <future>
+#include <limits>
+#include <optional>
+#include <type_traits>
 
 #include "core/atomic_file.h"
 #include "core/interrupt.h"
@@ -125,16 +128,33 @@ uint64_t HashFile(const std::string& path, uint64_t* bytes) {
 
 namespace {
 
+// The points between reading and encoding (in cell files and in memory), in one of two forms.
+// WidePoint: the archive-frame position in double, any input. CompactPoint: when every input
+// point is a float in one frame shared by all inputs (binary PLY with float x, y, z, the usual
+// photogrammetry output), that float; adding the shift from that frame to the archive's gives
+// the very doubles WidePoint would hold, so the archive is the same, from 16 bytes a point
+// instead of 28.
 #pragma pack(push, 1)
-struct TempPoint {  // 28 bytes: local-frame position and colour, in cell files and in memory
+struct WidePoint {
   double x, y, z;
   uint32_t rgb;
   // By value: a reference to a member of a packed struct may be misaligned (undefined behaviour
   // that UBSan reports where Eigen's constructors take `const double&`).
-  Eigen::Vector3d Position() const { return Eigen::Vector3d(double{x}, double{y}, double{z}); }
+  Eigen::Vector3d Position(const Eigen::Vector3d& /*shift*/) const {
+    return Eigen::Vector3d(double{x}, double{y}, double{z});
+  }
 };
 #pragma pack(pop)
-static_assert(sizeof(TempPoint) == 28, "TempPoint must be packed");
+static_assert(sizeof(WidePoint) == 28, "WidePoint must be packed");
+
+struct CompactPoint {
+  float x, y, z;
+  uint32_t rgb;
+  Eigen::Vector3d Position(const Eigen::Vector3d& shift) const {
+    return Eigen::Vector3d(double{x}, double{y}, double{z}) + shift;
+  }
+};
+static_assert(sizeof(CompactPoint) == 16, "CompactPoint must be 16 bytes");
 
 constexpr int kMortonBits = 21;  // per axis; 63-bit codes, 21 levels of 3 bits
 
@@ -150,9 +170,9 @@ inline uint64_t Spread(uint64_t v) {  // 21 bits -> every third bit
 
 struct MortonGrid {
   Eigen::Vector3d min, scale;  // cells per metre
-  uint64_t Code(const TempPoint& p) const {
+  uint64_t Code(const Eigen::Vector3d& p) const {
     const double top = static_cast<double>((1 << kMortonBits) - 1);
-    const double c[3] = {p.x, p.y, p.z};
+    const double c[3] = {p.x(), p.y(), p.z()};
     uint64_t q[3];
     for (int a = 0; a < 3; ++a) q[a] = static_cast<uint64_t>(std::clamp((c[a] - min[a]) * scale[a], 0.0, top));
     return Spread(q[0]) | Spread(q[1]) << 1 | Spread(q[2]) << 2;
@@ -162,6 +182,7 @@ struct MortonGrid {
 // The key of a point at a level: the code's top 3 * levels bits.
 inline uint64_t Prefix(uint64_t code, int levels) { return levels == 0 ? 0 : code >> (63 - 3 * levels); }
 
+template <typename P>
 class CellFile {
  public:
   explicit CellFile(std::string path) : path_(std::move(path)) {}
@@ -170,14 +191,14 @@ class CellFile {
     if (!path_.empty()) unlink(path_.c_str());
   }
   // Appends n points to the file.
-  void Append(const TempPoint* points, size_t n) {
+  void Append(const P* points, size_t n) {
     if (n == 0) return;
     if (fd_ < 0) {
       fd_ = open(path_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
       if (fd_ < 0) throw InputError(path_, "", std::string("cannot create cell file: ") + std::strerror(errno));
     }
     const char* p = reinterpret_cast<const char*>(points);
-    size_t left = n * sizeof(TempPoint);
+    size_t left = n * sizeof(P);
     while (left > 0) {
       const ssize_t w = write(fd_, p, left);
       if (w < 0 && errno == EINTR) continue;
@@ -196,14 +217,14 @@ class CellFile {
     }
     Mapping(const Mapping&) = delete;
     Mapping& operator=(const Mapping&) = delete;
-    const TempPoint* points() const { return static_cast<const TempPoint*>(data_); }
+    const P* points() const { return static_cast<const P*>(data_); }
 
    private:
     void* data_;
     size_t bytes_;
   };
   Mapping Map() const {
-    const size_t bytes = static_cast<size_t>(count_) * sizeof(TempPoint);
+    const size_t bytes = static_cast<size_t>(count_) * sizeof(P);
     if (bytes == 0) return Mapping(nullptr, 0);
     void* p = mmap(nullptr, bytes, PROT_READ, MAP_PRIVATE, fd_, 0);
     if (p == MAP_FAILED) throw InputError(path_, "", std::string("cannot map cell file: ") + std::strerror(errno));
@@ -211,10 +232,10 @@ class CellFile {
     return Mapping(p, bytes);
   }
   // Reads points [from, from + n).
-  void Read(uint64_t from, size_t n, TempPoint* out) const {
-    size_t left = n * sizeof(TempPoint);
+  void Read(uint64_t from, size_t n, P* out) const {
+    size_t left = n * sizeof(P);
     char* p = reinterpret_cast<char*>(out);
-    uint64_t offset = from * sizeof(TempPoint);
+    uint64_t offset = from * sizeof(P);
     while (left > 0) {
       const ssize_t got = pread(fd_, p, left, static_cast<off_t>(offset));
       if (got < 0 && errno == EINTR) continue;
@@ -229,6 +250,12 @@ class CellFile {
   uint64_t count_ = 0;
 };
 
+// Whether v is a float (so CompactPoint holds it exactly); false for NaN and beyond float's range.
+inline bool IsFloat(double v) {
+  return std::abs(v) <= std::numeric_limits<float>::max() && double{static_cast<float>(v)} == v;
+}
+inline bool IsFloat(const Eigen::Vector3d& p) { return IsFloat(p.x()) && IsFloat(p.y()) && IsFloat(p.z()); }
+
 // Pass 1 bounds and pass 2 converts the points in parallel blocks of this many.
 constexpr size_t kBoundsBlock = size_t{1} << 14;
 
@@ -237,20 +264,23 @@ constexpr size_t kBoundsBlock = size_t{1} << 14;
 constexpr size_t kRoutePiece = size_t{1} << 16;
 
 // A source of points in batches: returns false at the end.
-using Batches = std::function<bool(UninitVector<TempPoint>*)>;
+template <typename P>
+using Batches = std::function<bool(UninitVector<P>*)>;
 
+// P: WidePoint or CompactPoint; `shift` is CompactPoint's (zero for WidePoint).
+template <typename P>
 class Packer {
  public:
-  Packer(const PackOptions& o, const std::string& dir, const MortonGrid& grid, uint64_t total,
-         const ProgressCallback& progress)
-      : o_(o), dir_(dir), grid_(grid), total_(total), progress_(progress) {}
+  Packer(const PackOptions& o, const std::string& dir, const MortonGrid& grid, const Eigen::Vector3d& shift,
+         uint64_t total, const ProgressCallback& progress)
+      : o_(o), dir_(dir), grid_(grid), shift_(shift), total_(total), progress_(progress) {}
 
   // Sorts points (all of one cell at `level`) in memory and writes their chunks.
-  void AddCell(const TempPoint* points, size_t n, int level) {
+  void AddCell(const P* points, size_t n, int level) {
     if (n == 0) return;
     keys_.resize(n);
     ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) keys_[i] = {grid_.Code(points[i]), i};
+      for (size_t i = r.begin(); i < r.end(); ++i) keys_[i] = {grid_.Code(points[i].Position(shift_)), i};
     });
     SortByCode(&keys_, &scratch_, 63 - 3 * level);
     sorted_.resize(n);
@@ -264,12 +294,12 @@ class Packer {
 
   // Buckets a stream of points (one cell at `level`, `count` of them) into cell files by the
   // next Morton levels, then handles each cell in Morton order.
-  void Spill(const Batches& source, uint64_t count, int level) {
+  void Spill(const Batches<P>& source, uint64_t count, int level) {
     if (level >= kMortonBits) {  // every code equal: any order is Morton order
-      UninitVector<TempPoint> batch;
+      UninitVector<P> batch;
       while (source(&batch)) {
         for (size_t i = 0; i < batch.size(); i += o_.chunk_points) {
-          UninitVector<TempPoint> part(batch.begin() + i,
+          UninitVector<P> part(batch.begin() + i,
                                        batch.begin() + std::min<size_t>(batch.size(), i + o_.chunk_points));
           AddCell(part.data(), part.size(), kMortonBits);
         }
@@ -279,14 +309,13 @@ class Packer {
     int k = 1;
     while (k < 3 && level + k < kMortonBits && count >> (3 * k) > o_.memory_points / 2) ++k;
     const size_t cells = size_t{1} << (3 * k);
-    std::vector<std::unique_ptr<CellFile>> files(cells);
+    std::vector<std::unique_ptr<CellFile<P>>> files(cells);
     const std::string stem = dir_ + "/cell-L" + std::to_string(level) + "-" + std::to_string(spill_id_++) + "-";
-    for (size_t c = 0; c < cells; ++c) files[c] = std::make_unique<CellFile>(stem + std::to_string(c) + ".tmp");
-    UninitVector<TempPoint> batch;
-    UninitVector<TempPoint> grouped;
+    for (size_t c = 0; c < cells; ++c) files[c] = std::make_unique<CellFile<P>>(stem + std::to_string(c) + ".tmp");
+    UninitVector<P> batch;
+    UninitVector<P> grouped;
     UninitVector<uint16_t> cell;
-    std::vector<uint64_t> at;  // per piece and cell: where the piece's points of the cell go
-    std::vector<uint64_t> start(cells + 1);
+    std::vector<uint64_t> at;  // per piece and cell: its count, then where its points go
     while (source(&batch)) {
       spilled_ += batch.size();
       // A counting sort of the batch by cell, stable (pieces in order, points in order within
@@ -297,20 +326,11 @@ class Packer {
       ParallelFor(size_t{0}, pieces, [&](size_t piece) {
         uint64_t* count = &at[piece * cells];
         for (size_t i = piece * kRoutePiece; i < std::min(n, (piece + 1) * kRoutePiece); ++i) {
-          cell[i] = static_cast<uint16_t>(Prefix(grid_.Code(batch[i]), level + k) & (cells - 1));
+          cell[i] = static_cast<uint16_t>(Prefix(grid_.Code(batch[i].Position(shift_)), level + k) & (cells - 1));
           ++count[cell[i]];
         }
       });
-      uint64_t sum = 0;
-      for (size_t c = 0; c < cells; ++c) {
-        start[c] = sum;
-        for (size_t piece = 0; piece < pieces; ++piece) {
-          const uint64_t m = at[piece * cells + c];
-          at[piece * cells + c] = sum;
-          sum += m;
-        }
-      }
-      start[cells] = sum;
+      const std::vector<uint64_t> start = StableBucketOffsets(&at, pieces, cells);
       grouped.resize(n);
       ParallelFor(size_t{0}, pieces, [&](size_t piece) {
         uint64_t* next = &at[piece * cells];
@@ -322,7 +342,7 @@ class Packer {
       });
     }
     for (size_t c = 0; c < cells; ++c) {
-      CellFile& f = *files[c];
+      CellFile<P>& f = *files[c];
       const uint64_t n = f.count();
       if (n == 0) {
         files[c].reset();
@@ -332,7 +352,7 @@ class Packer {
         {
           // Mapped, not copied out of the page cache; the file is deleted as soon as it is
           // sorted, so disk stays ~ one copy of the input.
-          const CellFile::Mapping mapped = f.Map();
+          const typename CellFile<P>::Mapping mapped = f.Map();
           AddCell(mapped.points(), static_cast<size_t>(n), level + k);
         }
         files[c].reset();
@@ -340,7 +360,7 @@ class Packer {
         uint64_t next = 0;
         const size_t batch_points = std::max<size_t>(1, o_.memory_points / 4);
         Spill(
-            [&](UninitVector<TempPoint>* out) {
+            [&](UninitVector<P>* out) {
               if (next >= n) return false;
               const size_t m = static_cast<size_t>(std::min<uint64_t>(batch_points, n - next));
               out->resize(m);
@@ -409,12 +429,12 @@ class Packer {
     ParallelFor(size_t{0}, n, [&](size_t k) {
       const auto [a, b] = ranges_[k];
       Box3d box;
-      for (size_t i = a; i < b; ++i) box.Extend(sorted_[i].Position());
+      for (size_t i = a; i < b; ++i) box.Extend(sorted_[i].Position(shift_));
       ArchiveChunk& c = made[k];
       c.quantizer = ChunkQuantizer::ForBox(box);
       c.count = b - a;
       for (size_t i = a; i < b; ++i) {
-        words_[i] = c.quantizer.Encode(sorted_[i].Position(), sorted_[i].rgb);
+        words_[i] = c.quantizer.Encode(sorted_[i].Position(shift_), sorted_[i].rgb);
       }
       c.hash = ArchiveHash(&words_[a], 8 * (b - a));
     });
@@ -450,10 +470,11 @@ class Packer {
   const PackOptions& o_;
   std::string dir_;
   MortonGrid grid_;
+  Eigen::Vector3d shift_;
   uint64_t total_;
   ProgressCallback progress_;
   std::vector<Keyed> keys_, scratch_;
-  UninitVector<TempPoint> sorted_;
+  UninitVector<P> sorted_;
   std::vector<uint64_t> words_;
   std::vector<std::pair<size_t, size_t>> ranges_;
   std::vector<ArchiveChunk> chunks_;
@@ -464,12 +485,16 @@ class Packer {
   double max_error_[3] = {0, 0, 0};
 };
 
-// Reads all inputs as TempPoints in the archive frame, `batch` points at a time.
+// Reads all inputs as points P in the archive frame (CompactPoints: in their shared frame),
+// `batch` points at a time.
+template <typename P>
 class InputBatches {
  public:
-  InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color)
-      : inputs_(inputs), frame_(frame), default_color_(default_color) {}
-  bool operator()(UninitVector<TempPoint>* out) {
+  // compact_origin: CompactPoint's frame, the one all inputs share.
+  InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color,
+               const Eigen::Vector3d& compact_origin)
+      : inputs_(inputs), frame_(frame), default_color_(default_color), compact_origin_(compact_origin) {}
+  bool operator()(UninitVector<P>* out) {
     out->clear();
     while (true) {
       if (!reader_) {
@@ -485,16 +510,31 @@ class InputBatches {
       const Eigen::Vector3d shift = chunk_.frame.origin - frame_.origin;
       out->resize(n);
       const uint32_t fallback = PackColor(default_color_);
-      std::atomic<bool> finite{true};
+      std::atomic<bool> finite{true}, exact{true};
       ParallelFor(tbb::blocked_range<size_t>(0, n, kBoundsBlock), [&](const tbb::blocked_range<size_t>& r) {
-        bool ok = true;
+        bool ok = true, floats = true;
         for (size_t i = r.begin(); i < r.end(); ++i) {
-          const Eigen::Vector3d p = chunk_.positions[i] + shift;
-          ok &= std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
-          (*out)[i] = {p.x(), p.y(), p.z(), chunk_.schema.colors ? PackColor(chunk_.colors[i]) : fallback};
+          const uint32_t rgb = chunk_.schema.colors ? PackColor(chunk_.colors[i]) : fallback;
+          if constexpr (std::is_same_v<P, CompactPoint>) {
+            const Eigen::Vector3d& p = chunk_.positions[i];
+            if (IsFloat(p)) {
+              (*out)[i] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), rgb};
+            } else {
+              floats = false;
+            }
+          } else {
+            const Eigen::Vector3d p = chunk_.positions[i] + shift;
+            ok &= std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+            (*out)[i] = {p.x(), p.y(), p.z(), rgb};
+          }
         }
         if (!ok) finite = false;
+        if (!floats) exact = false;
       });
+      // Compact points were floats in one frame on the first read (non-finite ones too).
+      if (!exact || (std::is_same_v<P, CompactPoint> && chunk_.frame.origin != compact_origin_)) {
+        throw InputError(inputs_[next_ - 1].name, "", "changed between the two reads (its points were floats in one frame)");
+      }
       if (!finite) {
         for (size_t i = 0; i < n; ++i) {
           if (!chunk_.positions[i].allFinite()) {
@@ -512,6 +552,7 @@ class InputBatches {
   const std::vector<PackInput>& inputs_;
   LocalFrame frame_;
   Rgb8 default_color_;
+  Eigen::Vector3d compact_origin_;
   size_t next_ = 0;
   uint64_t index_ = 0;
   std::unique_ptr<PointReader> reader_;
@@ -576,6 +617,9 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   Box3d world;
   uint64_t total = 0;
   std::vector<uint64_t> counts(inputs.size(), 0);
+  // Whether every point is a float in one frame shared by all inputs (then CompactPoints).
+  bool floats = true;
+  std::optional<Eigen::Vector3d> shared_origin;
   auto pass1 = [&] {
     for (size_t k = 0; k < inputs.size(); ++k) {
       auto reader = inputs[k].open();
@@ -583,6 +627,7 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
       if (info.header_bounds && info.count != kUnknownCount) {
         counts[k] = info.count;
         if (info.count > 0) world.Extend(*info.header_bounds);
+        floats = false;  // its points are not read here
         continue;
       }
       PointCloud chunk;
@@ -591,13 +636,20 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
         // Per block of points, in parallel; min and max do not depend on the order.
         const size_t n = chunk.size(), blocks = (n + kBoundsBlock - 1) / kBoundsBlock;
         boxes.assign(blocks, Box3d());
+        if (!shared_origin) shared_origin = chunk.frame.origin;
+        floats = floats && chunk.frame.origin == *shared_origin;
+        std::atomic<bool> all_floats{floats};
         ParallelFor(size_t{0}, blocks, [&](size_t b) {
+          bool block_floats = true;
           for (size_t i = b * kBoundsBlock; i < std::min(n, (b + 1) * kBoundsBlock); ++i) {
             const Eigen::Vector3d& p = chunk.positions[i];
+            block_floats &= IsFloat(p);
             if (!p.allFinite()) continue;  // reported with its index in pass 2
             boxes[b].Extend(chunk.frame.ToWorld(p));
           }
+          if (!block_floats) all_floats = false;
         });
+        floats = all_floats;
         for (const Box3d& box : boxes) world.Extend(box);
         counts[k] += n;
       }
@@ -637,20 +689,29 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
     }
   } cleanup{temp, RegisterTempPath(temp)};
 
-  auto run = [&] {
-    Packer packer(options, temp, grid, total, progress);
-    InputBatches batches(inputs, manifest.frame, options.default_color);
+  auto pack = [&](auto point_type) {
+    using P = decltype(point_type);
+    const Eigen::Vector3d origin = shared_origin.value_or(Eigen::Vector3d::Zero());
+    const Eigen::Vector3d shift =
+        std::is_same_v<P, CompactPoint> ? Eigen::Vector3d(origin - manifest.frame.origin) : Eigen::Vector3d::Zero();
+    Packer<P> packer(options, temp, grid, shift, total, progress);
+    InputBatches<P> batches(inputs, manifest.frame, options.default_color, origin);
     if (total <= options.memory_points) {
-      UninitVector<TempPoint> all, batch;
+      UninitVector<P> all, batch;
       all.reserve(total);
       while (batches(&batch)) all.insert(all.end(), batch.begin(), batch.end());
       packer.AddCell(all.data(), all.size(), 0);
     } else {
-      packer.Spill([&batches](UninitVector<TempPoint>* out) { return batches(out); }, total, 0);
+      packer.Spill([&batches](UninitVector<P>* out) { return batches(out); }, total, 0);
     }
     packer.Finish(&manifest);
     summary.spilled_points = packer.spilled();
     for (int a = 0; a < 3; ++a) summary.max_error[a] = packer.max_error()[a];
+  };
+  const bool compact = floats && shared_origin.has_value() && !options.wide_records;
+  summary.record_bytes = compact ? sizeof(CompactPoint) : sizeof(WidePoint);
+  auto run = [&] {
+    if (compact) pack(CompactPoint{}); else pack(WidePoint{});
   };
   const auto sort_start = std::chrono::steady_clock::now();
   if (arena) arena->execute(run); else run();

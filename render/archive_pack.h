@@ -4,12 +4,14 @@
 // render frame: origin at the centre, rounded to metres). Pass 2 reads the points once more and
 // computes 63-bit Morton codes (21 bits per axis over the bounds). Inputs of at most
 // `memory_points` points are sorted in memory; larger ones are bucketed by the top Morton bits
-// into up to 512 cell files on disk (28 bytes a point), then each cell, in Morton order, is
-// sorted in memory (a cell still too large is bucketed again by the next bits), so memory stays
-// ~ 100 bytes x memory_points (400 MB by default) whatever the input size. Sorted points are cut into chunks of
-// consecutive points sharing a Morton prefix (<= chunk_points each), quantized and written to
-// data files of ~file_bytes. The output directory appears complete or not at all (built beside
-// it, then renamed; an existing archive there is replaced, anything else refused).
+// into up to 512 cell files on disk (16 bytes a point when every input point is a float in one
+// frame shared by the inputs, as in binary PLY with float x, y, z; else 28), then each cell, in
+// Morton order, is sorted in memory (a cell still too large is bucketed again by the next bits),
+// so memory stays ~ 100 bytes x memory_points (400 MB by default) whatever the input size.
+// Sorted points are cut into chunks of consecutive points sharing a Morton prefix
+// (<= chunk_points each), quantized and written to data files of ~file_bytes. The output
+// directory appears complete or not at all (built beside it, then renamed; an existing archive
+// there is replaced, anything else refused).
 #pragma once
 
 #include <cstdint>
@@ -30,6 +32,9 @@ struct PackOptions {
   uint64_t file_bytes = uint64_t{1} << 30;     // data files are cut at chunk ends past this size
   Rgb8 default_color{200, 200, 200};           // for inputs without colours
   int threads = 0;                             // 0: as TBB allows
+  // Sort 28-byte double records even when every point is a float in one frame (16-byte ones
+  // then; the same archive either way). For tests and benchmarks.
+  bool wide_records = false;
   void Check() const;
 };
 
@@ -49,6 +54,7 @@ PackInput PackInputFromGenerator(const std::string& name, uint64_t total, uint64
 struct PackSummary {
   uint64_t points = 0, chunks = 0, files = 0, bytes = 0;
   uint64_t spilled_points = 0;  // points that went through cell files on disk (external sort)
+  size_t record_bytes = 0;      // bytes a point while sorting: 16 (floats in one frame) or 28
   double seconds = 0;           // whole pack, including bounds and hashing
   // Its stages: the bounds (pass 1), reading, sorting and writing the chunks (pass 2), and
   // hashing the input files for the manifest (on another thread, during pass 1).

@@ -256,6 +256,59 @@ TEST(Archive, PointsAreInMortonOrderForAnyThreadCount) {
   EXPECT_LT(ties, all.size() / 10);  // the check compares cells, not one cell throughout
 }
 
+TEST(Archive, FloatInputsSortAsCompactRecordsIntoTheSameArchive) {
+  TempDir dir;
+  PointCloud cloud = IndexedCloud(30000, Eigen::Vector3d(500000, 4200000, 150));
+  for (Eigen::Vector3d& p : cloud.positions) p = p.cast<float>().cast<double>();  // floats, as from PLY
+  PackOptions o;
+  o.chunk_points = 512;
+  o.file_bytes = 64 * 1024;
+  for (uint64_t memory : {uint64_t{1} << 20, uint64_t{2048}}) {  // in memory, then nested cell files
+    o.memory_points = memory;
+    const std::string tag = std::to_string(memory);
+    o.wide_records = false;
+    const PackSummary compact = PackArchive(o, {CloudInput(cloud)}, dir.path() + "/c" + tag);
+    o.wide_records = true;
+    const PackSummary wide = PackArchive(o, {CloudInput(cloud)}, dir.path() + "/w" + tag);
+    EXPECT_EQ(compact.record_bytes, 16u);
+    EXPECT_EQ(wide.record_bytes, 28u);
+    EXPECT_EQ(compact.spilled_points, wide.spilled_points);
+    ASSERT_GT(compact.files, 1u);
+    for (uint64_t f = 0; f < compact.files; ++f) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "/data-%05llu.bin", static_cast<unsigned long long>(f));
+      ASSERT_TRUE(ReadBytes(dir.path() + "/c" + tag + name) == ReadBytes(dir.path() + "/w" + tag + name)) << tag << name;
+    }
+    EXPECT_TRUE(ReadBytes(dir.path() + "/c" + tag + "/manifest.json") ==
+                ReadBytes(dir.path() + "/w" + tag + "/manifest.json")) << tag;
+  }
+  o = PackOptions();
+  // One coordinate that is not a float, or inputs in different frames: 28-byte records.
+  PointCloud odd = cloud;
+  odd.positions[777].x() += 1e-9;
+  EXPECT_EQ(PackArchive(o, {CloudInput(odd)}, dir.path() + "/odd").record_bytes, 28u);
+  PointCloud moved = cloud;
+  moved.frame.origin.x() += 1;
+  EXPECT_EQ(PackArchive(o, {CloudInput(cloud), CloudInput(moved)}, dir.path() + "/two").record_bytes, 28u);
+  EXPECT_EQ(PackArchive(o, {CloudInput(cloud), CloudInput(cloud)}, dir.path() + "/same").record_bytes, 16u);
+  // An input whose points are floats on the first read but not on the second is refused.
+  int reads = 0;
+  PackInput changing = PackInputFromGenerator("changing", 1000, 1000, [&](uint64_t, uint64_t n) {
+    PointCloud part = TerracedSolid(n, 3);
+    const bool second = reads++ > 0;
+    for (Eigen::Vector3d& p : part.positions) p = p.cast<float>().cast<double>();
+    if (second) part.positions[500].z() += 1e-9;
+    return part;
+  });
+  try {
+    PackArchive(o, {changing}, dir.path() + "/changed");
+    FAIL() << "a changed input accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("changed between the two reads"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.path() + "/changed"));
+}
+
 TEST(Archive, PacksPlyFilesRecordingTheirHashes) {
   TempDir dir;
   PointCloud a = TerracedSolid(3000, 1), b = TerracedSolid(2000, 2);

@@ -36,6 +36,23 @@ void LocalRadixSort(Keyed* keys, Keyed* temp, size_t n, int bits) {
 
 }  // namespace
 
+std::vector<uint64_t> StableBucketOffsets(std::vector<uint64_t>* counts, size_t slices, size_t buckets) {
+  CANDI_CHECK_EQ(counts->size(), slices * buckets);
+  std::vector<uint64_t> start(buckets + 1, 0);
+  uint64_t sum = 0;
+  for (size_t k = 0; k < buckets; ++k) {
+    start[k] = sum;
+    for (size_t s = 0; s < slices; ++s) {
+      uint64_t& c = (*counts)[s * buckets + k];
+      const uint64_t m = c;
+      c = sum;
+      sum += m;
+    }
+  }
+  start[buckets] = sum;
+  return start;
+}
+
 void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits) {
   CANDI_CHECK(bits <= 64) << "SortByCode: " << bits << " bits";
   const size_t n = keys->size();
@@ -53,17 +70,7 @@ void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits)
     uint64_t* c = &count[s * buckets];
     for (size_t i = a; i < b; ++i) ++c[(in[i].code >> shift) & (buckets - 1)];
   });
-  std::vector<uint64_t> bucket_start(buckets + 1, 0);
-  uint64_t sum = 0;
-  for (size_t k = 0; k < buckets; ++k) {
-    bucket_start[k] = sum;
-    for (size_t s = 0; s < kSlices; ++s) {
-      const uint64_t m = count[s * buckets + k];
-      count[s * buckets + k] = sum;
-      sum += m;
-    }
-  }
-  bucket_start[buckets] = sum;
+  const std::vector<uint64_t> bucket_start = StableBucketOffsets(&count, kSlices, buckets);
   Keyed* out = scratch->data();
   ParallelFor(size_t{0}, kSlices, [&](size_t s) {
     const auto [a, b] = slice(s);

@@ -8,6 +8,7 @@
 // of a plain LSD radix sort.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -17,6 +18,13 @@ struct Keyed {
   uint64_t code;
   uint64_t index;  // the key's position in the input, say
 };
+
+// A stable counting sort's offsets: *counts holds, for each of `slices` consecutive slices of
+// the input, its count in each of `buckets` buckets (row-major, slice by slice). Replaces every
+// count with where that slice's first item of that bucket goes (buckets in order, the slices in
+// order within each) and returns where each bucket starts (buckets + 1 entries, the last the
+// total).
+std::vector<uint64_t> StableBucketOffsets(std::vector<uint64_t>* counts, size_t slices, size_t buckets);
 
 // Sorts *keys stably by code & (2^bits - 1) (the bits above must be equal: they are not looked
 // at); *scratch is resized and used as scratch. bits in [0, 64].
