@@ -330,10 +330,10 @@ void PlyReader::CheckFinite(size_t n, const PointCloud& chunk, uint64_t first) c
   // the threads.
   std::atomic<bool> any_bad{false};
   ParallelFor(size_t{0}, (n + kDecodeBlock - 1) / kDecodeBlock, [&](size_t b) {
+    const uint64_t* word = bits + 3 * b * kDecodeBlock;
+    const size_t words = 3 * (std::min(n, (b + 1) * kDecodeBlock) - b * kDecodeBlock);
     uint64_t bad = 0;
-    for (size_t j = 3 * b * kDecodeBlock; j < 3 * std::min(n, (b + 1) * kDecodeBlock); ++j) {
-      bad |= ((bits[j] & kExponent) + (1ULL << 52)) & (1ULL << 63);
-    }
+    for (size_t j = 0; j < words; ++j) bad |= ((word[j] & kExponent) + (1ULL << 52)) & (1ULL << 63);
     if (bad) any_bad = true;
   });
   if (!any_bad) return;
