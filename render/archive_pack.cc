@@ -170,12 +170,26 @@ inline uint64_t Spread(uint64_t v) {  // 21 bits -> every third bit
 
 struct MortonGrid {
   Eigen::Vector3d min, scale;  // cells per metre
-  uint64_t Code(const Eigen::Vector3d& p) const {
+  // The point's cell on each axis: 21 bits.
+  void Quantize(const Eigen::Vector3d& p, uint64_t q[3]) const {
     const double top = static_cast<double>((1 << kMortonBits) - 1);
-    const double c[3] = {p.x(), p.y(), p.z()};
+    for (int a = 0; a < 3; ++a) q[a] = static_cast<uint64_t>(std::clamp((p[a] - min[a]) * scale[a], 0.0, top));
+  }
+  uint64_t Code(const Eigen::Vector3d& p) const {
     uint64_t q[3];
-    for (int a = 0; a < 3; ++a) q[a] = static_cast<uint64_t>(std::clamp((c[a] - min[a]) * scale[a], 0.0, top));
+    Quantize(p, q);
     return Spread(q[0]) | Spread(q[1]) << 1 | Spread(q[2]) << 2;
+  }
+  // Code(p)'s 3 * k bits of levels [level, level + k) (k <= 3), without spreading all 21 bits.
+  uint32_t Child(const Eigen::Vector3d& p, int level, int k) const {
+    uint64_t q[3];
+    Quantize(p, q);
+    const int shift = kMortonBits - level - k;
+    uint32_t child = 0;
+    for (int t = 0; t < k; ++t) {
+      for (int a = 0; a < 3; ++a) child |= static_cast<uint32_t>((q[a] >> (shift + t)) & 1) << (3 * t + a);
+    }
+    return child;
   }
 };
 
@@ -326,7 +340,7 @@ class Packer {
       ParallelFor(size_t{0}, pieces, [&](size_t piece) {
         uint64_t* count = &at[piece * cells];
         for (size_t i = piece * kRoutePiece; i < std::min(n, (piece + 1) * kRoutePiece); ++i) {
-          cell[i] = static_cast<uint16_t>(Prefix(grid_.Code(batch[i].Position(shift_)), level + k) & (cells - 1));
+          cell[i] = static_cast<uint16_t>(grid_.Child(batch[i].Position(shift_), level, k));
           ++count[cell[i]];
         }
       });
