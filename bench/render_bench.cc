@@ -149,7 +149,8 @@ int main(int argc, char** argv) {
       const int runs = i + 3 < argc ? std::max(1, std::atoi(argv[i + 3])) : 1;
       std::vector<double> ms;
       for (int r = 0; r < runs; ++r) ms.push_back(RenderMs(splats, camera, 1, 1));
-      std::printf("%.1f ms (median of %d; fastest %.1f ms)\n", Median(ms), runs, *std::min_element(ms.begin(), ms.end()));
+      std::printf("%.1f ms (median of %d; fastest %.1f ms)\n", Median(ms), runs,
+                  *std::min_element(ms.begin(), ms.end()));
       return 0;
     }
   }

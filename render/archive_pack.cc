@@ -348,7 +348,9 @@ class Packer {
       grouped.resize(n);
       ParallelFor(size_t{0}, pieces, [&](size_t piece) {
         uint64_t* next = &at[piece * cells];
-        for (size_t i = piece * kRoutePiece; i < std::min(n, (piece + 1) * kRoutePiece); ++i) grouped[next[cell[i]]++] = batch[i];
+        for (size_t i = piece * kRoutePiece; i < std::min(n, (piece + 1) * kRoutePiece); ++i) {
+          grouped[next[cell[i]]++] = batch[i];
+        }
       });
       // The page-cache copies of different cells run in parallel.
       ParallelFor(size_t{0}, cells, [&](size_t c) {
@@ -545,9 +547,11 @@ class InputBatches {
         if (!ok) finite = false;
         if (!floats) exact = false;
       });
-      // Compact points were floats in one frame on the first read (non-finite ones too).
+      // Compact points were all finite floats in one frame on the first read: anything else now
+      // means the input changed.
       if (!exact || (std::is_same_v<P, CompactPoint> && chunk_.frame.origin != compact_origin_)) {
-        throw InputError(inputs_[next_ - 1].name, "", "changed between the two reads (its points were floats in one frame)");
+        throw InputError(inputs_[next_ - 1].name, "",
+                         "changed between the two reads (its points were floats in one frame)");
       }
       if (!finite) {
         for (size_t i = 0; i < n; ++i) {

@@ -277,7 +277,8 @@ TEST(Archive, FloatInputsSortAsCompactRecordsIntoTheSameArchive) {
     for (uint64_t f = 0; f < compact.files; ++f) {
       char name[32];
       std::snprintf(name, sizeof(name), "/data-%05llu.bin", static_cast<unsigned long long>(f));
-      ASSERT_TRUE(ReadBytes(dir.path() + "/c" + tag + name) == ReadBytes(dir.path() + "/w" + tag + name)) << tag << name;
+      ASSERT_TRUE(ReadBytes(dir.path() + "/c" + tag + name) == ReadBytes(dir.path() + "/w" + tag + name))
+          << tag << name;
     }
     EXPECT_TRUE(ReadBytes(dir.path() + "/c" + tag + "/manifest.json") ==
                 ReadBytes(dir.path() + "/w" + tag + "/manifest.json")) << tag;
