@@ -113,19 +113,6 @@ ChunkQuantizer ChunkQuantizer::ForBox(const Box3d& box) {
   return q;
 }
 
-uint64_t ChunkQuantizer::Encode(const Eigen::Vector3d& x, uint32_t rgb) const {
-  uint64_t word = rgb & 0xffffff;
-  int shift = 24;
-  for (int a = 0; a < 3; ++a) {
-    if (bits[a] == 0) continue;
-    const double top = static_cast<double>((uint64_t{1} << bits[a]) - 1);  // exact (bits <= 24)
-    const double t = std::clamp(std::nearbyint((x[a] - box.min[a]) / step[a]), 0.0, top);
-    word |= static_cast<uint64_t>(t) << shift;
-    shift += bits[a];
-  }
-  return word;
-}
-
 // ---- manifest -------------------------------------------------------------------------------
 
 namespace {
