@@ -18,7 +18,7 @@ namespace candi {
 namespace {
 
 // Binary vertices decode in blocks of this many, in parallel.
-constexpr size_t kDecodeBlock = 4096;
+constexpr size_t kDecodeBlock = size_t{1} << 15;
 
 using ply::Type;
 
