@@ -6,7 +6,7 @@
 //  4. the big frame: 1.5 * 10^8 points, L = 100, 1024^2, two threads: seconds, bytes per point.
 // Medians of 3 runs. Usage: render_bench [--quick] [--big N] (N points for section 4; 0 skips)
 // [--section K]... (only these sections); render_bench --profile N L [R]: R (1) 1024^2 renders
-// of N points at L, one thread, their median (for profilers).
+// of N points at L, one thread, their median and the fastest (for profilers).
 #include <sys/resource.h>
 
 #include <algorithm>

@@ -6,7 +6,8 @@
 // point is one little-endian uint64 (8 bytes with colour):
 //   bits 0..23   colour 0xRRGGBB
 //   bits 24..    x (bx bits), then y (by bits), then z (bz bits); bx + by + bz = 40
-// quantized on the chunk's bounding box (double, local frame): q = round((x - min) / step),
+// quantized on the chunk's bounding box (double, local frame): q = round((x - min) / step) (half
+// steps to even),
 // step = extent / (2^b - 1). The 40 bits are shared out per chunk: each axis with an extent gets
 // at least 1 bit, then each further bit goes to the axis with the largest step (at most 24 bits
 // an axis); a flat axis (extent 0) gets 0 bits and step 0.
