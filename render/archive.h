@@ -6,11 +6,10 @@
 // point is one little-endian uint64 (8 bytes with colour):
 //   bits 0..23   colour 0xRRGGBB
 //   bits 24..    x (bx bits), then y (by bits), then z (bz bits); bx + by + bz = 40
-// quantized on the chunk's bounding box (double, local frame): q = round((x - min) / step) (half
-// steps to even),
-// step = extent / (2^b - 1). The 40 bits are shared out per chunk: each axis with an extent gets
-// at least 1 bit, then each further bit goes to the axis with the largest step (at most 24 bits
-// an axis); a flat axis (extent 0) gets 0 bits and step 0.
+// quantized on the chunk's bounding box (double, local frame): q = round((x - min) / step), half
+// steps to even, step = extent / (2^b - 1). The 40 bits are shared out per chunk: each axis
+// with an extent gets at least 1 bit, then each further bit goes to the axis with the largest
+// step (at most 24 bits an axis); a flat axis (extent 0) gets 0 bits and step 0.
 // Error bound per axis: |x - dequantized x| <= step / 2 = extent / (2^b - 1) / 2, plus the double
 // rounding of min + q * step (a few ulps of the coordinates, ~1e-16 relative), tested in
 // archive_test.cc. A chunk of 65536 points spanning 1 m gets 13-14 bits per axis: 0.06 mm.
