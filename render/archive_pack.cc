@@ -37,6 +37,10 @@ void PackOptions::Check() const {
     throw std::invalid_argument("PackOptions::chunk_points = " + std::to_string(chunk_points) +
                                 "; must be in [64, 16777216]");
   }
+  if (memory_points >= (uint64_t{1} << 32)) {  // a cell's points are indexed by 32 bits
+    throw std::invalid_argument("PackOptions::memory_points = " + std::to_string(memory_points) +
+                                "; must be < 2^32");
+  }
   if (memory_points < chunk_points) {
     throw std::invalid_argument("PackOptions::memory_points = " + std::to_string(memory_points) +
                                 "; must be >= chunk_points (" + std::to_string(chunk_points) + ")");
@@ -313,7 +317,9 @@ class Packer {
     if (n == 0) return;
     keys_.resize(n);
     ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) keys_[i] = {grid_.Code(points[i].Position(shift_)), i};
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        keys_[i] = {grid_.Code(points[i].Position(shift_)), static_cast<uint32_t>(i)};
+      }
     });
     SortByCode(&keys_, &scratch_, 63 - 3 * level);
     sorted_.resize(n);

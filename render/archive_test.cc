@@ -310,6 +310,19 @@ TEST(Archive, FloatInputsSortAsCompactRecordsIntoTheSameArchive) {
   EXPECT_FALSE(fs::exists(dir.path() + "/changed"));
 }
 
+TEST(Archive, PackOptionsOutOfRangeAreRefused) {
+  PackOptions o;
+  o.Check();
+  o.memory_points = uint64_t{1} << 32;  // a cell's points are indexed by 32 bits
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = PackOptions();
+  o.memory_points = o.chunk_points - 1;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = PackOptions();
+  o.chunk_points = 32;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+}
+
 TEST(Archive, PacksPlyFilesRecordingTheirHashes) {
   TempDir dir;
   PointCloud a = TerracedSolid(3000, 1), b = TerracedSolid(2000, 2);

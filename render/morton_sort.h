@@ -14,10 +14,14 @@
 
 namespace candi::render {
 
+// 12 bytes (4-byte aligned): the sort moves a quarter fewer bytes than with a 64-bit index.
+#pragma pack(push, 4)
 struct Keyed {
   uint64_t code;
-  uint64_t index;  // the key's position in the input, say
+  uint32_t index;  // the key's position in the input, say
 };
+#pragma pack(pop)
+static_assert(sizeof(Keyed) == 12, "Keyed must be 12 bytes");
 
 // A stable counting sort's offsets: *counts holds, for each of `slices` consecutive slices of
 // the input, its count in each of `buckets` buckets (row-major, slice by slice). Replaces every

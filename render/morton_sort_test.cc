@@ -20,7 +20,7 @@ std::vector<Keyed> RandomKeys(size_t n, int bits, uint64_t values, uint64_t seed
   std::vector<Keyed> keys(n);
   for (size_t i = 0; i < n; ++i) {
     const uint64_t v = values ? HashIndex(seed, rng.Below(values)) : rng.Next();
-    keys[i] = {high | (v & low_mask), i};
+    keys[i] = {high | (v & low_mask), static_cast<uint32_t>(i)};
   }
   return keys;
 }
