@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 
 #include <algorithm>
+#include <cstring>
 #include <utility>
 
 #include "core/check.h"
@@ -14,21 +15,30 @@ namespace {
 
 // LSD radix sort of keys[0, n) by the code's bits [0, bits), stable, with temp[0, n) as
 // scratch: 8-bit digits, a digit whose values are all equal skipped. The range is small (one
-// bucket of SortByCode), so the passes stay in the cache.
+// bucket of SortByCode, < 2^32 keys), so the passes stay in the cache. The counts of every digit
+// are taken in one first pass: the keys come nearly in order, so counting one digit at a time
+// would increment the same counter again and again, each increment waiting for the last.
 void LocalRadixSort(Keyed* keys, Keyed* temp, size_t n, int bits) {
-  uint64_t count[256];
+  constexpr int kMaxDigits = 8;
+  const int digits = std::min(kMaxDigits, (bits + 7) / 8);
+  uint32_t count[kMaxDigits][256];
+  std::memset(count, 0, sizeof(count[0]) * static_cast<size_t>(digits));
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t code = keys[i].code;
+    for (int d = 0; d < digits; ++d) ++count[d][(code >> (8 * d)) & 0xff];
+  }
   Keyed *from = keys, *to = temp;
-  for (int shift = 0; shift < bits; shift += 8) {
-    std::fill(count, count + 256, uint64_t{0});
-    for (size_t i = 0; i < n; ++i) ++count[(from[i].code >> shift) & 0xff];
-    if (*std::max_element(count, count + 256) == n) continue;  // one value: already in order
-    uint64_t sum = 0;
-    for (uint64_t& c : count) {
-      const uint64_t m = c;
-      c = sum;
+  for (int d = 0; d < digits; ++d) {
+    uint32_t* c = count[d];
+    if (*std::max_element(c, c + 256) == n) continue;  // one value: already in order
+    uint32_t sum = 0;
+    for (int v = 0; v < 256; ++v) {
+      const uint32_t m = c[v];
+      c[v] = sum;
       sum += m;
     }
-    for (size_t i = 0; i < n; ++i) to[count[(from[i].code >> shift) & 0xff]++] = from[i];
+    const int shift = 8 * d;
+    for (size_t i = 0; i < n; ++i) to[c[(from[i].code >> shift) & 0xff]++] = from[i];
     std::swap(from, to);
   }
   if (from != keys) std::copy(from, from + n, keys);
