@@ -40,6 +40,22 @@ void BinaryFile::Seek(uint64_t offset) {
   position_ = offset;
 }
 
+size_t BinaryFile::ReadAt(uint64_t offset, void* dst, size_t n) const {
+  size_t total = 0;
+  auto* out = static_cast<uint8_t*>(dst);
+  while (total < n) {
+    const ssize_t got = pread(fd_, out + total, n - total, static_cast<off_t>(offset + total));
+    if (got < 0) {
+      if (errno == EINTR) continue;
+      throw InputError(path_, "byte " + std::to_string(offset + total),
+                       std::string("read error: ") + std::strerror(errno));
+    }
+    if (got == 0) break;
+    total += static_cast<size_t>(got);
+  }
+  return total;
+}
+
 size_t BinaryFile::ReadSome(void* dst, size_t n) {
   size_t total = 0;
   auto* out = static_cast<uint8_t*>(dst);

@@ -28,6 +28,9 @@ class BinaryFile {
   void ReadExact(void* dst, size_t n, const std::string& what);
   // Reads up to n bytes; returns the number read (0 at the end).
   size_t ReadSome(void* dst, size_t n);
+  // Reads up to n bytes at `offset` without moving; returns the number read (fewer only at the
+  // end). Safe to call from several threads at once.
+  size_t ReadAt(uint64_t offset, void* dst, size_t n) const;
   // Reads a text line (without "\n" or "\r\n") of at most max_length bytes; false at the end.
   bool ReadLine(std::string* line, size_t max_length = 1 << 16);
   // Bytes at the start of the file (fewer if the file is shorter), without moving.
