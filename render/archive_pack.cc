@@ -410,7 +410,9 @@ class InputBatches {
       // Compact points were all finite floats in one frame on the first read: anything else now
       // means the input changed.
       if (!exact || (std::is_same_v<P, CompactPoint> && chunk_.frame.origin != compact_origin_)) {
-        throw InputError(inputs_[next_ - 1].name, "",
+        size_t i = 0;  // the first point that is no longer a float (the first of a moved frame)
+        if (!exact) while (i < n && IsFloat(chunk_.positions[i])) ++i;
+        throw InputError(inputs_[next_ - 1].name, "point " + std::to_string(index_ + i),
                          "changed between the two reads (its points were floats in one frame)");
       }
       if (!finite) {

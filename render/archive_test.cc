@@ -305,7 +305,8 @@ TEST(Archive, FloatInputsSortAsCompactRecordsIntoTheSameArchive) {
     PackArchive(o, {changing}, dir.path() + "/changed");
     FAIL() << "a changed input accepted";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("changed between the two reads"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("point 500: changed between the two reads"), std::string::npos)
+        << e.what();
   }
   EXPECT_FALSE(fs::exists(dir.path() + "/changed"));
 }
