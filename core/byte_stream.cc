@@ -12,6 +12,25 @@ namespace {
 constexpr size_t kParallelPart = size_t{4} << 20;  // bytes a thread copies at least
 }  // namespace
 
+size_t ReadAtInParts(const BinaryFile& file, uint64_t offset, void* dst, size_t n) {
+  if (n < 2 * kParallelPart) return file.ReadAt(offset, dst, n);
+  // The copy out of the page cache is the cost of a read of a cached file; in one part it would
+  // run on one core while the others wait.
+  auto* out = static_cast<uint8_t*>(dst);
+  const size_t parts = std::min<size_t>(16, n / kParallelPart);
+  std::vector<size_t> got(parts, 0);
+  auto begin = [&](size_t k) { return n * k / parts; };
+  ParallelFor(size_t{0}, parts, [&](size_t k) {
+    got[k] = file.ReadAt(offset + begin(k), out + begin(k), begin(k + 1) - begin(k));
+  });
+  size_t total = 0;  // the bytes read without a gap (a part falls short only at the end)
+  for (size_t k = 0; k < parts; ++k) {
+    total += got[k];
+    if (got[k] < begin(k + 1) - begin(k)) break;
+  }
+  return total;
+}
+
 ByteStream::ByteStream(BinaryFile& file, size_t block_size)
     : file_(file), block_size_(block_size), offset_(file.position()) {}
 
@@ -29,27 +48,9 @@ bool ByteStream::Ensure(size_t n) {
   if (buffer_.size() < want) buffer_.resize(want);
   while (end_ < n) {
     const size_t want = static_cast<size_t>(std::min<uint64_t>(buffer_.size() - end_, file_.remaining()));
-    if (want >= 2 * kParallelPart) {
-      // Large fills are copied out of the page cache by parallel parts (the copy is the cost of
-      // a read of a cached file, and it would otherwise run on one core while the others wait).
-      const size_t parts = std::min<size_t>(16, want / kParallelPart);
-      std::vector<size_t> got(parts, 0);
-      const uint64_t at = file_.position();
-      auto begin = [&](size_t k) { return want * k / parts; };
-      ParallelFor(size_t{0}, parts, [&](size_t k) {
-        got[k] = file_.ReadAt(at + begin(k), buffer_.data() + end_ + begin(k), begin(k + 1) - begin(k));
-      });
-      size_t total = 0;  // the bytes read without a gap (a part falls short only at the end)
-      for (size_t k = 0; k < parts; ++k) {
-        total += got[k];
-        if (got[k] < begin(k + 1) - begin(k)) break;
-      }
-      file_.Seek(at + total);
-      if (total == 0) return false;
-      end_ += total;
-      continue;
-    }
-    const size_t got = file_.ReadSome(buffer_.data() + end_, buffer_.size() - end_);
+    const uint64_t at = file_.position();
+    const size_t got = ReadAtInParts(file_, at, buffer_.data() + end_, want);
+    file_.Seek(at + got);
     if (got == 0) return false;
     end_ += got;
   }

@@ -9,6 +9,10 @@
 
 namespace candi {
 
+// Reads like file.ReadAt (up to n bytes at offset; fewer only at the end of the file), copying
+// reads of 8 MiB and more out of the page cache in parallel parts. Returns the bytes read.
+size_t ReadAtInParts(const BinaryFile& file, uint64_t offset, void* dst, size_t n);
+
 class ByteStream {
  public:
   // Starts at the file's current position.

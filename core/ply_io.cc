@@ -193,6 +193,7 @@ class PlyReader : public PointReader {
  public:
   PlyReader(const std::string& path, const PointReadOptions& options);
   size_t Read(size_t max_points, PointCloud* chunk) override;
+  std::optional<PointRecordLayout> record_layout() const override { return record_layout_; }
   // After all vertices: reads the faces, fanning polygons into triangles.
   std::vector<std::array<uint32_t, 3>> ReadFaces();
 
@@ -201,6 +202,7 @@ class PlyReader : public PointReader {
     throw InputError(path_, position, message);
   }
   void MapColumns();
+  void SetRecordLayout();
   void SkipElement(const ply::Element& element);
   size_t ReadBinary(size_t n, PointCloud* chunk);
   size_t ReadAscii(size_t n, PointCloud* chunk);
@@ -224,6 +226,7 @@ class PlyReader : public PointReader {
   std::vector<uint8_t> compact_;
   uint64_t line_ = 0;  // ASCII: the current line number
   size_t pending_consume_ = 0;  // ASCII: bytes of the current line, consumed by NextLine
+  std::optional<PointRecordLayout> record_layout_;
 };
 
 PlyReader::PlyReader(const std::string& path, const PointReadOptions& options)
@@ -249,6 +252,29 @@ PlyReader::PlyReader(const std::string& path, const PointReadOptions& options)
   line_ = header_.header_lines;
   stream_ = std::make_unique<ByteStream>(file_);
   for (int e = 0; e < vertex_element_; ++e) SkipElement(header_.elements[e]);
+  SetRecordLayout();
+}
+
+void PlyReader::SetRecordLayout() {
+  const ply::Element& vertex = header_.elements[vertex_element_];
+  if (header_.encoding != PlyEncoding::kBinaryLittleEndian || vertex.HasLists()) return;
+  PointRecordLayout layout;
+  layout.first_byte = stream_->offset();
+  layout.stride = vertex.FixedSize();
+  layout.count = info_.count;
+  for (const Column& c : columns_) {
+    const int axis = c.role == Role::kX ? 0 : c.role == Role::kY ? 1 : c.role == Role::kZ ? 2 : -1;
+    const int channel = c.role == Role::kR ? 0 : c.role == Role::kG ? 1 : c.role == Role::kB ? 2 : -1;
+    if (axis >= 0) {
+      if (c.type != Type::kFloat32) return;
+      layout.xyz[axis] = c.offset;
+    }
+    if (channel >= 0) {
+      if (c.type != Type::kUint8) return;
+      layout.rgb[channel] = static_cast<int>(c.offset);
+    }
+  }
+  record_layout_ = layout;
 }
 
 void PlyReader::MapColumns() {

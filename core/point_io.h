@@ -49,6 +49,20 @@ struct PointReadOptions {
   bool scalar_fields = true;
 };
 
+// How a file stores its points when they are fixed-size little-endian records with float
+// coordinates: binary little-endian PLY whose vertices have float x, y, z, uchar colour (or none)
+// and no lists. A consumer that needs only positions and colours (the render archive packer)
+// decodes such records itself, in bulk, where Read() would widen every coordinate to a double.
+// A record's position is (double(x), double(y), double(z)) in the reader's info().frame, its
+// colour (red, green, blue) the bytes at rgb (default colour when rgb[0] < 0): what Read() gives.
+struct PointRecordLayout {
+  uint64_t first_byte = 0;       // file offset of the first record
+  size_t stride = 0;             // bytes a record
+  size_t xyz[3] = {0, 0, 0};     // offsets of x, y, z in a record
+  int rgb[3] = {-1, -1, -1};     // offsets of red, green, blue; -1: no colour
+  uint64_t count = 0;            // records
+};
+
 class PointReader {
  public:
   virtual ~PointReader() = default;
@@ -57,6 +71,9 @@ class PointReader {
   // Reads up to max_points (> 0) next points into *chunk, replacing its points; chunk's schema,
   // frame and meta are set from info(). Returns the number read, 0 at the end of the points.
   virtual size_t Read(size_t max_points, PointCloud* chunk) = 0;
+  // The file's point records when their layout is a PointRecordLayout, else nullopt. The caller
+  // reads the bytes itself (and checks that the file holds them all).
+  virtual std::optional<PointRecordLayout> record_layout() const { return std::nullopt; }
   uint64_t points_read() const { return points_read_; }
 
  protected:

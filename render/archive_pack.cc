@@ -20,6 +20,7 @@
 #include "core/check.h"
 #include "core/parallel.h"
 #include "render/morton_sort.h"
+#include "render/pack_input.h"
 #include "render/pack_records.h"
 #include "render/splat_cloud.h"
 
@@ -110,20 +111,6 @@ PackInput PackInputFromGenerator(const std::string& name, uint64_t total, uint64
   in.name = name;
   in.open = [=] { return std::unique_ptr<PointReader>(new GeneratedReader(name, total, piece, make)); };
   return in;
-}
-
-uint64_t HashFile(const std::string& path, uint64_t* bytes) {
-  BinaryFile file(path);
-  *bytes = file.size();
-  constexpr size_t kBlock = size_t{64} << 20;
-  std::vector<uint8_t> buffer(std::min<uint64_t>(kBlock, std::max<uint64_t>(file.size(), 1)));
-  std::vector<uint64_t> blocks;
-  while (file.remaining() > 0) {
-    const size_t n = static_cast<size_t>(std::min<uint64_t>(kBlock, file.remaining()));
-    file.ReadExact(buffer.data(), n, "block for hashing");
-    blocks.push_back(ArchiveHash(buffer.data(), n));
-  }
-  return ArchiveHash(blocks.data(), 8 * blocks.size(), file.size());
 }
 
 namespace {
@@ -361,84 +348,6 @@ class Packer {
   double max_error_[3] = {0, 0, 0};
 };
 
-// Reads all inputs as points P in the archive frame (CompactPoints: in their shared frame),
-// `batch` points at a time.
-template <typename P>
-class InputBatches {
- public:
-  // compact_origin: CompactPoint's frame, the one all inputs share.
-  InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color,
-               const Eigen::Vector3d& compact_origin)
-      : inputs_(inputs), frame_(frame), default_color_(default_color), compact_origin_(compact_origin) {}
-  bool operator()(UninitVector<P>* out) {
-    out->clear();
-    while (true) {
-      if (!reader_) {
-        if (next_ >= inputs_.size()) return false;
-        reader_ = inputs_[next_++].open();
-        index_ = 0;
-      }
-      const size_t n = reader_->Read(1 << 20, &chunk_);
-      if (n == 0) {
-        reader_.reset();
-        continue;
-      }
-      const Eigen::Vector3d shift = chunk_.frame.origin - frame_.origin;
-      out->resize(n);
-      const uint32_t fallback = PackColor(default_color_);
-      std::atomic<bool> finite{true}, exact{true};
-      ParallelFor(tbb::blocked_range<size_t>(0, n, kBoundsBlock), [&](const tbb::blocked_range<size_t>& r) {
-        bool ok = true, floats = true;
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-          const uint32_t rgb = chunk_.schema.colors ? PackColor(chunk_.colors[i]) : fallback;
-          if constexpr (std::is_same_v<P, CompactPoint>) {
-            const Eigen::Vector3d& p = chunk_.positions[i];
-            if (IsFloat(p)) {
-              (*out)[i] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), rgb};
-            } else {
-              floats = false;
-            }
-          } else {
-            const Eigen::Vector3d p = chunk_.positions[i] + shift;
-            ok &= std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
-            (*out)[i] = {p.x(), p.y(), p.z(), rgb};
-          }
-        }
-        if (!ok) finite = false;
-        if (!floats) exact = false;
-      });
-      // Compact points were all finite floats in one frame on the first read: anything else now
-      // means the input changed.
-      if (!exact || (std::is_same_v<P, CompactPoint> && chunk_.frame.origin != compact_origin_)) {
-        size_t i = 0;  // the first point that is no longer a float (the first of a moved frame)
-        if (!exact) while (i < n && IsFloat(chunk_.positions[i])) ++i;
-        throw InputError(inputs_[next_ - 1].name, "point " + std::to_string(index_ + i),
-                         "changed between the two reads (its points were floats in one frame)");
-      }
-      if (!finite) {
-        for (size_t i = 0; i < n; ++i) {
-          if (!chunk_.positions[i].allFinite()) {
-            throw InputError(inputs_[next_ - 1].name, "point " + std::to_string(index_ + i),
-                             "NaN or infinite coordinate");
-          }
-        }
-      }
-      index_ += n;
-      return true;
-    }
-  }
-
- private:
-  const std::vector<PackInput>& inputs_;
-  LocalFrame frame_;
-  Rgb8 default_color_;
-  Eigen::Vector3d compact_origin_;
-  size_t next_ = 0;
-  uint64_t index_ = 0;
-  std::unique_ptr<PointReader> reader_;
-  PointCloud chunk_;
-};
-
 // Builds into `temp`, then renames over `output` (replacing an archive, refusing anything else).
 void Publish(const std::string& temp, const std::string& output) {
   std::error_code ec;
@@ -475,23 +384,19 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   ArchiveManifest manifest;
   manifest.chunk_points = options.chunk_points;
 
-  // The input files' hashes for the manifest, read on another thread while pass 1 (one thread)
-  // reads the points. The future's destructor waits for it if packing fails.
-  struct SourceHashes {
-    std::vector<uint64_t> hash, bytes;
-    double seconds = 0;
+  // The input files' hashes for the manifest. Files of records (binary PLY) are hashed by pass
+  // 1 from the bytes it reads; the others on another thread while the packer goes on (the
+  // futures' destructors wait for them if packing fails).
+  std::vector<uint64_t> hashes(inputs.size(), 0), hashed_bytes(inputs.size(), 0);
+  std::vector<std::future<double>> hashing;
+  auto hash_later = [&](size_t k) {
+    if (inputs[k].path.empty()) return;
+    hashing.push_back(std::async(std::launch::async, [&inputs, &hashes, &hashed_bytes, k] {
+      const auto t0 = std::chrono::steady_clock::now();
+      hashes[k] = HashFile(inputs[k].path, &hashed_bytes[k]);
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }));
   };
-  std::future<SourceHashes> source_hashes = std::async(std::launch::async, [&inputs] {
-    const auto t0 = std::chrono::steady_clock::now();
-    SourceHashes h;
-    h.hash.resize(inputs.size(), 0);
-    h.bytes.resize(inputs.size(), 0);
-    for (size_t k = 0; k < inputs.size(); ++k) {
-      if (!inputs[k].path.empty()) h.hash[k] = HashFile(inputs[k].path, &h.bytes[k]);
-    }
-    h.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return h;
-  });
 
   // Pass 1: bounds and counts (headers when they state both), in the arena like pass 2.
   Box3d world;
@@ -505,11 +410,25 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
       auto reader = inputs[k].open();
       const PointFileInfo& info = reader->info();
       if (info.header_bounds && info.count != kUnknownCount) {
+        hash_later(k);
         counts[k] = info.count;
         if (info.count > 0) world.Extend(*info.header_bounds);
         floats = false;  // its points are not read here
         continue;
       }
+      const std::optional<PointRecordLayout> layout = reader->record_layout();
+      if (options.direct_reads && layout && !inputs[k].path.empty() && reader->path() == inputs[k].path) {
+        const RecordScan scan = ScanRecords(reader->path(), *layout, info.frame);
+        hashes[k] = scan.hash;
+        hashed_bytes[k] = scan.bytes;
+        counts[k] = layout->count;
+        if (layout->count == 0) continue;
+        if (!shared_origin) shared_origin = info.frame.origin;
+        floats = floats && info.frame.origin == *shared_origin;
+        world.Extend(scan.world);
+        continue;
+      }
+      hash_later(k);
       PointCloud chunk;
       std::vector<Box3d> boxes;
       while (reader->Read(1 << 20, &chunk) > 0) {
@@ -575,7 +494,7 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
     const Eigen::Vector3d shift =
         std::is_same_v<P, CompactPoint> ? Eigen::Vector3d(origin - manifest.frame.origin) : Eigen::Vector3d::Zero();
     Packer<P> packer(options, temp, grid, shift, total, progress);
-    InputBatches<P> batches(inputs, manifest.frame, options.default_color, origin);
+    InputBatches<P> batches(inputs, manifest.frame, options.default_color, origin, options.direct_reads);
     if (total <= options.memory_points) {
       UninitVector<P> all, batch;
       all.reserve(total);
@@ -604,16 +523,15 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
                                                   " on the first (did a file change?)");
   }
   manifest.bounds = local;
-  const SourceHashes hashes = source_hashes.get();
+  for (std::future<double>& h : hashing) summary.hash_seconds += h.get();
   for (size_t k = 0; k < inputs.size(); ++k) {
     ArchiveSource src;
     src.path = inputs[k].path.empty() ? inputs[k].name : inputs[k].path;
     src.points = counts[k];
-    src.hash = hashes.hash[k];
-    src.bytes = hashes.bytes[k];
+    src.hash = hashes[k];
+    src.bytes = hashed_bytes[k];
     manifest.sources.push_back(src);
   }
-  summary.hash_seconds = hashes.seconds;
   WriteFileAtomic(temp + "/" + kArchiveManifest, manifest.ToJson());
   CommitTempPath(cleanup.interrupt_id, [&] {
     Publish(temp, out_path.string());

@@ -1,0 +1,303 @@
+#include "render/pack_input.h"
+
+#include <tbb/blocked_range.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <type_traits>
+
+#include "core/binary_file.h"
+#include "core/byte_stream.h"
+#include "core/check.h"
+#include "core/parallel.h"
+
+namespace candi::render {
+
+uint64_t HashFile(const std::string& path, uint64_t* bytes) {
+  BinaryFile file(path);
+  *bytes = file.size();
+  std::vector<uint8_t> buffer(std::min<uint64_t>(pack_internal::kHashBlock, std::max<uint64_t>(file.size(), 1)));
+  std::vector<uint64_t> blocks;
+  while (file.remaining() > 0) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(pack_internal::kHashBlock, file.remaining()));
+    file.ReadExact(buffer.data(), n, "block for hashing");
+    blocks.push_back(ArchiveHash(buffer.data(), n));
+  }
+  return ArchiveHash(blocks.data(), 8 * blocks.size(), file.size());
+}
+
+namespace pack_internal {
+
+namespace {
+
+// Records are converted and checked in parallel blocks of this many.
+constexpr size_t kRecordBlock = size_t{1} << 14;
+
+// Whether a float's bits are NaN or infinite (exponent all ones): adding one to that exponent
+// carries into the sign bit.
+inline uint32_t NonFiniteBit(uint32_t bits) { return ((bits & 0x7f800000u) + 0x00800000u) & 0x80000000u; }
+
+inline float LoadFloat(const uint8_t* p) {
+  float v;
+  std::memcpy(&v, p, 4);
+  return v;
+}
+
+// The first record in [0, n) with a NaN or infinite coordinate, or n.
+size_t FirstNonFinite(const PointRecordLayout& l, const uint8_t* records, size_t n) {
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* r = records + i * l.stride;
+    for (int a = 0; a < 3; ++a) {
+      if (!std::isfinite(LoadFloat(r + l.xyz[a]))) return i;
+    }
+  }
+  return n;
+}
+
+[[noreturn]] void FailNonFinite(const std::string& path, uint64_t vertex) {
+  throw InputError(path, "vertex " + std::to_string(vertex), "coordinate is NaN or infinite");
+}
+
+// A file too short for its records is refused as the PLY reader refuses it.
+void CheckHoldsRecords(const std::string& path, const PointRecordLayout& l, uint64_t file_bytes) {
+  const uint64_t end = l.first_byte + l.count * l.stride;
+  if (file_bytes >= end) return;
+  const uint64_t whole = file_bytes > l.first_byte ? (file_bytes - l.first_byte) / l.stride : 0;
+  throw InputError(path, "byte " + std::to_string(file_bytes),
+                   "file ends inside vertex " + std::to_string(whole) + " of " + std::to_string(l.count));
+}
+
+// Min and max of the records' coordinates (floats), and whether any is NaN or infinite.
+struct FloatBox {
+  float lo[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                 std::numeric_limits<float>::infinity()};
+  float hi[3] = {-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+                 -std::numeric_limits<float>::infinity()};
+  bool bad = false;
+};
+FloatBox BoxOfRecords(const PointRecordLayout& l, const uint8_t* records, size_t n) {
+  FloatBox box;
+  uint32_t bad = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* r = records + i * l.stride;
+    for (int a = 0; a < 3; ++a) {
+      uint32_t bits;
+      std::memcpy(&bits, r + l.xyz[a], 4);
+      bad |= NonFiniteBit(bits);
+      const float v = LoadFloat(r + l.xyz[a]);
+      box.lo[a] = std::min(box.lo[a], v);
+      box.hi[a] = std::max(box.hi[a], v);
+    }
+  }
+  box.bad = bad != 0;
+  return box;
+}
+
+}  // namespace
+
+struct RecordFile::Impl {
+  explicit Impl(const std::string& path) : file(path) {}
+  BinaryFile file;
+  UninitVector<uint8_t> buffer;
+};
+
+RecordFile::RecordFile(const std::string& path, const PointRecordLayout& layout)
+    : impl_(std::make_unique<Impl>(path)), layout_(layout) {
+  CheckHoldsRecords(path, layout_, impl_->file.size());
+}
+
+RecordFile::~RecordFile() = default;
+
+size_t RecordFile::Next(size_t max_points, const uint8_t** records) {
+  const size_t n = static_cast<size_t>(std::min<uint64_t>(max_points, layout_.count - next_));
+  if (n == 0) return 0;
+  const size_t bytes = n * layout_.stride;
+  impl_->buffer.resize(bytes);
+  const uint64_t at = layout_.first_byte + next_ * layout_.stride;
+  if (ReadAtInParts(impl_->file, at, impl_->buffer.data(), bytes) != bytes) {
+    CheckHoldsRecords(impl_->file.path(), layout_, BinaryFile(impl_->file.path()).size());  // it shrank
+    throw InputError(impl_->file.path(), "byte " + std::to_string(at), "short read of point records");
+  }
+  next_ += n;
+  *records = impl_->buffer.data();
+  return n;
+}
+
+RecordScan ScanRecords(const std::string& path, const PointRecordLayout& l, const LocalFrame& frame) {
+  BinaryFile file(path);
+  RecordScan scan;
+  scan.bytes = file.size();
+  CheckHoldsRecords(path, l, scan.bytes);
+  const uint64_t end = l.first_byte + l.count * l.stride;
+  // HashFile's blocks, each read with the start of the record that crosses its end.
+  UninitVector<uint8_t> buffer(static_cast<size_t>(std::min<uint64_t>(kHashBlock + l.stride, scan.bytes)));
+  std::vector<uint64_t> hashes;
+  FloatBox total;
+  for (uint64_t at = 0; at < scan.bytes; at += kHashBlock) {
+    const size_t block = static_cast<size_t>(std::min<uint64_t>(kHashBlock, scan.bytes - at));
+    const size_t want = static_cast<size_t>(std::min<uint64_t>(kHashBlock + l.stride, scan.bytes - at));
+    if (ReadAtInParts(file, at, buffer.data(), want) != want) {
+      throw InputError(path, "byte " + std::to_string(at), "short read (did the file change?)");
+    }
+    // The records that start in this block.
+    auto first_at_or_after = [&](uint64_t byte) {
+      return byte <= l.first_byte ? 0 : std::min<uint64_t>(l.count, (byte - l.first_byte + l.stride - 1) / l.stride);
+    };
+    const uint64_t r0 = first_at_or_after(at), r1 = first_at_or_after(std::min<uint64_t>(at + block, end));
+    const size_t n = static_cast<size_t>(r1 - r0), parts = (n + kRecordBlock - 1) / kRecordBlock;
+    const uint8_t* records = buffer.data() + (l.first_byte + r0 * l.stride - at);
+    std::vector<FloatBox> boxes(parts);
+    uint64_t hash = 0;
+    // Task 0 hashes the block while the others take the bounds of its records.
+    ParallelFor(size_t{0}, parts + 1, [&](size_t t) {
+      if (t == 0) {
+        hash = ArchiveHash(buffer.data(), block);
+        return;
+      }
+      const size_t a = (t - 1) * kRecordBlock;
+      boxes[t - 1] = BoxOfRecords(l, records + a * l.stride, std::min(kRecordBlock, n - a));
+    });
+    hashes.push_back(hash);
+    for (size_t p = 0; p < parts; ++p) {
+      const size_t a = p * kRecordBlock;
+      if (boxes[p].bad) FailNonFinite(path, r0 + a + FirstNonFinite(l, records + a * l.stride, std::min(kRecordBlock, n - a)));
+      for (int a = 0; a < 3; ++a) {
+        total.lo[a] = std::min(total.lo[a], boxes[p].lo[a]);
+        total.hi[a] = std::max(total.hi[a], boxes[p].hi[a]);
+      }
+    }
+  }
+  scan.hash = ArchiveHash(hashes.data(), 8 * hashes.size(), scan.bytes);
+  if (l.count > 0) {
+    // frame.ToWorld is monotonic on each axis, so the bounds of the world positions are those of
+    // the float bounds, the same doubles as a point-by-point pass.
+    scan.world.Extend(frame.ToWorld(Eigen::Vector3d(total.lo[0], total.lo[1], total.lo[2])));
+    scan.world.Extend(frame.ToWorld(Eigen::Vector3d(total.hi[0], total.hi[1], total.hi[2])));
+  }
+  return scan;
+}
+
+template <typename P>
+InputBatches<P>::InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color,
+                              const Eigen::Vector3d& compact_origin, bool direct)
+    : inputs_(inputs),
+      frame_(frame),
+      default_color_(default_color),
+      compact_origin_(compact_origin),
+      direct_(direct && std::is_same_v<P, CompactPoint>) {}
+
+template <typename P>
+InputBatches<P>::~InputBatches() = default;
+
+template <typename P>
+bool InputBatches<P>::ReadRecords(UninitVector<P>* out) {
+  const uint8_t* records = nullptr;
+  const size_t n = records_->Next(1 << 20, &records);
+  if (n == 0) return false;
+  const PointRecordLayout& l = records_->layout();
+  out->resize(n);
+  const uint32_t fallback = PackColor(default_color_);
+  std::atomic<bool> bad{false};
+  ParallelFor(size_t{0}, (n + kRecordBlock - 1) / kRecordBlock, [&](size_t b) {
+    uint32_t nonfinite = 0;
+    for (size_t i = b * kRecordBlock; i < std::min(n, (b + 1) * kRecordBlock); ++i) {
+      const uint8_t* r = records + i * l.stride;
+      P& p = (*out)[i];
+      if constexpr (std::is_same_v<P, CompactPoint>) {
+        std::memcpy(&p.x, r + l.xyz[0], 4);
+        std::memcpy(&p.y, r + l.xyz[1], 4);
+        std::memcpy(&p.z, r + l.xyz[2], 4);
+        uint32_t bits[3];
+        std::memcpy(bits, &p, 12);
+        nonfinite |= NonFiniteBit(bits[0]) | NonFiniteBit(bits[1]) | NonFiniteBit(bits[2]);
+        p.rgb = l.rgb[0] < 0 ? fallback
+                             : uint32_t{r[l.rgb[0]]} << 16 | uint32_t{r[l.rgb[1]]} << 8 | uint32_t{r[l.rgb[2]]};
+      }
+    }
+    if (nonfinite) bad = true;
+  });
+  if (bad) FailNonFinite(inputs_[next_ - 1].name, index_ + FirstNonFinite(l, records, n));
+  index_ += n;
+  return true;
+}
+
+template <typename P>
+bool InputBatches<P>::operator()(UninitVector<P>* out) {
+  out->clear();
+  while (true) {
+    if (!reader_ && !records_) {
+      if (next_ >= inputs_.size()) return false;
+      reader_ = inputs_[next_++].open();
+      index_ = 0;
+      if (std::optional<PointRecordLayout> layout = reader_->record_layout(); direct_ && layout) {
+        if (reader_->info().frame.origin != compact_origin_) {
+          throw InputError(inputs_[next_ - 1].name, "", "changed between the two reads (its frame moved)");
+        }
+        records_ = std::make_unique<RecordFile>(reader_->path(), *layout);
+        reader_.reset();
+      }
+    }
+    if (records_) {
+      if (ReadRecords(out)) return true;
+      records_.reset();
+      continue;
+    }
+    const size_t n = reader_->Read(1 << 20, &chunk_);
+    if (n == 0) {
+      reader_.reset();
+      continue;
+    }
+    const Eigen::Vector3d shift = chunk_.frame.origin - frame_.origin;
+    out->resize(n);
+    const uint32_t fallback = PackColor(default_color_);
+    std::atomic<bool> finite{true}, exact{true};
+    ParallelFor(tbb::blocked_range<size_t>(0, n, kRecordBlock), [&](const tbb::blocked_range<size_t>& r) {
+      bool ok = true, floats = true;
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const uint32_t rgb = chunk_.schema.colors ? PackColor(chunk_.colors[i]) : fallback;
+        if constexpr (std::is_same_v<P, CompactPoint>) {
+          const Eigen::Vector3d& p = chunk_.positions[i];
+          if (IsFloat(p)) {
+            (*out)[i] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), rgb};
+          } else {
+            floats = false;
+          }
+        } else {
+          const Eigen::Vector3d p = chunk_.positions[i] + shift;
+          ok &= std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+          (*out)[i] = {p.x(), p.y(), p.z(), rgb};
+        }
+      }
+      if (!ok) finite = false;
+      if (!floats) exact = false;
+    });
+    // Compact points were all finite floats in one frame on the first read: anything else now
+    // means the input changed.
+    if (!exact || (std::is_same_v<P, CompactPoint> && chunk_.frame.origin != compact_origin_)) {
+      size_t i = 0;  // the first point that is no longer a float (the first of a moved frame)
+      if (!exact) while (i < n && IsFloat(chunk_.positions[i])) ++i;
+      throw InputError(inputs_[next_ - 1].name, "point " + std::to_string(index_ + i),
+                       "changed between the two reads (its points were floats in one frame)");
+    }
+    if (!finite) {
+      for (size_t i = 0; i < n; ++i) {
+        if (!chunk_.positions[i].allFinite()) {
+          throw InputError(inputs_[next_ - 1].name, "point " + std::to_string(index_ + i),
+                           "NaN or infinite coordinate");
+        }
+      }
+    }
+    index_ += n;
+    return true;
+  }
+}
+
+template class InputBatches<WidePoint>;
+template class InputBatches<CompactPoint>;
+
+}  // namespace pack_internal
+
+}  // namespace candi::render

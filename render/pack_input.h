@@ -1,0 +1,83 @@
+// The packer's reading of its inputs (render/archive_pack.cc), private to it: the points as
+// records in the archive frame, batch by batch, and the direct reading of files whose points are
+// fixed-size float records (core/point_io.h's PointRecordLayout: binary PLY), which pass 1 scans
+// for bounds and the manifest's hash in one read and pass 2 turns into CompactPoints without
+// widening every coordinate to a double.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/box.h"
+#include "core/point_io.h"
+#include "render/archive_pack.h"
+#include "render/pack_records.h"
+#include "render/splat_cloud.h"
+
+namespace candi::render::pack_internal {
+
+// HashFile hashes files in blocks of this many bytes.
+constexpr size_t kHashBlock = size_t{64} << 20;
+
+// The records of a PointRecordLayout read straight from the file, block by block (parallel
+// preads). Refuses (InputError naming the file and the vertex) a file too short for them.
+class RecordFile {
+ public:
+  RecordFile(const std::string& path, const PointRecordLayout& layout);
+  ~RecordFile();
+  RecordFile(const RecordFile&) = delete;
+  RecordFile& operator=(const RecordFile&) = delete;
+  const PointRecordLayout& layout() const { return layout_; }
+  // Reads up to max_points next records; returns how many (0 at the end), at *records.
+  size_t Next(size_t max_points, const uint8_t** records);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  PointRecordLayout layout_;
+  uint64_t next_ = 0;
+};
+
+// Pass 1 over a file of records: the world bounds of its finite points (world = frame origin +
+// position), and HashFile's hash and size, from one read. A NaN or infinite coordinate is
+// refused as the readers refuse it ("vertex N: coordinate is NaN or infinite").
+struct RecordScan {
+  Box3d world;
+  uint64_t hash = 0, bytes = 0;
+};
+RecordScan ScanRecords(const std::string& path, const PointRecordLayout& layout, const LocalFrame& frame);
+
+// Reads all inputs as points P in the archive frame (CompactPoints: in their shared frame),
+// ~2^20 points a batch. Binary PLY inputs of float records are read directly as CompactPoints
+// when `direct` (PackOptions::direct_reads).
+template <typename P>
+class InputBatches {
+ public:
+  // compact_origin: CompactPoint's frame, the one all inputs share.
+  InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color,
+               const Eigen::Vector3d& compact_origin, bool direct);
+  ~InputBatches();
+  // The next batch into *out; false after the last.
+  bool operator()(UninitVector<P>* out);
+
+ private:
+  // Reads the records of the current input (a RecordFile) into *out.
+  bool ReadRecords(UninitVector<P>* out);
+
+  const std::vector<PackInput>& inputs_;
+  LocalFrame frame_;
+  Rgb8 default_color_;
+  Eigen::Vector3d compact_origin_;
+  bool direct_;
+  size_t next_ = 0;
+  uint64_t index_ = 0;
+  std::unique_ptr<PointReader> reader_;
+  std::unique_ptr<RecordFile> records_;
+  PointCloud chunk_;
+};
+
+}  // namespace candi::render::pack_internal

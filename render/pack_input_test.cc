@@ -1,0 +1,141 @@
+// The packer's direct reading of binary PLY records (render/pack_input.h): the same archive as
+// through the point readers, the manifest's hash from the same read, bad files refused.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <limits>
+
+#include "core/atomic_file.h"
+#include "core/check.h"
+#include "core/point_io.h"
+#include "render/archive.h"
+#include "render/archive_pack.h"
+#include "render/synthetic_scene.h"
+#include "tests/util/test_util.h"
+
+namespace candi::render {
+namespace {
+
+namespace fs = std::filesystem;
+using candi::testing::TempDir;
+
+// A binary PLY of float positions (local, in the cloud's frame) via the project's writer.
+void WriteFloatPly(const std::string& path, const PointCloud& cloud) {
+  PointWriteOptions o;
+  o.precision = PositionPrecision::kFloat32;
+  WritePointCloud(path, cloud, o);
+}
+
+PointCloud Scene(uint64_t n, uint64_t seed, bool colors, bool normals) {
+  PointCloud c = TerracedSolid(n, seed);
+  c.frame.origin = Eigen::Vector3d(500000, 4200000, 150);  // survey coordinates: a shifted frame
+  PointSchema s = c.schema;
+  s.colors = colors;
+  s.normals = normals;
+  c.SetSchema(s);
+  for (uint64_t i = 0; i < n; ++i) {
+    if (colors) c.colors[i] = {static_cast<uint8_t>(i >> 16), static_cast<uint8_t>(i >> 8), static_cast<uint8_t>(i)};
+    if (normals) c.normals[i] = Eigen::Vector3f(0, 0, 1);
+  }
+  return c;
+}
+
+void ExpectSameArchive(const std::string& a, const std::string& b, const std::string& what) {
+  const Archive x(a), y(b);
+  ASSERT_EQ(x.manifest().files.size(), y.manifest().files.size()) << what;
+  for (const ArchiveFile& f : x.manifest().files) {
+    EXPECT_TRUE(ReadFileToString(a + "/" + f.name) == ReadFileToString(b + "/" + f.name)) << what << " " << f.name;
+  }
+  EXPECT_EQ(ReadFileToString(a + "/manifest.json"), ReadFileToString(b + "/manifest.json")) << what;
+}
+
+TEST(PackDirect, PlyRecordsGiveTheSameArchiveAsThePointReaders) {
+  TempDir dir;
+  // Two files in one shifted frame: colours, and no colours with normals (another record size).
+  WriteFloatPly(dir.File("a.ply"), Scene(20000, 1, true, false));
+  WriteFloatPly(dir.File("b.ply"), Scene(9000, 2, false, true));
+  ASSERT_TRUE(OpenPointReader(dir.File("a.ply"))->record_layout().has_value());
+  ASSERT_TRUE(OpenPointReader(dir.File("b.ply"))->record_layout().has_value());
+  const std::vector<PackInput> inputs = {PackInputFromFile(dir.File("a.ply")), PackInputFromFile(dir.File("b.ply"))};
+  PackOptions o;
+  o.chunk_points = 512;
+  o.file_bytes = 64 * 1024;
+  for (uint64_t memory : {uint64_t{1} << 20, uint64_t{2048}}) {  // in memory, then nested cell files
+    o.memory_points = memory;
+    const std::string tag = std::to_string(memory);
+    o.direct_reads = true;
+    const PackSummary direct = PackArchive(o, inputs, dir.File("d" + tag));
+    o.direct_reads = false;
+    const PackSummary read = PackArchive(o, inputs, dir.File("r" + tag));
+    EXPECT_EQ(direct.record_bytes, 16u);
+    EXPECT_EQ(read.record_bytes, 16u);
+    EXPECT_EQ(direct.points, 29000u);
+    EXPECT_GT(direct.files, 1u);
+    ExpectSameArchive(dir.File("d" + tag), dir.File("r" + tag), tag);
+  }
+  // Files in different frames: 28-byte records, still the same archive.
+  PointCloud moved = Scene(5000, 3, true, false);
+  moved.frame.origin.x() += 1;
+  WriteFloatPly(dir.File("c.ply"), moved);
+  const std::vector<PackInput> mixed = {PackInputFromFile(dir.File("a.ply")), PackInputFromFile(dir.File("c.ply"))};
+  o.direct_reads = true;
+  EXPECT_EQ(PackArchive(o, mixed, dir.File("dm")).record_bytes, 28u);
+  o.direct_reads = false;
+  PackArchive(o, mixed, dir.File("rm"));
+  ExpectSameArchive(dir.File("dm"), dir.File("rm"), "mixed frames");
+}
+
+TEST(PackDirect, HashOfAFileOfSeveralBlocksIsHashFiles) {
+  // 4.6 million 15-byte records: 69 MB, two hash blocks of 64 MiB with a record across the cut.
+  TempDir dir;
+  PointCloud cloud = Scene(4600000, 4, true, false);
+  WriteFloatPly(dir.File("big.ply"), cloud);
+  // The record across the cut holds the largest x, so the bounds miss it if that record is lost.
+  const uint64_t first = OpenPointReader(dir.File("big.ply"))->record_layout()->first_byte;
+  const size_t across = static_cast<size_t>(((uint64_t{64} << 20) - first) / 15);
+  ASSERT_GT(first + 15 * (across + 1), uint64_t{64} << 20);
+  cloud.positions[across].x() = cloud.LocalBounds().max.x() + 1.5;
+  WriteFloatPly(dir.File("big.ply"), cloud);
+  PackOptions o;
+  o.memory_points = uint64_t{1} << 23;
+  PackArchive(o, {PackInputFromFile(dir.File("big.ply"))}, dir.File("out"));
+  const Archive archive(dir.File("out"));
+  uint64_t bytes = 0;
+  const uint64_t hash = HashFile(dir.File("big.ply"), &bytes);
+  ASSERT_GT(bytes, uint64_t{64} << 20);
+  EXPECT_EQ(archive.manifest().sources.at(0).hash, hash);
+  EXPECT_EQ(archive.manifest().sources.at(0).bytes, bytes);
+  EXPECT_EQ(archive.manifest().points, 4600000u);
+  const Box3d world = ReadPointCloud(dir.File("big.ply")).WorldBounds();
+  EXPECT_EQ(archive.manifest().bounds.max, world.Translated(-archive.manifest().frame.origin).max);
+  EXPECT_EQ(archive.manifest().bounds.min, world.Translated(-archive.manifest().frame.origin).min);
+}
+
+TEST(PackDirect, NanAndTruncatedFilesAreRefusedNamingTheVertex) {
+  TempDir dir;
+  PointCloud cloud = Scene(40000, 5, true, false);
+  cloud.positions[33000].y() = std::numeric_limits<double>::quiet_NaN();
+  cloud.positions[37000].z() = std::numeric_limits<double>::infinity();
+  WriteFloatPly(dir.File("nan.ply"), cloud);
+  auto refused = [&](const std::string& file, const std::string& message) {
+    try {
+      PackArchive({}, {PackInputFromFile(dir.File(file))}, dir.File("out"));
+      ADD_FAILURE() << file << " accepted";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(file), std::string::npos) << what;
+      EXPECT_NE(what.find(message), std::string::npos) << what;
+    }
+    EXPECT_FALSE(fs::exists(dir.File("out"))) << file;
+  };
+  refused("nan.ply", "vertex 33000: coordinate is NaN or infinite");
+  // Cut inside vertex 30000 (15 bytes a vertex after the header): the reader's header check
+  // refuses it before any record is read.
+  WriteFloatPly(dir.File("cut.ply"), Scene(40000, 6, true, false));
+  const uint64_t size = fs::file_size(dir.File("cut.ply"));
+  fs::resize_file(dir.File("cut.ply"), size - 10000 * 15 + 7);
+  refused("cut.ply", "header promises 40000 vertex records");
+}
+
+}  // namespace
+}  // namespace candi::render
