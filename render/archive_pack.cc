@@ -141,8 +141,11 @@ class Packer {
     if (n == 0) return;
     keys_.resize(n);
     ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        keys_[i] = {grid_.Code(points[i].Position(shift_)), static_cast<uint32_t>(i)};
+      uint64_t codes[256];
+      for (size_t a = r.begin(); a < r.end(); a += 256) {
+        const size_t m = std::min<size_t>(256, r.end() - a);
+        MortonCodes(grid_, shift_, points + a, m, codes);
+        for (size_t i = 0; i < m; ++i) keys_[a + i] = {codes[i], static_cast<uint32_t>(a + i)};
       }
     });
     SortByCode(&keys_, &scratch_, 63 - 3 * level);
@@ -188,9 +191,15 @@ class Packer {
       at.assign(pieces * cells, 0);
       ParallelFor(size_t{0}, pieces, [&](size_t piece) {
         uint64_t* count = &at[piece * cells];
-        for (size_t i = piece * kRoutePiece; i < std::min(n, (piece + 1) * kRoutePiece); ++i) {
-          cell[i] = static_cast<uint16_t>(grid_.Child(batch[i].Position(shift_), level, k));
-          ++count[cell[i]];
+        uint64_t codes[256];
+        const int below = 3 * (kMortonBits - level - k);  // the code's bits below the child's
+        for (size_t a = piece * kRoutePiece; a < std::min(n, (piece + 1) * kRoutePiece); a += 256) {
+          const size_t m = std::min<size_t>(256, n - a);
+          MortonCodes(grid_, shift_, batch.data() + a, m, codes);
+          for (size_t i = 0; i < m; ++i) {
+            cell[a + i] = static_cast<uint16_t>((codes[i] >> below) & (cells - 1));
+            ++count[cell[a + i]];
+          }
         }
       });
       const std::vector<uint64_t> start = StableBucketOffsets(&at, pieces, cells);

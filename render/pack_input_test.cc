@@ -8,8 +8,10 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/point_io.h"
+#include "core/rng.h"
 #include "render/archive.h"
 #include "render/archive_pack.h"
+#include "render/pack_records.h"
 #include "render/synthetic_scene.h"
 #include "tests/util/test_util.h"
 
@@ -47,6 +49,41 @@ void ExpectSameArchive(const std::string& a, const std::string& b, const std::st
     EXPECT_TRUE(ReadFileToString(a + "/" + f.name) == ReadFileToString(b + "/" + f.name)) << what << " " << f.name;
   }
   EXPECT_EQ(ReadFileToString(a + "/manifest.json"), ReadFileToString(b + "/manifest.json")) << what;
+}
+
+TEST(PackRecords, VectorizedMortonCodesEqualTheGridsCode) {
+  // Survey-scale shift, points beyond the grid on both sides (clamped), a count that is not a
+  // multiple of the 256-point blocks.
+  using namespace pack_internal;
+  MortonGrid grid;
+  grid.min = Eigen::Vector3d(-3.25, 10.5, -0.125);
+  grid.scale = Eigen::Vector3d(std::ldexp(1.0, kMortonBits) / 7.5, std::ldexp(1.0, kMortonBits) / 0.01, 0.0);
+  const Eigen::Vector3d shift(-250.0, 12.0, 0.5);
+  Rng rng(3);
+  const size_t n = 1000;
+  std::vector<CompactPoint> compact(n);
+  std::vector<WidePoint> wide(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p(rng.Uniform(244.0, 256.0), rng.Uniform(-1.6, -1.4), rng.Uniform(-9.0, 9.0));
+    compact[i] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), 0};
+    const Eigen::Vector3d q = compact[i].Position(shift);
+    wide[i] = {q.x(), q.y(), q.z(), 0};
+  }
+  std::vector<uint64_t> a(n), b(n);
+  MortonCodes(grid, shift, compact.data(), n, a.data());
+  MortonCodes(grid, Eigen::Vector3d::Zero(), wide.data(), n, b.data());
+  size_t clamped_low = 0, clamped_high = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t code = grid.Code(compact[i].Position(shift));
+    ASSERT_EQ(a[i], code) << i;
+    ASSERT_EQ(b[i], code) << i;
+    uint64_t q[3];
+    grid.Quantize(compact[i].Position(shift), q);
+    clamped_low += q[0] == 0;
+    clamped_high += q[0] == (1u << kMortonBits) - 1;
+  }
+  EXPECT_GT(clamped_low, 0u);
+  EXPECT_GT(clamped_high, 0u);
 }
 
 TEST(PackDirect, PlyRecordsGiveTheSameArchiveAsThePointReaders) {

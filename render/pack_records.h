@@ -74,17 +74,6 @@ struct MortonGrid {
     Quantize(p, q);
     return Spread(q[0]) | Spread(q[1]) << 1 | Spread(q[2]) << 2;
   }
-  // Code(p)'s 3 * k bits of levels [level, level + k) (k <= 3), without spreading all 21 bits.
-  uint32_t Child(const Eigen::Vector3d& p, int level, int k) const {
-    uint64_t q[3];
-    Quantize(p, q);
-    const int shift = kMortonBits - level - k;
-    uint32_t child = 0;
-    for (int t = 0; t < k; ++t) {
-      for (int a = 0; a < 3; ++a) child |= static_cast<uint32_t>((q[a] >> (shift + t)) & 1) << (3 * t + a);
-    }
-    return child;
-  }
 };
 
 // The key of a point at a level: the code's top 3 * levels bits.
@@ -165,6 +154,13 @@ void Encode(const ChunkQuantizer& q, const Eigen::Vector3d& shift, const WidePoi
             uint64_t* words);
 void Encode(const ChunkQuantizer& q, const Eigen::Vector3d& shift, const CompactPoint* points, size_t n,
             uint64_t* words);
+
+// MortonGrid::Code of each point's Position(shift) into codes[0, n), vectorized (compiled for
+// AVX2 as well): the same codes.
+void MortonCodes(const MortonGrid& g, const Eigen::Vector3d& shift, const WidePoint* points, size_t n,
+                 uint64_t* codes);
+void MortonCodes(const MortonGrid& g, const Eigen::Vector3d& shift, const CompactPoint* points, size_t n,
+                 uint64_t* codes);
 
 // Whether v is a float (so CompactPoint holds it exactly); false for NaN and beyond float's range.
 inline bool IsFloat(double v) {
