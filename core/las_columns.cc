@@ -199,25 +199,37 @@ bool DecimalForm(double scale, double offset, double* divisor, double* integer_o
 }
 }  // namespace
 
+LasPositionDecoder::LasPositionDecoder(const Eigen::Vector3d& s, const Eigen::Vector3d& o) {
+  decimal = true;
+  for (int k = 0; k < 3; ++k) decimal = decimal && DecimalForm(s[k], o[k], &divisor[k], &integer_offset[k]);
+  for (int k = 0; k < 3; ++k) {
+    scale[k] = s[k];
+    offset[k] = o[k];
+  }
+}
+
+bool LasPositionDecoder::operator==(const LasPositionDecoder& o) const {
+  for (int k = 0; k < 3; ++k) {
+    if (scale[k] != o.scale[k] || offset[k] != o.offset[k]) return false;
+  }
+  return true;  // the rest follows from scale and offset
+}
+
 void DecodeLasPositions(const uint8_t* p, size_t stride, size_t n, const Eigen::Vector3d& scale,
                         const Eigen::Vector3d& offset, Eigen::Vector3d* out) {
-  double divisor[3], integer_offset[3];
-  bool decimal = true;
-  for (int k = 0; k < 3; ++k) decimal = decimal && DecimalForm(scale[k], offset[k], &divisor[k], &integer_offset[k]);
-  if (decimal) {
+  const LasPositionDecoder d(scale, offset);
+  if (d.decimal) {
     // X + O is an exact integer below 2^53; one correctly rounded division per coordinate.
     for (size_t i = 0; i < n; ++i, p += stride) {
-      out[i] = Eigen::Vector3d((LoadLE<int32_t>(p) + integer_offset[0]) / divisor[0],
-                               (LoadLE<int32_t>(p + 4) + integer_offset[1]) / divisor[1],
-                               (LoadLE<int32_t>(p + 8) + integer_offset[2]) / divisor[2]);
+      out[i] = Eigen::Vector3d((LoadLE<int32_t>(p) + d.integer_offset[0]) / d.divisor[0],
+                               (LoadLE<int32_t>(p + 4) + d.integer_offset[1]) / d.divisor[1],
+                               (LoadLE<int32_t>(p + 8) + d.integer_offset[2]) / d.divisor[2]);
     }
     return;
   }
-  const double sx = scale.x(), sy = scale.y(), sz = scale.z();
-  const double ox = offset.x(), oy = offset.y(), oz = offset.z();
   for (size_t i = 0; i < n; ++i, p += stride) {
-    out[i] = Eigen::Vector3d(LoadLE<int32_t>(p) * sx + ox, LoadLE<int32_t>(p + 4) * sy + oy,
-                             LoadLE<int32_t>(p + 8) * sz + oz);
+    out[i] = Eigen::Vector3d(LoadLE<int32_t>(p) * d.scale[0] + d.offset[0], LoadLE<int32_t>(p + 4) * d.scale[1] + d.offset[1],
+                             LoadLE<int32_t>(p + 8) * d.scale[2] + d.offset[2]);
   }
 }
 

@@ -57,6 +57,22 @@ ScalarType LasScalarTypeOf(const LasExtraBytes& e);
 // Gives a one-byte column (kU8/kI8, unscaled) its decoding table; other columns are left alone.
 void FillLasByteTable(LasColumn* c);
 
+// LAS integer coordinates to positions: (X + offset/scale) / (1/scale) when every axis has a
+// decimal scale (1/scale an integer) and an offset that is a multiple of it, the correctly
+// rounded decimal (0.001 * 3272 is 3.2720000000000002, 3272 / 1000 is 3.272); X * scale + offset
+// otherwise. The one definition for the reader and the render archive packer.
+struct LasPositionDecoder {
+  LasPositionDecoder() = default;
+  LasPositionDecoder(const Eigen::Vector3d& scale, const Eigen::Vector3d& offset);
+  bool decimal = false;
+  double divisor[3] = {1, 1, 1}, integer_offset[3] = {0, 0, 0};  // decimal
+  double scale[3] = {1, 1, 1}, offset[3] = {0, 0, 0};             // otherwise
+  double Axis(int a, int32_t x) const {
+    return decimal ? (x + integer_offset[a]) / divisor[a] : x * scale[a] + offset[a];
+  }
+  bool operator==(const LasPositionDecoder& o) const;
+};
+
 // Decoding n records (stride bytes apart) into entries [first, first + n) of the chunk.
 void DecodeLasPositions(const uint8_t* records, size_t stride, size_t n,
                         const Eigen::Vector3d& scale, const Eigen::Vector3d& offset,

@@ -33,6 +33,7 @@ class LasReader : public PointReader {
  public:
   LasReader(const std::string& path, const PointReadOptions& options);
   size_t Read(size_t max_points, PointCloud* chunk) override;
+  std::optional<PointRecordLayout> record_layout() const override;
 
  private:
   void RefuseLaszip(const std::vector<LasVlr>& vlrs) const;
@@ -229,6 +230,23 @@ size_t LasReader::Read(size_t max_points, PointCloud* chunk) {
   });
   points_read_ += n;
   return n;
+}
+
+std::optional<PointRecordLayout> LasReader::record_layout() const {
+  PointRecordLayout l;
+  l.coordinates = PointRecordLayout::Coordinates::kLasInt32;
+  l.first_byte = header_.offset_to_point_data;
+  l.stride = header_.record_length;
+  l.xyz[0] = 0, l.xyz[1] = 4, l.xyz[2] = 8;
+  if (info_.schema.colors) {
+    for (int c = 0; c < 3; ++c) l.rgb[c] = layout_.color_offset + 2 * c;
+  }
+  l.color_bytes = 2;
+  l.color_shift = color_shift_;
+  l.scale = header_.scale;
+  l.offset = header_.offset;
+  l.count = info_.count;
+  return l;
 }
 
 void LasReader::DecodeBlock(const uint8_t* records, size_t n, size_t first,

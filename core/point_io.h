@@ -49,17 +49,25 @@ struct PointReadOptions {
   bool scalar_fields = true;
 };
 
-// How a file stores its points when they are fixed-size little-endian records with float
+// How a file stores its points when they are fixed-size little-endian records of 32-bit
 // coordinates: binary little-endian PLY whose vertices have float x, y, z, uchar colour (or none)
-// and no lists. A consumer that needs only positions and colours (the render archive packer)
-// decodes such records itself, in bulk, where Read() would widen every coordinate to a double.
-// A record's position is (double(x), double(y), double(z)) in the reader's info().frame, its
-// colour (red, green, blue) the bytes at rgb (default colour when rgb[0] < 0): what Read() gives.
+// and no lists, and LAS (int32 X, Y, Z with the header's scale and offset, 16-bit colour). A
+// consumer that needs only positions and colours (the render archive packer) decodes such
+// records itself, in bulk, where Read() would widen every coordinate to a double. A record's
+// position in the reader's info().frame is (double(x), double(y), double(z)) for floats and
+// LasPositionDecoder(scale, offset) of the integers for LAS; its colour (red, green, blue) is the
+// bytes at rgb, or the 16-bit values there >> color_shift (default colour when rgb[0] < 0): what
+// Read() gives.
 struct PointRecordLayout {
+  enum class Coordinates { kFloat32, kLasInt32 };
+  Coordinates coordinates = Coordinates::kFloat32;
   uint64_t first_byte = 0;       // file offset of the first record
   size_t stride = 0;             // bytes a record
   size_t xyz[3] = {0, 0, 0};     // offsets of x, y, z in a record
   int rgb[3] = {-1, -1, -1};     // offsets of red, green, blue; -1: no colour
+  int color_bytes = 1;           // 1 (8-bit) or 2 (16-bit, LAS)
+  int color_shift = 0;           // 16-bit colour: value >> color_shift
+  Eigen::Vector3d scale = Eigen::Vector3d::Ones(), offset = Eigen::Vector3d::Zero();  // LAS
   uint64_t count = 0;            // records
 };
 

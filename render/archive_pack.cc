@@ -128,13 +128,13 @@ constexpr size_t kRoutePiece = size_t{1} << 16;
 template <typename P>
 using Batches = std::function<bool(UninitVector<P>*)>;
 
-// P: WidePoint or CompactPoint; `shift` is CompactPoint's (zero for WidePoint).
+// P: WidePoint, CompactPoint or LasPoint; `frame` turns its records into archive positions.
 template <typename P>
 class Packer {
  public:
-  Packer(const PackOptions& o, const std::string& dir, const MortonGrid& grid, const Eigen::Vector3d& shift,
+  Packer(const PackOptions& o, const std::string& dir, const MortonGrid& grid, const RecordFrame& frame,
          uint64_t total, const ProgressCallback& progress)
-      : o_(o), dir_(dir), grid_(grid), shift_(shift), total_(total), progress_(progress) {}
+      : o_(o), dir_(dir), grid_(grid), frame_(frame), total_(total), progress_(progress) {}
 
   // Sorts points (all of one cell at `level`) in memory and writes their chunks.
   void AddCell(const P* points, size_t n, int level) {
@@ -144,7 +144,7 @@ class Packer {
       uint64_t codes[256];
       for (size_t a = r.begin(); a < r.end(); a += 256) {
         const size_t m = std::min<size_t>(256, r.end() - a);
-        MortonCodes(grid_, shift_, points + a, m, codes);
+        MortonCodes(grid_, frame_, points + a, m, codes);
         for (size_t i = 0; i < m; ++i) keys_[a + i] = {codes[i], static_cast<uint32_t>(a + i)};
       }
     });
@@ -195,7 +195,7 @@ class Packer {
         const int below = 3 * (kMortonBits - level - k);  // the code's bits below the child's
         for (size_t a = piece * kRoutePiece; a < std::min(n, (piece + 1) * kRoutePiece); a += 256) {
           const size_t m = std::min<size_t>(256, n - a);
-          MortonCodes(grid_, shift_, batch.data() + a, m, codes);
+          MortonCodes(grid_, frame_, batch.data() + a, m, codes);
           for (size_t i = 0; i < m; ++i) {
             cell[a + i] = static_cast<uint16_t>((codes[i] >> below) & (cells - 1));
             ++count[cell[a + i]];
@@ -303,11 +303,11 @@ class Packer {
     ParallelFor(size_t{0}, n, [&](size_t k) {
       const auto [a, b] = ranges_[k];
       Box3d box;
-      for (size_t i = a; i < b; ++i) box.Extend(sorted_[i].Position(shift_));
+      for (size_t i = a; i < b; ++i) box.Extend(sorted_[i].Position(frame_));
       ArchiveChunk& c = made[k];
       c.quantizer = ChunkQuantizer::ForBox(box);
       c.count = b - a;
-      Encode(c.quantizer, shift_, &sorted_[a], b - a, &words_[a]);
+      Encode(c.quantizer, frame_, &sorted_[a], b - a, &words_[a]);
       c.hash = ArchiveHash(&words_[a], 8 * (b - a));
     });
     for (size_t k = 0; k < n; ++k) {
@@ -342,7 +342,7 @@ class Packer {
   const PackOptions& o_;
   std::string dir_;
   MortonGrid grid_;
-  Eigen::Vector3d shift_;
+  RecordFrame frame_;
   uint64_t total_;
   ProgressCallback progress_;
   std::vector<Keyed> keys_, scratch_;
@@ -414,10 +414,24 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   // Whether every point is a float in one frame shared by all inputs (then CompactPoints).
   bool floats = true;
   std::optional<Eigen::Vector3d> shared_origin;
+  // Whether every input is LAS read directly, all in one frame with one scale and offset (then
+  // LasPoints), and that frame and decoder.
+  bool las = options.direct_reads;
+  std::optional<Eigen::Vector3d> las_origin;
+  LasPositionDecoder las_decoder;
   auto pass1 = [&] {
     for (size_t k = 0; k < inputs.size(); ++k) {
       auto reader = inputs[k].open();
       const PointFileInfo& info = reader->info();
+      const std::optional<PointRecordLayout> layout = reader->record_layout();
+      const bool direct = options.direct_reads && layout && !inputs[k].path.empty() && reader->path() == inputs[k].path;
+      if (direct && layout->coordinates == PointRecordLayout::Coordinates::kLasInt32) {
+        const LasPositionDecoder decoder(layout->scale, layout->offset);
+        if (!las_origin) las_origin = info.frame.origin, las_decoder = decoder;
+        las = las && *las_origin == info.frame.origin && decoder == las_decoder;
+      } else {
+        las = false;
+      }
       if (info.header_bounds && info.count != kUnknownCount) {
         hash_later(k);
         counts[k] = info.count;
@@ -425,8 +439,7 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
         floats = false;  // its points are not read here
         continue;
       }
-      const std::optional<PointRecordLayout> layout = reader->record_layout();
-      if (options.direct_reads && layout && !inputs[k].path.empty() && reader->path() == inputs[k].path) {
+      if (direct && layout->coordinates == PointRecordLayout::Coordinates::kFloat32) {
         const RecordScan scan = ScanRecords(reader->path(), *layout, info.frame);
         hashes[k] = scan.hash;
         hashed_bytes[k] = scan.bytes;
@@ -499,11 +512,14 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
 
   auto pack = [&](auto point_type) {
     using P = decltype(point_type);
-    const Eigen::Vector3d origin = shared_origin.value_or(Eigen::Vector3d::Zero());
-    const Eigen::Vector3d shift =
-        std::is_same_v<P, CompactPoint> ? Eigen::Vector3d(origin - manifest.frame.origin) : Eigen::Vector3d::Zero();
-    Packer<P> packer(options, temp, grid, shift, total, progress);
-    InputBatches<P> batches(inputs, manifest.frame, options.default_color, origin, options.direct_reads);
+    // The records' frame (CompactPoint: the inputs' shared one; LasPoint: the LAS files').
+    const Eigen::Vector3d origin = std::is_same_v<P, LasPoint> ? las_origin.value_or(Eigen::Vector3d::Zero())
+                                                               : shared_origin.value_or(Eigen::Vector3d::Zero());
+    RecordFrame frame;
+    if (!std::is_same_v<P, WidePoint>) frame.shift = origin - manifest.frame.origin;
+    frame.las = las_decoder;
+    Packer<P> packer(options, temp, grid, frame, total, progress);
+    InputBatches<P> batches(inputs, manifest.frame, options.default_color, origin, las_decoder, options.direct_reads);
     if (total <= options.memory_points) {
       UninitVector<P> all, batch;
       all.reserve(total);
@@ -517,9 +533,16 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
     for (int a = 0; a < 3; ++a) summary.max_error[a] = packer.max_error()[a];
   };
   const bool compact = floats && shared_origin.has_value() && !options.wide_records;
-  summary.record_bytes = compact ? sizeof(CompactPoint) : sizeof(WidePoint);
+  const bool las_records = !compact && las && las_origin.has_value() && !options.wide_records;
+  summary.record_bytes = compact ? sizeof(CompactPoint) : las_records ? sizeof(LasPoint) : sizeof(WidePoint);
   auto run = [&] {
-    if (compact) pack(CompactPoint{}); else pack(WidePoint{});
+    if (compact) {
+      pack(CompactPoint{});
+    } else if (las_records) {
+      pack(LasPoint{});
+    } else {
+      pack(WidePoint{});
+    }
   };
   const auto sort_start = std::chrono::steady_clock::now();
   if (arena) arena->execute(run); else run();

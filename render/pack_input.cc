@@ -182,12 +182,14 @@ RecordScan ScanRecords(const std::string& path, const PointRecordLayout& l, cons
 
 template <typename P>
 InputBatches<P>::InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color,
-                              const Eigen::Vector3d& compact_origin, bool direct)
+                              const Eigen::Vector3d& compact_origin, const LasPositionDecoder& las,
+                              bool direct)
     : inputs_(inputs),
       frame_(frame),
       default_color_(default_color),
       compact_origin_(compact_origin),
-      direct_(direct && std::is_same_v<P, CompactPoint>) {}
+      las_(las),
+      direct_(direct && !std::is_same_v<P, WidePoint>) {}
 
 template <typename P>
 InputBatches<P>::~InputBatches() = default;
@@ -206,15 +208,20 @@ bool InputBatches<P>::ReadRecords(UninitVector<P>* out) {
     for (size_t i = b * kRecordBlock; i < std::min(n, (b + 1) * kRecordBlock); ++i) {
       const uint8_t* r = records + i * l.stride;
       P& p = (*out)[i];
-      if constexpr (std::is_same_v<P, CompactPoint>) {
+      if constexpr (!std::is_same_v<P, WidePoint>) {
         std::memcpy(&p.x, r + l.xyz[0], 4);
         std::memcpy(&p.y, r + l.xyz[1], 4);
         std::memcpy(&p.z, r + l.xyz[2], 4);
+      }
+      if constexpr (std::is_same_v<P, CompactPoint>) {
         uint32_t bits[3];
         std::memcpy(bits, &p, 12);
         nonfinite |= NonFiniteBit(bits[0]) | NonFiniteBit(bits[1]) | NonFiniteBit(bits[2]);
         p.rgb = l.rgb[0] < 0 ? fallback
                              : uint32_t{r[l.rgb[0]]} << 16 | uint32_t{r[l.rgb[1]]} << 8 | uint32_t{r[l.rgb[2]]};
+      } else if constexpr (std::is_same_v<P, LasPoint>) {  // 16-bit colour >> color_shift, as the reader
+        auto channel = [&](int c) { return uint32_t{static_cast<uint8_t>(LoadLE<uint16_t>(r + l.rgb[c]) >> l.color_shift)}; };
+        p.rgb = l.rgb[0] < 0 ? fallback : channel(0) << 16 | channel(1) << 8 | channel(2);
       }
     }
     if (nonfinite) bad = true;
@@ -232,12 +239,18 @@ bool InputBatches<P>::operator()(UninitVector<P>* out) {
       if (next_ >= inputs_.size()) return false;
       reader_ = inputs_[next_++].open();
       index_ = 0;
-      if (std::optional<PointRecordLayout> layout = reader_->record_layout(); direct_ && layout) {
-        if (reader_->info().frame.origin != compact_origin_) {
-          throw InputError(inputs_[next_ - 1].name, "", "changed between the two reads (its frame moved)");
+      const std::optional<PointRecordLayout> layout = reader_->record_layout();
+      using Coordinates = PointRecordLayout::Coordinates;
+      const Coordinates wanted = std::is_same_v<P, LasPoint> ? Coordinates::kLasInt32 : Coordinates::kFloat32;
+      if (direct_ && layout && layout->coordinates == wanted) {
+        if (reader_->info().frame.origin != compact_origin_ ||
+            (wanted == Coordinates::kLasInt32 && !(LasPositionDecoder(layout->scale, layout->offset) == las_))) {
+          throw InputError(inputs_[next_ - 1].name, "", "changed between the two reads (its frame, scale or offset)");
         }
         records_ = std::make_unique<RecordFile>(reader_->path(), *layout);
         reader_.reset();
+      } else if (std::is_same_v<P, LasPoint>) {
+        throw InputError(inputs_[next_ - 1].name, "", "changed between the two reads (no longer LAS records)");
       }
     }
     if (records_) {
@@ -258,7 +271,9 @@ bool InputBatches<P>::operator()(UninitVector<P>* out) {
       bool ok = true, floats = true;
       for (size_t i = r.begin(); i < r.end(); ++i) {
         const uint32_t rgb = chunk_.schema.colors ? PackColor(chunk_.colors[i]) : fallback;
-        if constexpr (std::is_same_v<P, CompactPoint>) {
+        if constexpr (std::is_same_v<P, LasPoint>) {
+          CANDI_CHECK(false) << "LasPoints are read directly";
+        } else if constexpr (std::is_same_v<P, CompactPoint>) {
           const Eigen::Vector3d& p = chunk_.positions[i];
           if (IsFloat(p)) {
             (*out)[i] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), rgb};
@@ -297,6 +312,7 @@ bool InputBatches<P>::operator()(UninitVector<P>* out) {
 
 template class InputBatches<WidePoint>;
 template class InputBatches<CompactPoint>;
+template class InputBatches<LasPoint>;
 
 }  // namespace pack_internal
 

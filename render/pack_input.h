@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "core/box.h"
+#include "core/las_columns.h"
 #include "core/point_io.h"
 #include "render/archive_pack.h"
 #include "render/pack_records.h"
@@ -52,14 +53,15 @@ struct RecordScan {
 RecordScan ScanRecords(const std::string& path, const PointRecordLayout& layout, const LocalFrame& frame);
 
 // Reads all inputs as points P in the archive frame (CompactPoints: in their shared frame),
-// ~2^20 points a batch. Binary PLY inputs of float records are read directly as CompactPoints
-// when `direct` (PackOptions::direct_reads).
+// ~2^20 points a batch. Files of records are read directly (`direct`, PackOptions::direct_reads):
+// binary PLY of floats as CompactPoints, LAS as LasPoints (only so).
 template <typename P>
 class InputBatches {
  public:
   // compact_origin: CompactPoint's frame, the one all inputs share.
+  // las: LasPoint's decoder, the one all inputs share.
   InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color,
-               const Eigen::Vector3d& compact_origin, bool direct);
+               const Eigen::Vector3d& compact_origin, const LasPositionDecoder& las, bool direct);
   ~InputBatches();
   // The next batch into *out; false after the last.
   bool operator()(UninitVector<P>* out);
@@ -72,6 +74,7 @@ class InputBatches {
   LocalFrame frame_;
   Rgb8 default_color_;
   Eigen::Vector3d compact_origin_;
+  LasPositionDecoder las_;
   bool direct_;
   size_t next_ = 0;
   uint64_t index_ = 0;

@@ -53,37 +53,51 @@ void ExpectSameArchive(const std::string& a, const std::string& b, const std::st
 
 TEST(PackRecords, VectorizedMortonCodesEqualTheGridsCode) {
   // Survey-scale shift, points beyond the grid on both sides (clamped), a count that is not a
-  // multiple of the 256-point blocks.
+  // multiple of the 256-point blocks; floats, doubles, and LAS integers with a decimal scale and
+  // with another.
   using namespace pack_internal;
   MortonGrid grid;
   grid.min = Eigen::Vector3d(-3.25, 10.5, -0.125);
   grid.scale = Eigen::Vector3d(std::ldexp(1.0, kMortonBits) / 7.5, std::ldexp(1.0, kMortonBits) / 0.01, 0.0);
-  const Eigen::Vector3d shift(-250.0, 12.0, 0.5);
+  RecordFrame frame;
+  frame.shift = Eigen::Vector3d(-250.0, 12.0, 0.5);
   Rng rng(3);
   const size_t n = 1000;
   std::vector<CompactPoint> compact(n);
   std::vector<WidePoint> wide(n);
+  std::vector<LasPoint> las(n);
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d p(rng.Uniform(244.0, 256.0), rng.Uniform(-1.6, -1.4), rng.Uniform(-9.0, 9.0));
     compact[i] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), 0};
-    const Eigen::Vector3d q = compact[i].Position(shift);
+    const Eigen::Vector3d q = compact[i].Position(frame);
     wide[i] = {q.x(), q.y(), q.z(), 0};
+    las[i] = {static_cast<int32_t>(p.x() * 1000), static_cast<int32_t>(p.y() * 1000), static_cast<int32_t>(p.z() * 1000), 0};
   }
-  std::vector<uint64_t> a(n), b(n);
-  MortonCodes(grid, shift, compact.data(), n, a.data());
-  MortonCodes(grid, Eigen::Vector3d::Zero(), wide.data(), n, b.data());
-  size_t clamped_low = 0, clamped_high = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const uint64_t code = grid.Code(compact[i].Position(shift));
-    ASSERT_EQ(a[i], code) << i;
-    ASSERT_EQ(b[i], code) << i;
-    uint64_t q[3];
-    grid.Quantize(compact[i].Position(shift), q);
-    clamped_low += q[0] == 0;
-    clamped_high += q[0] == (1u << kMortonBits) - 1;
-  }
-  EXPECT_GT(clamped_low, 0u);
-  EXPECT_GT(clamped_high, 0u);
+  // Each record type against Code of its Position, and how many were clamped on x.
+  auto check = [&](const RecordFrame& f, const auto& points, const char* what) {
+    std::vector<uint64_t> codes(n);
+    MortonCodes(grid, f, points.data(), n, codes.data());
+    size_t low = 0, high = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d p = points[i].Position(f);
+      ASSERT_EQ(codes[i], grid.Code(p)) << what << " " << i;
+      uint64_t q[3];
+      grid.Quantize(p, q);
+      low += q[0] == 0;
+      high += q[0] == (1u << kMortonBits) - 1;
+    }
+    EXPECT_GT(low, 0u) << what;
+    EXPECT_GT(high, 0u) << what;
+  };
+  check(frame, compact, "floats");
+  check(RecordFrame(), wide, "doubles");
+  RecordFrame decimal = frame, other = frame;
+  decimal.las = LasPositionDecoder(Eigen::Vector3d::Constant(0.001), Eigen::Vector3d(2.0, -1.0, 0.0));
+  other.las = LasPositionDecoder(Eigen::Vector3d::Constant(0.003), Eigen::Vector3d(-488.0, 0.3, 0.0));
+  ASSERT_TRUE(decimal.las.decimal);
+  ASSERT_FALSE(other.las.decimal);
+  check(decimal, las, "LAS, decimal scale");
+  check(other, las, "LAS, other scale");
 }
 
 TEST(PackDirect, PlyRecordsGiveTheSameArchiveAsThePointReaders) {
@@ -120,6 +134,48 @@ TEST(PackDirect, PlyRecordsGiveTheSameArchiveAsThePointReaders) {
   o.direct_reads = false;
   PackArchive(o, mixed, dir.File("rm"));
   ExpectSameArchive(dir.File("dm"), dir.File("rm"), "mixed frames");
+}
+
+TEST(PackDirect, LasRecordsGiveTheSameArchiveAsThePointReaders) {
+  TempDir dir;
+  // Survey coordinates in LAS (world, int32 with scale and offset): a decimal scale, then one
+  // that is not (positions X * scale + offset).
+  for (const double scale : {0.001, 0.0003}) {
+    const std::string tag = scale == 0.001 ? "mm" : "odd";
+    PointWriteOptions w;
+    w.las_scale = Eigen::Vector3d::Constant(scale);
+    w.las_offset = Eigen::Vector3d(500000, 4200000, 100);
+    WritePointCloud(dir.File(tag + "a.las"), Scene(20000, 7, true, false), w);
+    WritePointCloud(dir.File(tag + "b.las"), Scene(7000, 8, true, false), w);
+    {
+      // 16-bit colours whose low bytes are not copies of the high ones (the writer's v * 257):
+      // the colour is the high byte.
+      const PointRecordLayout l = *OpenPointReader(dir.File(tag + "a.las"))->record_layout();
+      ASSERT_EQ(l.color_shift, 8);
+      std::string bytes = ReadFileToString(dir.File(tag + "a.las"));
+      for (uint64_t i = 0; i < l.count; ++i) {
+        for (int c = 0; c < 3; ++c) bytes[l.first_byte + i * l.stride + l.rgb[c]] = static_cast<char>(i * 7 + c);
+      }
+      WriteFileAtomic(dir.File(tag + "a.las"), bytes);
+    }
+    const std::vector<PackInput> inputs = {PackInputFromFile(dir.File(tag + "a.las")),
+                                           PackInputFromFile(dir.File(tag + "b.las"))};
+    PackOptions o;
+    o.chunk_points = 512;
+    o.file_bytes = 64 * 1024;
+    for (uint64_t memory : {uint64_t{1} << 20, uint64_t{2048}}) {
+      o.memory_points = memory;
+      const std::string name = tag + std::to_string(memory);
+      o.direct_reads = true;
+      EXPECT_EQ(PackArchive(o, inputs, dir.File("d" + name)).record_bytes, 16u) << name;
+      o.direct_reads = false;
+      EXPECT_EQ(PackArchive(o, inputs, dir.File("r" + name)).record_bytes, 28u) << name;
+      ExpectSameArchive(dir.File("d" + name), dir.File("r" + name), name);
+    }
+  }
+  // LAS files of different scales: 28-byte records.
+  EXPECT_EQ(PackArchive({}, {PackInputFromFile(dir.File("mma.las")), PackInputFromFile(dir.File("odda.las"))},
+                        dir.File("mixed")).record_bytes, 28u);
 }
 
 TEST(PackDirect, HashOfAFileOfSeveralBlocksIsHashFiles) {

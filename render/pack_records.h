@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 
 #include "core/check.h"
+#include "core/las_columns.h"
 #include "render/archive.h"
 
 namespace candi::render::pack_internal {
@@ -28,15 +29,21 @@ namespace candi::render::pack_internal {
 // photogrammetry output), that float; adding the shift from that frame to the archive's gives
 // the very doubles WidePoint would hold, so the archive is the same, from 16 bytes a point
 // instead of 28.
+// How records give positions in the archive frame: CompactPoint adds `shift` to its floats,
+// LasPoint decodes its integers with `las` (as the LAS reader does) and adds `shift`, WidePoint
+// holds the position itself.
+struct RecordFrame {
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+  LasPositionDecoder las;
+};
+
 #pragma pack(push, 1)
 struct WidePoint {
   double x, y, z;
   uint32_t rgb;
   // By value: a reference to a member of a packed struct may be misaligned (undefined behaviour
   // that UBSan reports where Eigen's constructors take `const double&`).
-  Eigen::Vector3d Position(const Eigen::Vector3d& /*shift*/) const {
-    return Eigen::Vector3d(double{x}, double{y}, double{z});
-  }
+  Eigen::Vector3d Position(const RecordFrame& /*frame*/) const { return Eigen::Vector3d(double{x}, double{y}, double{z}); }
 };
 #pragma pack(pop)
 static_assert(sizeof(WidePoint) == 28, "WidePoint must be packed");
@@ -44,11 +51,21 @@ static_assert(sizeof(WidePoint) == 28, "WidePoint must be packed");
 struct CompactPoint {
   float x, y, z;
   uint32_t rgb;
-  Eigen::Vector3d Position(const Eigen::Vector3d& shift) const {
-    return Eigen::Vector3d(double{x}, double{y}, double{z}) + shift;
+  Eigen::Vector3d Position(const RecordFrame& f) const {
+    return Eigen::Vector3d(double{x}, double{y}, double{z}) + f.shift;
   }
 };
 static_assert(sizeof(CompactPoint) == 16, "CompactPoint must be 16 bytes");
+
+// A LAS point record's integers (every input LAS with one scale and offset, read directly).
+struct LasPoint {
+  int32_t x, y, z;
+  uint32_t rgb;
+  Eigen::Vector3d Position(const RecordFrame& f) const {
+    return Eigen::Vector3d(f.las.Axis(0, x), f.las.Axis(1, y), f.las.Axis(2, z)) + f.shift;
+  }
+};
+static_assert(sizeof(LasPoint) == 16, "LasPoint must be 16 bytes");
 
 constexpr int kMortonBits = 21;  // per axis; 63-bit codes, 21 levels of 3 bits
 
@@ -150,17 +167,15 @@ class CellFile {
 // Quantizes points[0, n) on a chunk's quantizer into words[0, n) (ChunkQuantizer::Encode).
 // Compiled for AVX2 as well (the loader picks), where Encode's rounding is one instruction rather
 // than a libm call: the same words.
-void Encode(const ChunkQuantizer& q, const Eigen::Vector3d& shift, const WidePoint* points, size_t n,
-            uint64_t* words);
-void Encode(const ChunkQuantizer& q, const Eigen::Vector3d& shift, const CompactPoint* points, size_t n,
-            uint64_t* words);
+void Encode(const ChunkQuantizer& q, const RecordFrame& f, const WidePoint* points, size_t n, uint64_t* words);
+void Encode(const ChunkQuantizer& q, const RecordFrame& f, const CompactPoint* points, size_t n, uint64_t* words);
+void Encode(const ChunkQuantizer& q, const RecordFrame& f, const LasPoint* points, size_t n, uint64_t* words);
 
-// MortonGrid::Code of each point's Position(shift) into codes[0, n), vectorized (compiled for
-// AVX2 as well): the same codes.
-void MortonCodes(const MortonGrid& g, const Eigen::Vector3d& shift, const WidePoint* points, size_t n,
-                 uint64_t* codes);
-void MortonCodes(const MortonGrid& g, const Eigen::Vector3d& shift, const CompactPoint* points, size_t n,
-                 uint64_t* codes);
+// MortonGrid::Code of each point's Position(f) into codes[0, n), vectorized (compiled for AVX2
+// as well): the same codes.
+void MortonCodes(const MortonGrid& g, const RecordFrame& f, const WidePoint* points, size_t n, uint64_t* codes);
+void MortonCodes(const MortonGrid& g, const RecordFrame& f, const CompactPoint* points, size_t n, uint64_t* codes);
+void MortonCodes(const MortonGrid& g, const RecordFrame& f, const LasPoint* points, size_t n, uint64_t* codes);
 
 // Whether v is a float (so CompactPoint holds it exactly); false for NaN and beyond float's range.
 inline bool IsFloat(double v) {
