@@ -302,8 +302,7 @@ class Packer {
     words_.resize(sorted_.size());
     ParallelFor(size_t{0}, n, [&](size_t k) {
       const auto [a, b] = ranges_[k];
-      Box3d box;
-      for (size_t i = a; i < b; ++i) box.Extend(sorted_[i].Position(frame_));
+      const Box3d box = ChunkBox(&sorted_[a], b - a, frame_);
       ArchiveChunk& c = made[k];
       c.quantizer = ChunkQuantizer::ForBox(box);
       c.count = b - a;

@@ -9,9 +9,37 @@ namespace candi::render::pack_internal {
 
 namespace {
 
+// One axis of LAS positions, Position's operations in a loop the compiler vectorizes.
+__attribute__((always_inline)) inline void DecodeAxis(const LasPoint* __restrict p, size_t m, const RecordFrame& f,
+                                                      int a, double* __restrict out) {
+  int32_t c[256];
+  for (size_t i = 0; i < m; ++i) c[i] = a == 0 ? p[i].x : a == 1 ? p[i].y : p[i].z;
+  const double s = f.shift[a];
+  if (f.las.decimal) {
+    const double o = f.las.integer_offset[a], d = f.las.divisor[a];
+    for (size_t i = 0; i < m; ++i) out[i] = (c[i] + o) / d + s;
+  } else {
+    const double k = f.las.scale[a], o = f.las.offset[a];
+    for (size_t i = 0; i < m; ++i) out[i] = (c[i] * k + o) + s;
+  }
+}
+
 template <typename P>
-inline void EncodeRun(const ChunkQuantizer& q, const RecordFrame& f, const P* points, size_t n, uint64_t* words) {
-  for (size_t i = 0; i < n; ++i) words[i] = q.Encode(points[i].Position(f), points[i].rgb);
+__attribute__((always_inline)) inline void EncodeRun(const ChunkQuantizer& q, const RecordFrame& f, const P* points,
+                                                     size_t n, uint64_t* words) {
+  if constexpr (std::is_same_v<P, LasPoint>) {
+    // The divisions of a block's positions first, vectorized, then the encoding.
+    double x[256], y[256], z[256];
+    for (size_t base = 0; base < n; base += 256) {
+      const size_t m = std::min<size_t>(256, n - base);
+      DecodeAxis(points + base, m, f, 0, x);
+      DecodeAxis(points + base, m, f, 1, y);
+      DecodeAxis(points + base, m, f, 2, z);
+      for (size_t i = 0; i < m; ++i) words[base + i] = q.Encode(Eigen::Vector3d(x[i], y[i], z[i]), points[base + i].rgb);
+    }
+  } else {
+    for (size_t i = 0; i < n; ++i) words[i] = q.Encode(points[i].Position(f), points[i].rgb);
+  }
 }
 
 // Spread(quantized coordinate) of c[0, m) on one axis, position(c) as Position gives it, then
@@ -86,5 +114,20 @@ __attribute__((always_inline)) inline void CodesRun(const MortonGrid& g, const R
 CANDI_PACK_RECORD_KERNELS(WidePoint)
 CANDI_PACK_RECORD_KERNELS(CompactPoint)
 CANDI_PACK_RECORD_KERNELS(LasPoint)
+
+Box3d ChunkBox(const LasPoint* points, size_t n, const RecordFrame& f) {
+  int32_t lo[3] = {points[0].x, points[0].y, points[0].z}, hi[3] = {lo[0], lo[1], lo[2]};
+  for (size_t i = 1; i < n; ++i) {
+    const int32_t c[3] = {points[i].x, points[i].y, points[i].z};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], c[a]);
+      hi[a] = std::max(hi[a], c[a]);
+    }
+  }
+  Box3d box;
+  box.Extend(LasPoint{lo[0], lo[1], lo[2], 0}.Position(f));
+  box.Extend(LasPoint{hi[0], hi[1], hi[2], 0}.Position(f));
+  return box;
+}
 
 }  // namespace candi::render::pack_internal

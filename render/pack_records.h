@@ -177,6 +177,17 @@ void MortonCodes(const MortonGrid& g, const RecordFrame& f, const WidePoint* poi
 void MortonCodes(const MortonGrid& g, const RecordFrame& f, const CompactPoint* points, size_t n, uint64_t* codes);
 void MortonCodes(const MortonGrid& g, const RecordFrame& f, const LasPoint* points, size_t n, uint64_t* codes);
 
+// The box of points[0, n) (n > 0): the positions' min and max on each axis.
+template <typename P>
+Box3d ChunkBox(const P* points, size_t n, const RecordFrame& f) {
+  Box3d box;
+  for (size_t i = 0; i < n; ++i) box.Extend(points[i].Position(f));
+  return box;
+}
+// LAS: a position is monotonic in its integer on each axis (increasing, or decreasing for a
+// negative scale), so the box is that of the integers' extremes, decoded: the same doubles.
+Box3d ChunkBox(const LasPoint* points, size_t n, const RecordFrame& f);
+
 // Whether v is a float (so CompactPoint holds it exactly); false for NaN and beyond float's range.
 inline bool IsFloat(double v) {
   return std::abs(v) <= std::numeric_limits<float>::max() && double{static_cast<float>(v)} == v;
