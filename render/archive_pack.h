@@ -1,14 +1,16 @@
 // Packing point files into a render archive (render/archive.h), streaming with bounded memory.
 //
 // Pass 1 finds the bounds (LAS headers, else a read of the points) and the archive's frame (the
-// render frame: origin at the centre, rounded to metres). Binary PLY of float records is read
-// directly (render/pack_input.h): one read gives its bounds and the manifest's hash of it, and
-// pass 2 takes its records without widening them to doubles; other inputs are hashed on another
-// thread. Pass 2 reads the points once more and
+// render frame: origin at the centre, rounded to metres). Files of records are read directly
+// (render/pack_input.h): for binary PLY of floats one read gives the bounds and the manifest's
+// hash, and pass 2 takes the records without widening them to doubles; LAS (bounds from its
+// header) is sorted as its integers when all inputs share a scale and offset. Other inputs, and
+// LAS, are hashed on another thread. Pass 2 reads the points once more and
 // computes 63-bit Morton codes (21 bits per axis over the bounds). Inputs of at most
 // `memory_points` points are sorted in memory; larger ones are bucketed by the top Morton bits
 // into up to 512 cell files on disk (16 bytes a point when every input point is a float in one
-// frame shared by the inputs, as in binary PLY with float x, y, z; else 28), then each cell, in
+// frame shared by the inputs, as in binary PLY with float x, y, z, or all inputs are LAS with one
+// scale and offset; else 28), then each cell, in
 // Morton order, is sorted in memory (a cell still too large is bucketed again by the next bits),
 // so memory stays ~ 100 bytes x memory_points (400 MB by default) whatever the input size.
 // Sorted points are cut into chunks of consecutive points sharing a Morton prefix
@@ -38,9 +40,9 @@ struct PackOptions {
   // Sort 28-byte double records even when every point is a float in one frame (16-byte ones
   // then; the same archive either way). For tests and benchmarks.
   bool wide_records = false;
-  // Read binary PLY files of float records (core/point_io.h's PointRecordLayout) directly: pass 1
-  // takes their bounds and hashes from one read, pass 2 makes records without widening to
-  // doubles. false: through their point readers (the same archive). For tests and benchmarks.
+  // Read files of records (core/point_io.h's PointRecordLayout: binary PLY of floats, LAS)
+  // directly: PLY's bounds and hash from one read, records without widening to doubles. false:
+  // through their point readers (the same archive). For tests and benchmarks.
   bool direct_reads = true;
   void Check() const;
 };

@@ -1,8 +1,8 @@
 // The packer's reading of its inputs (render/archive_pack.cc), private to it: the points as
 // records in the archive frame, batch by batch, and the direct reading of files whose points are
-// fixed-size float records (core/point_io.h's PointRecordLayout: binary PLY), which pass 1 scans
-// for bounds and the manifest's hash in one read and pass 2 turns into CompactPoints without
-// widening every coordinate to a double.
+// fixed-size records (core/point_io.h's PointRecordLayout): binary PLY of floats, which pass 1
+// scans for bounds and the manifest's hash in one read and pass 2 turns into CompactPoints
+// without widening every coordinate to a double, and LAS, turned into LasPoints.
 #pragma once
 
 #include <cstdint>

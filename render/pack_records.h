@@ -1,4 +1,4 @@
-// The packer's intermediate points (render/archive_pack.cc), private to it: the two record
+// The packer's intermediate points (render/archive_pack.cc), private to it: the three record
 // forms a point takes between reading and quantizing, the Morton grid over the archive's bounds,
 // and the cell files of the external sort.
 #pragma once
@@ -23,12 +23,13 @@
 
 namespace candi::render::pack_internal {
 
-// The points between reading and encoding (in cell files and in memory), in one of two forms.
+// The points between reading and encoding (in cell files and in memory), in one of three forms.
 // WidePoint: the archive-frame position in double, any input. CompactPoint: when every input
 // point is a float in one frame shared by all inputs (binary PLY with float x, y, z, the usual
 // photogrammetry output), that float; adding the shift from that frame to the archive's gives
 // the very doubles WidePoint would hold, so the archive is the same, from 16 bytes a point
-// instead of 28.
+// instead of 28. LasPoint: when every input is LAS with one scale and offset, its integers,
+// decoded as the LAS reader decodes them (16 bytes as well).
 // How records give positions in the archive frame: CompactPoint adds `shift` to its floats,
 // LasPoint decodes its integers with `las` (as the LAS reader does) and adds `shift`, WidePoint
 // holds the position itself.
