@@ -13,6 +13,7 @@
 
 #include "apps/arg_parse.h"
 #include "apps/commands.h"
+#include "apps/failure.h"
 #include "apps/view_json.h"
 #include "core/check.h"
 #include "core/log.h"
@@ -356,14 +357,23 @@ int RunRenderArchive(const RenderArgs& args, const Plan& plan) {
   if (!session) {
     if (failure) std::rethrow_exception(failure);
   } else {
-    const bool all_ok = session->AllOk(!failure);
-    if (failure) {
-      std::fprintf(stderr, "candi: MPI rank %d of %d failed; no image is written\n", rank, ranks);
-      std::rethrow_exception(failure);
-    }
-    if (!all_ok) {
-      throw InputError("MPI rank " + std::to_string(rank) + " of " + std::to_string(ranks) +
-                       ": stopped because another rank failed (its message is above); no image written");
+    // Every rank learns every failure; rank 0 prints them all before any process exits, since
+    // mpirun ends the job when the first process exits non-zero and a report that another rank
+    // had yet to print would be lost. The barrier holds every rank until it is printed.
+    const FailureReport mine = failure ? DescribeFailure(failure) : FailureReport{};
+    const auto failures = session->GatherFailures(mine.exit_code, mine.text);
+    if (!failures.empty()) {
+      if (rank == 0) {
+        for (const auto& f : failures) {
+          const size_t skip = f.message.rfind("candi: ", 0) == 0 ? 7 : 0;  // the report's own prefix
+          std::fprintf(stderr, "candi: MPI rank %d of %d failed: %s\n", f.rank, ranks, f.message.c_str() + skip);
+        }
+        std::fprintf(stderr, "candi: every rank stopped because %s failed; no image written\n",
+                     failures.size() == 1 && failures[0].rank != 0 ? "another rank" : "a rank");
+        std::fflush(stderr);
+      }
+      session->Barrier();
+      throw ReportedFailure(failures.front().exit_code);
     }
     session->ReduceToRoot(&result);
     if (rank != 0) return kOk;

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/failure.h"
 #include "core/check.h"
 #include "core/interrupt.h"
 
@@ -85,20 +86,11 @@ int main(int argc, char** argv) {
   candi::InstallInterruptHandler("candi");
   try {
     return RunCli(argc, argv);
-  } catch (const candi::InputError& e) {
-    std::fprintf(stderr, "candi: error: %s\n", e.what());
-    return kBadInput;
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "candi: invalid option value: %s\n", e.what());
-    return kUsage;
-  } catch (const candi::InternalError& e) {
-    std::fprintf(stderr, "candi: internal error (please report): %s\n", e.what());
-    return kInternal;
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "candi: internal error: out of memory\n");
-    return kInternal;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "candi: internal error: %s\n", e.what());
-    return kInternal;
+  } catch (const ReportedFailure& e) {
+    return e.exit_code();
+  } catch (...) {
+    const FailureReport report = DescribeFailure(std::current_exception());
+    std::fprintf(stderr, "%s\n", report.text.c_str());
+    return report.exit_code;
   }
 }

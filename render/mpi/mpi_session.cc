@@ -45,11 +45,31 @@ Session::Session() {
 
 Session::~Session() { MPI_Finalize(); }
 
-bool Session::AllOk(bool ok) const {
-  int mine = ok ? 1 : 0, all = 0;
-  Check(MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
-  return all == 1;
+std::vector<Session::Failure> Session::GatherFailures(int exit_code, const std::string& message) const {
+  // Codes and message lengths first, then the messages of every rank (one Allgatherv).
+  const int mine[2] = {exit_code, exit_code == 0 ? 0 : static_cast<int>(std::min<size_t>(message.size(), 1 << 16))};
+  std::vector<int> heads(2 * static_cast<size_t>(size_));
+  Check(MPI_Allgather(mine, 2, MPI_INT, heads.data(), 2, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
+  std::vector<int> lengths(size_), offsets(size_);
+  int total = 0;
+  for (int r = 0; r < size_; ++r) {
+    lengths[r] = heads[2 * r + 1];
+    offsets[r] = total;
+    total += lengths[r];
+  }
+  std::string all(static_cast<size_t>(total), '\0');
+  Check(MPI_Allgatherv(message.data(), mine[1], MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR,
+                       MPI_COMM_WORLD),
+        "MPI_Allgatherv");
+  std::vector<Failure> failures;
+  for (int r = 0; r < size_; ++r) {
+    if (heads[2 * r] == 0) continue;
+    failures.push_back({r, heads[2 * r], all.substr(offsets[r], lengths[r])});
+  }
+  return failures;
 }
+
+void Session::Barrier() const { Check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier"); }
 
 void Session::ReduceToRoot(SpbrResult* result) const {
   // The image size first, so a mismatch is an error, not a garbled reduction.

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "render/spbr.h"
 
@@ -27,8 +29,18 @@ class Session {
 
   int rank() const { return rank_; }
   int size() const { return size_; }
-  // Collective: true when every rank passes ok = true (so a failed rank stops all, no hang).
-  bool AllOk(bool ok) const;
+  // Collective: every rank passes its failure (exit_code 0 = none); every rank gets the failures
+  // of all ranks, in rank order (empty when none failed). So rank 0 can report a failed rank's
+  // reason itself, before any process exits (mpirun ends the whole job when the first process
+  // exits non-zero, and a message still to be printed by another rank would be lost).
+  struct Failure {
+    int rank = 0;
+    int exit_code = 0;
+    std::string message;
+  };
+  std::vector<Failure> GatherFailures(int exit_code, const std::string& message) const;
+  // Collective: returns when every rank has called it.
+  void Barrier() const;
   // Collective: adds the ranks' sums, grey histograms and copy counts onto rank 0's `result`.
   // Throws InternalError when the ranks' image sizes differ.
   void ReduceToRoot(SpbrResult* result) const;

@@ -1,0 +1,28 @@
+#include "apps/failure.h"
+
+#include <new>
+
+#include "apps/commands.h"
+#include "core/check.h"
+
+namespace candi::app {
+
+FailureReport DescribeFailure(std::exception_ptr failure) {
+  try {
+    std::rethrow_exception(failure);
+  } catch (const InputError& e) {
+    return {kBadInput, std::string("candi: error: ") + e.what()};
+  } catch (const std::invalid_argument& e) {
+    return {kUsage, std::string("candi: invalid option value: ") + e.what()};
+  } catch (const InternalError& e) {
+    return {kInternal, std::string("candi: internal error (please report): ") + e.what()};
+  } catch (const std::bad_alloc&) {
+    return {kInternal, "candi: internal error: out of memory"};
+  } catch (const std::exception& e) {
+    return {kInternal, std::string("candi: internal error: ") + e.what()};
+  } catch (...) {
+    return {kInternal, "candi: internal error: an unknown exception"};
+  }
+}
+
+}  // namespace candi::app

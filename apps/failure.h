@@ -1,0 +1,31 @@
+// How `candi` reports a failure: the line it prints on stderr and the exit code (commands.h's
+// ExitCode). main() uses it for every exception that reaches it; the MPI render uses it to send
+// a failed rank's report to rank 0 before any process exits.
+#pragma once
+
+#include <exception>
+#include <stdexcept>
+#include <string>
+
+namespace candi::app {
+
+struct FailureReport {
+  int exit_code = 0;   // kUsage, kBadInput or kInternal
+  std::string text;    // "candi: error: ...", without a final newline
+};
+
+// The report of an exception: InputError -> 2, std::invalid_argument -> 1, anything else -> 3.
+FailureReport DescribeFailure(std::exception_ptr failure);
+
+// A failure whose report is on stderr already (an MPI rank's, printed by rank 0 for every rank):
+// main() returns exit_code() and prints nothing more.
+class ReportedFailure : public std::runtime_error {
+ public:
+  explicit ReportedFailure(int exit_code) : std::runtime_error("reported"), exit_code_(exit_code) {}
+  int exit_code() const { return exit_code_; }
+
+ private:
+  int exit_code_;
+};
+
+}  // namespace candi::app
