@@ -8,7 +8,7 @@ CTEST_FLAGS ?= --output-on-failure
 # left to `make test-all`.
 CTEST_EXCLUDE ?= -LE slow
 
-.PHONY: all deps deps-fuzz configure build test test-all test-asan test-tsan demo bench fuzz clean format
+.PHONY: all deps deps-fuzz configure build test test-all test-stress test-asan test-tsan demo bench fuzz clean format
 
 all: build
 
@@ -32,6 +32,12 @@ test: build
 
 test-all: build
 	@cd $(BUILD_DIR) && CANDI_SLOW_TESTS=1 ctest $(CTEST_FLAGS) -j $(JOBS)
+
+# The suite of `make test` STRESS_RUNS times (5) with two busy loops competing for the cores;
+# lists every test that failed even once (scripts/stress.sh; STRESS_TESTS=regex for some).
+STRESS_RUNS ?= 5
+test-stress: build
+	@STRESS_RUNS=$(STRESS_RUNS) STRESS_JOBS=$(JOBS) CTEST_EXCLUDE="$(CTEST_EXCLUDE)" bash scripts/stress.sh $(BUILD_DIR)
 
 # The whole suite built with AddressSanitizer + UndefinedBehaviorSanitizer (build-asan/, GCC,
 # -O1 -g): every report fails its test. Slow: not part of `make test`.
