@@ -399,7 +399,8 @@ void AddSfm(CLI::App& app, SfmArgs& a, std::function<int()>* run) {
   c->add_option("--camera-model", a.camera_model, "COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
   c->add_flag("--camera-per-image", a.camera_per_image, "Separate intrinsics per photo (default: "
               "one shared camera)");
-  c->add_option("--threads", a.threads, "COLMAP threads (-1: all)");
+  c->add_option("--threads", a.threads, "Threads for feature extraction and matching (-1: all); "
+                "COLMAP verifies and maps on one thread, so the model is the same on every run");
   c->add_flag("--overwrite", a.overwrite, "Replace a previous run in the workspace");
   c->callback([run, &a] { *run = [&a] { return RunSfm(a); }; });
   c->footer("Example: candi sfm photos/ -o work --max-image-size 1600");

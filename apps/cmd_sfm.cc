@@ -60,7 +60,10 @@ nlohmann::json ToJson(const SfmSummary& s, const SfmArgs& a) {
   j["points"] = s.points;
   j["mean_reprojection_error_px"] = s.mean_reprojection_error;
   j["mean_track_length"] = s.mean_track_length;
-  j["matcher"] = s.matcher;
+  j["matcher"] = "candi exact brute force, " + s.matcher;
+  j["reproducibility"] = "image ids by photo name; exact matching (same matches every run, any thread count); "
+                         "COLMAP matches_importer and mapper on one thread, random_seed 0: the same photos and "
+                         "options give the same model bytes on this machine";
   j["max_image_size"] = a.max_image_size;
   j["max_features"] = a.max_features;
   j["model_dir"] = s.model_dir;

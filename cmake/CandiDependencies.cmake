@@ -19,6 +19,7 @@ pkg_check_modules(DXFLIB REQUIRED IMPORTED_TARGET dxflib)
 find_package(nanoflann REQUIRED)
 # reconstruction
 find_package(Ceres REQUIRED)
+find_package(SQLite3 REQUIRED)   # COLMAP's database (SQLite::SQLite3)
 # imgproc only: imgcodecs pulls ~120 shared libraries into every process (core/jpeg_io.h)
 find_package(OpenCV REQUIRED COMPONENTS core imgproc)
 find_package(Torch REQUIRED)

@@ -16,6 +16,8 @@ packages=(
   libnanoflann-dev
   # reconstruction
   colmap libceres-dev libpcl-dev libtorch-dev libopencv-dev
+  # COLMAP's feature database, read by candi's own matcher (colmap_database.h)
+  libsqlite3-dev
   # render scale-out
   libopenmpi-dev openmpi-bin
   # apps

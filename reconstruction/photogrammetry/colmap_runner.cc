@@ -23,7 +23,9 @@
 #include "core/check.h"
 #include "core/interrupt.h"
 #include "core/log.h"
+#include "reconstruction/photogrammetry/colmap_database.h"
 #include "reconstruction/photogrammetry/colmap_model.h"
+#include "reconstruction/photogrammetry/sift_matching.h"
 
 extern char** environ;
 
@@ -34,6 +36,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kModelPlaceholder = "<model>";
+constexpr const char* kMatchList = "matches.txt";
 constexpr double kHeartbeatSeconds = 10.0;
 constexpr int kLogTailLines = 20;
 
@@ -66,7 +69,7 @@ void PrepareWorkspace(const SfmOptions& options, const std::string& workspace,
                                      "(candi fills it with links); choose another workspace");
   }
   std::vector<std::string> previous;
-  for (const char* entry : {"database.db", "images", "sparse", "dense", "logs", "sfm_report.json"}) {
+  for (const char* entry : {"database.db", kMatchList, "images", "sparse", "dense", "logs", "sfm_report.json"}) {
     if (fs::exists(fs::symlink_status(Path(workspace, entry)))) previous.push_back(entry);
   }
   if (previous.empty()) return;
@@ -165,8 +168,7 @@ ColmapVersion ParseColmapVersion(const std::string& help_output) {
   return version;
 }
 
-std::vector<SfmStage> BuildSfmStages(const SfmOptions& options, const std::string& workspace,
-                                     size_t num_images, bool cuda) {
+std::vector<SfmStage> BuildSfmStages(const SfmOptions& options, const std::string& workspace, bool cuda) {
   options.Check();
   const std::string& exe = options.colmap;
   const std::string database = Path(workspace, "database.db"), images = Path(workspace, "images");
@@ -180,20 +182,18 @@ std::vector<SfmStage> BuildSfmStages(const SfmOptions& options, const std::strin
                      "--SiftExtraction.max_num_features", std::to_string(options.max_features),
                      "--SiftExtraction.num_threads", Threads(options.threads),
                      "--SiftExtraction.use_gpu", gpu}});
-  const bool exhaustive = num_images <= static_cast<size_t>(options.exhaustive_max_images);
-  SfmStage matcher{exhaustive ? "exhaustive_matcher" : "sequential_matcher",
-                   {exe, exhaustive ? "exhaustive_matcher" : "sequential_matcher", "--database_path",
-                    database, "--SiftMatching.num_threads", Threads(options.threads),
-                    "--SiftMatching.use_gpu", gpu}};
-  if (!exhaustive) {
-    matcher.argv.insert(matcher.argv.end(),
-                        {"--SequentialMatching.overlap", std::to_string(options.sequential_overlap)});
-  }
-  stages.push_back(matcher);
+  // Matching is candi's (sift_matching.h; an in-process stage, no argv); COLMAP verifies the
+  // matches (one thread, in the list's order) and maps with one thread and its PRNG seeded, so
+  // the same photos give the same model on every run.
+  stages.push_back({kMatchStage, {}});
+  stages.push_back({"matches_importer",
+                    {exe, "matches_importer", "--database_path", database, "--match_list_path",
+                     Path(workspace, kMatchList), "--match_type", "raw", "--SiftMatching.use_gpu", "0",
+                     "--SiftMatching.num_threads", "1", "--random_seed", "0"}});
   stages.push_back({"mapper",
                     {exe, "mapper", "--database_path", database, "--image_path", images,
-                     "--output_path", Path(workspace, "sparse"), "--Mapper.num_threads",
-                     Threads(options.threads)}});
+                     "--output_path", Path(workspace, "sparse"), "--Mapper.num_threads", "1",
+                     "--random_seed", "0"}});
   stages.push_back({"image_undistorter",
                     {exe, "image_undistorter", "--image_path", images, "--input_path",
                      kModelPlaceholder, "--output_path", Path(workspace, "dense"), "--output_type",
@@ -370,6 +370,39 @@ ColmapVersion DetectColmap(const std::string& colmap, const std::string& log_pat
   }
 }
 
+// candi's matching stage: every pair (exhaustive) or neighbours by name (sequential), matched
+// exactly from the database's descriptors into WORKSPACE/matches.txt; a summary in its log.
+double MatchFeatures(const SfmOptions& options, const std::string& workspace, bool exhaustive,
+                     const std::string& log_path, int index, int count, const SfmProgress& progress) {
+  if (progress) progress(kMatchStage, index, count, 0.0, false);
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<DatabaseImage> images = ReadColmapDescriptors(Path(workspace, "database.db"));
+  std::sort(images.begin(), images.end(),
+            [](const DatabaseImage& a, const DatabaseImage& b) { return a.name < b.name; });
+  const size_t cleared = ClearBorderDescriptors(&images);
+  const auto pairs = exhaustive ? ExhaustivePairs(images.size())
+                                : SequentialPairs(images.size(), options.sequential_overlap);
+  double next_beat = kHeartbeatSeconds;
+  const MatchListSummary matched = WriteMatchList(
+      images, pairs, SiftMatchOptions{}, options.threads, Path(workspace, kMatchList), [&](size_t, size_t) {
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (progress && seconds >= next_beat) {
+          progress(kMatchStage, index, count, seconds, false);
+          next_beat += kHeartbeatSeconds;
+        }
+      });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  WriteFileAtomic(log_path, std::string("candi's exact SIFT matcher (") + (exhaustive ? "exhaustive" : "sequential") +
+                                ", brute force, COLMAP's ratio 0.8, distance 0.7, cross-check)\n" +
+                                std::to_string(images.size()) + " images, " + std::to_string(matched.pairs) +
+                                " pairs, " + std::to_string(matched.pairs_written) + " with matches, " +
+                                std::to_string(matched.matches) + " matches; " + std::to_string(cleared) +
+                                " features in the outermost pixel row or column left out (their descriptors "
+                                "differ from run to run)\n");
+  if (progress) progress(kMatchStage, index, count, seconds, true);
+  return seconds;
+}
+
 }  // namespace
 
 SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
@@ -396,9 +429,9 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
   summary.colmap = DetectColmap(options.colmap, Path(workspace, "logs/colmap_help.log"));
   LinkImages(images_dir, summary.images, workspace);
   fs::create_directories(Path(workspace, "sparse"));
-  std::vector<SfmStage> stages = BuildSfmStages(options, workspace, summary.images.size(),
-                                                summary.colmap.cuda);
-  summary.matcher = stages[1].name;
+  std::vector<SfmStage> stages = BuildSfmStages(options, workspace, summary.colmap.cuda);
+  const bool exhaustive = summary.images.size() <= static_cast<size_t>(options.exhaustive_max_images);
+  summary.matcher = exhaustive ? "exhaustive" : "sequential (overlap " + std::to_string(options.sequential_overlap) + ")";
   const int count = static_cast<int>(stages.size());
   ColmapModel model;
   for (int i = 0; i < count; ++i) {
@@ -408,14 +441,25 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
       std::replace(stage.argv.begin(), stage.argv.end(), std::string(kModelPlaceholder), summary.model_dir);
     }
     try {
-      summary.stage_seconds.emplace_back(stage.name, RunSfmStage(stage, log_path, i + 1, count, progress));
-    } catch (const InputError&) {
-      if (stage.name != "mapper" || !LargestModel(Path(workspace, "sparse"), &model).empty()) throw;
+      const double seconds = stage.argv.empty()
+                                 ? MatchFeatures(options, workspace, exhaustive, log_path, i + 1, count, progress)
+                                 : RunSfmStage(stage, log_path, i + 1, count, progress);
+      summary.stage_seconds.emplace_back(stage.name, seconds);
+    } catch (const InputError& e) {
+      // A mapper that ended by itself without a model found no overlap; a killed one is reported as such.
+      if (stage.name != "mapper" || std::string(e.what()).find("killed by signal") != std::string::npos ||
+          !LargestModel(Path(workspace, "sparse"), &model).empty()) {
+        throw;
+      }
       throw InputError(log_path, "", "no model: the images may not overlap (COLMAP's mapper could "
                                      "not register any pair of them); the end of its log:\n" +
                                          TailOfFile(log_path, kLogTailLines));
     }
-    if (stage.name == "feature_extractor") CheckExtraction(log_path, images_dir, &summary);
+    if (stage.name == "feature_extractor") {
+      CheckExtraction(log_path, images_dir, &summary);
+      // COLMAP numbers the images in the order its threads finish; the mapper follows the ids.
+      RenumberImagesByName(Path(workspace, "database.db"));
+    }
     if (stage.name == "mapper") {
       summary.model_dir = LargestModel(Path(workspace, "sparse"), &model);
       if (summary.model_dir.empty() || model.images.size() < 2) {

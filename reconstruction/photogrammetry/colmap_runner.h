@@ -38,7 +38,7 @@ struct SfmOptions {
   int sequential_overlap = 10;        // sequential matching: neighbours matched per image, >= 1
   std::string camera_model = "SIMPLE_RADIAL";  // a COLMAP camera model name
   bool single_camera = true;          // one camera (intrinsics) shared by all photos
-  int threads = -1;                   // COLMAP threads; -1 = all cores, else >= 1
+  int threads = -1;                   // feature extraction and matching threads; -1 = all cores, else >= 1
   bool overwrite = false;             // replace a previous run's outputs in the workspace
   void Check() const;
 };
@@ -49,12 +49,17 @@ struct SfmStage {
   std::vector<std::string> argv;  // argv[0] is the executable
 };
 
-// The stages for a workspace (absolute paths inside it) and `num_images` photos. `cuda` keeps the
-// GPU on for SIFT; otherwise `--SiftExtraction.use_gpu 0 --SiftMatching.use_gpu 0`. The mapper
-// stage is followed by image_undistorter whose --input_path is a placeholder (`<model>`) that
-// RunSfm replaces with the largest model's folder.
-std::vector<SfmStage> BuildSfmStages(const SfmOptions& options, const std::string& workspace,
-                                     size_t num_images, bool cuda);
+// The stage run in candi itself, not by COLMAP (its argv is empty): exact matching of the
+// extracted features into WORKSPACE/matches.txt (sift_matching.h).
+inline constexpr const char* kMatchStage = "match_features";
+
+// The stages for a workspace (absolute paths inside it): feature_extractor, match_features
+// (candi's), matches_importer (COLMAP's geometric verification of those matches, one thread),
+// mapper (one thread, seeded) and image_undistorter, whose --input_path is a placeholder
+// (`<model>`) that RunSfm replaces with the largest model's folder. `cuda` keeps the GPU on for
+// SIFT extraction. Everything after extraction runs on one thread or exactly, so the same photos
+// and options give the same model bytes (README, "Reproducibility").
+std::vector<SfmStage> BuildSfmStages(const SfmOptions& options, const std::string& workspace, bool cuda);
 
 // Progress of a run: called when a stage starts (done = false, seconds = 0), every few seconds
 // while it runs (done = false) and when it ends (done = true). seconds = elapsed in the stage.
@@ -72,7 +77,7 @@ struct SfmSummary {
   size_t points = 0;                      // sparse points
   double mean_reprojection_error = 0;     // pixels, COLMAP's definition
   double mean_track_length = 0;           // observations per point
-  std::string matcher;                    // exhaustive_matcher | sequential_matcher
+  std::string matcher;                    // "exhaustive" | "sequential (overlap N)" (candi's matcher)
   std::string model_dir;                  // WORKSPACE/sparse/<k>, the largest model
   std::string dense_dir;                  // WORKSPACE/dense
   std::vector<std::pair<std::string, double>> stage_seconds;

@@ -113,41 +113,41 @@ std::string Value(const SfmStage& stage, const std::string& flag) {
   return "<absent>";
 }
 
-TEST(BuildSfmStages, CpuArgvAndMatcherChoice) {
+TEST(BuildSfmStages, CpuArgvAndDeterministicMatching) {
   SfmOptions o;
   o.colmap = "/opt/colmap";
   o.max_features = 2000;
   o.max_image_size = 800;
-  o.exhaustive_max_images = 5;
-  const std::vector<SfmStage> few = BuildSfmStages(o, "/w s", 5, /*cuda=*/false);
-  ASSERT_EQ(few.size(), 4u);
-  EXPECT_EQ(few[0].argv[0], "/opt/colmap");
-  EXPECT_EQ(few[0].argv[1], "feature_extractor");
-  EXPECT_EQ(Value(few[0], "--SiftExtraction.use_gpu"), "0");
-  EXPECT_EQ(Value(few[0], "--SiftExtraction.max_num_features"), "2000");
-  EXPECT_EQ(Value(few[0], "--SiftExtraction.max_image_size"), "800");
-  EXPECT_EQ(Value(few[0], "--ImageReader.single_camera"), "1");
-  EXPECT_EQ(Value(few[0], "--image_path"), "/w s/images");  // one argv element, no quoting
-  EXPECT_EQ(few[1].name, "exhaustive_matcher");
-  EXPECT_EQ(Value(few[1], "--SiftMatching.use_gpu"), "0");
-  EXPECT_EQ(Value(few[2], "--output_path"), "/w s/sparse");
-  EXPECT_EQ(Value(few[3], "--output_path"), "/w s/dense");
-  EXPECT_EQ(Value(few[3], "--max_image_size"), "800");
-  const std::vector<SfmStage> many = BuildSfmStages(o, "/w", 6, /*cuda=*/true);
-  EXPECT_EQ(many[1].name, "sequential_matcher");
-  EXPECT_EQ(Value(many[1], "--SequentialMatching.overlap"), "10");
-  EXPECT_EQ(Value(many[0], "--SiftExtraction.use_gpu"), "1");
+  const std::vector<SfmStage> stages = BuildSfmStages(o, "/w s", /*cuda=*/false);
+  ASSERT_EQ(stages.size(), 5u);
+  EXPECT_EQ(stages[0].argv[0], "/opt/colmap");
+  EXPECT_EQ(stages[0].argv[1], "feature_extractor");
+  EXPECT_EQ(Value(stages[0], "--SiftExtraction.use_gpu"), "0");
+  EXPECT_EQ(Value(stages[0], "--SiftExtraction.max_num_features"), "2000");
+  EXPECT_EQ(Value(stages[0], "--SiftExtraction.max_image_size"), "800");
+  EXPECT_EQ(Value(stages[0], "--ImageReader.single_camera"), "1");
+  EXPECT_EQ(Value(stages[0], "--image_path"), "/w s/images");  // one argv element, no quoting
+  // Matching is candi's own (no argv); COLMAP verifies the raw matches and maps on one thread.
+  EXPECT_EQ(stages[1].name, kMatchStage);
+  EXPECT_TRUE(stages[1].argv.empty());
+  EXPECT_EQ(stages[2].argv[1], "matches_importer");
+  EXPECT_EQ(Value(stages[2], "--match_type"), "raw");
+  EXPECT_EQ(Value(stages[2], "--match_list_path"), "/w s/matches.txt");
+  EXPECT_EQ(Value(stages[2], "--SiftMatching.num_threads"), "1");
+  EXPECT_EQ(stages[3].argv[1], "mapper");
+  EXPECT_EQ(Value(stages[3], "--Mapper.num_threads"), "1");
+  EXPECT_EQ(Value(stages[3], "--random_seed"), "0");
+  EXPECT_EQ(Value(stages[3], "--output_path"), "/w s/sparse");
+  EXPECT_EQ(Value(stages[4], "--output_path"), "/w s/dense");
+  EXPECT_EQ(Value(stages[4], "--max_image_size"), "800");
+  EXPECT_EQ(Value(BuildSfmStages(o, "/w", /*cuda=*/true)[0], "--SiftExtraction.use_gpu"), "1");
 }
 
 // Every option candi passes is one the installed COLMAP lists in `colmap <command> -h`.
 TEST(BuildSfmStages, OptionNamesAreAcceptedByTheInstalledColmap) {
   REQUIRE_COLMAP();
-  SfmOptions o;
-  o.exhaustive_max_images = 2;
-  std::vector<SfmStage> stages = BuildSfmStages(o, "/w", 2, false);
-  const std::vector<SfmStage> sequential = BuildSfmStages(o, "/w", 3, false);
-  stages.push_back(sequential[1]);
-  for (const SfmStage& stage : stages) {
+  for (const SfmStage& stage : BuildSfmStages(SfmOptions{}, "/w", false)) {
+    if (stage.argv.empty()) continue;  // candi's own stage
     const std::string help = RunCommand("colmap " + stage.argv[1] + " -h").output;
     ASSERT_NE(help.find("--help"), std::string::npos) << stage.name << ": " << help;
     for (const std::string& flag : Flags(stage)) {
@@ -264,7 +264,7 @@ TEST(RunSfm, UnrelatedImagesGiveNoModelMessage) {
            });
   });
   EXPECT_NE(text.find("no model: the images may not overlap"), std::string::npos) << text;
-  EXPECT_EQ(stages, (std::vector<std::string>{"feature_extractor", "exhaustive_matcher"}));
+  EXPECT_EQ(stages, (std::vector<std::string>{"feature_extractor", kMatchStage, "matches_importer"}));
   EXPECT_TRUE(FileExists(dir.File("ws/logs/mapper.log")));
   EXPECT_TRUE(FileExists(dir.File("ws/images/n0.pgm")));
   EXPECT_FALSE(FileExists(dir.File("ws/images/notes.txt")));

@@ -1,0 +1,36 @@
+// COLMAP's feature database (database.db, SQLite; COLMAP 3.8's schema): the images and their
+// SIFT descriptors, for candi's own matcher (sift_matching.h), and the renumbering that makes the
+// database the same on every run.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace candi::photogrammetry {
+
+struct DatabaseImage {
+  int64_t image_id = 0;
+  int64_t camera_id = 0;
+  std::string name;                  // relative to COLMAP's --image_path
+  int64_t width = 0, height = 0;     // of its camera, pixels
+  int64_t rows = 0;                  // features
+  std::vector<float> xy;             // rows x 2: keypoint positions, pixels (COLMAP: 0.5 = first pixel's centre)
+  std::vector<uint8_t> descriptors;  // rows x 128, row-major (COLMAP stores them as unsigned bytes)
+};
+
+// Every image of the database with its keypoints and descriptors, by increasing image_id. An image
+// with no features gets rows = 0. Throws InputError naming the file for a missing or unreadable
+// database, a missing table, a blob whose size is not rows x cols elements, descriptors not 128
+// wide, or keypoint and descriptor counts that differ.
+// Read-only (SQLITE_OPEN_READONLY).
+std::vector<DatabaseImage> ReadColmapDescriptors(const std::string& database_path);
+
+// Gives the images ids 1..n in the order of their names, and the cameras ids 1..m in the order of
+// their first image, in one transaction (all or nothing). COLMAP's feature_extractor numbers them
+// in the order its threads finish, which differs from run to run, and the mapper's choices follow
+// the ids. Only before matching: a database holding matches is an InputError, as is an image
+// naming a missing camera. Returns true when anything was renumbered.
+bool RenumberImagesByName(const std::string& database_path);
+
+}  // namespace candi::photogrammetry
