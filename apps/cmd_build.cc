@@ -8,7 +8,10 @@
 //   archive/               the render archive of every layer (candi pack)
 //   renders/<view>.png     one SPBR render per view, and its .view.json (repeatable)
 //   meshlab/               float local-coordinate PLYs, scene.mlp and shift.txt
-//   archive.json           provenance: sources and hashes, method, parameters, seed, version, counts
+//   archive.json           provenance: sources and hashes, method, parameters, seed, version, counts,
+//                          what makes the build reproducible; no run times, so that two builds of the
+//                          same input give the same bytes
+//   timings.json           seconds per layer, the pack, each view and in all
 // Intermediate files go to work/. Every file is written atomically.
 //
 // Resuming (--resume): every finished stage that is worth keeping (a digitized foundation, relief
@@ -18,7 +21,11 @@
 // its files' names, sizes and times), the keys of the stages it uses). A resumed build redoes only stages whose key differs or whose outputs are
 // missing; archive.json marks what was reused ("resumed": true). An interrupted build (SIGINT,
 // core/interrupt.h) leaves finished stages complete and nothing half-written.
+#include <signal.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -190,8 +197,12 @@ LayerResult Photogrammetry(const Scene& scene, const SceneLayer& l, const std::s
     if (RunSfm(sfm) != kOk) throw InputError(l.images, "", "structure from motion failed");
     workspace = (fs::path(sfm.workspace) / "dense").string();
     r.method = "scanned: photogrammetry (COLMAP structure from motion, dense multi-view stereo)";
+    const json report = json::parse(ReadFileToString((fs::path(sfm.workspace) / "sfm_report.json").string()));
     r.parameters["sfm"] = {{"max_image_size", sfm.max_image_size}, {"max_features", sfm.max_features},
-                           {"camera_model", sfm.camera_model}, {"workspace", sfm.workspace}};
+                           {"camera_model", sfm.camera_model}, {"workspace", sfm.workspace},
+                           {"colmap_version", report.value("colmap_version", "")},
+                           {"matcher", report.value("matcher", "")},
+                           {"reproducibility", report.value("reproducibility", "")}};
   }
   if (!workspace.empty()) {
     DenseArgs d;
@@ -306,6 +317,14 @@ class Checkpoints {
   void Save(const std::string& stage, const std::string& key, json data) const {
     data["key"] = key;
     WriteFileAtomic((dir_ / (stage + ".json")).string(), data.dump(1) + "\n");
+    // For tests (tests/fault_test.cc): CANDI_TEST_INTERRUPT_AFTER=<stage> interrupts the build
+    // right after this checkpoint, as a user's Ctrl-C would, at a point that no timing decides.
+    // The interrupt handler's thread ends the process; this one waits for it.
+    const char* interrupt_after = std::getenv("CANDI_TEST_INTERRUPT_AFTER");
+    if (interrupt_after != nullptr && stage == interrupt_after) {
+      kill(getpid(), SIGINT);
+      for (;;) pause();
+    }
   }
 
  private:
@@ -541,6 +560,7 @@ int RunBuild(const BuildArgs& args) {
     checkpoints.Save("pack", pack_key, {{"seconds", pack_seconds}});
   }
 
+  json timings = {{"layers", json::object()}, {"views", json::object()}};  // seconds, apart from archive.json
   // 4. Renders (key: the view's and the render settings' JSON, the seed, the keys of its layers).
   json views = json::array();
   for (size_t vi = 0; vi < scene.views.size(); ++vi) {
@@ -591,7 +611,8 @@ int RunBuild(const BuildArgs& args) {
     json alphas = json::object();
     for (size_t k = 0; k < r.alpha.size(); ++k) alphas[fs::path(r.inputs[k]).stem().string()] = r.alpha[k];
     views.push_back({{"name", v.name}, {"png", "renders/" + v.name + ".png"}, {"opaque", v.opaque},
-                     {"opacity", alphas}, {"seconds", seconds}, {"resumed", checkpoint.has_value()}});
+                     {"opacity", alphas}, {"resumed", checkpoint.has_value()}});
+    timings["views"][v.name] = seconds;
   }
 
   // 5. MeshLab project, provenance.
@@ -612,17 +633,31 @@ int RunBuild(const BuildArgs& args) {
                       {"sources", sources}, {"world_from_layer", matrix}, {"opacity", l.opacity},
                       {"highlight", l.highlight}, {"points", clouds[k].size()}, {"dropped_nan", dropped[k]},
                       {"replaces", l.replaces}, {"replaced_by", replaced[k]},
-                      {"file", "layers/" + l.name + ".ply"}, {"seconds", results[k].seconds},
-                      {"resumed", static_cast<bool>(layer_resumed[k])}});
+                      {"file", "layers/" + l.name + ".ply"}, {"resumed", static_cast<bool>(layer_resumed[k])}});
+    timings["layers"][l.name] = results[k].seconds;
   }
   const json provenance = {
       {"candi_version", CANDI_VERSION}, {"scene", {{"path", scene.path}, {"sha256", Sha256Hex(scene.text)}}},
       {"name", scene.name}, {"seed", scene.seed},
       {"frame", {{"origin", {frame.origin.x(), frame.origin.y(), frame.origin.z()}}}},
-      {"points", total}, {"layers", layers}, {"archive", "archive"}, {"pack_seconds", pack_seconds},
+      {"points", total}, {"layers", layers}, {"archive", "archive"},
       {"pack_resumed", pack_checkpoint.has_value()},
-      {"views", views}, {"meshlab", "meshlab/scene.mlp"}, {"seconds", Seconds(start)}};
+      {"views", views}, {"meshlab", "meshlab/scene.mlp"},
+      {"reproducibility",
+       {{"seed", scene.seed},
+        {"same_bytes", "the same sources (their SHA-256 above), scene, seed, candi version and COLMAP build on the "
+                       "same machine give byte-identical layers/, archive/, renders/, meshlab/ and this file, for "
+                       "any thread count; run times are kept apart, in timings.json"},
+        {"how", "every random step draws from the scene's seed; parallel work is split and reduced in a fixed "
+                "order; photos: COLMAP's image ids follow the photo names, candi matches the features exactly "
+                "(brute force), COLMAP verifies and maps on one thread with its random seed fixed"},
+        {"across_machines", "not guaranteed: another CPU or C library can round floating point differently "
+                            "(COLMAP's SIFT, Ceres, libm), and one differing bit can change what COLMAP's "
+                            "mapper registers (README, Reproducibility)"}}}};
   WriteFileAtomic((out / "archive.json").string(), provenance.dump(2) + "\n");
+  timings["pack"] = pack_seconds;
+  timings["total"] = Seconds(start);
+  WriteFileAtomic((out / "timings.json").string(), timings.dump(2) + "\n");
 
   std::printf("%-16s %-15s %12s %8s %-8s %s\n", "layer", "kind", "points", "opacity", "scanned", "seconds");
   for (size_t k = 0; k < scene.layers.size(); ++k)
