@@ -56,6 +56,8 @@ function(candi_tests folder)
   candi_warnings(${target})
   candi_test_compile_options(${target})
   include(GoogleTest)
+  # Discovery runs the executable at test time; 600 s, not 60, so that a loaded machine (libtorch
+  # alone takes seconds to load) cannot fail a run by timing (`make test-stress`).
   gtest_discover_tests(${target} DISCOVERY_MODE PRE_TEST WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
-                       PROPERTIES LABELS ${folder} DISCOVERY_TIMEOUT 60)
+                       PROPERTIES LABELS ${folder} DISCOVERY_TIMEOUT 600)
 endfunction()
