@@ -104,6 +104,22 @@ void AddRender(CLI::App& app, RenderArgs& a, std::function<int()>* run) {
   c->footer("Example: candi render building.ply foundation.ply -o site.png -L 100 --alpha 0.3,0.8");
 }
 
+void AddView(CLI::App& app, ViewArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("view", "Open an archive in the browser: orbit it see-through while the server "
+                                       "renders (SPBR), the image refining as you watch");
+  c->add_option("inputs", a.inputs, "A build directory (candi build), a render archive (candi pack), or "
+                "point files (packed on the fly into a temporary archive)")->required();
+  c->add_option("--host", a.host, "Address to serve on (default 127.0.0.1; 0.0.0.0 serves your network: "
+                "anyone with the printed address and token sees the data)");
+  c->add_option("--port", a.port, "Port (0: any free one)")->check(CLI::Range(0, 65535));
+  c->add_option("--up", a.up, "World up for the first view, x,y,z (default 0,0,1; COLMAP's frame: 0,-1,0)");
+  c->add_option("--from", a.from, "Direction the first view looks in, x,y,z (default: oblique, from above)");
+  c->add_option("--columns", a.columns, "XYZ/PTS column spec");
+  c->add_option("--threads", a.threads, "Render threads (0: all)")->check(CLI::Range(0, 256));
+  c->callback([run, &a] { *run = [&a] { return RunView(a); }; });
+  c->footer("Example: candi view borobudur_out/   (then open the printed http://127.0.0.1:8765/?token=... address)");
+}
+
 void AddBench(CLI::App& app, BenchArgs& a, std::function<int()>* run) {
   auto* c = app.add_subcommand("bench", "Benchmarks: `candi bench render` prints SPBR accuracy vs "
                                         "time for L = 1 ... 1024");
@@ -524,6 +540,8 @@ int RunCli(int argc, char** argv) {
   AddOpacity(app, opacity, &run);
   RenderArgs render;
   AddRender(app, render, &run);
+  ViewArgs view;
+  AddView(app, view, &run);
   BenchArgs bench;
   AddBench(app, bench, &run);
   PackArgs pack;

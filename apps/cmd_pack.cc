@@ -18,15 +18,7 @@ int RunPack(const PackArgs& args) {
   o.threads = args.threads;
   std::vector<render::PackInput> inputs;
   for (const std::string& in : args.inputs) {
-    render::PackInput p = render::PackInputFromFile(in);
-    const std::string columns = args.columns;
-    p.open = [in, columns] {
-      PointReadOptions read;
-      read.columns = columns;
-      read.scalar_fields = false;
-      return OpenPointReader(in, read);
-    };
-    inputs.push_back(std::move(p));
+    inputs.push_back(render::PackInputFromFile(in, args.columns));
   }
   ConsoleProgress progress("pack");
   const render::PackSummary s = render::PackArchive(o, inputs, args.output, progress.Callback());

@@ -299,10 +299,6 @@ render::SpbrResult RenderArchiveInput(const RenderArgs& a, const Plan& p, render
   const render::Archive archive(a.inputs[0]);
   const render::ArchiveManifest& m = archive.manifest();
   *world_camera = WorldCamera(a, p, m.bounds.Translated(m.frame.origin));
-  if (world_camera->projection != render::Projection::kPerspective) {
-    throw std::invalid_argument("an archive renders perspective views; use --mode memory on point files for "
-                                "orthographic ones");
-  }
   const int drawn = a.preview > 0 ? std::min(a.preview, p.repeat_level) : p.repeat_level;
   render::ArchiveRenderOptions o;
   o.repeat_level = p.repeat_level;

@@ -82,6 +82,18 @@ struct RenderArgs {
 };
 int RunRender(const RenderArgs& args);
 
+// candi view (cmd_view.cc): the browser viewer (view/).
+struct ViewArgs {
+  std::vector<std::string> inputs;    // a build directory, an archive, or point files
+  std::string host = "127.0.0.1";
+  int port = 8765;                    // 0: any free port
+  std::string up;                     // x,y,z world up (default z; COLMAP's frame: 0,-1,0)
+  std::string from;                   // x,y,z direction from the eye to the target
+  std::string columns;                // XYZ/PTS inputs
+  int threads = 0;
+};
+int RunView(const ViewArgs& args);
+
 struct BenchArgs {
   std::string what = "render";        // render
   unsigned long long points = 1000000;

@@ -11,6 +11,7 @@ find_package(fmt REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)
+find_package(Boost 1.74 REQUIRED)   # header-only: Beast and Asio (candi view)
 # mesh
 find_package(CGAL REQUIRED)
 find_package(OpenMesh CONFIG REQUIRED)   # CONFIG: CGAL ships a FindOpenMesh that fails (trap 1)

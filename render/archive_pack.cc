@@ -50,12 +50,13 @@ void PackOptions::Check() const {
   }
 }
 
-PackInput PackInputFromFile(const std::string& path) {
+PackInput PackInputFromFile(const std::string& path, const std::string& columns) {
   PackInput in;
   in.name = path;
   in.path = path;
-  in.open = [path] {
+  in.open = [path, columns] {
     PointReadOptions read;
+    read.columns = columns;
     read.scalar_fields = false;
     return OpenPointReader(path, read);
   };

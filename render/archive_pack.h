@@ -54,7 +54,8 @@ struct PackInput {
   std::string path;
   std::function<std::unique_ptr<PointReader>()> open;
 };
-PackInput PackInputFromFile(const std::string& path);
+// `columns`: the XYZ/PTS column spec (core/point_io.h), "" for the default.
+PackInput PackInputFromFile(const std::string& path, const std::string& columns = "");
 // Points made on demand, `piece` at a time: make(k, n) returns piece k (n points, any frame).
 // For generated data (benchmarks, tests) that never touches a point file.
 PackInput PackInputFromGenerator(const std::string& name, uint64_t total, uint64_t piece,

@@ -47,16 +47,24 @@ bool BoxMayBeVisible(const Camera::Projector& p, const Camera& camera, const Box
                             k & 4 ? box.max.z() : box.min.z());
     c[k] = p.rotation * (x - p.eye);
   }
-  const double near = p.near * (1 - 1e-6) - 1e-9;
   auto all = [&](auto outside) {
     for (const Eigen::Vector3d& v : c) {
       if (!outside(v)) return false;
     }
     return true;
   };
-  if (all([&](const Eigen::Vector3d& v) { return v.z() < near; })) return false;
   const double left = -margin_px - p.cx, right = camera.width + margin_px - p.cx;
   const double top = -margin_px - p.cy, bottom = camera.height + margin_px - p.cy;
+  if (!p.perspective) {
+    // u - cx = f x: the slab of the image's rows and columns, whatever the depth.
+    if (all([&](const Eigen::Vector3d& v) { return p.focal * v.x() < left; })) return false;
+    if (all([&](const Eigen::Vector3d& v) { return p.focal * v.x() > right; })) return false;
+    if (all([&](const Eigen::Vector3d& v) { return p.focal * v.y() < top; })) return false;
+    if (all([&](const Eigen::Vector3d& v) { return p.focal * v.y() > bottom; })) return false;
+    return true;
+  }
+  const double near = p.near * (1 - 1e-6) - 1e-9;
+  if (all([&](const Eigen::Vector3d& v) { return v.z() < near; })) return false;
   // u - cx = f x / z: outside left when f x < left z (z > 0); corners behind the camera are
   // handled by keeping the box (they may wrap), unless all are behind (above).
   bool any_behind = false;
@@ -69,6 +77,7 @@ bool BoxMayBeVisible(const Camera::Projector& p, const Camera& camera, const Box
   return true;
 }
 
+
 namespace {
 
 struct ThreadSums {
@@ -77,20 +86,24 @@ struct ThreadSums {
   ThreadSums(int w, int h) : sums(w, h) {}
 };
 
-// Transform and projection exactly as SpbrStreamRenderer's (bit-identical images).
+// Transform and projection exactly as SpbrStreamRenderer's (bit-identical images). Orthographic
+// views shift every depth by `depth_offset` (OrthographicDepthOffset) so that all drawn ones are
+// positive, as the kernel's keys need.
 struct Kernel {
   KernelTransform transform;
   KernelProjection projection;
 };
-Kernel MakeKernel(const Camera::Projector& projector, int w, int h) {
+Kernel MakeKernel(const Camera::Projector& projector, int w, int h, double depth_offset) {
   Kernel k;
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) k.transform.a[3 * r + c] = static_cast<float>(projector.rotation(r, c));
   }
-  const Eigen::Vector3d b = -(projector.rotation * projector.eye);
+  Eigen::Vector3d b = -(projector.rotation * projector.eye);
+  b.z() += depth_offset;
   for (int r = 0; r < 3; ++r) k.transform.b[r] = static_cast<float>(b[r]);
+  const float near = projector.perspective ? static_cast<float>(projector.near) : -std::numeric_limits<float>::infinity();
   k.projection = {static_cast<float>(projector.focal), static_cast<float>(projector.cx),
-                  static_cast<float>(projector.cy), static_cast<float>(projector.near), true, w, h, 0, h};
+                  static_cast<float>(projector.cy), near, projector.perspective, w, h, 0, h};
   return k;
 }
 
@@ -174,16 +187,13 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
                          const ProgressCallback& progress, ArchiveRenderStats* stats_out) {
   options.Check();
   camera.Check();
-  if (camera.projection != Projection::kPerspective) {
-    throw std::invalid_argument("rendering an archive draws perspective views (depths must stay positive)");
-  }
   const auto start = std::chrono::steady_clock::now();
   const int L = options.repeat_level;
   const int e_begin = options.ensemble_begin, e_end = options.ensemble_end == 0 ? L : options.ensemble_end;
   const ArchiveManifest& m = archive.manifest();
   const int w = camera.width, h = camera.height;
   const Camera::Projector projector = camera.MakeProjector();
-  const Kernel kernel = MakeKernel(projector, w, h);
+  const Kernel kernel = MakeKernel(projector, w, h, OrthographicDepthOffset(projector, m.bounds));
   uint64_t visible_points = 0;
   const std::vector<size_t> visible = VisibleChunks(options, camera, projector, archive, &visible_points);
 

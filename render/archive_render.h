@@ -1,4 +1,4 @@
-// Streaming SPBR of a render archive: memory-mapped chunks pass through the splat kernel, so the
+// Streaming SPBR of a render archive (perspective or orthographic views): memory-mapped chunks pass through the splat kernel, so the
 // renderer holds frame buffers and a bounded batch of chunks, never the cloud.
 //
 // The image equals, bit for bit, SpbrStreamRenderer's (and so any chunking of it) fed the
@@ -49,13 +49,15 @@ struct ArchiveRenderStats {
   double seconds = 0;
 };
 
-// `camera` is perspective, in the archive's frame (world - manifest().frame.origin). The result
+// `camera` is perspective or orthographic, in the archive's frame (world - manifest().frame.origin). The result
 // holds the sums of the drawn ensembles; `ensembles` and `repeat_level` are L.
+// `progress` is called between groups of chunks; an exception it throws aborts the render (the
+// viewer drops an image whose camera moved so).
 SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& camera, const Archive& archive,
                          const ProgressCallback& progress = nullptr, ArchiveRenderStats* stats = nullptr);
 
-// True when the chunk box (archive frame) may draw a pixel of `camera` (perspective), with
-// `margin_px` pixels around the image.
+// True when the chunk box (archive frame) may draw a pixel of `camera`, with `margin_px` pixels
+// around the image.
 bool BoxMayBeVisible(const Camera::Projector& projector, const Camera& camera, const Box3d& box, double margin_px);
 
 }  // namespace candi::render

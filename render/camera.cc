@@ -82,4 +82,15 @@ Camera FrameBox(const Box3d& box, int width, int height, const Eigen::Vector3d& 
   return camera;
 }
 
+double OrthographicDepthOffset(const Camera::Projector& p, const Box3d& bounds) {
+  if (p.perspective || bounds.IsEmpty()) return 0.0;
+  double zmin = 1e300;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d x(corner & 1 ? bounds.max[0] : bounds.min[0], corner & 2 ? bounds.max[1] : bounds.min[1],
+                            corner & 4 ? bounds.max[2] : bounds.min[2]);
+    zmin = std::min(zmin, (p.rotation * (x - p.eye)).z());
+  }
+  return std::max(0.0, 1.0 - zmin);
+}
+
 }  // namespace candi::render

@@ -60,4 +60,9 @@ struct Camera {
 Camera FrameBox(const Box3d& box, int width, int height, const Eigen::Vector3d& view_dir,
                 Projection projection = Projection::kPerspective, double fov_y_deg = 40.0);
 
+// Orthographic views: what every depth is shifted by so that the depths of points within
+// `bounds` are positive, as the splat kernel's keys need (1 - the nearest corner's depth, or 0);
+// 0 for perspective views.
+double OrthographicDepthOffset(const Camera::Projector& projector, const Box3d& bounds);
+
 }  // namespace candi::render

@@ -93,16 +93,6 @@ struct Frame {
   double depth_offset = 0;
 };
 
-double DepthOffset(const Camera::Projector& p, const Box3d& bounds) {
-  if (p.perspective || bounds.IsEmpty()) return 0.0;
-  double zmin = 1e300;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Eigen::Vector3d x(corner & 1 ? bounds.max[0] : bounds.min[0], corner & 2 ? bounds.max[1] : bounds.min[1],
-                            corner & 4 ? bounds.max[2] : bounds.min[2]);
-    zmin = std::min(zmin, (p.rotation * (x - p.eye)).z());
-  }
-  return std::max(0.0, 1.0 - zmin);
-}
 
 // One thread's frame: a z-buffer of keys, the sums of the ensembles it drew, and the grey
 // histogram of ensemble 0 when it drew that one.
@@ -152,7 +142,7 @@ SpbrResult RenderSpbr(const SpbrOptions& options, const Camera& camera, const Sp
   result.seed = cloud.seed;
   result.ensembles = options.ensembles > 0 ? std::min(options.ensembles, L) : L;
   result.copies = cloud.copies();
-  Frame frame{options, camera, projector, cloud, {}, result.ensembles, DepthOffset(projector, cloud.bounds)};
+  Frame frame{options, camera, projector, cloud, {}, result.ensembles, OrthographicDepthOffset(projector, cloud.bounds)};
   frame.visible.resize(cloud.blocks.size());
   const double margin = 1.0 + options.point_size;
   tbb::enumerable_thread_specific<ThreadFrame> frames(camera.width, camera.height);

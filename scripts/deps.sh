@@ -27,6 +27,9 @@ packages=(
   # interop tests: the archive opened in the real tools (meshlabserver under xvfb-run, CloudCompare
   # command line with QT_QPA_PLATFORM=offscreen); tests/interop_cli_test.cc
   meshlab cloudcompare xvfb xauth
+  # candi view: Boost.Beast/Asio (header-only) serves HTTP and WebSocket; the browser tests drive
+  # Debian's chromium headless through the DevTools protocol (tests/view_browser_test.py)
+  libboost-dev chromium python3-websocket
 )
 if [[ ${1:-} == fuzz ]]; then
   packages=(clang-14 libclang-rt-14-dev)

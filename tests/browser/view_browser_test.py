@@ -1,0 +1,236 @@
+"""candi view in a real browser: Debian's chromium, headless, driven through DevTools.
+
+Usage: view_browser_test.py CANDI SOURCE_DIR   (ctest runs it; skips, saying why, without chromium)
+
+The scene is the bundled foundation drawing made into points by `candi foundation` and packed by
+`candi pack`: the project's own code, no fixture files. Checks: the converged frame equals `candi
+render` of the same view, seed and L (bit for bit, as sent and as drawn on the canvas); a mouse
+drag moves the camera and brings new frames; bad requests and messages are refused and the server
+keeps serving. Timeouts only catch hangs; no verdict depends on speed.
+"""
+import base64
+import http.client
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import devtools  # noqa: E402
+import websocket  # noqa: E402
+
+CANDI = SOURCE = None
+HANG = 600  # seconds: a hang, not a speed limit
+
+
+def run(*args):
+    r = subprocess.run([CANDI, *args], capture_output=True, text=True)
+    if r.returncode != 0:
+        raise AssertionError("candi %s failed (%d):\n%s" % (" ".join(args), r.returncode, r.stderr[-3000:]))
+    return r
+
+
+class Viewer:
+    """`candi view` on a free port; the URL it prints."""
+
+    def __init__(self, *inputs):
+        self.process = subprocess.Popen([CANDI, "view", *inputs, "--port", "0"], stdout=subprocess.PIPE,
+                                        stderr=subprocess.PIPE, text=True)
+        line = self.process.stdout.readline()
+        if not line.startswith("candi view: "):
+            self.process.kill()
+            raise AssertionError("candi view printed %r; stderr:\n%s" % (line, self.process.stderr.read()[-3000:]))
+        self.url = line.split(": ", 1)[1].strip()
+        self.port = int(self.url.split(":")[2].split("/")[0])
+        self.token = self.url.split("token=")[1]
+
+    def request(self, method, path, headers=None, body=None):
+        c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=HANG)
+        c.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
+        headers = dict(headers or {})
+        headers.setdefault("Host", "127.0.0.1:%d" % self.port)
+        for k, v in headers.items():
+            c.putheader(k, v)
+        if body is not None:
+            c.putheader("Content-Length", str(len(body)))
+        c.endheaders(body.encode() if isinstance(body, str) else body)
+        r = c.getresponse()
+        data = r.read()
+        c.close()
+        return r.status, data
+
+    def close(self):
+        self.process.terminate()
+        self.process.wait(timeout=60)
+        self.stderr = self.process.stderr.read()
+
+
+class ViewInBrowser(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.dir = tempfile.mkdtemp(prefix="candi-view-test-")
+        ply = os.path.join(cls.dir, "foundation.ply")
+        run("foundation", os.path.join(SOURCE, "examples", "borobudur", "foundation.dxf"), "-o", ply,
+            "--count", "200000", "--no-self-intersection")
+        cls.archive = os.path.join(cls.dir, "foundation.archive")
+        run("pack", ply, "-o", cls.archive)
+        cls.viewer = Viewer(cls.archive)
+        cls.browser = devtools.Browser(640, 480)
+        cls.browser.call("Page.enable")
+        cls.browser.call("Page.navigate", url=cls.viewer.url)
+        cls.browser.wait_for("window.candiViewer && candiViewer.stats.lastFrame !== null", HANG, "a first frame")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.browser.close()
+        cls.viewer.close()
+        shutil.rmtree(cls.dir, ignore_errors=True)
+
+    def wait_converged(self):
+        # Converged, and for the page's latest camera (no view message still on its way).
+        return self.browser.wait_for(
+            "(() => { const f = candiViewer.stats.lastFrame; return f && f.converged && "
+            "f.seq === candiViewer.stats.drawnSeq && !document.hidden && "
+            "JSON.stringify(candiViewer.camera()) === candiViewer.lastSentCamera() ? f : null; })()",
+            HANG, "convergence")
+
+    def test_1_converged_frame_is_candi_render(self):
+        frame = self.wait_converged()
+        self.assertEqual(frame["format"], "png")
+        self.assertEqual(frame["ensembles"], frame["repeat_level"])
+        view_json = self.browser.evaluate("candiViewer.viewJson()")
+        settings = self.browser.evaluate("candiViewer.settings()")
+        view = os.path.join(self.dir, "view.json")
+        with open(view, "w") as f:
+            f.write(view_json)
+        reference = os.path.join(self.dir, "reference.png")
+        run("render", self.archive, "--view", view, "-L", str(settings["repeat_level"]), "--seed",
+            str(settings["seed"]), "--background", ",".join(str(c) for c in settings["background"]),
+            "--brightness", "auto" if settings["brightness"] == "auto" else str(settings["brightness"]),
+            "-o", reference)
+        with open(reference, "rb") as f:
+            w, h, ch, expected = devtools.decode_png(f.read())
+        sent = base64.b64decode(self.browser.evaluate("candiViewer.pngBase64()", await_promise=True))
+        sw, sh, sch, got = devtools.decode_png(sent)
+        self.assertEqual((sw, sh, sch), (w, h, 3))
+        self.assertEqual(got, expected, "the converged frame differs from candi render's image")
+        # What the canvas shows: the same pixels (RGBA).
+        canvas = self.browser.evaluate("candiViewer.canvasPixels()")
+        self.assertEqual(len(canvas), w * h * 4)
+        rgb = bytes(v for i, v in enumerate(canvas) if i % 4 != 3)
+        self.assertEqual(rgb, expected, "the canvas differs from candi render's image")
+        # Not a blank image: the foundation covers part of it.
+        background = bytes(settings["background"])
+        covered = sum(1 for p in range(w * h) if expected[3 * p:3 * p + 3] != background)
+        self.assertGreater(covered, w * h // 50)
+
+    def test_2_drag_moves_camera_and_brings_frames(self):
+        self.wait_converged()
+        before = self.browser.evaluate("candiViewer.camera()")
+        frames = self.browser.evaluate("candiViewer.stats.framesReceived")
+        seq = self.browser.evaluate("candiViewer.stats.drawnSeq")
+        b = self.browser
+        b.mouse("mouseMoved", 320, 240, buttons=0, button="none")
+        b.mouse("mousePressed", 320, 240)
+        for k in range(1, 11):
+            b.mouse("mouseMoved", 320 + 10 * k, 240 + 3 * k)
+            time.sleep(0.02)
+        b.mouse("mouseReleased", 420, 270, buttons=0)
+        after = b.evaluate("candiViewer.camera()")
+        self.assertNotEqual(before["eye"], after["eye"], "the drag did not orbit the camera")
+        self.assertEqual(before["target"], after["target"], "an orbit keeps the target")
+        b.wait_for("candiViewer.stats.drawnSeq > %d && candiViewer.stats.framesReceived > %d" % (seq, frames),
+                   HANG, "a frame of the new camera")
+        frame = self.wait_converged()
+        self.assertGreater(frame["seq"], seq)
+
+    def test_3_bad_requests_are_refused_and_the_server_keeps_serving(self):
+        v = self.viewer
+        t = v.token
+        good = "/api/scene?token=" + t
+        cases = [
+            ("GET", "/../../etc/passwd?token=" + t, {}, None, 404),
+            ("GET", "/%2e%2e/%2e%2e/etc/passwd?token=" + t, {}, None, 404),
+            ("GET", "/viewer.js/../../archive?token=" + t, {}, None, 404),
+            ("GET", "/api/scene?token=wrong", {}, None, 403),
+            ("GET", "/api/scene", {}, None, 403),
+            ("GET", good, {"Host": "attacker.example:%d" % v.port}, None, 403),
+            ("GET", good, {"Host": "127.0.0.1:1"}, None, 403),
+            ("GET", good, {"Origin": "http://attacker.example"}, None, 403),
+            ("POST", good, {}, "{}", 405),
+            ("GET", good, {"X-Big": "a" * 20000}, None, 431),
+            ("GET", "/" + "a" * 3000 + "?token=" + t, {}, None, 414),
+            ("GET", good, {}, "x" * 5000, 413),
+        ]
+        for method, path, headers, body, status in cases:
+            got, _ = v.request(method, path, headers, body)
+            self.assertEqual(got, status, "%s %s %s" % (method, path[:60], list(headers)))
+            self.assertEqual(v.request("GET", good)[0], 200, "the server stopped answering after " + path[:60])
+        # A request that is not HTTP at all.
+        import socket
+        s = socket.create_connection(("127.0.0.1", v.port), timeout=HANG)
+        s.sendall(b"\x16\x03\x01\x02\x00garbage\r\n\r\n")
+        reply = s.recv(100)
+        s.close()
+        self.assertTrue(reply.startswith(b"HTTP/1.1 400") or reply == b"", reply)
+        self.assertEqual(v.request("GET", good)[0], 200)
+
+        ws_url = "ws://127.0.0.1:%d/ws?token=%s" % (v.port, t)
+        # Wrong token: no upgrade.
+        with self.assertRaises(websocket.WebSocketBadStatusException):
+            websocket.create_connection("ws://127.0.0.1:%d/ws?token=x" % v.port, timeout=HANG)
+        # Cross-site page: refused by its Origin.
+        with self.assertRaises(websocket.WebSocketBadStatusException):
+            websocket.create_connection(ws_url, timeout=HANG, origin="http://attacker.example")
+        camera = json.loads(self.browser.evaluate("candiViewer.viewJson()"))
+        bad_messages = [
+            "{not json",
+            json.dumps({"type": "view", "seq": 1}),
+            json.dumps({"type": "view", "seq": 1, "camera": dict(camera, eye=[0, 0, "x"])}),
+            json.dumps({"type": "view", "seq": 1, "camera": dict(camera, width=100000)}),
+            json.dumps({"type": "view", "seq": 1, "camera": camera, "settings": {"repeat_level": 0}}),
+            json.dumps({"type": "view", "seq": 1, "camera": camera, "settings": {"point_size": float("nan")}})
+            .replace("NaN", "1e999"),
+            json.dumps({"type": "hack"}),
+            "[" * 100000,
+        ]
+        for m in bad_messages:
+            ws = websocket.create_connection(ws_url, timeout=HANG)
+            ws.send(m)
+            # The error (not for a message beyond the size limit, refused by the framing), then the close.
+            replies = []
+            with self.assertRaises((websocket.WebSocketConnectionClosedException, ConnectionError)):
+                while True:
+                    r = ws.recv()
+                    if r in ("", b""):
+                        raise websocket.WebSocketConnectionClosedException()
+                    replies.append(r)
+            if len(m) < 16384:
+                self.assertEqual(len(replies), 1, m[:80])
+                self.assertIn('"error"', replies[0], m[:80])
+            self.assertFalse(any(isinstance(r, bytes) for r in replies), "a frame for a bad message")
+            ws.close()
+        # The next good page is served.
+        ws = websocket.create_connection(ws_url, timeout=HANG)
+        small = dict(camera, width=64, height=48)
+        ws.send(json.dumps({"type": "view", "seq": 5, "camera": small, "settings": {"repeat_level": 4}}))
+        data = ws.recv()
+        self.assertIsInstance(data, bytes)
+        n = int.from_bytes(data[:4], "little")
+        header = json.loads(data[4:4 + n])
+        self.assertEqual((header["seq"], header["width"], header["height"]), (5, 64, 48))
+        ws.close()
+
+
+if __name__ == "__main__":
+    if len(sys.argv) < 3:
+        sys.exit("usage: view_browser_test.py CANDI SOURCE_DIR")
+    CANDI, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+    if devtools.find_chromium() is None:
+        print("SKIP: chromium is not installed (scripts/deps.sh installs it)")
+        sys.exit(0)
+    unittest.main(argv=[sys.argv[0], "-v"])

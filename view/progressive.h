@@ -1,0 +1,72 @@
+// Progressive SPBR of a render archive: ensembles accumulate while the camera rests.
+//
+// Each ensemble of SPBR is an independent image, and their integer sums add exactly, so an image
+// drawn in batches of ensembles [0, k1), [k1, k2), ... equals, bit for bit, the image of all L
+// drawn at once: once converged (k = L) the pixels are those `candi render` writes for the same
+// archive, view, seed and L (the same gain, the same rounding). Before that the image is the
+// average of the first k ensembles: an unbiased, noisier estimate of the final one.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+
+#include "core/image.h"
+#include "render/archive.h"
+#include "render/archive_render.h"
+#include "render/spbr.h"
+#include "view/protocol.h"
+
+namespace candi::view {
+
+// Draws the ensembles options.ensemble_begin..end of `local_camera` (the archive's frame): by
+// default RenderArchive; under MPI, every rank's share reduced on rank 0. `cancel` is polled
+// between chunk groups and aborts the draw (throws Cancelled) when it returns true.
+struct Cancelled {};
+using RangeRenderer = std::function<render::SpbrResult(const render::ArchiveRenderOptions& options,
+                                                       const render::Camera& local_camera,
+                                                       const std::function<bool()>& cancel)>;
+RangeRenderer LocalRangeRenderer(const render::Archive& archive);
+
+class ProgressiveImage {
+ public:
+  ProgressiveImage(const render::Archive& archive, RangeRenderer renderer, int threads);
+
+  // Begins the image of `state` (camera in world coordinates); the drawn ensembles are dropped.
+  void Start(const ViewState& state);
+  const ViewState& state() const { return state_; }
+  int ensembles() const { return drawn_; }
+  int repeat_level() const { return state_.settings.EffectiveRepeatLevel(); }
+  bool converged() const { return started_ && drawn_ == repeat_level(); }
+
+  // Draws the next `count` ensembles (at least one, at most those left); returns milliseconds.
+  // Throws Cancelled (nothing added) when `cancel` says so.
+  double Step(int count, const std::function<bool()>& cancel = nullptr);
+  // Milliseconds an ensemble took in the last step (0 before any).
+  double ms_per_ensemble() const { return ms_per_ensemble_; }
+
+  // The image of the ensembles drawn so far and its brightness gain (candi render's rule: the
+  // scene's gain, or automatic from the first ensemble when more than one is drawn).
+  Image8 Image(double* gain) const;
+
+ private:
+  const render::Archive& archive_;
+  RangeRenderer renderer_;
+  int threads_;
+  ViewState state_;
+  bool started_ = false;
+  int drawn_ = 0;
+  render::SpbrResult sums_;
+  double ms_per_ensemble_ = 0;
+};
+
+// The nearest archived point drawn within `radius_px` of pixel (u, v) of `local_camera`
+// (1-pixel points; reads only the chunks whose projected boxes hold the pixel).
+struct PickResult {
+  bool hit = false;
+  Eigen::Vector3d local = Eigen::Vector3d::Zero();  // archive frame
+  double depth = 0;
+};
+PickResult PickPoint(const render::Archive& archive, const render::Camera& local_camera, double u, double v,
+                     double radius_px);
+
+}  // namespace candi::view

@@ -1,0 +1,678 @@
+#include "view/server.h"
+
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <list>
+#include <mutex>
+#include <optional>
+#include <random>
+#include <thread>
+
+#include "core/check.h"
+#include "view/frame_encoding.h"
+#include "view/web_assets.h"
+
+namespace candi::view {
+
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+namespace net = boost::asio;
+using tcp = net::ip::tcp;
+
+namespace {
+
+constexpr size_t kHeaderLimit = 8192, kTargetLimit = 2048, kBodyLimit = 1024;
+
+std::string RandomToken() {
+  std::random_device device;  // /dev/urandom
+  std::string hex;
+  static const char* digits = "0123456789abcdef";
+  for (int i = 0; i < 4; ++i) {
+    const uint32_t word = device();
+    for (int k = 0; k < 8; ++k) hex += digits[(word >> (4 * k)) & 15];
+  }
+  return hex;
+}
+
+bool ConstantTimeEqual(const std::string& a, const std::string& b) {
+  if (a.size() != b.size()) return false;
+  unsigned char diff = 0;
+  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
+  return diff == 0;
+}
+
+std::string Lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+bool IsLoopback(const std::string& bind) { return bind == "127.0.0.1" || bind == "localhost" || bind == "::1"; }
+
+bool IsIpLiteral(const std::string& host) {
+  boost::system::error_code ec;
+  net::ip::make_address(host, ec);
+  return !ec;
+}
+
+// "host:port" or "[v6]:port" -> host (brackets removed) and port text.
+bool SplitHostPort(const std::string& text, std::string* host, std::string* port) {
+  if (!text.empty() && text[0] == '[') {
+    const size_t close = text.find(']');
+    if (close == std::string::npos) return false;
+    *host = text.substr(1, close - 1);
+    const std::string rest = text.substr(close + 1);
+    if (rest.empty()) *port = "";
+    else if (rest[0] == ':') *port = rest.substr(1);
+    else return false;
+    return true;
+  }
+  const size_t colon = text.rfind(':');
+  if (colon == std::string::npos) {
+    *host = text;
+    *port = "";
+  } else {
+    *host = text.substr(0, colon);
+    *port = text.substr(colon + 1);
+  }
+  return host->find(':') == std::string::npos;
+}
+
+}  // namespace
+
+bool HostAllowed(const std::string& header, const std::string& bind, int port) {
+  std::string host, port_text;
+  if (header.size() > 255 || !SplitHostPort(Lower(header), &host, &port_text)) return false;
+  const std::string expected_port = std::to_string(port);
+  if (port_text != expected_port && !(port == 80 && port_text.empty())) return false;
+  if (host == "localhost" || host == "127.0.0.1" || host == "::1") return true;
+  if (IsLoopback(bind)) return false;
+  // Bound to an address of the network: that address, or any address literal when bound to all
+  // of them; never a name (a name can be rebound to another address by its DNS).
+  if (bind == "0.0.0.0" || bind == "::") return IsIpLiteral(host);
+  return host == Lower(bind);
+}
+
+bool OriginAllowed(const std::string& origin, const std::string& bind, int port) {
+  const std::string prefix = "http://";
+  const std::string o = Lower(origin);
+  if (o.compare(0, prefix.size(), prefix) != 0) return false;
+  return HostAllowed(o.substr(prefix.size()), bind, port);
+}
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// A page's state, shared by its WebSocket (I/O thread) and the render thread.
+class WsSession;
+struct Client {
+  std::mutex mutex;
+  std::optional<ViewState> wanted;     // the latest view the page sent
+  uint64_t wanted_seq = 0;
+  uint64_t wanted_generation = 0;      // bumped by every view message
+  std::deque<ClientMessage> picks;
+  int frames_outstanding = 0;          // posted to the socket, not yet written or dropped
+  bool closed = false;
+  std::weak_ptr<WsSession> session;
+  // Render thread only.
+  std::unique_ptr<ProgressiveImage> image;
+  uint64_t image_generation = 0, image_seq = 0;
+  int steps = 0;                       // steps since the image started
+  std::optional<render::Camera> last_camera;  // of the image drawn (picks)
+  std::atomic<uint64_t> generation{0};  // wanted_generation, for cancelling without the lock
+};
+
+}  // namespace
+
+struct Server::Impl {
+  ServerOptions options;
+  const ViewerSource& source;
+  const render::Archive& archive;
+  RangeRenderer renderer;
+  std::string token;
+  std::string scene_json;
+  net::io_context io{1};
+  tcp::acceptor acceptor{io};
+  int port = 0;
+
+  std::mutex mutex;                    // clients, cv
+  std::condition_variable cv;
+  std::list<std::shared_ptr<Client>> clients;
+  bool stopping = false;
+  std::thread render_thread;
+
+  std::atomic<uint64_t> requests{0}, refused{0}, pages{0}, open_pages{0}, frames_sent{0}, frames_dropped{0},
+      images_abandoned{0}, bad_messages{0};
+
+  Impl(const ServerOptions& o, const ViewerSource& s, const render::Archive& a, RangeRenderer r)
+      : options(o), source(s), archive(a), renderer(std::move(r)) {}
+
+  void Log(const std::string& line) {
+    if (options.log) options.log(line);
+  }
+  void Wake() { cv.notify_all(); }
+
+  void Accept();
+  void RenderLoop();
+  bool StepClient(const std::shared_ptr<Client>& c);
+};
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+class WsSession : public std::enable_shared_from_this<WsSession> {
+ public:
+  WsSession(tcp::socket&& socket, Server::Impl* server) : ws_(std::move(socket)), server_(server) {}
+
+  void Start(http::request<http::string_body> request) {
+    ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
+    ws_.read_message_max(kMaxMessageBytes);
+    ws_.async_accept(request, beast::bind_front_handler(&WsSession::OnAccept, shared_from_this()));
+  }
+
+  // Render thread -> I/O thread.
+  void QueueFrame(std::shared_ptr<const std::string> frame) {
+    if (frame_) {  // the page has not taken the last one: the newer replaces it
+      ++server_->frames_dropped;
+      Done(1);
+    }
+    frame_ = std::move(frame);
+    Write();
+  }
+  void QueueText(std::string text) {
+    texts_.push_back(std::move(text));
+    Write();
+  }
+
+ private:
+  void OnAccept(beast::error_code ec) {
+    if (ec) return;
+    client_ = std::make_shared<Client>();
+    client_->session = weak_from_this();
+    {
+      std::lock_guard<std::mutex> lock(server_->mutex);
+      server_->clients.push_back(client_);
+    }
+    ++server_->pages;
+    ++server_->open_pages;
+    Read();
+  }
+
+  void Read() { ws_.async_read(buffer_, beast::bind_front_handler(&WsSession::OnRead, shared_from_this())); }
+
+  void OnRead(beast::error_code ec, size_t) {
+    if (ec) {
+      Close();
+      return;
+    }
+    if (!ws_.got_text()) {
+      Refuse("binary messages are not part of the protocol");
+      return;
+    }
+    const std::string text = beast::buffers_to_string(buffer_.data());
+    buffer_.consume(buffer_.size());
+    ClientMessage message;
+    try {
+      message = ParseClientMessage(text);
+    } catch (const std::invalid_argument& e) {
+      Refuse(e.what());
+      return;
+    }
+    {
+      std::lock_guard<std::mutex> lock(client_->mutex);
+      if (message.type == MessageType::kView) {
+        client_->wanted = message.view;
+        client_->wanted_seq = message.seq;
+        client_->generation = ++client_->wanted_generation;
+      } else if (client_->picks.size() < 4) {
+        client_->picks.push_back(message);
+      }
+    }
+    server_->Wake();
+    Read();
+  }
+
+  // A malformed message: say why, then close with a policy error.
+  void Refuse(const std::string& why) {
+    ++server_->bad_messages;
+    server_->Log("view: closed a page's socket: " + why);
+    closing_ = true;
+    texts_.push_back(ErrorReply(why));
+    Write();
+  }
+
+  void Write() {
+    if (writing_ || !ws_.is_open()) return;
+    if (!texts_.empty()) {
+      writing_ = true;
+      in_flight_text_ = std::move(texts_.front());
+      texts_.pop_front();
+      ws_.text(true);
+      ws_.async_write(net::buffer(in_flight_text_),
+                      beast::bind_front_handler(&WsSession::OnWrite, shared_from_this(), false));
+    } else if (closing_) {
+      writing_ = true;
+      ws_.async_close(websocket::close_code::policy_error,
+                      [self = shared_from_this()](beast::error_code) { self->Close(); });
+    } else if (frame_) {
+      writing_ = true;
+      in_flight_frame_ = std::move(frame_);
+      frame_.reset();
+      ws_.binary(true);
+      ws_.async_write(net::buffer(*in_flight_frame_),
+                      beast::bind_front_handler(&WsSession::OnWrite, shared_from_this(), true));
+    }
+  }
+
+  void OnWrite(bool frame, beast::error_code ec, size_t) {
+    writing_ = false;
+    if (frame) {
+      in_flight_frame_.reset();
+      if (!ec) ++server_->frames_sent;
+      Done(1);
+    }
+    if (ec) {
+      Close();
+      return;
+    }
+    Write();
+  }
+
+  // Frames written or dropped: the render thread may draw more for this page.
+  void Done(int n) {
+    if (!client_) return;
+    {
+      std::lock_guard<std::mutex> lock(client_->mutex);
+      client_->frames_outstanding -= n;
+    }
+    server_->Wake();
+  }
+
+  void Close() {
+    if (closed_) return;
+    closed_ = true;
+    if (frame_) {
+      frame_.reset();
+      Done(1);
+    }
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws_).socket().close(ignored);
+    if (client_) {
+      {
+        std::lock_guard<std::mutex> lock(client_->mutex);
+        client_->closed = true;
+        client_->generation = ~uint64_t{0};  // abandons an image being drawn
+      }
+      --server_->open_pages;
+      server_->Wake();
+    }
+  }
+
+  websocket::stream<beast::tcp_stream> ws_;
+  Server::Impl* server_;
+  beast::flat_buffer buffer_;
+  std::shared_ptr<Client> client_;
+  std::deque<std::string> texts_;
+  std::string in_flight_text_;
+  std::shared_ptr<const std::string> frame_, in_flight_frame_;
+  bool writing_ = false, closing_ = false, closed_ = false;
+};
+
+// ---------------------------------------------------------------------------------------------
+class HttpSession : public std::enable_shared_from_this<HttpSession> {
+ public:
+  HttpSession(tcp::socket&& socket, Server::Impl* server) : stream_(std::move(socket)), server_(server) {}
+  void Start() { Read(); }
+
+ private:
+  using Response = http::response<http::string_body>;
+
+  void Read() {
+    parser_.emplace();
+    parser_->header_limit(kHeaderLimit);
+    parser_->body_limit(kBodyLimit);
+    stream_.expires_after(std::chrono::seconds(30));
+    http::async_read(stream_, buffer_, *parser_, beast::bind_front_handler(&HttpSession::OnRead, shared_from_this()));
+  }
+
+  void OnRead(beast::error_code ec, size_t) {
+    if (ec == http::error::end_of_stream || ec == net::error::operation_aborted || ec == beast::error::timeout ||
+        ec == net::error::eof || ec == net::error::connection_reset) {
+      Shutdown();
+      return;
+    }
+    if (ec) {  // malformed: status by cause, then close
+      http::status status = http::status::bad_request;
+      if (ec == http::error::header_limit) status = http::status::request_header_fields_too_large;
+      if (ec == http::error::body_limit) status = http::status::payload_too_large;
+      Send(Plain(status, 11, false, std::string("bad request: ") + ec.message()));
+      return;
+    }
+    http::request<http::string_body> request = parser_->release();
+    ++server_->requests;
+    Handle(std::move(request));
+  }
+
+  Response Plain(http::status status, unsigned version, bool keep_alive, const std::string& text) {
+    Response r{status, version};
+    r.set(http::field::content_type, "text/plain; charset=utf-8");
+    r.keep_alive(keep_alive);
+    r.body() = text + "\n";
+    if (static_cast<int>(status) >= 400) ++server_->refused;
+    return r;
+  }
+
+  void Handle(http::request<http::string_body>&& request) {
+    const unsigned version = request.version();
+    const bool keep_alive = request.keep_alive();
+    auto refuse = [&](http::status status, const std::string& why) {
+      server_->Log("view: refused " + std::string(request.method_string()) + " " +
+                   std::string(request.target().substr(0, 200)) + ": " + why);
+      Send(Plain(status, version, false, why));
+    };
+    const std::string host(request[http::field::host]);
+    const int port = server_->port;
+    const std::string& bind = server_->options.host;
+    if (!HostAllowed(host, bind, port)) return refuse(http::status::forbidden, "Host '" + host.substr(0, 100) + "' is not this server");
+    if (request.count(http::field::origin) &&
+        !OriginAllowed(std::string(request[http::field::origin]), bind, port)) {
+      return refuse(http::status::forbidden, "Origin not allowed");
+    }
+    if (request.target().size() > kTargetLimit) return refuse(http::status::uri_too_long, "target too long");
+    const std::string target(request.target());
+    const size_t q = target.find('?');
+    const std::string path = target.substr(0, q);
+    const std::string query = q == std::string::npos ? "" : target.substr(q + 1);
+    // The token: from the query (?token=) or the cookie.
+    std::string given, from_cookie;
+    for (size_t start = 0; start <= query.size();) {
+      size_t end = query.find('&', start);
+      if (end == std::string::npos) end = query.size();
+      const std::string pair = query.substr(start, end - start);
+      if (pair.compare(0, 6, "token=") == 0) given = pair.substr(6);
+      start = end + 1;
+    }
+    // Cookies are shared by every port of a host: one name per server's port.
+    const std::string cookie_name = "candi_token_" + std::to_string(port) + "=";
+    const std::string cookies(request[http::field::cookie]);
+    for (size_t at = cookies.find(cookie_name); at != std::string::npos; at = cookies.find(cookie_name, at + 1)) {
+      if (at == 0 || cookies[at - 1] == ' ' || cookies[at - 1] == ';') {
+        const size_t begin = at + cookie_name.size(), end = cookies.find(';', at);
+        from_cookie = cookies.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+      }
+    }
+    const bool authorised = ConstantTimeEqual(given, server_->token) || ConstantTimeEqual(from_cookie, server_->token);
+    if (request.method() != http::verb::get && request.method() != http::verb::head) {
+      return refuse(http::status::method_not_allowed, "only GET and HEAD");
+    }
+    if (!authorised) {
+      return refuse(http::status::forbidden,
+                    "missing or wrong access token: open the address `candi view` printed (with ?token=...)");
+    }
+    if (path == "/ws") {
+      if (!websocket::is_upgrade(request)) return refuse(http::status::bad_request, "expected a WebSocket upgrade");
+      if (server_->open_pages >= static_cast<uint64_t>(server_->options.max_clients)) {
+        return refuse(http::status::service_unavailable, "too many pages open");
+      }
+      stream_.expires_never();
+      std::make_shared<WsSession>(stream_.release_socket(), server_)->Start(std::move(request));
+      return;
+    }
+    Response r{http::status::ok, version};
+    if (path == "/api/scene") {
+      r.set(http::field::content_type, "application/json");
+      r.body() = server_->scene_json;
+    } else {
+      const WebAsset* asset = FindWebAsset(path == "/" ? "/index.html" : path);
+      if (asset == nullptr) return refuse(http::status::not_found, "not found");
+      r.set(http::field::content_type, asset->content_type);
+      r.body().assign(reinterpret_cast<const char*>(asset->data), asset->size);
+    }
+    if (ConstantTimeEqual(given, server_->token)) {
+      r.set(http::field::set_cookie, cookie_name + server_->token + "; Path=/; HttpOnly; SameSite=Strict");
+    }
+    r.set(http::field::cache_control, "no-store");
+    r.set("X-Content-Type-Options", "nosniff");
+    r.set("Referrer-Policy", "no-referrer");
+    r.set("Content-Security-Policy",
+          "default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws://" + host +
+              "; style-src 'self'; script-src 'self'; frame-ancestors 'none'");
+    r.keep_alive(keep_alive);
+    r.prepare_payload();
+    if (request.method() == http::verb::head) r.body().clear();
+    Send(std::move(r));
+  }
+
+  void Send(Response&& response) {
+    auto shared = std::make_shared<Response>(std::move(response));
+    shared->prepare_payload();
+    http::async_write(stream_, *shared,
+                      [self = shared_from_this(), shared](beast::error_code ec, size_t) {
+                        if (ec || shared->need_eof()) return self->Shutdown();
+                        self->Read();
+                      });
+  }
+
+  void Shutdown() {
+    beast::error_code ignored;
+    stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+    stream_.socket().close(ignored);
+  }
+
+  beast::tcp_stream stream_;
+  Server::Impl* server_;
+  beast::flat_buffer buffer_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+};
+
+}  // namespace
+
+void Server::Impl::Accept() {
+  acceptor.async_accept(net::make_strand(io), [this](beast::error_code ec, tcp::socket socket) {
+    if (!acceptor.is_open()) return;
+    if (!ec) std::make_shared<HttpSession>(std::move(socket), this)->Start();
+    Accept();
+  });
+}
+
+// One step of one page: its picks, then (if its image is not converged and the page has room
+// for a frame) the next batch of ensembles. Returns false when the page had nothing to do.
+bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
+  std::optional<ClientMessage> pick;
+  std::optional<ViewState> restart;
+  uint64_t generation = 0, seq = 0;
+  {
+    std::lock_guard<std::mutex> lock(c->mutex);
+    if (c->closed) return false;
+    const bool moved = c->wanted && c->wanted_generation != c->image_generation;
+    if (!c->picks.empty() && c->last_camera) {
+      pick = c->picks.front();
+      c->picks.pop_front();
+    } else if (c->frames_outstanding >= 2 || (c->frames_outstanding == 1 && !moved)) {
+      // The page has frames to take first. A new camera's frame may wait behind the one being
+      // written (it replaces any other), but a converging image waits for the page.
+      return false;
+    } else if (moved) {
+      restart = c->wanted;
+      generation = c->wanted_generation;
+      seq = c->wanted_seq;
+    } else if (!c->image || c->image->converged()) {
+      return false;
+    }
+  }
+  std::shared_ptr<WsSession> session = c->session.lock();
+  if (!session) return false;
+  if (pick) {
+    render::Camera local = *c->last_camera;
+    local.eye -= archive.manifest().frame.origin;
+    local.target -= archive.manifest().frame.origin;
+    const PickResult r = PickPoint(archive, local, pick->x, pick->y, 3.0);
+    const std::string reply = PickReply(pick->seq, r.hit, r.local + archive.manifest().frame.origin, r.depth);
+    net::post(io, [session, reply] { session->QueueText(reply); });
+    return true;
+  }
+  if (restart) {
+    if (!c->image) c->image = std::make_unique<ProgressiveImage>(archive, renderer, options.threads);
+    if (c->image->ensembles() > 0 && !c->image->converged()) ++images_abandoned;
+    try {
+      c->image->Start(*restart);
+    } catch (const std::exception& e) {  // Camera::Check: the parser has checked it already
+      net::post(io, [session, m = ErrorReply(e.what())] { session->QueueText(m); });
+      c->image_generation = generation;
+      c->image.reset();
+      return true;
+    }
+    c->image_generation = generation;
+    c->image_seq = seq;
+    c->steps = 0;
+    c->last_camera = restart->camera;
+  }
+  ProgressiveImage& image = *c->image;
+  // Ensembles for this step: the first within the first-frame budget, then each step twice the
+  // budget of the last, up to step_ms (fewer when other pages wait).
+  const double per = image.ms_per_ensemble() > 0 ? image.ms_per_ensemble() : options.first_frame_ms;
+  const double budget = std::min(options.step_ms, options.first_frame_ms * std::pow(2.0, c->steps));
+  const int count = std::max(1, static_cast<int>(budget / per));
+  const uint64_t mine = c->image_generation;
+  double ms = 0;
+  try {
+    ms = image.Step(count, [&] { return c->generation.load() != mine; });
+  } catch (const Cancelled&) {
+    ++images_abandoned;
+    return true;
+  } catch (const std::exception& e) {  // a corrupt chunk, out of memory
+    Log(std::string("view: render failed: ") + e.what());
+    net::post(io, [session, m = ErrorReply(std::string("render failed: ") + e.what())] { session->QueueText(m); });
+    c->image.reset();
+    return true;
+  }
+  ++c->steps;
+  double gain = 1;
+  const Image8 pixels = image.Image(&gain);
+  FrameHeader h;
+  h.seq = c->image_seq;
+  h.ensembles = image.ensembles();
+  h.repeat_level = image.repeat_level();
+  h.png = image.converged();
+  h.width = pixels.width();
+  h.height = pixels.height();
+  h.gain = gain;
+  h.render_ms = ms;
+  auto frame = std::make_shared<const std::string>(
+      FrameMessage(h, h.png ? EncodePng(pixels) : EncodeJpeg(pixels, options.jpeg_quality)));
+  {
+    std::lock_guard<std::mutex> lock(c->mutex);
+    ++c->frames_outstanding;
+  }
+  net::post(io, [session, frame] { session->QueueFrame(frame); });
+  return true;
+}
+
+void Server::Impl::RenderLoop() {
+  size_t turn = 0;
+  for (;;) {
+    std::vector<std::shared_ptr<Client>> snapshot;
+    {
+      std::unique_lock<std::mutex> lock(mutex);
+      if (stopping) return;
+      clients.remove_if([](const std::shared_ptr<Client>& c) {
+        std::lock_guard<std::mutex> l(c->mutex);
+        return c->closed;
+      });
+      snapshot.assign(clients.begin(), clients.end());
+    }
+    // Round robin: every page in turn, starting after the one served last.
+    bool worked = false;
+    for (size_t i = 0; i < snapshot.size() && !worked; ++i) {
+      const size_t k = (turn + i) % snapshot.size();
+      if (StepClient(snapshot[k])) {
+        worked = true;
+        turn = k + 1;
+      }
+    }
+    if (!worked) {
+      std::unique_lock<std::mutex> lock(mutex);
+      if (stopping) return;
+      cv.wait_for(lock, std::chrono::milliseconds(200));
+    }
+  }
+}
+
+Server::Server(const ServerOptions& options, const ViewerSource& source, const render::Archive& archive,
+               RangeRenderer renderer)
+    : impl_(std::make_unique<Impl>(options, source, archive, std::move(renderer))) {
+  Impl& s = *impl_;
+  s.token = options.token.empty() ? RandomToken() : options.token;
+  s.scene_json = source.ToJson(archive.manifest());
+  boost::system::error_code ec;
+  const net::ip::address address = net::ip::make_address(options.host == "localhost" ? "127.0.0.1" : options.host, ec);
+  if (ec) throw std::runtime_error("--host '" + options.host + "': not an IP address");
+  if (options.port < 0 || options.port > 65535) throw std::runtime_error("--port " + std::to_string(options.port) + ": not a port");
+  const tcp::endpoint endpoint(address, static_cast<unsigned short>(options.port));
+  s.acceptor.open(endpoint.protocol(), ec);
+  if (!ec) s.acceptor.set_option(net::socket_base::reuse_address(true), ec);
+  if (!ec) s.acceptor.bind(endpoint, ec);
+  if (!ec) s.acceptor.listen(net::socket_base::max_listen_connections, ec);
+  if (ec) {
+    throw std::runtime_error("cannot listen on " + options.host + ":" + std::to_string(options.port) + ": " + ec.message());
+  }
+  s.port = s.acceptor.local_endpoint().port();
+  s.Accept();
+  s.render_thread = std::thread([this] { impl_->RenderLoop(); });
+}
+
+Server::~Server() {
+  Stop();
+  if (impl_->render_thread.joinable()) impl_->render_thread.join();
+}
+
+int Server::port() const { return impl_->port; }
+const std::string& Server::token() const { return impl_->token; }
+
+std::string Server::Url() const {
+  std::string host = impl_->options.host;
+  if (host == "0.0.0.0") host = "127.0.0.1";
+  if (host.find(':') != std::string::npos) host = "[" + host + "]";
+  return "http://" + host + ":" + std::to_string(impl_->port) + "/?token=" + impl_->token;
+}
+
+void Server::Run() { impl_->io.run(); }
+
+void Server::Stop() {
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    impl_->stopping = true;
+    for (auto& c : impl_->clients) c->generation = ~uint64_t{0};
+  }
+  impl_->cv.notify_all();
+  net::post(impl_->io, [this] {
+    beast::error_code ignored;
+    impl_->acceptor.close(ignored);
+    impl_->io.stop();
+  });
+}
+
+ServerStats Server::stats() const {
+  const Impl& s = *impl_;
+  ServerStats out;
+  out.requests = s.requests;
+  out.refused = s.refused;
+  out.pages = s.pages;
+  out.open_pages = s.open_pages;
+  out.frames_sent = s.frames_sent;
+  out.frames_dropped = s.frames_dropped;
+  out.images_abandoned = s.images_abandoned;
+  out.bad_messages = s.bad_messages;
+  return out;
+}
+
+}  // namespace candi::view

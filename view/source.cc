@@ -1,0 +1,199 @@
+#include "view/source.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/check.h"
+#include "core/point_io.h"
+#include "render/archive_pack.h"
+#include "render/view_json.h"
+
+namespace candi::view {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+json Vec(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+json ReadJson(const std::string& path) {
+  try {
+    return json::parse(ReadFileToString(path));
+  } catch (const json::exception& e) {
+    throw InputError(path, "", std::string("not valid JSON: ") + e.what());
+  }
+}
+
+// The scene's "render" block (repeat level, size, background, brightness), when the scene file
+// a build names is still there; anything unreadable keeps the defaults (the viewer's settings
+// are the page's to change).
+void SceneSettings(const json& provenance, ViewerSource* source) {
+  if (!provenance.contains("scene") || !provenance["scene"].is_object()) return;
+  const json& scene = provenance["scene"];
+  if (!scene.contains("path") || !scene["path"].is_string()) return;
+  const std::string path = scene["path"].get<std::string>();
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return;
+  json s;
+  try {
+    s = json::parse(ReadFileToString(path));
+  } catch (const std::exception&) {
+    return;
+  }
+  if (!s.is_object() || !s.contains("render") || !s["render"].is_object()) return;
+  const json& r = s["render"];
+  ViewSettings& v = source->settings;
+  if (r.contains("repeat_level") && r["repeat_level"].is_number_integer()) {
+    v.repeat_level = std::clamp(r["repeat_level"].get<int>(), 1, kMaxRepeatLevel);
+  }
+  if (r.contains("width") && r["width"].is_number_integer() && r.contains("height") && r["height"].is_number_integer()) {
+    source->first_view.width = std::clamp(r["width"].get<int>(), 1, kMaxImageSide);
+    source->first_view.height = std::clamp(r["height"].get<int>(), 1, kMaxImageSide);
+  }
+  if (r.contains("background") && r["background"].is_array() && r["background"].size() == 3) {
+    const json& b = r["background"];
+    if (b[0].is_number_integer() && b[1].is_number_integer() && b[2].is_number_integer()) {
+      v.background = {static_cast<uint8_t>(std::clamp(b[0].get<int>(), 0, 255)),
+                      static_cast<uint8_t>(std::clamp(b[1].get<int>(), 0, 255)),
+                      static_cast<uint8_t>(std::clamp(b[2].get<int>(), 0, 255))};
+    }
+  }
+  if (r.contains("brightness")) {
+    if (r["brightness"] == "none") v.brightness = 1;
+    else if (r["brightness"].is_number() && r["brightness"].get<double>() > 0) v.brightness = r["brightness"].get<double>();
+  }
+  if (s.contains("seed") && s["seed"].is_number_unsigned()) v.seed = s["seed"].get<uint64_t>();
+}
+
+ViewerSource FromBuild(const fs::path& dir, const Orientation& orientation) {
+  ViewerSource source;
+  source.kind = "build";
+  source.archive_dir = (dir / "archive").string();
+  const std::string provenance_path = (dir / "archive.json").string();
+  const json p = ReadJson(provenance_path);
+  if (!p.is_object()) throw InputError(provenance_path, "/", "expected a JSON object");
+  source.title = p.value("name", dir.filename().string());
+  if (p.contains("layers") && p["layers"].is_array()) {
+    for (const json& l : p["layers"]) {
+      if (!l.is_object()) continue;
+      SourceLayer layer;
+      layer.name = l.value("name", "");
+      layer.kind = l.value("kind", "");
+      layer.points = l.value("points", uint64_t{0});
+      layer.opacity = l.value("opacity", 1.0);
+      layer.highlight = l.value("highlight", false);
+      source.layers.push_back(layer);
+    }
+  }
+  const render::Archive archive(source.archive_dir);
+  const render::ArchiveManifest& m = archive.manifest();
+  SceneSettings(p, &source);
+  source.first_view = FirstView(m.bounds.Translated(m.frame.origin), source.first_view.width,
+                                source.first_view.height, orientation);
+  if (p.contains("views") && p["views"].is_array()) {
+    for (const json& v : p["views"]) {
+      if (!v.is_object() || !v.contains("name") || !v["name"].is_string()) continue;
+      const std::string name = v["name"].get<std::string>();
+      const fs::path file = dir / "renders" / (name + ".view.json");
+      std::error_code ec;
+      if (!fs::is_regular_file(file, ec)) continue;
+      source.views.push_back({name, render::ParseView(ReadFileToString(file.string()), file.string()),
+                              v.value("opaque", false)});
+    }
+  }
+  return source;
+}
+
+}  // namespace
+
+render::Camera FirstView(const Box3d& world_bounds, int width, int height, const Orientation& o) {
+  CANDI_CHECK(o.up.norm() > 0) << "up";
+  const Eigen::Vector3d up = o.up.normalized();
+  // candi render's default (from above, oblique) turned from z-up to `up`.
+  const Eigen::Vector3d dir = o.view_dir ? *o.view_dir
+                                         : Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), up) *
+                                               Eigen::Vector3d(0.45, 0.7, -0.55);
+  render::Camera c = render::FrameBox(world_bounds, width, height, dir);
+  if (std::abs(dir.normalized().dot(up)) < 0.999) c.up = up;
+  return c;
+}
+
+std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
+  json layers_json = json::array();
+  for (const SourceLayer& l : layers) {
+    layers_json.push_back({{"name", l.name}, {"kind", l.kind}, {"points", l.points}, {"opacity", l.opacity},
+                           {"highlight", l.highlight}});
+  }
+  json views_json = json::array();
+  for (const SavedView& v : views) {
+    views_json.push_back({{"name", v.name}, {"camera", json::parse(render::ViewToJson(v.camera))}, {"opaque", v.opaque}});
+  }
+  const Box3d world = m.bounds.Translated(m.frame.origin);
+  json s = {{"title", title},
+            {"kind", kind},
+            {"points", m.points},
+            {"chunks", m.chunks.size()},
+            {"origin", Vec(m.frame.origin)},
+            {"bounds", {{"min", Vec(world.min)}, {"max", Vec(world.max)}}},
+            {"layers", layers_json},
+            {"views", views_json},
+            {"first_view", json::parse(render::ViewToJson(first_view))},
+            {"settings",
+             {{"repeat_level", settings.repeat_level},
+              {"point_size", settings.point_size},
+              {"background", {settings.background.r, settings.background.g, settings.background.b}},
+              {"brightness", settings.brightness < 0 ? json("auto") : json(settings.brightness)},
+              {"opaque", settings.opaque},
+              {"seed", settings.seed}}}};
+  return s.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
+ViewerSource OpenViewerSource(const std::string& path, const Orientation& orientation) {
+  std::error_code ec;
+  const fs::path p(path);
+  if (fs::is_regular_file(p / "archive.json", ec) && render::IsArchive((p / "archive").string())) {
+    return FromBuild(p, orientation);
+  }
+  if (!render::IsArchive(path)) {
+    throw InputError(path, "", "neither a build directory (archive.json and archive/) nor a render archive "
+                               "(manifest.json)");
+  }
+  ViewerSource source;
+  source.kind = "archive";
+  source.archive_dir = path;
+  source.title = fs::absolute(p).lexically_normal().filename().string();
+  if (source.title.empty()) source.title = fs::absolute(p).lexically_normal().parent_path().filename().string();
+  const render::Archive archive(path);
+  const render::ArchiveManifest& m = archive.manifest();
+  source.first_view = FirstView(m.bounds.Translated(m.frame.origin), 1024, 768, orientation);
+  return source;
+}
+
+ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,
+                              const Orientation& orientation, const ProgressCallback& progress) {
+  std::string tmpl = (fs::temp_directory_path() / "candi-view-XXXXXX").string();
+  if (mkdtemp(tmpl.data()) == nullptr) throw InputError(tmpl, "", "cannot create a temporary directory");
+  const std::string archive_dir = tmpl + "/archive";
+  try {
+    std::vector<render::PackInput> inputs;
+    for (const std::string& in : files) inputs.push_back(render::PackInputFromFile(in, columns));
+    render::PackArchive(render::PackOptions(), inputs, archive_dir, progress);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(tmpl, ec);
+    throw;
+  }
+  ViewerSource source = OpenViewerSource(archive_dir, orientation);
+  source.kind = "points";
+  source.title = fs::path(files.front()).filename().string() + (files.size() > 1 ? " + " + std::to_string(files.size() - 1) : "");
+  source.temporary_dir = tmpl;
+  return source;
+}
+
+}  // namespace candi::view

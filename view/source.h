@@ -1,0 +1,63 @@
+// What `candi view` shows: a render archive and what is known about it (its layers, the scene's
+// saved views and render settings, a first view).
+//
+// - a build directory (`candi build`): its archive/, the layers and views of archive.json, each
+//   view's camera (renders/<view>.view.json) and the scene's render settings;
+// - a render archive (`candi pack`);
+// - point files: packed on the fly into a temporary archive (removed when the viewer exits).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/progress.h"
+#include "render/archive.h"
+#include "render/camera.h"
+#include "view/protocol.h"
+
+namespace candi::view {
+
+struct SourceLayer {
+  std::string name, kind;
+  uint64_t points = 0;
+  double opacity = 1;
+  bool highlight = false;
+};
+
+struct SavedView {
+  std::string name;
+  render::Camera camera;  // world frame
+  bool opaque = false;
+};
+
+// Where "up" is and which side the first view looks from.
+struct Orientation {
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();     // world up (survey data: z)
+  std::optional<Eigen::Vector3d> view_dir;           // eye -> target; default: from above, oblique
+};
+
+struct ViewerSource {
+  std::string title;
+  std::string archive_dir;
+  std::string kind;                 // "build", "archive" or "points"
+  std::vector<SourceLayer> layers;  // empty when unknown
+  std::vector<SavedView> views;
+  ViewSettings settings;            // the scene's render settings, or the defaults
+  render::Camera first_view;        // world frame
+  std::string temporary_dir;        // points: the packed archive's directory (removed by the caller)
+  // The page's scene description (JSON): title, kind, layers, views, settings, first view,
+  // bounds (world), origin, points.
+  std::string ToJson(const render::ArchiveManifest& manifest) const;
+};
+
+// A camera that frames the archive's bounds (world frame) for `orientation`.
+render::Camera FirstView(const Box3d& world_bounds, int width, int height, const Orientation& orientation);
+
+// Opens a build directory or an archive (InputError naming the file for anything malformed).
+ViewerSource OpenViewerSource(const std::string& path, const Orientation& orientation);
+// Packs point files into a fresh temporary directory.
+ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,
+                              const Orientation& orientation, const ProgressCallback& progress);
+
+}  // namespace candi::view

@@ -1,0 +1,275 @@
+// The viewer's parts below the server: the message parser, the Host/Origin checks, progressive
+// accumulation (batches of ensembles give candi render's image, bit for bit), orthographic
+// archive renders, picking, the first view.
+#include <stdexcept>
+#include <string>
+
+#include "core/png_io.h"
+#include "core/rng.h"
+#include "render/archive_pack.h"
+#include "render/archive_render.h"
+#include "render/spbr.h"
+#include "render/splat_cloud.h"
+#include "render/synthetic_scene.h"
+#include "render/view_json.h"
+#include "tests/util/test_util.h"
+#include "view/frame_encoding.h"
+#include "view/progressive.h"
+#include "view/protocol.h"
+#include "view/server.h"
+#include "view/source.h"
+
+namespace candi::view {
+namespace {
+
+using candi::testing::TempDir;
+
+const char* kView =
+    R"({"type":"view","seq":3,"camera":{"projection":"perspective","width":64,"height":48,"eye":[10,-20,15],)"
+    R"("target":[0,0,0],"up":[0,0,1],"fov_y_deg":40},"settings":{"repeat_level":20,"point_size":1.5,)"
+    R"("background":[1,2,3],"brightness":2.5,"opaque":false,"seed":7}})";
+
+TEST(Protocol, ParsesAViewAndAPick) {
+  const ClientMessage m = ParseClientMessage(kView);
+  EXPECT_EQ(m.type, MessageType::kView);
+  EXPECT_EQ(m.seq, 3u);
+  EXPECT_EQ(m.view.camera.width, 64);
+  EXPECT_EQ(m.view.camera.eye, Eigen::Vector3d(10, -20, 15));
+  EXPECT_EQ(m.view.settings.repeat_level, 20);
+  EXPECT_EQ(m.view.settings.point_size, 1.5);
+  EXPECT_EQ(m.view.settings.background, (Rgb8{1, 2, 3}));
+  EXPECT_EQ(m.view.settings.brightness, 2.5);
+  EXPECT_EQ(m.view.settings.seed, 7u);
+  const ClientMessage p = ParseClientMessage(R"({"type":"pick","seq":4,"x":3.5,"y":-1})");
+  EXPECT_EQ(p.type, MessageType::kPick);
+  EXPECT_EQ(p.x, 3.5);
+  EXPECT_EQ(p.y, -1);
+}
+
+TEST(Protocol, RefusesMalformedMessagesNamingTheField) {
+  auto refused = [](const std::string& text, const std::string& where) {
+    try {
+      ParseClientMessage(text);
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(where), std::string::npos) << e.what() << " for " << text;
+      return;
+    }
+    ADD_FAILURE() << "accepted: " << text;
+  };
+  refused("{", "byte");
+  refused("[]", "expected a JSON object");
+  refused(R"({"type":"hack"})", "/type");
+  refused(R"({"type":"view"})", "/camera");
+  refused(R"({"type":"view","camera":{"eye":[0,0,"x"]}})", "/eye/2");
+  refused(R"({"type":"view","camera":{"eye":[1,2,3],"target":[1,2,3]}})", "/camera");
+  refused(R"({"type":"view","camera":{"width":5000}})", "/camera");
+  refused(R"({"type":"view","camera":{"eye":[1e300,0,0]}})", "/camera");
+  refused(R"({"type":"view","camera":{},"settings":{"repeat_level":0}})", "/settings/repeat_level");
+  refused(R"({"type":"view","camera":{},"settings":{"repeat_level":10001}})", "/settings/repeat_level");
+  refused(R"({"type":"view","camera":{},"settings":{"point_size":1e999}})", "");
+  refused(R"({"type":"view","camera":{},"settings":{"background":[0,0,256]}})", "/settings/background/2");
+  refused(R"({"type":"view","camera":{},"settings":{"brightness":0}})", "/settings/brightness");
+  refused(R"({"type":"view","camera":{},"settings":{"colour":1}})", "/settings/colour");
+  refused(R"({"type":"view","camera":{},"seq":-1})", "/seq");
+  refused(R"({"type":"pick","x":"a"})", "/x");
+  refused(R"({"type":"pick","camera":{}})", "/camera");
+  refused(std::string(kMaxMessageBytes + 1, ' '), "bytes");
+  // Invalid UTF-8 in a key: refused, and the error reply is still valid JSON.
+  try {
+    ParseClientMessage("{\"type\":\"view\",\"camera\":{},\"\xff\":1}");
+    ADD_FAILURE() << "accepted invalid UTF-8";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(ErrorReply(e.what()).find("\"error\""), std::string::npos);
+  }
+}
+
+TEST(Protocol, HostAndOriginMustNameThisServer) {
+  EXPECT_TRUE(HostAllowed("127.0.0.1:8765", "127.0.0.1", 8765));
+  EXPECT_TRUE(HostAllowed("localhost:8765", "127.0.0.1", 8765));
+  EXPECT_TRUE(HostAllowed("LOCALHOST:8765", "127.0.0.1", 8765));
+  EXPECT_TRUE(HostAllowed("[::1]:8765", "127.0.0.1", 8765));
+  EXPECT_FALSE(HostAllowed("127.0.0.1:8766", "127.0.0.1", 8765));
+  EXPECT_FALSE(HostAllowed("127.0.0.1", "127.0.0.1", 8765));
+  EXPECT_FALSE(HostAllowed("attacker.example:8765", "127.0.0.1", 8765));  // DNS rebinding
+  EXPECT_FALSE(HostAllowed("192.168.1.5:8765", "127.0.0.1", 8765));
+  EXPECT_FALSE(HostAllowed("", "127.0.0.1", 8765));
+  EXPECT_FALSE(HostAllowed("127.0.0.1:8765:1", "127.0.0.1", 8765));
+  // Serving the network: address literals, never names.
+  EXPECT_TRUE(HostAllowed("192.168.1.5:8765", "0.0.0.0", 8765));
+  EXPECT_FALSE(HostAllowed("attacker.example:8765", "0.0.0.0", 8765));
+  EXPECT_TRUE(HostAllowed("10.0.0.2:8765", "10.0.0.2", 8765));
+  EXPECT_FALSE(HostAllowed("10.0.0.3:8765", "10.0.0.2", 8765));
+  EXPECT_TRUE(OriginAllowed("http://127.0.0.1:8765", "127.0.0.1", 8765));
+  EXPECT_FALSE(OriginAllowed("http://attacker.example", "127.0.0.1", 8765));
+  EXPECT_FALSE(OriginAllowed("null", "127.0.0.1", 8765));
+  EXPECT_FALSE(OriginAllowed("https://127.0.0.1:8765", "127.0.0.1", 8765));
+}
+
+// An archive of a terraced solid in survey coordinates.
+std::string MakeArchive(const TempDir& dir, uint64_t n, uint64_t chunk_points) {
+  PointCloud cloud = render::TerracedSolid(n, 3);
+  cloud.frame.origin = Eigen::Vector3d(500000, 9100000, 200);
+  render::PackOptions o;
+  o.chunk_points = chunk_points;
+  const std::string path = dir.File("a.archive");
+  render::PackArchive(o, {render::PackInputFromGenerator("solid", n, n, [&](uint64_t, uint64_t) { return cloud; })},
+                      path);
+  return path;
+}
+
+render::Camera WorldView(const render::Archive& archive, render::Projection projection) {
+  const render::ArchiveManifest& m = archive.manifest();
+  render::Camera c = render::FrameBox(m.bounds.Translated(m.frame.origin), 96, 64, Eigen::Vector3d(0.45, 0.7, -0.55),
+                                      projection);
+  return c;
+}
+
+TEST(Progressive, BatchesOfEnsemblesGiveTheWholeRenderBitForBit) {
+  TempDir dir;
+  const render::Archive archive(MakeArchive(dir, 20000, 1024));
+  for (render::Projection projection : {render::Projection::kPerspective, render::Projection::kOrthographic}) {
+    ViewState state;
+    state.camera = WorldView(archive, projection);
+    state.settings.repeat_level = 13;
+    state.settings.seed = 5;
+    state.settings.point_size = 1.5;
+    // The whole render, as candi render draws it.
+    render::ArchiveRenderOptions o;
+    o.repeat_level = 13;
+    o.seed = 5;
+    o.point_size = 1.5;
+    render::Camera local = state.camera;
+    local.eye -= archive.manifest().frame.origin;
+    local.target -= archive.manifest().frame.origin;
+    const render::SpbrResult whole = render::RenderArchive(o, local, archive);
+    const double gain = render::AutoBrightnessGain(whole);
+    const Image8 expected = render::ToImage8(render::AverageImage(whole, state.settings.background, gain));
+
+    ProgressiveImage image(archive, LocalRangeRenderer(archive), 2);
+    image.Start(state);
+    int steps = 0;
+    for (int count : {1, 2, 4, 100}) {
+      image.Step(count);
+      ++steps;
+      if (image.converged()) break;
+    }
+    EXPECT_EQ(steps, 4);
+    ASSERT_TRUE(image.converged());
+    double got_gain = 0;
+    const Image8 got = image.Image(&got_gain);
+    EXPECT_EQ(got_gain, gain);
+    EXPECT_TRUE(got == expected) << "projection " << static_cast<int>(projection);
+    // Something is drawn, and the two halves differ (not a blank image).
+    int covered = 0;
+    for (size_t i = 0; i < got.values().size(); i += 3) covered += got.values()[i] || got.values()[i + 1] || got.values()[i + 2];
+    EXPECT_GT(covered, 96 * 64 / 10);
+    // Restarting drops what was drawn.
+    image.Start(state);
+    EXPECT_EQ(image.ensembles(), 0);
+    EXPECT_FALSE(image.converged());
+    // A cancelled step adds nothing.
+    EXPECT_THROW(image.Step(3, [] { return true; }), Cancelled);
+    EXPECT_EQ(image.ensembles(), 0);
+  }
+}
+
+TEST(Progressive, OrthographicArchiveRenderAgreesWithTheInMemoryRenderer) {
+  TempDir dir;
+  const render::Archive archive(MakeArchive(dir, 20000, 2048));
+  const PointCloud points = archive.ReadAll();
+  render::SplatCloudOptions so;
+  so.repeat_level = 1;
+  so.seed = 1;
+  const render::SplatCloud splats = render::BuildSplatCloud(so, {&points});
+  render::Camera world = WorldView(archive, render::Projection::kOrthographic);
+  render::Camera in_splats = world, in_archive = world;
+  in_splats.eye -= splats.frame.origin, in_splats.target -= splats.frame.origin;
+  in_archive.eye -= archive.manifest().frame.origin, in_archive.target -= archive.manifest().frame.origin;
+  const render::SpbrResult a = render::RenderSpbr(render::SpbrOptions(), in_splats, splats);
+  render::ArchiveRenderOptions o;
+  o.repeat_level = 1;
+  const render::SpbrResult b = render::RenderArchive(o, in_archive, archive);
+  // Opaque (L = 1): the nearest point per pixel. The two renderers shift depths differently, so a
+  // near tie may go either way; coverage must agree exactly and colours almost everywhere.
+  size_t hits_a = 0, hits_b = 0, same = 0, covered = 0;
+  for (size_t p = 0; p < a.sums.sums.size(); p += 4) {
+    hits_a += a.sums.sums[p + 3];
+    hits_b += b.sums.sums[p + 3];
+    if (a.sums.sums[p + 3]) {
+      ++covered;
+      same += a.sums.sums[p] == b.sums.sums[p] && a.sums.sums[p + 1] == b.sums.sums[p + 1];
+    }
+  }
+  EXPECT_EQ(hits_a, hits_b);
+  EXPECT_GT(covered, 500u);
+  EXPECT_GE(same, covered * 95 / 100);
+}
+
+TEST(Progressive, PickFindsTheNearestPointUnderThePixel) {
+  TempDir dir;
+  const render::Archive archive(MakeArchive(dir, 20000, 512));
+  const render::ArchiveManifest& m = archive.manifest();
+  render::Camera local = WorldView(archive, render::Projection::kPerspective);
+  local.eye -= m.frame.origin, local.target -= m.frame.origin;
+  const PointCloud points = archive.ReadAll();
+  const render::Camera::Projector p = local.MakeProjector();
+  // The nearest point of all projecting within 3 px of the image centre, by brute force.
+  const double u = 48, v = 32;
+  double best = 1e300;
+  Eigen::Vector3d truth = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& x : points.positions) {
+    double pu, pv, depth;
+    if (p.Project(x, &pu, &pv, &depth) && (pu - u) * (pu - u) + (pv - v) * (pv - v) <= 9 && depth < best) {
+      best = depth;
+      truth = x;
+    }
+  }
+  ASSERT_LT(best, 1e300) << "the centre shows the solid";
+  const PickResult r = PickPoint(archive, local, u, v, 3.0);
+  ASSERT_TRUE(r.hit);
+  EXPECT_EQ(r.local, truth);
+  EXPECT_DOUBLE_EQ(r.depth, best);
+  // Beside the image: nothing.
+  EXPECT_FALSE(PickPoint(archive, local, -500, -500, 3.0).hit);
+}
+
+TEST(Progressive, FirstViewKeepsUpUpInSurveyAndColmapFrames) {
+  Box3d box;
+  box.Extend(Eigen::Vector3d(-1, -2, -3));
+  box.Extend(Eigen::Vector3d(4, 5, 6));
+  // Survey data (z up): candi render's default view.
+  const render::Camera z = FirstView(box, 320, 240, Orientation());
+  const render::Camera d = render::FrameBox(box, 320, 240, Eigen::Vector3d(0.45, 0.7, -0.55));
+  EXPECT_EQ(z.eye, d.eye);
+  EXPECT_EQ(z.up, Eigen::Vector3d::UnitZ());
+  // COLMAP's frame (y down): a point further along -y is higher in the image.
+  Orientation colmap;
+  colmap.up = Eigen::Vector3d(0, -1, 0);
+  const render::Camera c = FirstView(box, 320, 240, colmap);
+  const render::Camera::Projector p = c.MakeProjector();
+  double u0, v0, u1, v1, depth;
+  ASSERT_TRUE(p.Project(c.target, &u0, &v0, &depth));
+  ASSERT_TRUE(p.Project(c.target + Eigen::Vector3d(0, -1, 0), &u1, &v1, &depth));
+  EXPECT_LT(v1, v0);
+  // And it looks down on the data, as the survey view does: the eye is above the target.
+  EXPECT_GT((c.eye - c.target).dot(colmap.up), 0);
+  EXPECT_GT((z.eye - z.target).dot(Eigen::Vector3d::UnitZ()), 0);
+}
+
+TEST(FrameEncoding, PngIsLosslessAndJpegDecodes) {
+  Image8 image(37, 21, 3);
+  Rng rng(4);
+  for (uint8_t& v : image.values()) v = static_cast<uint8_t>(rng.Uniform(0, 256));
+  const std::string png = EncodePng(image);
+  TempDir dir;
+  candi::testing::WriteBytes(dir.File("a.png"), png);
+  const PngImage back = ReadPng(dir.File("a.png"));
+  ASSERT_EQ(back.image8.width(), 37);
+  EXPECT_TRUE(back.image8 == image);
+  const std::string jpeg = EncodeJpeg(image, 85);
+  EXPECT_EQ(static_cast<unsigned char>(jpeg[0]), 0xff);
+  EXPECT_EQ(static_cast<unsigned char>(jpeg[1]), 0xd8);
+}
+
+}  // namespace
+}  // namespace candi::view
