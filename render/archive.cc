@@ -14,6 +14,7 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
+#include "core/rng.h"
 
 namespace candi::render {
 
@@ -162,8 +163,13 @@ std::string ArchiveManifest::ToJson() const {
   j["bounds_max"] = Vec(bounds.max);
   j["points"] = points;
   j["chunk_points"] = chunk_points;
+  j["shuffle_seed"] = shuffle_seed;
   j["encoding"] = "uint64 LE per point: bits 0-23 colour 0xRRGGBB, then x, y, z with bits[] bits each, "
-                  "x = min + q * step; points in Morton order; hash = xxHash64 seed 0";
+                  "x = min + q * step; chunks of one layer each, in Morton order per layer; points in a "
+                  "seeded random order within a chunk; hash = xxHash64 seed 0";
+  Json l = Json::array();
+  for (const ArchiveLayer& layer : layers) l.push_back({{"name", layer.name}, {"points", layer.points}});
+  j["layers"] = l;
   Json s = Json::array();
   for (const ArchiveSource& src : sources) {
     s.push_back({{"path", src.path}, {"bytes", src.bytes}, {"hash", Hex(src.hash)}, {"points", src.points}});
@@ -178,6 +184,7 @@ std::string ArchiveManifest::ToJson() const {
                  {"offset", ch.offset},
                  {"count", ch.count},
                  {"first", ch.first},
+                 {"layer", ch.layer},
                  {"min", Vec(ch.quantizer.box.min)},
                  {"max", Vec(ch.quantizer.box.max)},
                  {"bits", {ch.quantizer.bits[0], ch.quantizer.bits[1], ch.quantizer.bits[2]}},
@@ -200,6 +207,11 @@ ArchiveManifest ArchiveManifest::FromJson(const std::string& text, const std::st
     throw InputError(path, "format", "not a candi render archive manifest");
   }
   m.version = Get<int>(j, "version", path, "manifest");
+  if (m.version == 1) {
+    throw InputError(path, "version", "archive version 1 (made before candi view: ensembles drawn by hash, no "
+                                      "layers); this candi reads version " + std::to_string(kArchiveVersion) +
+                                      ": pack the point files again with candi pack");
+  }
   if (m.version != kArchiveVersion) {
     throw InputError(path, "version", "archive version " + std::to_string(m.version) + "; this candi reads version " +
                                           std::to_string(kArchiveVersion));
@@ -209,6 +221,15 @@ ArchiveManifest ArchiveManifest::FromJson(const std::string& text, const std::st
   m.bounds.max = GetVec(j, "bounds_max", path, "manifest");
   m.points = Get<uint64_t>(j, "points", path, "manifest");
   m.chunk_points = Get<uint64_t>(j, "chunk_points", path, "manifest");
+  m.shuffle_seed = Get<uint64_t>(j, "shuffle_seed", path, "manifest");
+  for (const Json& l : Get<Json>(j, "layers", path, "manifest")) {
+    ArchiveLayer layer;
+    layer.name = Get<std::string>(l, "name", path, "layers");
+    layer.points = Get<uint64_t>(l, "points", path, "layers");
+    m.layers.push_back(layer);
+  }
+  if (m.layers.empty()) throw InputError(path, "layers", "an archive has at least one layer");
+  std::vector<uint64_t> layer_points(m.layers.size(), 0);
   for (const Json& s : Get<Json>(j, "sources", path, "manifest")) {
     ArchiveSource src;
     src.path = Get<std::string>(s, "path", path, "sources");
@@ -237,6 +258,10 @@ ArchiveManifest ArchiveManifest::FromJson(const std::string& text, const std::st
     ch.offset = Get<uint64_t>(c, "offset", path, where);
     ch.count = Get<uint64_t>(c, "count", path, where);
     ch.first = Get<uint64_t>(c, "first", path, where);
+    ch.layer = Get<int>(c, "layer", path, where);
+    if (ch.layer < 0 || static_cast<size_t>(ch.layer) >= m.layers.size()) {
+      throw InputError(path, where + ".layer", "layer index " + std::to_string(ch.layer) + " out of range");
+    }
     ch.quantizer.box.min = GetVec(c, "min", path, where);
     ch.quantizer.box.max = GetVec(c, "max", path, where);
     const Json& bits_json = Get<Json>(c, "bits", path, where);
@@ -268,13 +293,45 @@ ArchiveManifest ArchiveManifest::FromJson(const std::string& text, const std::st
       throw InputError(path, where, "count/first/offset inconsistent with the file sizes and the chunks before");
     }
     next += ch.count;
+    layer_points[ch.layer] += ch.count;
     m.chunks.push_back(ch);
+  }
+  for (size_t l = 0; l < m.layers.size(); ++l) {
+    if (layer_points[l] != m.layers[l].points) {
+      throw InputError(path, "layers[" + std::to_string(l) + "].points",
+                       "the chunks of layer '" + m.layers[l].name + "' hold " + std::to_string(layer_points[l]) +
+                           " points, the manifest says " + std::to_string(m.layers[l].points));
+    }
   }
   if (next != m.points) {
     throw InputError(path, "points", "the chunks hold " + std::to_string(next) + " points, the manifest says " +
                                          std::to_string(m.points));
   }
   return m;
+}
+
+void EnsembleSlices(uint64_t n, uint64_t chunk_first, int L, uint64_t seed, int ensemble, double fraction,
+                    std::vector<PointRun>* runs) {
+  if (!(fraction > 0) || n == 0) return;
+  const uint64_t r = HashIndex(seed, chunk_first, /*stream=*/0x5EED511CE) % static_cast<uint64_t>(L);
+  // floor(s n / L) without overflow: n < 2^40 points, L <= 2^17.
+  auto bound = [&](uint64_t s) {
+    return static_cast<uint64_t>((static_cast<unsigned __int128>(s) * n) / static_cast<unsigned>(L));
+  };
+  for (int j = 0; j < static_cast<int>(std::ceil(fraction)) && j < L; ++j) {
+    const uint64_t s = (static_cast<uint64_t>(ensemble) + r + static_cast<uint64_t>(j)) % static_cast<uint64_t>(L);
+    const uint64_t begin = bound(s), end = bound(s + 1);
+    const double share = std::min(1.0, fraction - j);
+    uint64_t take = end - begin;
+    if (share < 1.0) {
+      // share x of the slice, rounded stochastically (seeded by the slice): unbiased even when
+      // slices hold a point or two (small chunks, large L).
+      const double x = share * static_cast<double>(end - begin);
+      const double u = static_cast<double>(HashIndex(seed, chunk_first * 131 + s, 0xF4AC7) >> 11) * 0x1.0p-53;
+      take = static_cast<uint64_t>(std::floor(x)) + ((x - std::floor(x)) > u ? 1 : 0);
+    }
+    if (take > 0) runs->push_back({begin, begin + take});
+  }
 }
 
 bool IsArchive(const std::string& path) {
@@ -292,6 +349,8 @@ Archive::Archive(const std::string& directory) : directory_(directory) {
     throw InputError(directory, "", "not a directory (a render archive is a directory with manifest.json)");
   }
   manifest_ = ArchiveManifest::FromJson(ReadFileToString(manifest_path), manifest_path);
+  verified_ = std::make_unique<std::atomic<uint8_t>[]>(manifest_.chunks.size());
+  for (size_t k = 0; k < manifest_.chunks.size(); ++k) verified_[k].store(0);
   maps_.resize(manifest_.files.size());
   for (size_t f = 0; f < manifest_.files.size(); ++f) {
     const std::string path = directory + "/" + manifest_.files[f].name;
@@ -329,8 +388,9 @@ const uint64_t* Archive::ChunkWords(size_t chunk, bool verify) const {
   CANDI_CHECK_LT(chunk, manifest_.chunks.size());
   const ArchiveChunk& c = manifest_.chunks[chunk];
   const uint8_t* base = static_cast<const uint8_t*>(maps_[c.file].data) + c.offset;
-  if (verify) {
+  if (verify && !verified_[chunk].load(std::memory_order_acquire)) {
     const uint64_t h = ArchiveHash(base, 8 * c.count);
+    if (h == c.hash) verified_[chunk].store(1, std::memory_order_release);
     if (h != c.hash) {
       throw InputError(directory_ + "/" + manifest_.files[c.file].name, "byte " + std::to_string(c.offset),
                        "chunk " + std::to_string(chunk) + " (" + std::to_string(c.count) +

@@ -13,8 +13,19 @@
 // Error bound per axis: |x - dequantized x| <= step / 2 = extent / (2^b - 1) / 2, plus the double
 // rounding of min + q * step (a few ulps of the coordinates, ~1e-16 relative), tested in
 // archive_test.cc. A chunk of 65536 points spanning 1 m gets 13-14 bits per axis: 0.06 mm.
-// Point k of the archive (its position in the Morton order, over all chunks) is its index for
-// the ensemble draw, so ensembles follow from (index, seed) as in SplatCloud.
+// Version 2: chunks belong to one layer each (an input file, or the layer a build names): the
+// points of each layer are Morton-sorted and chunked on their own. Within a chunk the points are
+// in a seeded random order (a Fisher-Yates shuffle seeded by the pack seed and the chunk's
+// index), so any run of them is a uniform sample of the chunk. SPBR ensemble e of a chunk of n
+// points at repeat level L is its slice s = (e + r) mod L, points [floor(s n / L),
+// floor((s + 1) n / L)), where r = HashIndex(render seed, chunk's first index) mod L (EnsembleSlices):
+// every point falls in exactly one ensemble, a preview of k ensembles reads k/L of each chunk,
+// and the seed still varies the draw. A layer drawn at a fraction f of its points (opacity: the
+// point-number law, alpha' = 1 - (1 - alpha)^f) takes the first f of each slice, and for f > 1
+// also of the next slices (each point then in up to ceil(f) ensembles, as multiplicities are).
+// Point k of the archive (its position over all chunks) is its index for the stochastic
+// rounding of point sizes above one pixel. Version 1 archives (hash-drawn ensembles, no layers)
+// are refused: repack them.
 // Integrity: each data file's size and each chunk's 64-bit hash are in the manifest; a missing
 // or short file is an InputError at open, a chunk whose bytes do not match its hash an
 // InputError when it is read (with verification on). Multiplicities (opacity control) are not
@@ -22,6 +33,7 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -34,7 +46,7 @@
 
 namespace candi::render {
 
-inline constexpr int kArchiveVersion = 1;
+inline constexpr int kArchiveVersion = 2;
 inline constexpr int kArchivePositionBits = 40;
 inline constexpr int kArchiveMaxAxisBits = 24;
 inline constexpr const char* kArchiveManifest = "manifest.json";
@@ -84,7 +96,22 @@ struct ArchiveChunk {
   uint64_t first = 0;      // archive index of the first point
   ChunkQuantizer quantizer;
   uint64_t hash = 0;       // ArchiveHash of the chunk's 8 * count bytes
+  int layer = 0;           // index into ArchiveManifest::layers
 };
+
+struct ArchiveLayer {
+  std::string name;
+  uint64_t points = 0;
+};
+
+// The runs of a chunk's points that ensemble `ensemble` draws (see the top of this file): at
+// fraction 1 one slice; at fraction f, ceil(f) runs, the first min(1, f - j) of slice s + j.
+// Appends [begin, end) pairs (chunk-relative) with begin < end to `runs`.
+struct PointRun {
+  uint64_t begin = 0, end = 0;
+};
+void EnsembleSlices(uint64_t count, uint64_t chunk_first, int repeat_level, uint64_t seed, int ensemble,
+                    double fraction, std::vector<PointRun>* runs);
 
 struct ArchiveSource {
   std::string path;
@@ -104,6 +131,8 @@ struct ArchiveManifest {
   Box3d bounds;            // local frame, of the (original) points
   uint64_t points = 0;
   uint64_t chunk_points = 0;  // the largest chunk allowed when packing
+  uint64_t shuffle_seed = 1;  // the seed of the points' order within each chunk
+  std::vector<ArchiveLayer> layers;
   std::vector<ArchiveSource> sources;
   std::vector<ArchiveFile> files;
   std::vector<ArchiveChunk> chunks;
@@ -128,7 +157,8 @@ class Archive {
 
   const std::string& directory() const { return directory_; }
   const ArchiveManifest& manifest() const { return manifest_; }
-  // The chunk's words (count of them), mapped. With `verify`, hashes them first and throws
+  // The chunk's words (count of them), mapped. With `verify`, hashes them first (the first time
+  // this object reads the chunk; a chunk that matched once is not hashed again) and throws
   // InputError naming the data file, the chunk and its offset when they do not match.
   const uint64_t* ChunkWords(size_t chunk, bool verify) const;
   // Lets the kernel drop the chunks' mapped pages (bounded resident memory while streaming).
@@ -149,6 +179,7 @@ class Archive {
     size_t bytes = 0;
   };
   std::vector<Mapping> maps_;
+  std::unique_ptr<std::atomic<uint8_t>[]> verified_;  // per chunk: its hash matched
 };
 
 }  // namespace candi::render

@@ -18,6 +18,7 @@
 #include "core/interrupt.h"
 #include "core/binary_file.h"
 #include "core/check.h"
+#include "core/rng.h"
 #include "core/parallel.h"
 #include "render/morton_sort.h"
 #include "render/pack_input.h"
@@ -54,6 +55,7 @@ PackInput PackInputFromFile(const std::string& path, const std::string& columns)
   PackInput in;
   in.name = path;
   in.path = path;
+  in.layer = fs::path(path).stem().string();
   in.open = [path, columns] {
     PointReadOptions read;
     read.columns = columns;
@@ -110,6 +112,7 @@ PackInput PackInputFromGenerator(const std::string& name, uint64_t total, uint64
   CANDI_CHECK(piece > 0) << "PackInputFromGenerator: piece 0";
   PackInput in;
   in.name = name;
+  in.layer = name;
   in.open = [=] { return std::unique_ptr<PointReader>(new GeneratedReader(name, total, piece, make)); };
   return in;
 }
@@ -249,6 +252,9 @@ class Packer {
     }
   }
 
+  // The layer the chunks written next belong to.
+  void SetLayer(int layer) { layer_ = layer; }
+
   // Closes the last data file; returns the manifest's chunks and files.
   void Finish(ArchiveManifest* m) {
     CloseFile();
@@ -301,10 +307,18 @@ class Packer {
     const size_t n = ranges_.size();
     std::vector<ArchiveChunk> made(n);
     words_.resize(sorted_.size());
+    const uint64_t base = chunks_.size();
     ParallelFor(size_t{0}, n, [&](size_t k) {
       const auto [a, b] = ranges_[k];
       const Box3d box = ChunkBox(&sorted_[a], b - a, frame_);
+      // A seeded random order within the chunk (Fisher-Yates): any run is a uniform sample.
+      Rng rng(HashIndex(o_.seed, base + k, /*stream=*/0x5A0FF1E));
+      for (size_t i = b - a; i > 1; --i) {
+        const size_t j = static_cast<size_t>(rng.Below(i));
+        std::swap(sorted_[a + i - 1], sorted_[a + j]);
+      }
       ArchiveChunk& c = made[k];
+      c.layer = layer_;
       c.quantizer = ChunkQuantizer::ForBox(box);
       c.count = b - a;
       Encode(c.quantizer, frame_, &sorted_[a], b - a, &words_[a]);
@@ -353,7 +367,7 @@ class Packer {
   std::vector<ArchiveFile> files_;
   std::unique_ptr<AtomicFile> file_;
   uint64_t written_ = 0, spilled_ = 0;
-  int spill_id_ = 0;
+  int spill_id_ = 0, layer_ = 0;
   double max_error_[3] = {0, 0, 0};
 };
 
@@ -392,6 +406,19 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   PackSummary summary;
   ArchiveManifest manifest;
   manifest.chunk_points = options.chunk_points;
+  manifest.shuffle_seed = options.seed;
+  // The layers, in the order their first input comes; the inputs of each.
+  std::vector<std::vector<size_t>> layer_inputs;
+  for (size_t k = 0; k < inputs.size(); ++k) {
+    const std::string name = inputs[k].layer.empty() ? inputs[k].name : inputs[k].layer;
+    size_t l = 0;
+    while (l < manifest.layers.size() && manifest.layers[l].name != name) ++l;
+    if (l == manifest.layers.size()) {
+      manifest.layers.push_back({name, 0});
+      layer_inputs.emplace_back();
+    }
+    layer_inputs[l].push_back(k);
+  }
 
   // The input files' hashes for the manifest. Files of records (binary PLY) are hashed by pass
   // 1 from the bytes it reads; the others on another thread while the packer goes on (the
@@ -519,14 +546,22 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
     if (!std::is_same_v<P, WidePoint>) frame.shift = origin - manifest.frame.origin;
     frame.las = las_decoder;
     Packer<P> packer(options, temp, grid, frame, total, progress);
-    InputBatches<P> batches(inputs, manifest.frame, options.default_color, origin, las_decoder, options.direct_reads);
-    if (total <= options.memory_points) {
-      UninitVector<P> all, batch;
-      all.reserve(total);
-      while (batches(&batch)) all.insert(all.end(), batch.begin(), batch.end());
-      packer.AddCell(all.data(), all.size(), 0);
-    } else {
-      packer.Spill([&batches](UninitVector<P>* out) { return batches(out); }, total, 0);
+    for (size_t l = 0; l < layer_inputs.size(); ++l) {
+      std::vector<PackInput> group;
+      uint64_t group_total = 0;
+      for (size_t k : layer_inputs[l]) group.push_back(inputs[k]), group_total += counts[k];
+      manifest.layers[l].points = group_total;
+      if (group_total == 0) continue;
+      packer.SetLayer(static_cast<int>(l));
+      InputBatches<P> batches(group, manifest.frame, options.default_color, origin, las_decoder, options.direct_reads);
+      if (group_total <= options.memory_points) {
+        UninitVector<P> all, batch;
+        all.reserve(group_total);
+        while (batches(&batch)) all.insert(all.end(), batch.begin(), batch.end());
+        packer.AddCell(all.data(), all.size(), 0);
+      } else {
+        packer.Spill([&batches](UninitVector<P>* out) { return batches(out); }, group_total, 0);
+      }
     }
     packer.Finish(&manifest);
     summary.spilled_points = packer.spilled();

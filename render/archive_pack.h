@@ -13,9 +13,11 @@
 // scale and offset; else 28), then each cell, in
 // Morton order, is sorted in memory (a cell still too large is bucketed again by the next bits),
 // so memory stays ~ 100 bytes x memory_points (400 MB by default) whatever the input size.
+// Each layer (PackInput::layer) is sorted and chunked on its own, so a chunk holds one layer.
 // Sorted points are cut into chunks of consecutive points sharing a Morton prefix
 // (<= chunk_points each), quantized and written to data files of ~file_bytes. The output
-// directory appears complete or not at all (built beside it, then renamed; an existing archive
+// directory appears complete or not at all. Within a chunk the points are then shuffled
+// (seeded by options.seed and the chunk's index; render/archive.h). The output (built beside it, then renamed; an existing archive
 // there is replaced, anything else refused).
 #pragma once
 
@@ -36,6 +38,7 @@ struct PackOptions {
   uint64_t memory_points = uint64_t{4} << 20;  // points sorted in memory at once, >= chunk_points
   uint64_t file_bytes = uint64_t{1} << 30;     // data files are cut at chunk ends past this size
   Rgb8 default_color{200, 200, 200};           // for inputs without colours
+  uint64_t seed = 1;                           // the points' random order within each chunk
   int threads = 0;                             // 0: as TBB allows
   // Sort 28-byte double records even when every point is a float in one frame (16-byte ones
   // then; the same archive either way). For tests and benchmarks.
@@ -52,6 +55,9 @@ struct PackOptions {
 struct PackInput {
   std::string name;
   std::string path;
+  // The archive layer the points go to; inputs naming the same layer are packed together.
+  // PackInputFromFile: the file's stem; PackInputFromGenerator: the name.
+  std::string layer;
   std::function<std::unique_ptr<PointReader>()> open;
 };
 // `columns`: the XYZ/PTS column spec (core/point_io.h), "" for the default.

@@ -31,6 +31,11 @@ void ArchiveRenderOptions::Check() const {
     throw std::invalid_argument("ArchiveRenderOptions::threads = " + std::to_string(threads) +
                                 "; must be in [0, 256]");
   }
+  for (double f : layer_fraction) {
+    if (!(f >= 0 && f <= 16)) {
+      throw std::invalid_argument("ArchiveRenderOptions::layer_fraction " + std::to_string(f) + ": must be in [0, 16]");
+    }
+  }
   const int end = ensemble_end == 0 ? repeat_level : ensemble_end;
   if (ensemble_begin < 0 || end > repeat_level || ensemble_begin > end) {
     throw std::invalid_argument("ArchiveRenderOptions: ensembles [" + std::to_string(ensemble_begin) + ", " +
@@ -114,7 +119,12 @@ std::vector<size_t> VisibleChunks(const ArchiveRenderOptions& options, const Cam
   const double margin = std::ceil(options.point_size) + 2.0;
   std::vector<size_t> visible;
   *points = 0;
+  if (!options.layer_fraction.empty() && options.layer_fraction.size() != m.layers.size()) {
+    throw std::invalid_argument("layer_fraction: " + std::to_string(options.layer_fraction.size()) + " values for " +
+                                std::to_string(m.layers.size()) + " layers of " + archive.directory());
+  }
   for (size_t k = 0; k < m.chunks.size(); ++k) {
+    if (!options.layer_fraction.empty() && options.layer_fraction[m.chunks[k].layer] == 0) continue;  // hidden
     if (!BoxMayBeVisible(projector, camera, m.chunks[k].quantizer.box, margin)) continue;
     const uint64_t bytes = m.chunks[k].count * kChunkBytesPerPoint;
     if (bytes > options.chunk_budget) {
@@ -148,11 +158,11 @@ std::vector<std::pair<size_t, size_t>> ChunkGroups(const std::vector<size_t>& vi
   return groups;
 }
 
-QuantizedPoints PointsOf(const ArchiveChunk& c, const uint64_t* words) {
+QuantizedPoints PointsOf(const ArchiveChunk& c, const uint64_t* words, const PointRun& run) {
   QuantizedPoints points;
-  points.words = words;
-  points.count = c.count;
-  points.first_index = c.first;
+  points.words = words + run.begin;
+  points.count = run.end - run.begin;
+  points.first_index = c.first + run.begin;
   for (int a = 0; a < 3; ++a) {
     points.min[a] = c.quantizer.box.min[a];
     points.step[a] = c.quantizer.step[a];
@@ -161,22 +171,40 @@ QuantizedPoints PointsOf(const ArchiveChunk& c, const uint64_t* words) {
   return points;
 }
 
+// What one thread draws: ensembles [first, first + count) of the render into its buffers'
+// ensembles [base, base + count).
+struct Share {
+  int first = 0, count = 0, base = 0;
+};
+
 // One thread's share of a group. The threads form `replicas` groups, each drawing every
 // replicas-th chunk into its own copy of the z-buffers; within a replica, `sharers` threads
-// split the ensembles (`selection`: this thread's). Thread t = sharer * replicas + replica; it
+// split the ensembles (`share`: this thread's). Thread t = sharer * replicas + replica; it
 // checks the hashes of the chunks it is the first to read in its replica's turn (a corrupt chunk
 // fails the render whichever thread reads it first). Returns the points drawn.
-uint64_t DrawShare(const Archive& archive, const std::vector<size_t>& visible, size_t g, size_t g_end, int replica,
-                   int replicas, int sharer, int sharers, bool verify, const Kernel& kernel,
-                   const EnsembleSelection& selection, EnsembleBuffers* buffers) {
+uint64_t DrawShare(const ArchiveRenderOptions& o, const Archive& archive, const std::vector<size_t>& visible, size_t g,
+                   size_t g_end, int replica, int replicas, int sharer, int sharers, const Kernel& kernel,
+                   const Share& share, EnsembleBuffers* buffers) {
   uint64_t drawn = 0;
+  std::vector<PointRun> runs;
+  const ArchiveManifest& m = archive.manifest();
   for (size_t j = g; j < g_end; ++j) {
     if (j % replicas != static_cast<size_t>(replica)) continue;
-    const bool check = verify && (j / replicas) % sharers == static_cast<size_t>(sharer);
+    const bool check = o.verify && (j / replicas) % sharers == static_cast<size_t>(sharer);
     const uint64_t* words = archive.ChunkWords(visible[j], check);
-    if (selection.count == 0) continue;  // no ensembles here (a last pass smaller than the threads)
-    drawn += SplatQuantized(kernel.transform, kernel.projection, PointsOf(archive.manifest().chunks[visible[j]], words),
-                            selection, buffers);
+    const ArchiveChunk& c = m.chunks[visible[j]];
+    const double fraction = o.layer_fraction.empty() ? 1.0 : o.layer_fraction[c.layer];
+    for (int e = 0; e < share.count; ++e) {
+      runs.clear();
+      EnsembleSlices(c.count, c.first, o.repeat_level, o.seed, share.first + e, fraction, &runs);
+      EnsembleSelection selection;
+      selection.seed = o.seed;
+      selection.base = share.base + e;
+      selection.point_size = o.point_size;
+      for (const PointRun& run : runs) {
+        drawn += SplatQuantized(kernel.transform, kernel.projection, PointsOf(c, words, run), selection, buffers);
+      }
+    }
   }
   return drawn;
 }
@@ -242,15 +270,9 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
           const int k1 = static_cast<int>(int64_t{K} * (sharer + 1) / sharers);
           EnsembleBuffers* mine = buffers[replica].get();
           if (k1 > k0) mine->Prepare(k0, k1);
-          EnsembleSelection selection;
-          selection.seed = options.seed;
-          selection.repeat_level = L;
-          selection.first = first + k0;
-          selection.count = k1 - k0;
-          selection.base = k0;
-          selection.point_size = options.point_size;
-          copies[t] += DrawShare(archive, visible, g, g_end, replica, replicas, sharer, sharers, options.verify, kernel,
-                                 selection, mine);
+          const Share share{first + k0, k1 - k0, k0};
+          copies[t] += DrawShare(options, archive, visible, g, g_end, replica, replicas, sharer, sharers, kernel, share,
+                                 mine);
         });
         archive.Release(std::vector<size_t>(visible.begin() + g, visible.begin() + g_end));
         for (size_t j = g; j < g_end; ++j) done += m.chunks[visible[j]].count;

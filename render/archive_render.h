@@ -1,12 +1,12 @@
 // Streaming SPBR of a render archive (perspective or orthographic views): memory-mapped chunks pass through the splat kernel, so the
 // renderer holds frame buffers and a bounded batch of chunks, never the cloud.
 //
-// The image equals, bit for bit, SpbrStreamRenderer's (and so any chunking of it) fed the
-// archive's dequantized points (Archive::ReadAll) in archive order, in the archive's frame, at
-// the same seed: a point's ensemble is EnsembleOf(seed, archive index), its position the float
-// of the dequantized double, drawn by the same kernel with the same transform. Quantization moves
-// points by at most the archive's documented bound, so against the original points the image
-// agrees statistically, not bitwise.
+// Ensemble e draws, of every visible chunk, the runs EnsembleSlices gives (render/archive.h): a
+// preview of k ensembles reads k/L of the data. The image is the z-buffer of each ensemble's
+// points, positions the float of the dequantized double, drawn by the same kernel as the other
+// renderers with the same transform; it is the same, bit for bit, for any thread count, memory
+// and chunk budget, any split of the ensembles (MPI, progressive batches): archive_test.cc
+// checks it against a plain reference implementation.
 // Chunks whose box lies wholly outside the view frustum (with a margin of the splat size) are
 // skipped; this never changes the image, since the kernel would drop their points.
 // A subset of the ensembles can be drawn (ensemble_begin/end): the integer sums of disjoint
@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "core/progress.h"
 #include "render/archive.h"
@@ -35,6 +36,10 @@ struct ArchiveRenderOptions {
   int threads = 0;                              // 0: as TBB allows
   int ensemble_begin = 0, ensemble_end = 0;     // ensembles drawn here; end 0 = L
   bool verify = true;                           // check each chunk's hash before drawing it
+  // Per archive layer, the share of its points drawn (render/archive.h: opacity follows the
+  // point-number law, alpha' = 1 - (1 - alpha)^f); 0 hides the layer (its chunks are not read).
+  // Empty: 1 for every layer. Each in [0, 16].
+  std::vector<double> layer_fraction;
   void Check() const;
 };
 

@@ -17,6 +17,7 @@
 #include "render/archive_render.h"
 #include "render/spbr_stream.h"
 #include "render/splat_cloud.h"
+#include "render/splat_kernel.h"
 #include "render/synthetic_scene.h"
 #include "tests/util/test_util.h"
 
@@ -153,12 +154,18 @@ TEST(Archive, RoundTripWithinBoundInMortonChunksInMemoryAndExternalSortAgree) {
   EXPECT_GE(external.spilled_points, 30000u);
   EXPECT_EQ(in_memory.points, 30000u);
   EXPECT_GT(in_memory.files, 1u);
-  // The same Morton order whichever way the points were sorted (chunk cuts may differ: the
-  // external sort never cuts across its cells): the colours (point indices) come in the same order.
+  // The same points whichever way they were sorted (chunk cuts may differ: the external sort
+  // never cuts across its cells, and each chunk is shuffled on its own).
   const PointCloud from_memory = Archive(dir.path() + "/a").ReadAll();
   const PointCloud from_disk = Archive(dir.path() + "/b").ReadAll();
   ASSERT_EQ(from_memory.size(), from_disk.size());
-  for (size_t i = 0; i < from_memory.size(); ++i) ASSERT_EQ(from_memory.colors[i], from_disk.colors[i]) << i;
+  auto indices = [](const PointCloud& c) {
+    std::vector<uint32_t> v;
+    for (const Rgb8& rgb : c.colors) v.push_back(uint32_t{rgb.r} << 16 | uint32_t{rgb.g} << 8 | rgb.b);
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  EXPECT_EQ(indices(from_memory), indices(from_disk));
   // Packing is deterministic: the same inputs and options give the same bytes.
   PackArchive(o, {CloudInput(cloud)}, dir.path() + "/c");
   EXPECT_EQ(ReadBytes(dir.path() + "/b/manifest.json"), ReadBytes(dir.path() + "/c/manifest.json"));
@@ -226,13 +233,14 @@ TEST(Archive, PointsAreInMortonOrderForAnyThreadCount) {
     PackArchive(o, {CloudInput(cloud)}, dir.path() + "/t" + std::to_string(threads));
   }
   EXPECT_EQ(ReadBytes(dir.path() + "/t1/data-00000.bin"), ReadBytes(dir.path() + "/t2/data-00000.bin"));
-  // The points come in Morton order of their original positions on the packer's grid (21 bits
-  // per axis over the bounds); ties keep the input order.
+  // The chunks come in Morton order of their points' original positions on the packer's grid
+  // (21 bits per axis over the bounds): every point of a chunk is at or after every point of the
+  // chunk before. Within a chunk the points are shuffled (not in Morton order).
   const Archive archive(dir.path() + "/t2");
-  const PointCloud all = archive.ReadAll();
-  const Box3d& box = archive.manifest().bounds;
+  const ArchiveManifest& m = archive.manifest();
+  const Box3d& box = m.bounds;
   auto cell = [&](uint64_t i) {
-    const Eigen::Vector3d p = cloud.positions[i] + (cloud.frame.origin - archive.manifest().frame.origin);
+    const Eigen::Vector3d p = cloud.positions[i] + (cloud.frame.origin - m.frame.origin);
     std::array<uint32_t, 3> q;
     for (int a = 0; a < 3; ++a) {
       const double scale = std::ldexp(1.0, 21) / (box.max[a] - box.min[a]);
@@ -240,20 +248,28 @@ TEST(Archive, PointsAreInMortonOrderForAnyThreadCount) {
     }
     return q;
   };
-  auto index = [&](size_t k) {
-    const Rgb8 c = all.colors[k];
-    return uint64_t{c.r} << 16 | uint64_t{c.g} << 8 | c.b;
-  };
-  size_t ties = 0;
-  for (size_t k = 1; k < all.size(); ++k) {
-    const auto a = cell(index(k - 1)), b = cell(index(k));
-    ASSERT_FALSE(MortonLess(b, a)) << "points " << k - 1 << " and " << k << " out of Morton order";
-    if (a == b) {
-      ++ties;
-      ASSERT_LT(index(k - 1), index(k)) << "a tie out of input order at " << k;
+  auto index = [&](const Rgb8& c) { return uint64_t{c.r} << 16 | uint64_t{c.g} << 8 | c.b; };
+  std::array<uint32_t, 3> previous_max{};
+  size_t inversions = 0, pairs = 0;
+  PointCloud chunk;
+  for (size_t k = 0; k < m.chunks.size(); ++k) {
+    archive.ReadChunk(k, &chunk);
+    std::array<uint32_t, 3> lo = cell(index(chunk.colors[0])), hi = lo;
+    for (size_t i = 0; i < chunk.size(); ++i) {
+      const auto c = cell(index(chunk.colors[i]));
+      if (MortonLess(c, lo)) lo = c;
+      if (MortonLess(hi, c)) hi = c;
+      if (i > 0) {
+        ++pairs;
+        inversions += MortonLess(c, cell(index(chunk.colors[i - 1])));
+      }
     }
+    if (k > 0) {
+      ASSERT_FALSE(MortonLess(lo, previous_max)) << "chunk " << k << " before the chunk ahead of it";
+    }
+    previous_max = hi;
   }
-  EXPECT_LT(ties, all.size() / 10);  // the check compares cells, not one cell throughout
+  EXPECT_GT(inversions, pairs / 4) << "the points of a chunk are not shuffled";
 }
 
 TEST(Archive, FloatInputsSortAsCompactRecordsIntoTheSameArchive) {
@@ -440,6 +456,7 @@ TEST(ArchiveManifest, ChunkCountBeyondItsFileIsRefused) {
   chunk.quantizer = ChunkQuantizer::ForBox(Box3d{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()});
   m.chunks = {chunk};
   m.points = chunk.count;
+  m.layers = {{"all", chunk.count}};
   try {
     ArchiveManifest::FromJson(m.ToJson(), "manifest.json");
     FAIL() << "accepted";
@@ -449,6 +466,7 @@ TEST(ArchiveManifest, ChunkCountBeyondItsFileIsRefused) {
   }
   m.chunks[0].count = 1;
   m.points = 1;
+  m.layers[0].points = 1;
   EXPECT_EQ(ArchiveManifest::FromJson(m.ToJson(), "manifest.json").chunks[0].count, 1u);
 }
 
@@ -463,13 +481,14 @@ TEST(ArchiveManifest, IntegersThatDoNotFitAreRefused) {
   chunk.quantizer = ChunkQuantizer::ForBox(Box3d{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()});
   m.chunks = {chunk};
   m.points = 1;
+  m.layers = {{"all", 1}};
   const std::string good = m.ToJson();
   ASSERT_EQ(ArchiveManifest::FromJson(good, "manifest.json").points, 1u);
-  const std::string field = "\"points\": 1";
+  const std::string field = "\n \"points\": 1";  // the top level's (indent 1), not a layer's
   ASSERT_NE(good.find(field), std::string::npos);
   for (const std::string bad : {"23058430092136939530", "1.5", "-1", "1e300"}) {
     std::string text = good;
-    text.replace(text.find(field), field.size(), "\"points\": " + bad);
+    text.replace(text.find(field), field.size(), "\n \"points\": " + bad);
     try {
       ArchiveManifest::FromJson(text, "manifest.json");
       ADD_FAILURE() << bad << " accepted";
@@ -482,20 +501,61 @@ TEST(ArchiveManifest, IntegersThatDoNotFitAreRefused) {
 
 // ---- rendering ------------------------------------------------------------------------------
 
-// The in-memory reference: SpbrStreamRenderer fed every dequantized point in one piece.
-SpbrResult Reference(const Archive& a, const Camera& camera, int L, uint64_t seed, double point_size) {
-  const PointCloud all = a.ReadAll();
-  SpbrStreamOptions o;
-  o.repeat_level = L;
-  o.seed = seed;
-  o.point_size = point_size;
-  SpbrStreamRenderer r(o, camera, a.manifest().frame);
-  for (int pass = 0; pass < r.passes(); ++pass) {
-    r.BeginPass(pass);
-    r.Add(all);
-    r.EndPass();
+// The reference: for each ensemble, every chunk's runs (EnsembleSlices) dequantized, in float,
+// through the plain kernel (SplatPoints) into a whole-image z-buffer; no passes, threads, groups
+// or replicas.
+SpbrResult Reference(const Archive& a, const Camera& camera, int L, uint64_t seed, double point_size,
+                     const std::vector<double>& fractions = {}) {
+  const ArchiveManifest& m = a.manifest();
+  const Camera::Projector p = camera.MakeProjector();
+  KernelTransform t;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) t.a[3 * r + c] = static_cast<float>(p.rotation(r, c));
   }
-  return r.Finish();
+  Eigen::Vector3d b = -(p.rotation * p.eye);
+  b.z() += OrthographicDepthOffset(p, m.bounds);
+  for (int r = 0; r < 3; ++r) t.b[r] = static_cast<float>(b[r]);
+  const KernelProjection kp{static_cast<float>(p.focal), static_cast<float>(p.cx), static_cast<float>(p.cy),
+                            p.perspective ? static_cast<float>(p.near) : -std::numeric_limits<float>::infinity(),
+                            p.perspective, camera.width, camera.height, 0, camera.height};
+  SpbrResult result;
+  result.sums = Accumulator(camera.width, camera.height);
+  result.repeat_level = result.ensembles = L;
+  result.seed = seed;
+  BandBuffer band;
+  band.Reset(camera.width, camera.height);
+  PointCloud chunk;
+  for (int e = 0; e < L; ++e) {
+    for (size_t k = 0; k < m.chunks.size(); ++k) {
+      const ArchiveChunk& c = m.chunks[k];
+      std::vector<PointRun> runs;
+      EnsembleSlices(c.count, c.first, L, seed, e, fractions.empty() ? 1.0 : fractions[c.layer], &runs);
+      if (runs.empty()) continue;
+      a.ReadChunk(k, &chunk);
+      for (const PointRun& run : runs) {
+        std::vector<float> x, y, z;
+        std::vector<uint32_t> colors;
+        for (uint64_t i = run.begin; i < run.end; ++i) {
+          x.push_back(static_cast<float>(chunk.positions[i].x()));
+          y.push_back(static_cast<float>(chunk.positions[i].y()));
+          z.push_back(static_cast<float>(chunk.positions[i].z()));
+          const Rgb8 rgb = chunk.colors[i];
+          colors.push_back(uint32_t{rgb.r} << 16 | uint32_t{rgb.g} << 8 | rgb.b);
+        }
+        if (point_size == 1.0) {
+          SplatPoints(t, kp, x.data(), y.data(), z.data(), colors.data(), x.size(), &band);
+        } else {
+          SplatPointsSized(t, kp, x.data(), y.data(), z.data(), colors.data(), x.size(),
+                           {point_size, seed, c.first + run.begin}, &band);
+        }
+        result.copies += x.size();
+      }
+    }
+    GreyHistogram grey{};
+    band.DrainInto(&result.sums, e == 0 ? &grey : nullptr);
+    if (e == 0) std::copy(grey.begin(), grey.end(), result.first_ensemble_grey.begin());
+  }
+  return result;
 }
 
 class ArchiveRender : public ::testing::Test {
@@ -504,8 +564,11 @@ class ArchiveRender : public ::testing::Test {
     dir_ = new TempDir;
     PackOptions o;
     o.chunk_points = 1024;
-    PackArchive(o, {PackInputFromGenerator("scene", 60000, 20000,
-                                           [](uint64_t k, uint64_t n) { return TerracedSolid(n, 100 + k); })},
+    // Two layers, so that per-layer fractions are covered.
+    PackArchive(o, {PackInputFromGenerator("scene", 40000, 20000,
+                                           [](uint64_t k, uint64_t n) { return TerracedSolid(n, 100 + k); }),
+                    PackInputFromGenerator("more", 20000, 20000,
+                                           [](uint64_t k, uint64_t n) { return TerracedSolid(n, 200 + k); })},
                 dir_->path() + "/arc");
     archive_ = new Archive(dir_->path() + "/arc");
   }
@@ -519,31 +582,106 @@ class ArchiveRender : public ::testing::Test {
 TempDir* ArchiveRender::dir_ = nullptr;
 Archive* ArchiveRender::archive_ = nullptr;
 
-TEST_F(ArchiveRender, EqualsInMemoryRenderOfDequantizedPointsBitForBit) {
-  const Camera camera = ObliqueView(archive_->manifest().bounds, 120, 90);
-  for (double size : {1.0, 2.5}) {
-    const SpbrResult ref = Reference(*archive_, camera, 12, 7, size);
-    ArchiveRenderOptions o;
-    o.repeat_level = 12;
-    o.seed = 7;
-    o.point_size = size;
-    o.threads = 2;
-    const SpbrResult one = RenderArchive(o, camera, *archive_);
-    EXPECT_TRUE(one.sums == ref.sums) << "point size " << size;
-    EXPECT_EQ(one.first_ensemble_grey, ref.first_ensemble_grey);
-    EXPECT_EQ(one.copies, ref.copies);
-    // Small budgets: several passes, one chunk per batch, one thread: same sums.
-    o.memory_budget = 12 * 120 * 90 * 5;
-    o.chunk_budget = 1024 * (kChunkBytesPerPoint + 8);
-    o.threads = 1;
-    ArchiveRenderStats stats;
-    const SpbrResult small = RenderArchive(o, camera, *archive_, nullptr, &stats);
-    EXPECT_EQ(stats.passes, 3);
-    EXPECT_TRUE(small.sums == ref.sums);
-    // A different seed gives a different image (the test can fail).
-    o.seed = 8;
-    EXPECT_FALSE(RenderArchive(o, camera, *archive_).sums == ref.sums);
+TEST_F(ArchiveRender, EqualsAPlainReferenceBitForBit) {
+  ASSERT_EQ(archive_->manifest().layers.size(), 2u);
+  for (Projection projection : {Projection::kPerspective, Projection::kOrthographic}) {
+    Camera camera = ObliqueView(archive_->manifest().bounds, 120, 90);
+    camera.projection = projection;
+    for (double size : {1.0, 2.5}) {
+      for (const std::vector<double>& fractions : {std::vector<double>{}, std::vector<double>{0.37, 2.6}}) {
+        const SpbrResult ref = Reference(*archive_, camera, 12, 7, size, fractions);
+        ArchiveRenderOptions o;
+        o.repeat_level = 12;
+        o.seed = 7;
+        o.point_size = size;
+        o.threads = 2;
+        o.layer_fraction = fractions;
+        const SpbrResult one = RenderArchive(o, camera, *archive_);
+        const std::string what = "size " + std::to_string(size) + ", " + std::to_string(fractions.size()) +
+                                 " fractions, projection " + std::to_string(static_cast<int>(projection));
+        EXPECT_TRUE(one.sums == ref.sums) << what;
+        EXPECT_EQ(one.first_ensemble_grey, ref.first_ensemble_grey) << what;
+        EXPECT_EQ(one.copies, ref.copies) << what;
+        if (fractions.empty()) {
+          EXPECT_EQ(ref.copies, 60000u);  // every point in one ensemble
+        }
+        // Small budgets: several passes, one chunk per batch, one thread: same sums.
+        o.memory_budget = 12 * 120 * 90 * 5;
+        o.chunk_budget = 1024 * (kChunkBytesPerPoint + 8);
+        o.threads = 1;
+        ArchiveRenderStats stats;
+        const SpbrResult small = RenderArchive(o, camera, *archive_, nullptr, &stats);
+        EXPECT_EQ(stats.passes, 3);
+        EXPECT_TRUE(small.sums == ref.sums) << what;
+        // A different seed gives a different image (the test can fail).
+        o.seed = 8;
+        EXPECT_FALSE(RenderArchive(o, camera, *archive_).sums == ref.sums) << what;
+      }
+    }
   }
+}
+
+TEST_F(ArchiveRender, LayerFractionsDrawTheirShareAndZeroReadsNothing) {
+  const Camera camera = ObliqueView(archive_->manifest().bounds, 64, 48);
+  const ArchiveManifest& m = archive_->manifest();
+  ArchiveRenderOptions o;
+  o.repeat_level = 50;
+  o.layer_fraction = {0.5, 0};
+  ArchiveRenderStats stats;
+  const SpbrResult half = RenderArchive(o, camera, *archive_, nullptr, &stats);
+  uint64_t layer0_chunks = 0;
+  for (const ArchiveChunk& c : m.chunks) layer0_chunks += c.layer == 0;
+  EXPECT_LE(stats.chunks_visible, layer0_chunks);  // the hidden layer's chunks are not read
+  // Half of layer 0's 40000 points, to within the stochastic rounding of each slice.
+  EXPECT_NEAR(static_cast<double>(half.copies), 20000.0, 400.0);
+  o.layer_fraction = {3.0, 1.0};
+  EXPECT_EQ(RenderArchive(o, camera, *archive_).copies, 3 * 40000u + 20000u);
+  o.layer_fraction = {1.0};
+  EXPECT_THROW(RenderArchive(o, camera, *archive_), std::invalid_argument);
+  o.layer_fraction = {1.0, -0.5};
+  EXPECT_THROW(RenderArchive(o, camera, *archive_), std::invalid_argument);
+}
+
+TEST(ArchiveSlices, EveryPointInExactlyOneEnsembleAndPrefixesAreFractions) {
+  for (uint64_t n : {1u, 7u, 100u, 65536u}) {
+    for (int L : {1, 3, 100, 1000}) {
+      std::vector<int> hits(n, 0);
+      std::vector<PointRun> runs;
+      for (int e = 0; e < L; ++e) {
+        runs.clear();
+        EnsembleSlices(n, 12345, L, 9, e, 1.0, &runs);
+        ASSERT_LE(runs.size(), 1u);
+        for (const PointRun& r : runs) {
+          for (uint64_t i = r.begin; i < r.end; ++i) ++hits[i];
+        }
+      }
+      for (uint64_t i = 0; i < n; ++i) ASSERT_EQ(hits[i], 1) << "n " << n << " L " << L << " point " << i;
+    }
+  }
+  // The seed rotates which slice an ensemble gets.
+  std::vector<PointRun> a, b;
+  EnsembleSlices(1000, 0, 10, 1, 0, 1.0, &a);
+  EnsembleSlices(1000, 0, 10, 2, 0, 1.0, &b);
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  int differ = 0;
+  for (uint64_t seed = 2; seed < 12; ++seed) {
+    b.clear();
+    EnsembleSlices(1000, 0, 10, seed, 0, 1.0, &b);
+    differ += b[0].begin != a[0].begin;
+  }
+  EXPECT_GE(differ, 5);
+  // Fraction 2.5: each ensemble takes two whole slices and half of a third.
+  a.clear();
+  EnsembleSlices(1000, 0, 10, 1, 3, 2.5, &a);
+  ASSERT_EQ(a.size(), 3u);
+  EXPECT_EQ(a[0].end - a[0].begin, 100u);
+  EXPECT_EQ(a[1].end - a[1].begin, 100u);
+  EXPECT_EQ(a[2].end - a[2].begin, 50u);
+  // Fraction 0: nothing.
+  a.clear();
+  EnsembleSlices(1000, 0, 10, 1, 3, 0.0, &a);
+  EXPECT_TRUE(a.empty());
 }
 
 TEST_F(ArchiveRender, ThreadsPassesAndBudgetsGiveTheSameImage) {

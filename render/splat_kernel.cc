@@ -273,23 +273,6 @@ __attribute__((always_inline)) inline void TestInverted(uint32_t p, uint64_t sto
 
 // The points of a batch whose ensemble (the seeded hash of the archive index, scaled by L) is
 // one of [first, first + K): their positions in the batch and their ensembles - first.
-__attribute__((always_inline)) inline size_t SelectBatch(uint64_t hash_key, uint64_t L, uint32_t first, uint32_t K,
-                                                         uint64_t index0, size_t n, uint32_t* __restrict chosen,
-                                                         uint32_t* __restrict chosen_ensemble) {
-  uint32_t ensemble[kBatch];
-  for (size_t i = 0; i < n; ++i) {  // relative to `first`: those before it wrap to >= K
-    const uint64_t h = Mix64(hash_key ^ (index0 + i));
-    ensemble[i] = static_cast<uint32_t>(((h >> 32) * L) >> 32) - first;
-  }
-  size_t m = 0;
-  for (size_t i = 0; i < n; ++i) {
-    chosen[m] = static_cast<uint32_t>(i);
-    chosen_ensemble[m] = ensemble[i];
-    m += ensemble[i] < K;
-  }
-  return m;
-}
-
 // Positions (ChunkQuantizer::Decode, then float) and colours of the chosen words.
 __attribute__((always_inline)) inline void DecodeBatch(const QuantizedPoints& in, const uint64_t* __restrict words,
                                                        const uint32_t* __restrict chosen, size_t m, float* __restrict x,
@@ -314,46 +297,35 @@ template <bool kPerspective>
 __attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTransform& t, const KernelProjection& p,
                                                                    const QuantizedPoints& in,
                                                                    const EnsembleSelection& sel, EnsembleBuffers* out) {
-  const uint64_t hash_key = HashStreamKey(sel.seed);
   const uint32_t spare = out->spare(), tiles_x = out->tiles_x();
   const SizedShape shape(sel.point_size);
   uint64_t* keys = out->keys(sel.base);
   uint32_t* filled = out->filled(sel.base);
-  size_t* counts = out->counts() + sel.base;
-  const size_t stride = out->stride();
-  uint32_t chosen[kBatch], chosen_ensemble[kBatch], color[kBatch], pixel[kBatch];
+  size_t* count = out->counts() + sel.base;
+  uint32_t chosen[kBatch], color[kBatch], pixel[kBatch];
+  for (uint32_t i = 0; i < kBatch; ++i) chosen[i] = i;
   float x[kBatch], y[kBatch], z[kBatch];
   uint64_t key[kBatch];
-  uint64_t drawn = 0;
   for (uint64_t s = 0; s < in.count; s += kBatch) {
     const size_t n = static_cast<size_t>(std::min<uint64_t>(kBatch, in.count - s));
     const uint64_t index0 = in.first_index + s;
-    const size_t m = SelectBatch(hash_key, static_cast<uint64_t>(sel.repeat_level), static_cast<uint32_t>(sel.first),
-                                 static_cast<uint32_t>(sel.count), index0, n, chosen, chosen_ensemble);
-    DecodeBatch(in, in.words + s, chosen, m, x, y, z, color);
-    drawn += m;
+    DecodeBatch(in, in.words + s, chosen, n, x, y, z, color);
     if (sel.point_size != 1.0) {
-      for (size_t j = 0; j < m; ++j) {
-        const uint32_t k = chosen_ensemble[j];
-        uint64_t* kk = keys + k * stride;
-        uint32_t* ff = filled + k * stride;
-        SplatSizedOne(t, p, x[j], y[j], z[j], color[j], shape, sel.seed, index0 + chosen[j],
+      for (size_t j = 0; j < n; ++j) {
+        SplatSizedOne(t, p, x[j], y[j], z[j], color[j], shape, sel.seed, index0 + j,
                       [&](int px, int py, uint64_t k64) {
                         const uint32_t q = EnsembleBuffers::TiledIndex(px, py, tiles_x);
-                        const uint64_t old = kk[q];
-                        if (old == 0) ff[counts[k]++] = q;
-                        kk[q] = std::max(old, ~k64);
+                        const uint64_t old = keys[q];
+                        if (old == 0) filled[(*count)++] = q;
+                        keys[q] = std::max(old, ~k64);
                       });
       }
       continue;
     }
-    ProjectBatch<kPerspective, true>(t, p, spare, x, y, z, color, m, pixel, key, tiles_x);
-    for (size_t j = 0; j < m; ++j) {
-      const uint32_t k = chosen_ensemble[j];
-      TestInverted(pixel[j], ~key[j], keys + k * stride, filled + k * stride, counts + k);
-    }
+    ProjectBatch<kPerspective, true>(t, p, spare, x, y, z, color, n, pixel, key, tiles_x);
+    for (size_t j = 0; j < n; ++j) TestInverted(pixel[j], ~key[j], keys, filled, count);
   }
-  return drawn;
+  return in.count;
 }
 
 CANDI_TARGET_CLONES_AVX2
@@ -385,8 +357,7 @@ void SplatPointsSized(const KernelTransform& t, const KernelProjection& p, const
 
 uint64_t SplatQuantized(const KernelTransform& t, const KernelProjection& p, const QuantizedPoints& points,
                         const EnsembleSelection& selection, EnsembleBuffers* buffers) {
-  CANDI_CHECK(selection.base >= 0 && selection.count >= 0 &&
-              selection.base + selection.count <= buffers->ensembles());
+  CANDI_CHECK(selection.base >= 0 && selection.base < buffers->ensembles());
   CANDI_CHECK(p.row0 == 0 && p.row1 == buffers->height() && p.width == buffers->width());
   return SplatQuantizedImpl(t, p, points, selection, buffers);
 }

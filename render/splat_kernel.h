@@ -147,18 +147,16 @@ struct QuantizedPoints {
   int bits[3] = {0, 0, 0};
 };
 
-// Which points a call draws: point i belongs to ensemble EnsembleOf(seed, first_index + i, L);
-// those of ensembles [first, first + count) are drawn into buffers' ensemble (e - first + base).
+// Where a call draws: every point into buffers' ensemble `base` (the archive's ensembles are
+// runs of points, render/archive.h EnsembleSlices).
 struct EnsembleSelection {
-  uint64_t seed = 1;
-  int repeat_level = 1;
-  int first = 0, count = 0;
-  int base = 0;              // base + count <= buffers->ensembles()
+  uint64_t seed = 1;         // of the stochastic rounding of point sizes
+  int base = 0;              // < buffers->ensembles()
   double point_size = 1.0;   // as SizedSplat, with the archive index as the point's index
 };
 
-// Decodes, selects, projects and z-tests the points in one pass (perspective or orthographic as
-// `p` says; the whole image, rows [0, height)) and returns how many were drawn (in view or not).
+// Decodes, projects and z-tests the points in one pass (perspective or orthographic as `p`
+// says; the whole image, rows [0, height)) and returns how many were drawn (in view or not).
 // The keys equal SplatPoints' / SplatPointsSized's for the same float positions.
 uint64_t SplatQuantized(const KernelTransform& t, const KernelProjection& p, const QuantizedPoints& points,
                         const EnsembleSelection& selection, EnsembleBuffers* buffers);

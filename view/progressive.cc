@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "core/check.h"
 
@@ -27,6 +28,11 @@ ProgressiveImage::ProgressiveImage(const render::Archive& archive, RangeRenderer
 
 void ProgressiveImage::Start(const ViewState& state) {
   state.camera.Check();
+  const size_t layers = archive_.manifest().layers.size();
+  if (!state.settings.layer_fraction.empty() && state.settings.layer_fraction.size() != layers) {
+    throw std::invalid_argument("/settings/layers: " + std::to_string(state.settings.layer_fraction.size()) +
+                                " values for an archive of " + std::to_string(layers) + " layers");
+  }
   state_ = state;
   started_ = true;
   drawn_ = 0;
@@ -49,6 +55,10 @@ double ProgressiveImage::Step(int count, const std::function<bool()>& cancel) {
   o.threads = threads_;
   o.ensemble_begin = drawn_;
   o.ensemble_end = drawn_ + count;
+  o.layer_fraction = state_.settings.layer_fraction;
+  // Previews read only their slices of each chunk; the step that completes the image checks the
+  // hashes of the chunks it draws (once per chunk: Archive remembers), as candi render does.
+  o.verify = drawn_ + count == L;
   render::Camera local = state_.camera;
   local.eye -= archive_.manifest().frame.origin;
   local.target -= archive_.manifest().frame.origin;

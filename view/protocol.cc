@@ -63,8 +63,11 @@ ViewSettings ParseSettings(const json& j) {
       s.opaque = v.get<bool>();
     } else if (k == "seed") {
       s.seed = Whole(v, where, uint64_t{1} << 53);
+    } else if (k == "layers") {
+      if (!v.is_array() || v.size() > kMaxLayers) Bad(where, "expected an array of at most 1024 numbers");
+      for (size_t i = 0; i < v.size(); ++i) s.layer_fraction.push_back(Number(v[i], where + "/" + std::to_string(i), 0, 16));
     } else {
-      Bad(where, "unknown key (known: repeat_level point_size background brightness opaque seed)");
+      Bad(where, "unknown key (known: repeat_level point_size background brightness opaque seed layers)");
     }
   }
   return s;

@@ -8,7 +8,10 @@
 //                 "background": [r, g, b],     0..255 each
 //                 "brightness": "auto" | "none" | gain (0, 100],
 //                 "opaque": false,             true: L = 1
-//                 "seed": 1}}                  [0, 2^53]
+//                 "seed": 1,                   [0, 2^53]
+//                 "layers": [1, 0.5, 0]}}      per archive layer, the share of its points drawn,
+//                                              [0, 16] (0 hides it; opacity follows the point-number
+//                                              law, alpha' = 1 - (1 - alpha)^f); absent: all 1
 //   {"type": "pick", "seq": 8, "x": 512.5, "y": 300}   the nearest drawn point under a pixel of
 //                                              the last view (fly to a double-clicked point)
 // Server -> page:
@@ -22,6 +25,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/point_cloud.h"
 #include "render/camera.h"
@@ -31,6 +35,7 @@ namespace candi::view {
 inline constexpr size_t kMaxMessageBytes = 16384;
 inline constexpr int kMaxImageSide = 4096;
 inline constexpr int kMaxRepeatLevel = 10000;
+inline constexpr size_t kMaxLayers = 1024;
 
 // What the page sets besides the camera.
 struct ViewSettings {
@@ -40,11 +45,12 @@ struct ViewSettings {
   double brightness = -1;  // -1: auto; otherwise the gain (1: none)
   bool opaque = false;
   uint64_t seed = 1;
+  std::vector<double> layer_fraction;  // per archive layer; empty: all 1
   // L as drawn: 1 when opaque.
   int EffectiveRepeatLevel() const { return opaque ? 1 : repeat_level; }
   bool operator==(const ViewSettings& o) const {
     return repeat_level == o.repeat_level && point_size == o.point_size && background == o.background &&
-           brightness == o.brightness && opaque == o.opaque && seed == o.seed;
+           brightness == o.brightness && opaque == o.opaque && seed == o.seed && layer_fraction == o.layer_fraction;
   }
 };
 

@@ -125,10 +125,17 @@ render::Camera FirstView(const Box3d& world_bounds, int width, int height, const
 }
 
 std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
+  // The archive's layers (what the page can show and hide), with what the build says of each.
   json layers_json = json::array();
-  for (const SourceLayer& l : layers) {
-    layers_json.push_back({{"name", l.name}, {"kind", l.kind}, {"points", l.points}, {"opacity", l.opacity},
-                           {"highlight", l.highlight}});
+  for (const render::ArchiveLayer& a : m.layers) {
+    json l = {{"name", a.name}, {"points", a.points}, {"kind", ""}, {"opacity", 1.0}, {"highlight", false}};
+    for (const SourceLayer& s : layers) {
+      if (s.name != a.name) continue;
+      l["kind"] = s.kind;
+      l["opacity"] = s.opacity;
+      l["highlight"] = s.highlight;
+    }
+    layers_json.push_back(l);
   }
   json views_json = json::array();
   for (const SavedView& v : views) {

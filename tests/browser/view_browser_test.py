@@ -75,9 +75,12 @@ class ViewInBrowser(unittest.TestCase):
         cls.dir = tempfile.mkdtemp(prefix="candi-view-test-")
         ply = os.path.join(cls.dir, "foundation.ply")
         run("foundation", os.path.join(SOURCE, "examples", "borobudur", "foundation.dxf"), "-o", ply,
-            "--count", "200000", "--no-self-intersection")
+            "--count", "200000", "--no-self-intersection", "--split")
+        # One file per foundation layer: an archive of four layers.
+        layers = sorted(f for f in os.listdir(cls.dir) if f.startswith("foundation_") and f.endswith(".ply"))
+        assert len(layers) == 4, layers
         cls.archive = os.path.join(cls.dir, "foundation.archive")
-        run("pack", ply, "-o", cls.archive)
+        run("pack", *[os.path.join(cls.dir, f) for f in layers], "-o", cls.archive)
         cls.viewer = Viewer(cls.archive)
         cls.browser = devtools.Browser(640, 480)
         cls.browser.call("Page.enable")
@@ -94,8 +97,7 @@ class ViewInBrowser(unittest.TestCase):
         # Converged, and for the page's latest camera (no view message still on its way).
         return self.browser.wait_for(
             "(() => { const f = candiViewer.stats.lastFrame; return f && f.converged && "
-            "f.seq === candiViewer.stats.drawnSeq && !document.hidden && "
-            "JSON.stringify(candiViewer.camera()) === candiViewer.lastSentCamera() ? f : null; })()",
+            "f.seq === candiViewer.stats.drawnSeq && f.seq === candiViewer.viewSeq() ? f : null; })()",
             HANG, "convergence")
 
     def test_1_converged_frame_is_candi_render(self):
@@ -148,7 +150,57 @@ class ViewInBrowser(unittest.TestCase):
         frame = self.wait_converged()
         self.assertGreater(frame["seq"], seq)
 
-    def test_3_bad_requests_are_refused_and_the_server_keeps_serving(self):
+    def converged_pixels(self):
+        self.wait_converged()
+        w, h, ch, rgb = devtools.decode_png(
+            base64.b64decode(self.browser.evaluate("candiViewer.pngBase64()", await_promise=True)))
+        return rgb
+
+    def opacity_map(self):
+        """Per pixel, the opacity of what is drawn: from the converged images over black and over
+        white (gain 1), alpha = 1 - (white - black) / 255, whatever the points' colours."""
+        b = self.browser
+        b.evaluate("candiViewer.setSettings({background: [0, 0, 0], brightness: 'none', point_size: 6})")
+        black = self.converged_pixels()
+        b.evaluate("candiViewer.setSettings({background: [255, 255, 255]})")
+        white = self.converged_pixels()
+        b.evaluate("candiViewer.setSettings({point_size: 1})")
+        return [1 - sum(white[3 * p + c] - black[3 * p + c] for c in range(3)) / (3 * 255.0)
+                for p in range(len(black) // 3)]
+
+    def test_3_layer_opacity_slider_follows_the_point_number_law(self):
+        b = self.browser
+        scene_layers = b.evaluate("candiViewer.settings().layers.length")
+        self.assertEqual(scene_layers, 4)
+        # Only the first layer shown: untick the others as a user would.
+        for i in (1, 2, 3):
+            b.evaluate("(() => { const e = document.getElementById('layer-visible-%d'); e.checked = false; "
+                       "e.dispatchEvent(new Event('input')); })()" % i)
+        self.assertEqual(b.evaluate("candiViewer.settings().layers"), [1, 0, 0, 0])
+        full = self.opacity_map()
+        # The slider to half the points.
+        b.evaluate("(() => { const e = document.getElementById('layer-share-0'); e.value = '0.5'; "
+                   "e.dispatchEvent(new Event('input')); })()")
+        self.assertEqual(b.evaluate("candiViewer.settings().layers"), [0.5, 0, 0, 0])
+        half = self.opacity_map()
+        covered = [p for p, a in enumerate(full) if a > 0.02]
+        self.assertGreater(len(covered), 2000, "the layer covers too little of the image to measure")
+        measured = sum(half[p] for p in covered) / len(covered)
+        law = sum(1 - (1 - min(full[p], 1.0)) ** 0.5 for p in covered) / len(covered)
+        before = sum(full[p] for p in covered) / len(covered)
+        print("layer opacity: %.4f at f = 1, %.4f at f = 0.5, the law predicts %.4f (%d pixels)"
+              % (before, measured, law, len(covered)))
+        self.assertGreater(before, 0.3, "too transparent to tell the law from a straight line")
+        self.assertLess(measured, 0.9 * before, "halving the points did not lower the opacity")
+        # The law, not halving: 1 - (1 - a)^0.5 is well above a / 2 at these opacities.
+        self.assertGreater(law - before / 2, 0.03)
+        self.assertAlmostEqual(measured, law, delta=0.02)
+        # Every layer back, at its full share.
+        b.evaluate("document.getElementById('layers-all').click()")
+        b.evaluate("candiViewer.setSettings({background: [0, 0, 0], brightness: 'auto'})")
+        self.assertEqual(b.evaluate("candiViewer.settings().layers"), [1, 1, 1, 1])
+
+    def test_4_bad_requests_are_refused_and_the_server_keeps_serving(self):
         v = self.viewer
         t = v.token
         good = "/api/scene?token=" + t

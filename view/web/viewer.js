@@ -19,8 +19,8 @@
   let camera = null;        // view.json fields
   let settings = null;      // the protocol's settings
   let socket = null;
-  let seq = 0, dirty = false, lastSent = '';
-  const stats = { framesReceived: 0, lastFrame: null, lastPng: null, sentAt: {}, latencies: [], drawnSeq: -1 };
+  let seq = 0, dirty = false, viewSeq = 0;
+  const stats = { framesReceived: 0, lastFrame: null, lastPng: null, sentAt: {}, latencies: [], drawnSeq: -1, drawnFrame: 0 };
 
   // ---- camera -----------------------------------------------------------------------------
   function clone(c) { return JSON.parse(JSON.stringify(c)); }
@@ -115,7 +115,7 @@
       dirty = false;
       seq += 1;
       stats.sentAt[seq] = performance.now();
-      lastSent = JSON.stringify(camera);
+      viewSeq = seq;
       send({ type: 'view', seq, camera, settings });
     }
     requestAnimationFrame(pump);
@@ -141,11 +141,15 @@
     const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, n)));
     const blob = new Blob([new Uint8Array(buffer, 4 + n)], { type: header.format === 'png' ? 'image/png' : 'image/jpeg' });
     stats.framesReceived += 1;
+    const arrival = stats.framesReceived;
     if (stats.sentAt[header.seq] !== undefined && header.ensembles > 0 && !stats.latencies[header.seq]) {
       stats.latencies[header.seq] = performance.now() - stats.sentAt[header.seq];
     }
     createImageBitmap(blob).then((bitmap) => {
-      if (header.seq < stats.drawnSeq) return;  // an older camera's frame arriving late
+      // Decoding finishes out of order (a PNG after the JPEG that followed it): show a frame only
+      // if none that arrived after it is shown.
+      if (arrival < stats.drawnFrame) { bitmap.close(); return; }
+      stats.drawnFrame = arrival;
       stats.drawnSeq = header.seq;
       ctx.drawImage(bitmap, 0, 0);
       bitmap.close();
@@ -272,13 +276,68 @@
     else $('status').textContent = 'the image has not converged yet: wait for ' + settings.repeat_level + ' ensembles';
   });
 
+  // ---- layers: visibility, points share (opacity), focus --------------------------------------
+  const shown = [];  // the share each layer had before it was hidden
+  function buildLayers() {
+    const box = $('layers');
+    box.textContent = '';
+    scene.layers.forEach((l, i) => {
+      shown[i] = settings.layers[i] > 0 ? settings.layers[i] : 1;
+      const div = document.createElement('div');
+      div.className = 'layer';
+      div.innerHTML = '<label><input type="checkbox" class="visible"> <span class="name"></span></label>' +
+        '<div class="meta"></div><label>points ×<input type="range" class="share" min="0.05" max="3" step="0.05">' +
+        '<output class="share-value"></output></label><button class="focus" title="this layer at full share, ' +
+        'the others dimmed">focus</button>';
+      div.querySelector('.name').textContent = l.name;
+      div.querySelector('.meta').textContent = (l.kind ? l.kind + ' · ' : '') + l.points.toLocaleString() + ' points';
+      div.querySelector('.visible').id = 'layer-visible-' + i;
+      div.querySelector('.share').id = 'layer-share-' + i;
+      div.querySelector('.visible').addEventListener('input', (e) => {
+        settings.layers[i] = e.target.checked ? shown[i] : 0;
+        syncLayers();
+        changed();
+      });
+      div.querySelector('.share').addEventListener('input', (e) => {
+        shown[i] = Number(e.target.value);
+        if (settings.layers[i] > 0) settings.layers[i] = shown[i];
+        syncLayers();
+        changed();
+      });
+      div.querySelector('.focus').addEventListener('click', () => {
+        const dim = Math.min(1, Math.max(0, Number($('dim').value) || 0));
+        settings.layers = scene.layers.map((_, k) => (k === i ? 1 : (dim > 0 ? dim : 0)));
+        settings.layers.forEach((f, k) => { if (f > 0) shown[k] = f; });
+        syncLayers();
+        changed();
+      });
+      box.appendChild(div);
+    });
+    syncLayers();
+  }
+  function syncLayers() {
+    scene.layers.forEach((l, i) => {
+      const f = settings.layers[i];
+      $('layer-visible-' + i).checked = f > 0;
+      $('layer-share-' + i).value = f > 0 ? f : shown[i];
+      $('layer-share-' + i).parentElement.querySelector('output').textContent = (f > 0 ? f : shown[i]).toFixed(2);
+    });
+  }
+  $('layers-all').addEventListener('click', () => {
+    settings.layers = scene.layers.map(() => 1);
+    settings.layers.forEach((_, k) => { shown[k] = 1; });
+    syncLayers();
+    changed();
+  });
+
   // For tests and scripts (the DevTools protocol reads these).
   window.candiViewer = {
     stats, viewJson,
-    lastSentCamera: () => (dirty ? '' : lastSent),
+    // The seq of the last view sent, or -1 while a change waits to be sent.
+    viewSeq: () => (dirty ? -1 : viewSeq),
     camera: () => clone(camera),
     settings: () => clone(settings),
-    setSettings: (s) => { Object.assign(settings, s); syncControls(); changed(); },
+    setSettings: (s) => { Object.assign(settings, s); syncControls(); syncLayers(); changed(); },
     setCamera: (c) => { Object.assign(camera, c); changed(); },
     pngBase64: () => new Promise((resolve) => {
       if (!stats.lastPng) return resolve('');
@@ -298,12 +357,8 @@
     $('title').textContent = s.title + ' · ' + s.points.toLocaleString() + ' points';
     settings = clone(s.settings);
     for (const v of s.views) { const o = document.createElement('option'); o.value = v.name; o.textContent = v.name; $('views').appendChild(o); }
-    for (const l of s.layers) {
-      const li = document.createElement('li');
-      li.textContent = l.name + ' (' + l.kind + ', ' + l.points.toLocaleString() + ' points, opacity ' + l.opacity + ')';
-      $('layers').appendChild(li);
-    }
-    if (s.layers.length === 0) $('layers').textContent = 'one layer';
+    if (!settings.layers) settings.layers = s.layers.map(() => 1);
+    buildLayers();
     camera = clone(s.first_view);
     // The first view's own size when the window has it (so the first image is candi render's).
     fitCanvas(true);
