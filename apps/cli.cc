@@ -169,6 +169,23 @@ void AddBenchScale(CLI::App& app, BenchScaleArgs& a, std::function<int()>* run) 
   c->footer("Example: candi bench scale --sizes 1e7");
 }
 
+void AddBenchView(CLI::App& app, BenchViewArgs& a, std::function<int()>* run) {
+  auto* c = app.get_subcommand("bench")->add_subcommand(
+      "view", "The viewer's renderer on generated archives: first-frame latency (p50/p95) and frames/s during "
+              "an orbit, seconds to the converged image, peak memory");
+  c->add_option("--sizes", a.sizes, "Point counts, comma separated (e.g. 1e7,1e8)");
+  c->add_flag("--billion", a.billion, "Also 1e9 points (~8 GB archive on disk)");
+  c->add_option("--work-dir", a.work_dir, "Folder for the generated archive (deleted afterwards)");
+  c->add_option("--size", a.size, "Image size WxH");
+  c->add_option("-L,--repeat-level", a.repeat_level, "Ensembles of the converged image");
+  c->add_option("--threads", a.threads, "Render threads (0: all)")->check(CLI::Range(0, 256));
+  c->add_option("--orbit-frames", a.orbit_frames, "Camera changes in the orbit");
+  c->add_option("--runs", a.runs, "Convergence runs (the median is printed)")->check(CLI::Range(1, 100));
+  c->add_flag("--keep", a.keep, "Keep the generated archive");
+  c->callback([run, &a] { *run = [&a] { return RunBenchView(a); }; });
+  c->footer("Example: candi bench view --sizes 1e7,1e8 --threads 2");
+}
+
 // `candi relief ...`: the buried-relief path (ALGORITHMS.md section 3).
 struct ReliefArgs {
   ReliefSynthArgs synth;
@@ -548,6 +565,8 @@ int RunCli(int argc, char** argv) {
   AddPack(app, pack, &run);
   BenchScaleArgs bench_scale;
   AddBenchScale(app, bench_scale, &run);
+  BenchViewArgs bench_view;
+  AddBenchView(app, bench_view, &run);
   FoundationArgs foundation;
   AddFoundation(app, foundation, &run);
   DenseArgs dense;

@@ -4,13 +4,17 @@
 #include <memory>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
+
 #include "apps/arg_parse.h"
+#include "apps/failure.h"
 #include "apps/commands.h"
 #include "core/interrupt.h"
 #include "core/log.h"
 #include "core/progress.h"
 #include "render/archive.h"
 #include "render/mpi/mpi_session.h"
+#include "render/view_json.h"
 #include "view/server.h"
 #include "view/source.h"
 
@@ -26,12 +30,79 @@ Eigen::Vector3d ParseDirection(const std::string& text, const std::string& what)
   return d;
 }
 
+// Under mpirun: rank 0 serves; for every step it broadcasts the request (camera, ensembles,
+// settings), every rank draws its share of the ensembles, and the sums are added on rank 0
+// exactly as candi render does. A rank's failure reaches rank 0 (the page gets the error); the
+// other ranks go on serving.
+std::string EncodeRequest(const render::ArchiveRenderOptions& o, const render::Camera& local) {
+  const nlohmann::json j = {{"camera", nlohmann::json::parse(render::ViewToJson(local))},
+                            {"repeat_level", o.repeat_level},
+                            {"seed", o.seed},
+                            {"point_size", o.point_size},
+                            {"begin", o.ensemble_begin},
+                            {"end", o.ensemble_end},
+                            {"layers", o.layer_fraction},
+                            {"verify", o.verify}};
+  return j.dump();
+}
+
+render::SpbrResult DrawShare(const render::mpi::Session& session, const render::Archive& archive,
+                             const std::string& request, int threads) {
+  render::SpbrResult result;
+  std::exception_ptr failure;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(request);
+    const render::Camera camera = render::ParseView(j.at("camera").dump(), "request");
+    render::ArchiveRenderOptions o;
+    o.repeat_level = j.at("repeat_level").get<int>();
+    o.seed = j.at("seed").get<uint64_t>();
+    o.point_size = j.at("point_size").get<double>();
+    o.layer_fraction = j.at("layers").get<std::vector<double>>();
+    o.verify = j.at("verify").get<bool>();
+    o.threads = threads;
+    const int begin = j.at("begin").get<int>(), end = j.at("end").get<int>();
+    int b = 0, e = 0;
+    render::mpi::EnsembleShare(end - begin, session.rank(), session.size(), &b, &e);
+    o.ensemble_begin = begin + b;
+    o.ensemble_end = begin + e;
+    result.sums = render::Accumulator(camera.width, camera.height);
+    if (e > b) result = render::RenderArchive(o, camera, archive);
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  const FailureReport mine = failure ? DescribeFailure(failure) : FailureReport{};
+  const auto failures = session.GatherFailures(mine.exit_code, mine.text);
+  if (!failures.empty()) {
+    throw InputError("MPI rank " + std::to_string(failures.front().rank) + " of " + std::to_string(session.size()) +
+                     " failed: " + failures.front().message);
+  }
+  session.ReduceToRoot(&result);
+  return result;
+}
+
+// Ranks other than 0: the archive rank 0 opened, then requests until "stop".
+int ServeRank(const render::mpi::Session& session, int threads) {
+  SetConsoleProgressEnabled(false);
+  std::string dir;
+  session.Broadcast(&dir);
+  const render::Archive archive(dir);
+  for (;;) {
+    std::string request;
+    session.Broadcast(&request);
+    if (request == "stop") return kOk;
+    try {
+      DrawShare(session, archive, request, threads);
+    } catch (const InputError&) {  // reported by rank 0
+    }
+  }
+}
+
 }  // namespace
 
 int RunView(const ViewArgs& args) {
-  if (render::mpi::LaunchedByMpi()) {
-    throw std::invalid_argument("candi view serves from one process; under mpirun use candi render");
-  }
+  std::unique_ptr<render::mpi::Session> session;
+  if (render::mpi::LaunchedByMpi()) session = std::make_unique<render::mpi::Session>(/*serialized=*/true);
+  if (session && session->rank() != 0) return ServeRank(*session, args.threads);
   view::Orientation orientation;
   if (!args.up.empty()) orientation.up = ParseDirection(args.up, "--up");
   if (!args.from.empty()) orientation.view_dir = ParseDirection(args.from, "--from");
@@ -66,6 +137,29 @@ int RunView(const ViewArgs& args) {
   } cleanup{source.temporary_dir, temporary};
 
   const render::Archive archive(source.archive_dir);
+  view::RangeRenderer renderer = view::LocalRangeRenderer(archive);
+  std::string stop = "stop";
+  struct StopRanks {  // however rank 0 leaves, the other ranks stop serving
+    render::mpi::Session* session;
+    std::string* stop;
+    ~StopRanks() {
+      if (session) session->Broadcast(stop);
+    }
+  } stop_ranks{nullptr, &stop};
+  if (session) {
+    std::string dir = std::filesystem::absolute(source.archive_dir).string();
+    session->Broadcast(&dir);
+    stop_ranks.session = session.get();
+    renderer = [&session, &archive, threads = args.threads](const render::ArchiveRenderOptions& o,
+                                                           const render::Camera& camera,
+                                                           const std::function<bool()>&) {
+      std::string request = EncodeRequest(o, camera);
+      session->Broadcast(&request);
+      return DrawShare(*session, archive, request, threads);
+    };
+    LogInfo("view: " + std::to_string(session->size()) + " MPI ranks share every image's ensembles (the archive must "
+            "be at the same path on every rank's machine)");
+  }
   view::ServerOptions options;
   options.host = args.host;
   options.threads = args.threads;
@@ -80,7 +174,7 @@ int RunView(const ViewArgs& args) {
   for (int i = 0; i < tries && !server; ++i) {
     options.port = args.port == 0 ? 0 : args.port + i;
     try {
-      server = std::make_unique<view::Server>(options, source, archive, view::LocalRangeRenderer(archive));
+      server = std::make_unique<view::Server>(options, source, archive, renderer);
     } catch (const std::runtime_error& e) {
       if (i + 1 == tries) throw InputError(e.what());
     }

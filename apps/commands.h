@@ -94,6 +94,20 @@ struct ViewArgs {
 };
 int RunView(const ViewArgs& args);
 
+// candi bench view (cmd_bench_view.cc): the viewer's frame latency, frame rate and convergence.
+struct BenchViewArgs {
+  std::string sizes = "1e7";
+  bool billion = false;
+  std::string work_dir = "candi-bench-view";
+  std::string size = "1024x768";
+  int repeat_level = 100;
+  int threads = 0;
+  int orbit_frames = 60;
+  int runs = 3;
+  bool keep = false;
+};
+int RunBenchView(const BenchViewArgs& args);
+
 struct BenchArgs {
   std::string what = "render";        // render
   unsigned long long points = 1000000;

@@ -17,7 +17,7 @@ seconds=${FUZZ_SECONDS:-60}
 max_len=${FUZZ_MAX_LEN:-65536}
 jobs=${FUZZ_JOBS:-2}
 runs=${FUZZ_RUNS:--1}
-all_targets=(ply las xyz dxf colmap_bin colmap_text colmap_array scene archive)
+all_targets=(ply las xyz dxf colmap_bin colmap_text colmap_array scene archive view_protocol)
 targets=("$@")
 [[ ${#targets[@]} -gt 0 ]] || targets=("${all_targets[@]}")
 

@@ -82,6 +82,12 @@ Image8 ProgressiveImage::Image(double* gain) const {
   return render::ToImage8(render::AverageImage(sums_, state_.settings.background, g));
 }
 
+int StepPolicy::Ensembles(double ms_per_ensemble, int step) const {
+  const double per = ms_per_ensemble > 0 ? ms_per_ensemble : first_frame_ms;
+  const double budget = std::min(step_ms, first_frame_ms * std::pow(2.0, std::min(step, 30)));
+  return std::max(1, static_cast<int>(std::min(budget / per, 1e6)));
+}
+
 PickResult PickPoint(const render::Archive& archive, const render::Camera& camera, double u, double v,
                      double radius_px) {
   camera.Check();

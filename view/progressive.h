@@ -59,6 +59,15 @@ class ProgressiveImage {
   double ms_per_ensemble_ = 0;
 };
 
+// How many ensembles a step draws: after a camera change as many as fit first_frame_ms (the
+// preview while the camera moves), then each step twice the budget of the one before, up to
+// step_ms, so the image converges in few steps and a new camera waits at most one step.
+struct StepPolicy {
+  double first_frame_ms = 40, step_ms = 400;
+  // `ms_per_ensemble`: the last step's (0 before any); `step`: steps since the image started.
+  int Ensembles(double ms_per_ensemble, int step) const;
+};
+
 // The nearest archived point drawn within `radius_px` of pixel (u, v) of `local_camera`
 // (1-pixel points; reads only the chunks whose projected boxes hold the pixel).
 struct PickResult {

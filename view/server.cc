@@ -537,11 +537,7 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
     c->last_camera = restart->camera;
   }
   ProgressiveImage& image = *c->image;
-  // Ensembles for this step: the first within the first-frame budget, then each step twice the
-  // budget of the last, up to step_ms (fewer when other pages wait).
-  const double per = image.ms_per_ensemble() > 0 ? image.ms_per_ensemble() : options.first_frame_ms;
-  const double budget = std::min(options.step_ms, options.first_frame_ms * std::pow(2.0, c->steps));
-  const int count = std::max(1, static_cast<int>(budget / per));
+  const int count = StepPolicy{options.first_frame_ms, options.step_ms}.Ensembles(image.ms_per_ensemble(), c->steps);
   const uint64_t mine = c->image_generation;
   double ms = 0;
   try {

@@ -34,7 +34,7 @@ struct ServerOptions {
   int max_clients = 16;            // open pages at once
   // The first frame after a camera change draws as many ensembles as fit this budget; then each
   // further step doubles it up to step_ms.
-  double first_frame_ms = 60, step_ms = 400;
+  double first_frame_ms = 40, step_ms = 400;
   int jpeg_quality = 85;
   std::function<void(const std::string&)> log;  // one line per event worth knowing (may be null)
 };

@@ -36,9 +36,15 @@ void Check(int code, const char* what) {
 }
 }  // namespace
 
-Session::Session() {
+Session::Session(bool serialized) {
   int provided = 0;
-  Check(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  const int wanted = serialized ? MPI_THREAD_SERIALIZED : MPI_THREAD_FUNNELED;
+  Check(MPI_Init_thread(nullptr, nullptr, wanted, &provided), "MPI_Init_thread");
+  if (provided < wanted) {
+    MPI_Finalize();
+    throw InternalError("this MPI library does not let a thread other than the main one call it "
+                        "(MPI_THREAD_SERIALIZED)");
+  }
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
 }
@@ -67,6 +73,14 @@ std::vector<Session::Failure> Session::GatherFailures(int exit_code, const std::
     failures.push_back({r, heads[2 * r], all.substr(offsets[r], lengths[r])});
   }
   return failures;
+}
+
+void Session::Broadcast(std::string* bytes) const {
+  uint64_t n = bytes->size();
+  Check(MPI_Bcast(&n, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  CANDI_CHECK(n < (uint64_t{1} << 30)) << "broadcast of " << n << " bytes";
+  bytes->resize(static_cast<size_t>(n));
+  Check(MPI_Bcast(bytes->data(), static_cast<int>(n), MPI_CHAR, 0, MPI_COMM_WORLD), "MPI_Bcast");
 }
 
 void Session::Barrier() const { Check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier"); }

@@ -19,10 +19,12 @@ bool LaunchedByMpi();
 // by at most one (a rank may get none when size > L).
 void EnsembleShare(int repeat_level, int rank, int size, int* begin, int* end);
 
-// MPI_Init_thread on construction, MPI_Finalize on destruction. One per process.
+// MPI_Init_thread on construction, MPI_Finalize on destruction. One per process. `serialized`:
+// MPI may be called from any one thread at a time (the viewer's render thread), not only from
+// the main one.
 class Session {
  public:
-  Session();
+  explicit Session(bool serialized = false);
   ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
@@ -39,6 +41,8 @@ class Session {
     std::string message;
   };
   std::vector<Failure> GatherFailures(int exit_code, const std::string& message) const;
+  // Collective: rank 0's bytes to every rank.
+  void Broadcast(std::string* bytes) const;
   // Collective: returns when every rank has called it.
   void Barrier() const;
   // Collective: adds the ranks' sums, grey histograms and copy counts onto rank 0's `result`.

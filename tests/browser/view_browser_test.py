@@ -37,8 +37,8 @@ def run(*args):
 class Viewer:
     """`candi view` on a free port; the URL it prints."""
 
-    def __init__(self, *inputs):
-        self.process = subprocess.Popen([CANDI, "view", *inputs, "--port", "0"], stdout=subprocess.PIPE,
+    def __init__(self, *inputs, launcher=()):
+        self.process = subprocess.Popen([*launcher, CANDI, "view", *inputs, "--port", "0"], stdout=subprocess.PIPE,
                                         stderr=subprocess.PIPE, text=True)
         line = self.process.stdout.readline()
         if not line.startswith("candi view: "):

@@ -1,0 +1,147 @@
+// candi bench view: what a page of `candi view` gets from the server's renderer on generated
+// archives (the terraced solid of bench scale) of 1e7, 1e8 (1e9) points: during an orbit, the
+// latency of the first frame after each camera change (render, average, JPEG) and the frames per
+// second; at rest, the time until the L-ensemble image is converged and sent (PNG); peak memory.
+// The schedule is the server's (view::StepPolicy); the socket is left out (127.0.0.1 adds well
+// under a millisecond a frame).
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+#include <vector>
+
+#include "apps/arg_parse.h"
+#include "apps/commands.h"
+#include "core/progress.h"
+#include "render/archive.h"
+#include "render/archive_pack.h"
+#include "render/synthetic_scene.h"
+#include "view/frame_encoding.h"
+#include "view/progressive.h"
+#include "view/source.h"
+
+namespace candi::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+double Since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t k = static_cast<size_t>(std::min<double>(v.size() - 1, std::ceil(q * v.size()) - 1));
+  return v[k];
+}
+
+double PeakMb() {
+  struct rusage u {};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024.0;
+}
+
+}  // namespace
+
+int RunBenchView(const BenchViewArgs& args) {
+  std::vector<uint64_t> sizes;
+  for (double v : ParseNumbers(args.sizes, ',', "--sizes")) {
+    if (!(v >= 1000 && v <= 1e10)) throw std::invalid_argument("--sizes: each count in [1e3, 1e10]");
+    sizes.push_back(static_cast<uint64_t>(v));
+  }
+  if (args.billion) sizes.push_back(1000000000ULL);
+  int width = 0, height = 0;
+  {
+    const std::vector<double> v = ParseNumbers(args.size, 'x', "--size");
+    if (v.size() != 2 || v[0] < 16 || v[1] < 16 || v[0] > 4096 || v[1] > 4096) {
+      throw std::invalid_argument("--size '" + args.size + "': expected WxH in [16, 4096]");
+    }
+    width = static_cast<int>(v[0]), height = static_cast<int>(v[1]);
+  }
+  if (args.repeat_level < 1 || args.repeat_level > view::kMaxRepeatLevel) {
+    throw std::invalid_argument("-L: in [1, 10000]");
+  }
+  if (args.orbit_frames < 2) throw std::invalid_argument("--orbit-frames: at least 2");
+  const std::string dir = fs::absolute(args.work_dir).string();
+  fs::create_directories(dir);
+  std::printf("candi bench view: terraced solid, %dx%d, L = %d, %d thread(s) (0: all); orbit of %d camera changes, "
+              "first frame = render + average + JPEG; converged = every step to L + PNG; median of %d\n",
+              width, height, args.repeat_level, args.threads, args.orbit_frames, args.runs);
+  std::printf("%12s %8s %9s %9s %9s %8s %8s %11s %9s\n", "points", "pack s", "p50 ms", "p95 ms", "frames/s",
+              "ensembl.", "conv. s", "conv. steps", "peak MB");
+  std::fflush(stdout);
+  const view::StepPolicy policy;
+  for (uint64_t n : sizes) {
+    const std::string archive_dir = dir + "/scene.archive";
+    const auto t_pack = std::chrono::steady_clock::now();
+    {
+      ConsoleProgress progress("bench view: packing " + std::to_string(n) + " points");
+      render::PackArchive(render::PackOptions(),
+                          {render::PackInputFromGenerator("terraced solid", n, 1000000,
+                                                          [](uint64_t k, uint64_t m) {
+                                                            return render::TerracedSolid(m, 1000 + k);
+                                                          })},
+                          archive_dir, progress.Callback());
+      progress.Finish();
+    }
+    const double pack_s = Since(t_pack) / 1000;
+    const render::Archive archive(archive_dir);
+    const render::ArchiveManifest& m = archive.manifest();
+    const Box3d world = m.bounds.Translated(m.frame.origin);
+    view::ViewState state;
+    state.camera = view::FirstView(world, width, height, view::Orientation());
+    state.settings.repeat_level = args.repeat_level;
+    view::ProgressiveImage image(archive, view::LocalRangeRenderer(archive), args.threads);
+
+    // The orbit: the camera turns by 3 degrees a frame; each frame is the first step of its image.
+    std::vector<double> latency, ensembles;
+    const Eigen::Vector3d target = state.camera.target, arm = state.camera.eye - target;
+    double orbit_ms = 0;
+    for (int f = 0; f < args.orbit_frames; ++f) {
+      const double angle = 3.0 * f * 3.14159265358979 / 180;
+      const Eigen::Vector3d turned(std::cos(angle) * arm.x() - std::sin(angle) * arm.y(),
+                                   std::sin(angle) * arm.x() + std::cos(angle) * arm.y(), arm.z());
+      state.camera.eye = target + turned;
+      const auto t = std::chrono::steady_clock::now();
+      image.Start(state);
+      const int count = policy.Ensembles(image.ms_per_ensemble(), 0);
+      image.Step(count);
+      const std::string jpeg = view::EncodeJpeg(image.Image(nullptr), 85);
+      const double ms = Since(t);
+      orbit_ms += ms;
+      if (f > 0) latency.push_back(ms), ensembles.push_back(count);  // the first frame sets the rate
+    }
+    // At rest: from a camera change to the converged PNG, every step's frame encoded.
+    std::vector<double> converge, steps;
+    for (int r = 0; r < args.runs; ++r) {
+      const auto t = std::chrono::steady_clock::now();
+      image.Start(state);
+      int step = 0;
+      while (!image.converged()) {
+        image.Step(policy.Ensembles(image.ms_per_ensemble(), step++));
+        const Image8 pixels = image.Image(nullptr);
+        if (image.converged()) view::EncodePng(pixels); else view::EncodeJpeg(pixels, 85);
+      }
+      converge.push_back(Since(t) / 1000);
+      steps.push_back(step);
+    }
+    std::printf("%12llu %8.1f %9.1f %9.1f %9.1f %8.0f %8.2f %11.0f %9.0f\n", static_cast<unsigned long long>(n),
+                pack_s, Percentile(latency, 0.5), Percentile(latency, 0.95),
+                1000.0 * args.orbit_frames / orbit_ms, Percentile(ensembles, 0.5), Percentile(converge, 0.5),
+                Percentile(steps, 0.5), PeakMb());
+    std::fflush(stdout);
+    std::error_code ec;
+    if (!args.keep) fs::remove_all(archive_dir, ec);
+  }
+  std::error_code ignored;
+  if (!args.keep) fs::remove_all(dir, ignored);
+  return kOk;
+}
+
+}  // namespace candi::app
