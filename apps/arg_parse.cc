@@ -28,4 +28,12 @@ std::vector<double> ParseNumbers(const std::string& text, char separator, const 
   return out;
 }
 
+Eigen::Vector3d ParseDirection(const std::string& text, const std::string& what) {
+  const std::vector<double> v = ParseNumbers(text, ',', what);
+  if (v.size() != 3) throw std::invalid_argument(what + " '" + text + "': expected x,y,z");
+  const Eigen::Vector3d d(v[0], v[1], v[2]);
+  if (!(d.norm() > 0) || !d.allFinite()) throw std::invalid_argument(what + " '" + text + "': not a direction");
+  return d;
+}
+
 }  // namespace candi::app

@@ -100,6 +100,8 @@ void AddRender(CLI::App& app, RenderArgs& a, std::function<int()>* run) {
   c->add_option("--memory-budget", a.memory_mb, "Stream mode and archives: MB of z-buffers resident per pass (12 B per pixel and ensemble)");
   c->add_option("--chunk-budget", a.chunk_budget_mb, "Archive input: MB of chunks mapped at once (8 B a point)");
   c->add_option("--columns", a.columns, "XYZ/PTS column spec");
+  c->add_option("--up", a.up, "Without --view: world up, x,y,z (default 0,0,1; COLMAP's frame: 0,-1,0)");
+  c->add_option("--from", a.from, "Without --view: the direction the view looks in, x,y,z (default: oblique, from above)");
   c->callback([run, &a] { *run = [&a] { return RunRender(a); }; });
   c->footer("Example: candi render building.ply foundation.ply -o site.png -L 100 --alpha 0.3,0.8");
 }

@@ -542,7 +542,9 @@ int RunBuild(const BuildArgs& args) {
   }
 
   // 3. The render archive of every layer (key: the layers' keys and the scene's origin).
-  std::vector<std::string> pack_parts = {"pack", scene_json.value("origin", json()).dump()};
+  // The archive format's version is part of the key: a build resumed by a newer candi repacks.
+  std::vector<std::string> pack_parts = {"pack", "archive v" + std::to_string(render::kArchiveVersion),
+                                         scene_json.value("origin", json()).dump()};
   pack_parts.insert(pack_parts.end(), layer_keys.begin(), layer_keys.end());
   const std::string pack_key = Key(pack_parts);
   PackArgs pack;

@@ -29,6 +29,7 @@
 #include "render/spbr_stream.h"
 #include "render/splat_cloud.h"
 #include "sampling/opacity.h"
+#include "view/source.h"
 
 namespace candi::app {
 
@@ -110,7 +111,10 @@ render::Camera WorldCamera(const RenderArgs& a, const Plan& p, const Box3d& worl
     if (a.size_given) c.width = p.width, c.height = p.height;
     return c;
   }
-  return render::FrameBox(world, p.width, p.height, Eigen::Vector3d(0.45, 0.7, -0.55));
+  view::Orientation o;
+  if (!a.up.empty()) o.up = ParseDirection(a.up, "--up");
+  if (!a.from.empty()) o.view_dir = ParseDirection(a.from, "--from");
+  return view::FirstView(world, p.width, p.height, o);
 }
 
 render::Camera InFrame(render::Camera c, const LocalFrame& frame) {

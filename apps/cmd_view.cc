@@ -22,13 +22,6 @@ namespace candi::app {
 
 namespace {
 
-Eigen::Vector3d ParseDirection(const std::string& text, const std::string& what) {
-  const std::vector<double> v = ParseNumbers(text, ',', what);
-  if (v.size() != 3) throw std::invalid_argument(what + " '" + text + "': expected x,y,z");
-  const Eigen::Vector3d d(v[0], v[1], v[2]);
-  if (!(d.norm() > 0) || !d.allFinite()) throw std::invalid_argument(what + " '" + text + "': not a direction");
-  return d;
-}
 
 // Under mpirun: rank 0 serves; for every step it broadcasts the request (camera, ensembles,
 // settings), every rank draws its share of the ensembles, and the sums are added on rank 0
@@ -106,9 +99,6 @@ int RunView(const ViewArgs& args) {
   view::Orientation orientation;
   if (!args.up.empty()) orientation.up = ParseDirection(args.up, "--up");
   if (!args.from.empty()) orientation.view_dir = ParseDirection(args.from, "--from");
-  if (orientation.view_dir && orientation.view_dir->normalized().cross(orientation.up.normalized()).norm() < 1e-3) {
-    throw std::invalid_argument("--from is parallel to --up: the view would have no up");
-  }
   view::ViewerSource source;
   namespace fs = std::filesystem;
   std::error_code ec;

@@ -79,6 +79,7 @@ struct RenderArgs {
   double memory_mb = 2048;            // stream mode and archives: z-buffers resident per pass
   double chunk_budget_mb = 256;       // archive input: chunks mapped at once (8 bytes a point)
   std::string columns;                // XYZ/PTS inputs
+  std::string up, from;               // default view: world up (x,y,z), viewing direction
 };
 int RunRender(const RenderArgs& args);
 

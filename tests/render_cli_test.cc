@@ -62,6 +62,45 @@ double MeanChannel(const Image8& image, int channel) {
   return sum / (image.width() * image.height());
 }
 
+// A facade in COLMAP's frame (y down, cameras looking along +z): a red band at the top (y = -2)
+// and a blue one at the bottom (y = +2). With --up 0,-1,0 the default view shows red above blue
+// (z-up's default shows it upside down or from above); --from parallel to --up is refused.
+TEST(RenderCli, UpPutsAColmapFrameFacadeUpright) {
+  TempDir dir;
+  PointCloud c;
+  c.schema.colors = true;
+  c.SetSchema(c.schema);
+  Rng rng(3);
+  for (int i = 0; i < 20000; ++i) {
+    const bool top = i % 2 == 0;
+    c.positions.push_back(Eigen::Vector3d(rng.Uniform(-4, 4), (top ? -2 : 2) + rng.Uniform(-0.5, 0.5),
+                                          rng.Uniform(-0.1, 0.1)));
+    c.colors.push_back(top ? Rgb8{255, 0, 0} : Rgb8{0, 0, 255});
+  }
+  c.Resize(c.positions.size());
+  WritePointCloud(dir.File("facade.ply"), c);
+  const std::string out = dir.File("up.png");
+  const Result r = RunCandi("render " + dir.File("facade.ply") + " -o " + out +
+                            " --up 0,-1,0 --opaque --size 64x64 --point-size 3");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const Image8 image = ReadPng(out).image8;
+  double red_rows = 0, blue_rows = 0, reds = 0, blues = 0;
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) {
+      if (image.at(x, y, 0) > 128 && image.at(x, y, 2) < 64) red_rows += y, reds += 1;
+      if (image.at(x, y, 2) > 128 && image.at(x, y, 0) < 64) blue_rows += y, blues += 1;
+    }
+  }
+  ASSERT_GT(reds, 20);
+  ASSERT_GT(blues, 20);
+  EXPECT_LT(red_rows / reds, blue_rows / blues) << "the top of the facade is not at the top of the image";
+  const Result bad = RunCandi("render " + dir.File("facade.ply") + " -o " + dir.File("bad.png") +
+                              " --up 0,-1,0 --from 0,2,0");
+  EXPECT_EQ(bad.code, 1) << bad.output;
+  EXPECT_NE(bad.output.find("parallel"), std::string::npos) << bad.output;
+  EXPECT_FALSE(FileExists(dir.File("bad.png")));
+}
+
 TEST(RenderCli, MergesInputsAndRecordsSeedAndRepeatLevel) {
   Scene s;
   const std::string out = s.dir.File("out.png");

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <stdexcept>
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
@@ -113,8 +114,12 @@ ViewerSource FromBuild(const fs::path& dir, const Orientation& orientation) {
 }  // namespace
 
 render::Camera FirstView(const Box3d& world_bounds, int width, int height, const Orientation& o) {
-  CANDI_CHECK(o.up.norm() > 0) << "up";
+  if (!(o.up.norm() > 0) || !o.up.allFinite()) throw std::invalid_argument("the up direction is not a direction");
   const Eigen::Vector3d up = o.up.normalized();
+  if (o.view_dir && !(o.view_dir->norm() > 0 && o.view_dir->normalized().cross(up).norm() > 1e-3)) {
+    throw std::invalid_argument("the viewing direction (--from) is zero or parallel to up (--up): the view would "
+                                "have no up");
+  }
   // candi render's default (from above, oblique) turned from z-up to `up`.
   const Eigen::Vector3d dir = o.view_dir ? *o.view_dir
                                          : Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), up) *

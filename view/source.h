@@ -51,7 +51,8 @@ struct ViewerSource {
   std::string ToJson(const render::ArchiveManifest& manifest) const;
 };
 
-// A camera that frames the archive's bounds (world frame) for `orientation`.
+// A camera that frames the archive's bounds (world frame) for `orientation`. Throws
+// std::invalid_argument when up is not a direction or the viewing direction is parallel to it.
 render::Camera FirstView(const Box3d& world_bounds, int width, int height, const Orientation& orientation);
 
 // Opens a build directory or an archive (InputError naming the file for anything malformed).
