@@ -183,7 +183,7 @@ void AddBenchView(CLI::App& app, BenchViewArgs& a, std::function<int()>* run) {
   c->add_option("--threads", a.threads, "Render threads (0: all)")->check(CLI::Range(0, 256));
   c->add_option("--orbit-frames", a.orbit_frames, "Camera changes in the orbit");
   c->add_option("--runs", a.runs, "Convergence runs (the median is printed)")->check(CLI::Range(1, 100));
-  c->add_flag("--keep", a.keep, "Keep the generated archive");
+  c->add_flag("--keep", a.keep, "Keep the generated archives, and reuse those an earlier --keep run kept");
   c->callback([run, &a] { *run = [&a] { return RunBenchView(a); }; });
   c->footer("Example: candi bench view --sizes 1e7,1e8 --threads 2");
 }

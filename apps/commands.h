@@ -105,7 +105,7 @@ struct BenchViewArgs {
   int threads = 0;
   int orbit_frames = 60;
   int runs = 3;
-  bool keep = false;
+  bool keep = false;                  // keep the archives, and reuse kept ones (pack s 0)
 };
 int RunBenchView(const BenchViewArgs& args);
 
