@@ -546,8 +546,12 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
   const int count = StepPolicy{options.first_frame_ms, options.step_ms}.Ensembles(image.ms_per_ensemble(), c->steps);
   const uint64_t mine = c->image_generation;
   double ms = 0;
+  // The first step of an image (its preview) is never abandoned: a page that sends cameras faster
+  // than they can be drawn still gets a frame of a recent one each turn. Refinement steps are
+  // abandoned as soon as the camera moves.
+  const bool first = c->steps == 0;
   try {
-    ms = image.Step(count, [&] { return c->generation.load() != mine; });
+    ms = image.Step(count, [&] { return !first && c->generation.load() != mine; });
   } catch (const Cancelled&) {
     ++images_abandoned;
     return true;

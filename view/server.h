@@ -3,7 +3,8 @@
 //
 // Boost.Beast (HTTP/1.1 and WebSocket over Boost.Asio) does the parsing and framing; one I/O
 // thread runs every socket, one render thread serves the pages in turn. A page's latest camera
-// wins: an image whose camera moved is abandoned mid-draw, and a frame the page has not yet
+// wins: an image whose camera moved is abandoned mid-draw (after its first frame, so a page
+// moving faster than frames can be drawn still gets frames), and a frame the page has not yet
 // taken is replaced by the next one (dropped, never queued), so a slow page never holds up the
 // others.
 //
