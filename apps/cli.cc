@@ -102,6 +102,8 @@ void AddRender(CLI::App& app, RenderArgs& a, std::function<int()>* run) {
   c->add_option("--columns", a.columns, "XYZ/PTS column spec");
   c->add_option("--up", a.up, "Without --view: world up, x,y,z (default 0,0,1; COLMAP's frame: 0,-1,0)");
   c->add_option("--from", a.from, "Without --view: the direction the view looks in, x,y,z (default: oblique, from above)");
+  c->add_option("--cameras", a.cameras, "Without --view: a COLMAP model (e.g. WORK/sparse/0) whose frame the points "
+                "are in: up and the viewing side from its cameras");
   c->callback([run, &a] { *run = [&a] { return RunRender(a); }; });
   c->footer("Example: candi render building.ply foundation.ply -o site.png -L 100 --alpha 0.3,0.8");
 }
@@ -116,6 +118,8 @@ void AddView(CLI::App& app, ViewArgs& a, std::function<int()>* run) {
   c->add_option("--port", a.port, "Port (0: any free one)")->check(CLI::Range(0, 65535));
   c->add_option("--up", a.up, "World up for the first view, x,y,z (default 0,0,1; COLMAP's frame: 0,-1,0)");
   c->add_option("--from", a.from, "Direction the first view looks in, x,y,z (default: oblique, from above)");
+  c->add_option("--cameras", a.cameras, "A COLMAP model (e.g. WORK/sparse/0) whose frame the points are in: the "
+                "first view's up and side from its cameras");
   c->add_option("--columns", a.columns, "XYZ/PTS column spec");
   c->add_option("--threads", a.threads, "Render threads (0: all)")->check(CLI::Range(0, 256));
   c->callback([run, &a] { *run = [&a] { return RunView(a); }; });

@@ -15,6 +15,7 @@
 #include "apps/commands.h"
 #include "apps/failure.h"
 #include "apps/view_json.h"
+#include "apps/view_orientation.h"
 #include "core/check.h"
 #include "core/log.h"
 #include "core/png_io.h"
@@ -111,10 +112,7 @@ render::Camera WorldCamera(const RenderArgs& a, const Plan& p, const Box3d& worl
     if (a.size_given) c.width = p.width, c.height = p.height;
     return c;
   }
-  view::Orientation o;
-  if (!a.up.empty()) o.up = ParseDirection(a.up, "--up");
-  if (!a.from.empty()) o.view_dir = ParseDirection(a.from, "--from");
-  return view::FirstView(world, p.width, p.height, o);
+  return view::FirstView(world, p.width, p.height, ParseOrientation(a.up, a.from, a.cameras));
 }
 
 render::Camera InFrame(render::Camera c, const LocalFrame& frame) {

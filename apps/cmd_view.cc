@@ -8,6 +8,7 @@
 
 #include "apps/arg_parse.h"
 #include "apps/failure.h"
+#include "apps/view_orientation.h"
 #include "apps/commands.h"
 #include "core/interrupt.h"
 #include "core/log.h"
@@ -96,9 +97,7 @@ int RunView(const ViewArgs& args) {
   std::unique_ptr<render::mpi::Session> session;
   if (render::mpi::LaunchedByMpi()) session = std::make_unique<render::mpi::Session>(/*serialized=*/true);
   if (session && session->rank() != 0) return ServeRank(*session, args.threads);
-  view::Orientation orientation;
-  if (!args.up.empty()) orientation.up = ParseDirection(args.up, "--up");
-  if (!args.from.empty()) orientation.view_dir = ParseDirection(args.from, "--from");
+  const view::Orientation orientation = ParseOrientation(args.up, args.from, args.cameras);
   view::ViewerSource source;
   namespace fs = std::filesystem;
   std::error_code ec;

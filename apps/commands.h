@@ -80,6 +80,7 @@ struct RenderArgs {
   double chunk_budget_mb = 256;       // archive input: chunks mapped at once (8 bytes a point)
   std::string columns;                // XYZ/PTS inputs
   std::string up, from;               // default view: world up (x,y,z), viewing direction
+  std::string cameras;                // default view: oriented by a COLMAP model's cameras
 };
 int RunRender(const RenderArgs& args);
 
@@ -90,6 +91,7 @@ struct ViewArgs {
   int port = 8765;                    // 0: any free port
   std::string up;                     // x,y,z world up (default z; COLMAP's frame: 0,-1,0)
   std::string from;                   // x,y,z direction from the eye to the target
+  std::string cameras;                // a COLMAP model: up and viewing side from its cameras
   std::string columns;                // XYZ/PTS inputs
   int threads = 0;
 };

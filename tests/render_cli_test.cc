@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <string>
 
@@ -62,6 +63,19 @@ double MeanChannel(const Image8& image, int channel) {
   return sum / (image.width() * image.height());
 }
 
+// True when the red pixels' mean row is above the blue pixels' (each colour drawn somewhere).
+bool RedAboveBlue(const std::string& png) {
+  const Image8 image = ReadPng(png).image8;
+  double red_rows = 0, blue_rows = 0, reds = 0, blues = 0;
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) {
+      if (image.at(x, y, 0) > 128 && image.at(x, y, 2) < 64) red_rows += y, reds += 1;
+      if (image.at(x, y, 2) > 128 && image.at(x, y, 0) < 64) blue_rows += y, blues += 1;
+    }
+  }
+  return reds > 20 && blues > 20 && red_rows / reds < blue_rows / blues;
+}
+
 // A facade in COLMAP's frame (y down, cameras looking along +z): a red band at the top (y = -2)
 // and a blue one at the bottom (y = +2). With --up 0,-1,0 the default view shows red above blue
 // (z-up's default shows it upside down or from above); --from parallel to --up is refused.
@@ -83,21 +97,46 @@ TEST(RenderCli, UpPutsAColmapFrameFacadeUpright) {
   const Result r = RunCandi("render " + dir.File("facade.ply") + " -o " + out +
                             " --up 0,-1,0 --opaque --size 64x64 --point-size 3");
   ASSERT_EQ(r.code, 0) << r.output;
-  const Image8 image = ReadPng(out).image8;
-  double red_rows = 0, blue_rows = 0, reds = 0, blues = 0;
-  for (int y = 0; y < image.height(); ++y) {
-    for (int x = 0; x < image.width(); ++x) {
-      if (image.at(x, y, 0) > 128 && image.at(x, y, 2) < 64) red_rows += y, reds += 1;
-      if (image.at(x, y, 2) > 128 && image.at(x, y, 0) < 64) blue_rows += y, blues += 1;
-    }
-  }
-  ASSERT_GT(reds, 20);
-  ASSERT_GT(blues, 20);
-  EXPECT_LT(red_rows / reds, blue_rows / blues) << "the top of the facade is not at the top of the image";
+  EXPECT_TRUE(RedAboveBlue(out)) << "the top of the facade is not at the top of the image";
   const Result bad = RunCandi("render " + dir.File("facade.ply") + " -o " + dir.File("bad.png") +
                               " --up 0,-1,0 --from 0,2,0");
   EXPECT_EQ(bad.code, 1) << bad.output;
   EXPECT_NE(bad.output.find("parallel"), std::string::npos) << bad.output;
+  EXPECT_FALSE(FileExists(dir.File("bad.png")));
+}
+
+// A facade whose top is +x (a red band at x = +2, blue at x = -2, in the plane z = 0) and one
+// COLMAP camera, rolled so that its image up is +x, looking along +z (a hand-written text model).
+// --cameras takes up and side from the camera: red above blue.
+TEST(RenderCli, CamerasOrientTheDefaultView) {
+  TempDir dir;
+  PointCloud c;
+  c.schema.colors = true;
+  c.SetSchema(c.schema);
+  Rng rng(4);
+  for (int i = 0; i < 20000; ++i) {
+    const bool top = i % 2 == 0;
+    c.positions.push_back(Eigen::Vector3d((top ? 2 : -2) + rng.Uniform(-0.5, 0.5), rng.Uniform(-4, 4),
+                                          rng.Uniform(-0.1, 0.1)));
+    c.colors.push_back(top ? Rgb8{255, 0, 0} : Rgb8{0, 0, 255});
+  }
+  c.Resize(c.positions.size());
+  WritePointCloud(dir.File("facade.ply"), c);
+  const std::string model = dir.File("sparse");
+  std::filesystem::create_directories(model);
+  WriteBytes(model + "/cameras.txt", "1 PINHOLE 100 100 50 50 50 50\n");
+  // cam_from_world: a turn of -90 degrees about z, so the camera's down (+y) is world -x.
+  WriteBytes(model + "/images.txt", "1 0.70710678118654757 0 0 -0.70710678118654757 0 0 -10 1 a.png\n\n");
+  WriteBytes(model + "/points3D.txt", "");
+  const std::string out = dir.File("cams.png");
+  const Result r = RunCandi("render " + dir.File("facade.ply") + " -o " + out + " --cameras " + model +
+                            " --opaque --size 64x64 --point-size 3");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(RedAboveBlue(out)) << "the camera's up is not the image's up";
+  // A folder that is no model: exit 2, naming it.
+  const Result bad = RunCandi("render " + dir.File("facade.ply") + " -o " + dir.File("bad.png") + " --cameras " +
+                              dir.path());
+  EXPECT_EQ(bad.code, 2) << bad.output;
   EXPECT_FALSE(FileExists(dir.File("bad.png")));
 }
 
