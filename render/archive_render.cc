@@ -82,7 +82,6 @@ bool BoxMayBeVisible(const Camera::Projector& p, const Camera& camera, const Box
   return true;
 }
 
-
 namespace {
 
 struct ThreadSums {
