@@ -36,6 +36,7 @@ void ArchiveRenderOptions::Check() const {
       throw std::invalid_argument("ArchiveRenderOptions::layer_fraction " + std::to_string(f) + ": must be in [0, 16]");
     }
   }
+  clip.Check("ArchiveRenderOptions::clip");
   const int end = ensemble_end == 0 ? repeat_level : ensemble_end;
   if (ensemble_begin < 0 || end > repeat_level || ensemble_begin > end) {
     throw std::invalid_argument("ArchiveRenderOptions: ensembles [" + std::to_string(ensemble_begin) + ", " +
@@ -111,9 +112,11 @@ Kernel MakeKernel(const Camera::Projector& projector, int w, int h, double depth
   return k;
 }
 
-// The chunks whose boxes may draw a pixel; each must fit the chunk budget.
+// The chunks whose boxes may draw a pixel; each must fit the chunk budget. `cut`: per archive
+// chunk, whether the clip region cuts it (its points are tested one by one).
 std::vector<size_t> VisibleChunks(const ArchiveRenderOptions& options, const Camera& camera,
-                                  const Camera::Projector& projector, const Archive& archive, uint64_t* points) {
+                                  const Camera::Projector& projector, const Archive& archive, uint64_t* points,
+                                  std::vector<uint8_t>* cut) {
   const ArchiveManifest& m = archive.manifest();
   const double margin = std::ceil(options.point_size) + 2.0;
   std::vector<size_t> visible;
@@ -122,8 +125,12 @@ std::vector<size_t> VisibleChunks(const ArchiveRenderOptions& options, const Cam
     throw std::invalid_argument("layer_fraction: " + std::to_string(options.layer_fraction.size()) + " values for " +
                                 std::to_string(m.layers.size()) + " layers of " + archive.directory());
   }
+  cut->assign(m.chunks.size(), 0);
   for (size_t k = 0; k < m.chunks.size(); ++k) {
     if (!options.layer_fraction.empty() && options.layer_fraction[m.chunks[k].layer] == 0) continue;  // hidden
+    const ClipRelation relation = options.clip.Classify(m.chunks[k].quantizer.box);
+    if (relation == ClipRelation::kOutside) continue;
+    (*cut)[k] = relation == ClipRelation::kPartial ? 1 : 0;
     if (!BoxMayBeVisible(projector, camera, m.chunks[k].quantizer.box, margin)) continue;
     const uint64_t bytes = m.chunks[k].count * kChunkBytesPerPoint;
     if (bytes > options.chunk_budget) {
@@ -157,8 +164,9 @@ std::vector<std::pair<size_t, size_t>> ChunkGroups(const std::vector<size_t>& vi
   return groups;
 }
 
-QuantizedPoints PointsOf(const ArchiveChunk& c, const uint64_t* words, const PointRun& run) {
+QuantizedPoints PointsOf(const ArchiveChunk& c, const uint64_t* words, const PointRun& run, const ClipRegion* clip) {
   QuantizedPoints points;
+  points.clip = clip;
   points.words = words + run.begin;
   points.count = run.end - run.begin;
   points.first_index = c.first + run.begin;
@@ -183,7 +191,7 @@ struct Share {
 // fails the render whichever thread reads it first). Returns the points drawn.
 uint64_t DrawShare(const ArchiveRenderOptions& o, const Archive& archive, const std::vector<size_t>& visible, size_t g,
                    size_t g_end, int replica, int replicas, int sharer, int sharers, const Kernel& kernel,
-                   const Share& share, EnsembleBuffers* buffers) {
+                   const Share& share, const std::vector<uint8_t>& cut, EnsembleBuffers* buffers) {
   uint64_t drawn = 0;
   std::vector<PointRun> runs;
   const ArchiveManifest& m = archive.manifest();
@@ -193,6 +201,7 @@ uint64_t DrawShare(const ArchiveRenderOptions& o, const Archive& archive, const 
     const uint64_t* words = archive.ChunkWords(visible[j], check);
     const ArchiveChunk& c = m.chunks[visible[j]];
     const double fraction = o.layer_fraction.empty() ? 1.0 : o.layer_fraction[c.layer];
+    const ClipRegion* clip = cut[visible[j]] ? &o.clip : nullptr;
     for (int e = 0; e < share.count; ++e) {
       runs.clear();
       EnsembleSlices(c.count, c.first, o.repeat_level, o.seed, share.first + e, fraction, &runs);
@@ -201,7 +210,7 @@ uint64_t DrawShare(const ArchiveRenderOptions& o, const Archive& archive, const 
       selection.base = share.base + e;
       selection.point_size = o.point_size;
       for (const PointRun& run : runs) {
-        drawn += SplatQuantized(kernel.transform, kernel.projection, PointsOf(c, words, run), selection, buffers);
+        drawn += SplatQuantized(kernel.transform, kernel.projection, PointsOf(c, words, run, clip), selection, buffers);
       }
     }
   }
@@ -222,7 +231,8 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   const Camera::Projector projector = camera.MakeProjector();
   const Kernel kernel = MakeKernel(projector, w, h, OrthographicDepthOffset(projector, m.bounds));
   uint64_t visible_points = 0;
-  const std::vector<size_t> visible = VisibleChunks(options, camera, projector, archive, &visible_points);
+  std::vector<uint8_t> cut;
+  const std::vector<size_t> visible = VisibleChunks(options, camera, projector, archive, &visible_points, &cut);
 
   // Resident ensembles (12 bytes a pixel each) and passes. The threads share the ensembles of a
   // pass, each drawing its own range of them from every visible point, so no z-buffer is held
@@ -271,7 +281,7 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
           if (k1 > k0) mine->Prepare(k0, k1);
           const Share share{first + k0, k1 - k0, k0};
           copies[t] += DrawShare(options, archive, visible, g, g_end, replica, replicas, sharer, sharers, kernel, share,
-                                 mine);
+                                 cut, mine);
         });
         archive.Release(std::vector<size_t>(visible.begin() + g, visible.begin() + g_end));
         for (size_t j = g; j < g_end; ++j) done += m.chunks[visible[j]].count;
@@ -300,6 +310,8 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   if (stats_out) {
     stats_out->chunks = m.chunks.size();
     stats_out->chunks_visible = visible.size();
+    stats_out->chunks_clipped = 0;
+    for (size_t k : visible) stats_out->chunks_clipped += cut[k];
     stats_out->points_visible = visible_points;
     stats_out->passes = passes;
     stats_out->threads = threads;

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/clip.h"
 #include "core/progress.h"
 #include "render/archive.h"
 #include "render/camera.h"
@@ -40,6 +41,9 @@ struct ArchiveRenderOptions {
   // point-number law, alpha' = 1 - (1 - alpha)^f); 0 hides the layer (its chunks are not read).
   // Empty: 1 for every layer. Each in [0, 16].
   std::vector<double> layer_fraction;
+  // Only points inside it are drawn (the archive's frame: ClipRegion::ToLocal of a world region);
+  // chunks wholly outside are not read, chunks wholly inside are not tested point by point.
+  ClipRegion clip;
   void Check() const;
 };
 
@@ -47,6 +51,7 @@ inline constexpr uint64_t kChunkBytesPerPoint = 8;
 
 struct ArchiveRenderStats {
   uint64_t chunks = 0, chunks_visible = 0;
+  uint64_t chunks_clipped = 0;   // visible chunks the clip region cuts (tested point by point)
   uint64_t points_visible = 0;   // points in visible chunks (read once per pass)
   int passes = 0;
   int threads = 0;                // threads that drew

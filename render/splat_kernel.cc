@@ -293,6 +293,25 @@ __attribute__((always_inline)) inline void DecodeBatch(const QuantizedPoints& in
   }
 }
 
+// The points of a batch inside the clip region (ClipRegion::Contains of the position
+// ChunkQuantizer::Decode gives: the same expression, so every renderer keeps the same points):
+// their positions in the batch, in order, into `chosen`; returns how many.
+inline size_t ClipBatch(const QuantizedPoints& in, const uint64_t* words, size_t n, uint32_t* chosen) {
+  const int b0 = in.bits[0], b1 = in.bits[1];
+  const uint64_t m0 = (uint64_t{1} << in.bits[0]) - 1, m1 = (uint64_t{1} << in.bits[1]) - 1;
+  const uint64_t m2 = (uint64_t{1} << in.bits[2]) - 1;
+  size_t m = 0;
+  for (size_t j = 0; j < n; ++j) {
+    const uint64_t q = words[j] >> 24;
+    const Eigen::Vector3d x(in.min[0] + static_cast<double>(q & m0) * in.step[0],
+                            in.min[1] + static_cast<double>((q >> b0) & m1) * in.step[1],
+                            in.min[2] + static_cast<double>((q >> (b0 + b1)) & m2) * in.step[2]);
+    chosen[m] = static_cast<uint32_t>(j);
+    m += in.clip->Contains(x) ? 1 : 0;
+  }
+  return m;
+}
+
 template <bool kPerspective>
 __attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTransform& t, const KernelProjection& p,
                                                                    const QuantizedPoints& in,
@@ -306,13 +325,16 @@ __attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTr
   for (uint32_t i = 0; i < kBatch; ++i) chosen[i] = i;
   float x[kBatch], y[kBatch], z[kBatch];
   uint64_t key[kBatch];
+  uint64_t drawn = 0;
   for (uint64_t s = 0; s < in.count; s += kBatch) {
-    const size_t n = static_cast<size_t>(std::min<uint64_t>(kBatch, in.count - s));
+    size_t n = static_cast<size_t>(std::min<uint64_t>(kBatch, in.count - s));
     const uint64_t index0 = in.first_index + s;
+    if (in.clip != nullptr) n = ClipBatch(in, in.words + s, n, chosen);
+    drawn += n;
     DecodeBatch(in, in.words + s, chosen, n, x, y, z, color);
     if (sel.point_size != 1.0) {
       for (size_t j = 0; j < n; ++j) {
-        SplatSizedOne(t, p, x[j], y[j], z[j], color[j], shape, sel.seed, index0 + j,
+        SplatSizedOne(t, p, x[j], y[j], z[j], color[j], shape, sel.seed, index0 + chosen[j],
                       [&](int px, int py, uint64_t k64) {
                         const uint32_t q = EnsembleBuffers::TiledIndex(px, py, tiles_x);
                         const uint64_t old = keys[q];
@@ -325,7 +347,7 @@ __attribute__((always_inline)) inline uint64_t SplatQuantizedLoop(const KernelTr
     ProjectBatch<kPerspective, true>(t, p, spare, x, y, z, color, n, pixel, key, tiles_x);
     for (size_t j = 0; j < n; ++j) TestInverted(pixel[j], ~key[j], keys, filled, count);
   }
-  return in.count;
+  return drawn;
 }
 
 CANDI_TARGET_CLONES_AVX2

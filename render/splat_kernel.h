@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/clip.h"
 #include "core/rng.h"
 #include "render/frame.h"
 
@@ -145,6 +146,9 @@ struct QuantizedPoints {
   double min[3] = {0, 0, 0};
   double step[3] = {0, 0, 0};
   int bits[3] = {0, 0, 0};
+  // Points outside it are not drawn (the chunk's frame); null: all are. Each kept point keeps its
+  // archive index.
+  const ClipRegion* clip = nullptr;
 };
 
 // Where a call draws: every point into buffers' ensemble `base` (the archive's ensembles are
@@ -156,7 +160,8 @@ struct EnsembleSelection {
 };
 
 // Decodes, projects and z-tests the points in one pass (perspective or orthographic as `p`
-// says; the whole image, rows [0, height)) and returns how many were drawn (in view or not).
+// says; the whole image, rows [0, height)) and returns how many were drawn (in view or not; inside
+// the clip region).
 // The keys equal SplatPoints' / SplatPointsSized's for the same float positions.
 uint64_t SplatQuantized(const KernelTransform& t, const KernelProjection& p, const QuantizedPoints& points,
                         const EnsembleSelection& selection, EnsembleBuffers* buffers);
