@@ -76,6 +76,13 @@ void AddOpacity(CLI::App& app, OpacityArgs& a, std::function<int()>* run) {
             "--image-size 1024");
 }
 
+void AddClip(CLI::App* c, ClipArgs& clip) {
+  c->add_option("--clip-box", clip.box, "Keep only points inside this box, world (survey) coordinates: "
+                "xmin,ymin,zmin,xmax,ymax,zmax");
+  c->add_option("--clip-plane", clip.planes, "Keep only the side of a plane its normal points into: "
+                "px,py,pz,nx,ny,nz (world coordinates; repeat for several)")->expected(1)->take_all();
+}
+
 void AddRender(CLI::App& app, RenderArgs& a, std::function<int()>* run) {
   auto* c = app.add_subcommand("render", "Render point files see-through with SPBR (stochastic "
                                          "point-based rendering), merged into one image");
@@ -104,6 +111,7 @@ void AddRender(CLI::App& app, RenderArgs& a, std::function<int()>* run) {
   c->add_option("--from", a.from, "Without --view: the direction the view looks in, x,y,z (default: oblique, from above)");
   c->add_option("--cameras", a.cameras, "Without --view: a COLMAP model (e.g. WORK/sparse/0) whose frame the points "
                 "are in: up and the viewing side from its cameras");
+  AddClip(c, a.clip);
   c->callback([run, &a] { *run = [&a] { return RunRender(a); }; });
   c->footer("Example: candi render building.ply foundation.ply -o site.png -L 100 --alpha 0.3,0.8");
 }
@@ -122,8 +130,39 @@ void AddView(CLI::App& app, ViewArgs& a, std::function<int()>* run) {
                 "first view's up and side from its cameras");
   c->add_option("--columns", a.columns, "XYZ/PTS column spec");
   c->add_option("--threads", a.threads, "Render threads (0: all)")->check(CLI::Range(0, 256));
+  AddClip(c, a.clip);
   c->callback([run, &a] { *run = [&a] { return RunView(a); }; });
   c->footer("Example: candi view borobudur_out/   (then open the printed http://127.0.0.1:8765/?token=... address)");
+}
+
+void AddSection(CLI::App& app, SectionArgs& a, std::function<int()>* run) {
+  auto* c = app.add_subcommand("section", "Cut a slab out of an archive or point files: a see-through image of "
+                                          "it and its section lines per layer (DXF, CSV, SVG), in survey coordinates");
+  c->add_option("inputs", a.inputs, "An archive (candi pack), a build directory (candi build), or point files "
+                "(a file's layer field names its layers)")->required();
+  c->add_option("-o,--output", a.output, "Output directory: section.png, .dxf, .csv, .svg and .json")->required();
+  c->add_option("--plane", a.plane, "A plane through a point with a normal: px,py,pz,nx,ny,nz (world coordinates)");
+  c->add_option("--through", a.through, "The vertical plane through two survey points, chainage from the first: "
+                "x1,y1,x2,y2 (or with z)");
+  c->add_option("--path", a.path, "A plan polyline x1,y1,x2,y2,...: its vertical faces unrolled into one section");
+  c->add_option("--thickness", a.thickness, "Slab thickness in metres (> 0)")->required();
+  c->add_option("--spacing", a.spacing, "Section lines: vertex spacing in metres (0: from the points' density)");
+  c->add_option("--max-gap", a.max_gap, "Section lines: a gap in the data longer than this breaks a line (0: automatic)");
+  c->add_option("--width", a.width, "Image width in pixels");
+  c->add_option("--pixel", a.pixel, "Image: metres per pixel (overrides --width)");
+  c->add_option("-L,--repeat-level", a.repeat_level, "Image: SPBR ensembles");
+  c->add_option("--seed", a.seed, "Image: seed of the ensembles");
+  c->add_option("--point-size", a.point_size, "Image: point size in pixels");
+  c->add_option("--opacity", a.opacity, "Image: opacity of a pixel one point covers, (0, 1]; overlapping layers "
+                "blend as SPBR blends");
+  c->add_option("--colours", a.colours, "Image colours: layer (one per layer) or data (the points' own)");
+  c->add_option("--background", a.background, "Image background r,g,b");
+  c->add_option("--layers", a.layers, "Only these layers (names)")->delimiter(',');
+  c->add_option("--columns", a.columns, "XYZ/PTS column spec");
+  c->add_option("--threads", a.threads, "Threads (0: all)")->check(CLI::Range(0, 256));
+  AddClip(c, a.clip);
+  c->callback([run, &a] { *run = [&a] { return RunSection(a); }; });
+  c->footer("Example: candi section borobudur_out/ --through 0,-60,0,60 --thickness 0.2 -o section_ns/");
 }
 
 void AddBench(CLI::App& app, BenchArgs& a, std::function<int()>* run) {
@@ -190,6 +229,21 @@ void AddBenchView(CLI::App& app, BenchViewArgs& a, std::function<int()>* run) {
   c->add_flag("--keep", a.keep, "Keep the generated archives, and reuse those an earlier --keep run kept");
   c->callback([run, &a] { *run = [&a] { return RunBenchView(a); }; });
   c->footer("Example: candi bench view --sizes 1e7,1e8 --threads 2");
+}
+
+void AddBenchSection(CLI::App& app, BenchSectionArgs& a, std::function<int()>* run) {
+  auto* c = app.get_subcommand("bench")->add_subcommand(
+      "section", "Sections: accuracy vs slab thickness on the bundled foundation, and seconds and chunks read "
+                 "on generated archives");
+  c->add_option("--sizes", a.sizes, "Point counts, comma separated (e.g. 1e7,1e8)");
+  c->add_flag("--billion", a.billion, "Also 1e9 points (~8 GB archive on disk)");
+  c->add_option("--work-dir", a.work_dir, "Folder for the generated data (shared with bench view)");
+  c->add_option("--drawing", a.drawing, "The drawing of the accuracy table (\"\" skips it)");
+  c->add_option("--thickness", a.thickness, "Slab thickness of the scale table, m");
+  c->add_option("--threads", a.threads, "Threads (0: all)")->check(CLI::Range(0, 256));
+  c->add_flag("--keep", a.keep, "Keep the generated archives, and reuse those an earlier --keep run kept");
+  c->callback([run, &a] { *run = [&a] { return RunBenchSection(a); }; });
+  c->footer("Example: candi bench section --sizes 1e7,1e8 --keep");
 }
 
 // `candi relief ...`: the buried-relief path (ALGORITHMS.md section 3).
@@ -565,6 +619,8 @@ int RunCli(int argc, char** argv) {
   AddRender(app, render, &run);
   ViewArgs view;
   AddView(app, view, &run);
+  SectionArgs section;
+  AddSection(app, section, &run);
   BenchArgs bench;
   AddBench(app, bench, &run);
   PackArgs pack;
@@ -573,6 +629,8 @@ int RunCli(int argc, char** argv) {
   AddBenchScale(app, bench_scale, &run);
   BenchViewArgs bench_view;
   AddBenchView(app, bench_view, &run);
+  BenchSectionArgs bench_section;
+  AddBenchSection(app, bench_section, &run);
   FoundationArgs foundation;
   AddFoundation(app, foundation, &run);
   DenseArgs dense;

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "apps/arg_parse.h"
+#include "apps/bench_archives.h"
 #include "apps/commands.h"
 #include "core/progress.h"
 #include "render/archive.h"
@@ -50,12 +51,7 @@ double PeakMb() {
 }  // namespace
 
 int RunBenchView(const BenchViewArgs& args) {
-  std::vector<uint64_t> sizes;
-  for (double v : ParseNumbers(args.sizes, ',', "--sizes")) {
-    if (!(v >= 1000 && v <= 1e10)) throw std::invalid_argument("--sizes: each count in [1e3, 1e10]");
-    sizes.push_back(static_cast<uint64_t>(v));
-  }
-  if (args.billion) sizes.push_back(1000000000ULL);
+  const std::vector<uint64_t> sizes = ParseBenchSizes(args.sizes, args.billion);
   int width = 0, height = 0;
   {
     const std::vector<double> v = ParseNumbers(args.size, 'x', "--size");
@@ -78,26 +74,8 @@ int RunBenchView(const BenchViewArgs& args) {
   std::fflush(stdout);
   const view::StepPolicy policy;
   for (uint64_t n : sizes) {
-    const std::string archive_dir = dir + "/scene-" + std::to_string(n) + ".archive";
-    const auto t_pack = std::chrono::steady_clock::now();
-    bool reused = false;
-    if (args.keep && render::IsArchive(archive_dir)) {  // kept by an earlier --keep run
-      try {
-        reused = render::Archive(archive_dir).manifest().points == n;
-      } catch (const std::exception&) {
-      }
-    }
-    if (!reused) {
-      ConsoleProgress progress("bench view: packing " + std::to_string(n) + " points");
-      render::PackArchive(render::PackOptions(),
-                          {render::PackInputFromGenerator("terraced solid", n, 1000000,
-                                                          [](uint64_t k, uint64_t m) {
-                                                            return render::TerracedSolid(m, 1000 + k);
-                                                          })},
-                          archive_dir, progress.Callback());
-      progress.Finish();
-    }
-    const double pack_s = reused ? 0.0 : Since(t_pack) / 1000;
+    double pack_s = 0;
+    const std::string archive_dir = BenchArchive(dir, n, args.keep, "bench view", &pack_s);
     const render::Archive archive(archive_dir);
     const render::ArchiveManifest& m = archive.manifest();
     const Box3d world = m.bounds.Translated(m.frame.origin);

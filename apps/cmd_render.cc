@@ -71,6 +71,7 @@ double ParseBrightness(const std::string& text) {
 }
 
 struct Plan {
+  ClipRegion clip;  // world coordinates
   int width = 1024, height = 768;
   Rgb8 background;
   double brightness = -1;
@@ -80,6 +81,7 @@ struct Plan {
 
 Plan MakePlan(const RenderArgs& a) {
   Plan p;
+  p.clip = ParseClip(a.clip.box, a.clip.planes);
   ParseSize(a.size, &p.width, &p.height);
   p.background = ParseColor(a.background);
   p.brightness = ParseBrightness(a.brightness);
@@ -112,7 +114,7 @@ render::Camera WorldCamera(const RenderArgs& a, const Plan& p, const Box3d& worl
     if (a.size_given) c.width = p.width, c.height = p.height;
     return c;
   }
-  return view::FirstView(world, p.width, p.height, ParseOrientation(a.up, a.from, a.cameras));
+  return view::FirstView(ClippedBounds(world, p.clip), p.width, p.height, ParseOrientation(a.up, a.from, a.cameras));
 }
 
 render::Camera InFrame(render::Camera c, const LocalFrame& frame) {
@@ -177,7 +179,10 @@ render::SpbrResult RenderInMemory(const RenderArgs& a, const Plan& p, render::Ca
   }
   if (total == 0) throw InputError("nothing to render: the inputs hold no points");
   *world_camera = WorldCamera(a, p, world);
+  // Opacity control sees the whole cloud (its density does not depend on the clipping); the
+  // clipping then removes points, as the archive renderer skips them.
   for (size_t k = 0; k < clouds.size() && !a.alpha.empty(); ++k) AdjustInput(a, p, *world_camera, k, &clouds[k]);
+  for (PointCloud& c : clouds) ClipCloud(p.clip, &c);
   std::vector<const PointCloud*> pointers;
   for (const PointCloud& c : clouds) pointers.push_back(&c);
   render::SplatCloudOptions build;
@@ -255,8 +260,9 @@ render::SpbrResult RenderStreaming(const RenderArgs& a, const Plan& p, render::C
     for (const std::string& in : a.inputs) {
       auto r = OpenPointReader(in, read);
       while (r->Read(1 << 20, &chunk) > 0) {
-        renderer.Add(chunk);
         done += chunk.size();
+        ClipCloud(p.clip, &chunk);
+        renderer.Add(chunk);
         progress.Update(done, total * renderer.passes());
       }
     }
@@ -274,7 +280,7 @@ void WriteOutputs(const RenderArgs& a, const Plan& p, const render::SpbrResult& 
   const ImageF average = render::AverageImage(result, p.background, gain);
   std::string inputs;
   for (const std::string& in : a.inputs) inputs += (inputs.empty() ? "" : " ") + in;
-  const PngText text = {{"Software", std::string("candi ") + kVersion},
+  PngText text = {{"Software", std::string("candi ") + kVersion},
                         {"candi:seed", std::to_string(result.seed)},
                         {"candi:repeat_level", std::to_string(result.repeat_level)},
                         {"candi:ensembles", std::to_string(result.ensembles)},
@@ -282,6 +288,7 @@ void WriteOutputs(const RenderArgs& a, const Plan& p, const render::SpbrResult& 
                         {"candi:mode", mode},
                         {"candi:inputs", inputs},
                         {"candi:view", ViewToJson(world_camera)}};
+  if (!p.clip.empty()) text["candi:clip"] = p.clip.Describe();
   WritePng(a.output, render::ToImage8(average), text);
   if (!a.output16.empty()) WritePng(a.output16, render::ToImage16(average), text);
   if (!a.save_view.empty()) SaveView(a.save_view, world_camera);
@@ -309,6 +316,7 @@ render::SpbrResult RenderArchiveInput(const RenderArgs& a, const Plan& p, render
   o.threads = a.threads;
   o.memory_budget = static_cast<uint64_t>(a.memory_mb * 1048576.0);
   o.chunk_budget = static_cast<uint64_t>(a.chunk_budget_mb * 1048576.0);
+  o.clip = p.clip.ToLocal(m.frame.origin);
   render::mpi::EnsembleShare(drawn, rank, ranks, &o.ensemble_begin, &o.ensemble_end);
   const bool none = o.ensemble_begin == o.ensemble_end;  // more ranks than ensembles
   ConsoleProgress progress("render: SPBR L=" + std::to_string(p.repeat_level) + " from " +
@@ -327,7 +335,9 @@ render::SpbrResult RenderArchiveInput(const RenderArgs& a, const Plan& p, render
   progress.Finish();
   if (rank == 0) {
     LogInfo("archive: " + std::to_string(stats.chunks_visible) + " of " + std::to_string(stats.chunks) +
-            " chunks in view (" + std::to_string(stats.points_visible) + " points), " + std::to_string(stats.passes) +
+            " chunks in view (" + std::to_string(stats.points_visible) + " points" +
+            (p.clip.empty() ? "" : ", " + std::to_string(stats.chunks_clipped) + " cut by the clipping") + "), " +
+            std::to_string(stats.passes) +
             " pass(es)" + (ranks > 1 ? ", " + std::to_string(ranks) + " MPI ranks" : ""));
   }
   result.repeat_level = p.repeat_level;

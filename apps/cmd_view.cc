@@ -1,5 +1,6 @@
 // candi view INPUT...: parses the command and hands it to view/ (the server, the page).
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
@@ -36,6 +37,7 @@ std::string EncodeRequest(const render::ArchiveRenderOptions& o, const render::C
                             {"begin", o.ensemble_begin},
                             {"end", o.ensemble_end},
                             {"layers", o.layer_fraction},
+                            {"clip", view::ClipPlaneArrays(o.clip)},  // doubles travel exactly (17 digits)
                             {"verify", o.verify}};
   return j.dump();
 }
@@ -52,6 +54,10 @@ render::SpbrResult DrawShare(const render::mpi::Session& session, const render::
     o.seed = j.at("seed").get<uint64_t>();
     o.point_size = j.at("point_size").get<double>();
     o.layer_fraction = j.at("layers").get<std::vector<double>>();
+    for (const auto& p : j.at("clip")) {
+      o.clip.planes.push_back({Eigen::Vector3d(p[0].get<double>(), p[1].get<double>(), p[2].get<double>()),
+                               Eigen::Vector3d(p[3].get<double>(), p[4].get<double>(), p[5].get<double>())});
+    }
     o.verify = j.at("verify").get<bool>();
     o.threads = threads;
     const int begin = j.at("begin").get<int>(), end = j.at("end").get<int>();
@@ -91,6 +97,72 @@ int ServeRank(const render::mpi::Session& session, int threads) {
   }
 }
 
+std::string Base64(const std::string& bytes) {
+  static const char* kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t n = static_cast<uint8_t>(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) n |= static_cast<uint8_t>(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) n |= static_cast<uint8_t>(bytes[i + 2]);
+    out += kDigits[n >> 18 & 63];
+    out += kDigits[n >> 12 & 63];
+    out += i + 1 < bytes.size() ? kDigits[n >> 6 & 63] : '=';
+    out += i + 2 < bytes.size() ? kDigits[n & 63] : '=';
+  }
+  return out;
+}
+
+std::string ReadWhole(const std::filesystem::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw InputError(path.string(), "", "cannot read the section output");
+  std::string out;
+  char buffer[65536];
+  size_t n;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) out.append(buffer, n);
+  std::fclose(f);
+  return out;
+}
+
+// The page's "export section": candi section of the archive for the slab, with the page's
+// clipping and only its shown layers, written to a temporary directory whose files travel back
+// in the reply (the PNG as base64).
+std::string SectionReply(const std::string& archive_dir, const render::ArchiveManifest& m, int threads, uint64_t seq,
+                         const view::SectionRequest& r, const view::ViewState& state) {
+  namespace fs = std::filesystem;
+  SectionArgs a;
+  a.inputs = {archive_dir};
+  a.thickness = r.thickness;
+  a.threads = threads;
+  const std::vector<double>& f = state.settings.layer_fraction;
+  for (size_t k = 0; k < f.size() && k < m.layers.size(); ++k) {
+    if (f[k] > 0) a.layers.push_back(m.layers[k].name);
+  }
+  if (!f.empty() && a.layers.empty()) throw std::invalid_argument("every layer is hidden");
+  if (a.layers.size() == m.layers.size()) a.layers.clear();
+  std::string pattern = (fs::temp_directory_path() / "candi-view-section-XXXXXX").string();
+  if (!mkdtemp(pattern.data())) throw InputError(pattern, "", "cannot create a temporary directory");
+  struct Remove {
+    std::string dir;
+    ~Remove() {
+      std::error_code ignored;
+      fs::remove_all(dir, ignored);
+    }
+  } remove{pattern};
+  a.output = pattern;
+  const std::string summary =
+      RunSectionInto(a, SectionPath::Plane(r.point, r.normal, r.thickness), state.settings.clip, /*print=*/false);
+  const fs::path out(pattern);
+  return nlohmann::json{{"type", "section"},
+                        {"seq", seq},
+                        {"summary", nlohmann::json::parse(summary)},
+                        {"dxf", ReadWhole(out / "section.dxf")},
+                        {"svg", ReadWhole(out / "section.svg")},
+                        {"csv", ReadWhole(out / "section.csv")},
+                        {"png_base64", Base64(ReadWhole(out / "section.png"))}}
+      .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 }  // namespace
 
 int RunView(const ViewArgs& args) {
@@ -125,6 +197,7 @@ int RunView(const ViewArgs& args) {
     }
   } cleanup{source.temporary_dir, temporary};
 
+  source.settings.clip = ParseClip(args.clip.box, args.clip.planes);
   const render::Archive archive(source.archive_dir);
   view::RangeRenderer renderer = view::LocalRangeRenderer(archive);
   std::string stop = "stop";
@@ -153,6 +226,10 @@ int RunView(const ViewArgs& args) {
   options.host = args.host;
   options.threads = args.threads;
   options.log = [](const std::string& line) { LogInfo(line); };
+  options.section = [&source, &archive, threads = args.threads](uint64_t seq, const view::SectionRequest& r,
+                                                                const view::ViewState& state) {
+    return SectionReply(source.archive_dir, archive.manifest(), threads, seq, r, state);
+  };
   if (args.host != "127.0.0.1" && args.host != "localhost" && args.host != "::1") {
     LogWarning("serving on " + args.host + ": anyone who can reach this machine and has the address with its token "
                "sees the data; the connection is not encrypted");

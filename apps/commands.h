@@ -6,6 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "core/clip.h"
+#include "core/section_path.h"
+
 namespace candi::app {
 
 enum ExitCode : int { kOk = 0, kUsage = 1, kBadInput = 2, kInternal = 3 };
@@ -59,6 +62,12 @@ struct OpacityArgs {
 };
 int RunOpacity(const OpacityArgs& args);
 
+// --clip-box and --clip-plane (apps/arg_parse.h ParseClip).
+struct ClipArgs {
+  std::string box;
+  std::vector<std::string> planes;
+};
+
 struct RenderArgs {
   std::vector<std::string> inputs;
   std::string output;                 // 8-bit PNG
@@ -81,8 +90,36 @@ struct RenderArgs {
   std::string columns;                // XYZ/PTS inputs
   std::string up, from;               // default view: world up (x,y,z), viewing direction
   std::string cameras;                // default view: oriented by a COLMAP model's cameras
+  ClipArgs clip;                      // only points inside are drawn
 };
 int RunRender(const RenderArgs& args);
+
+// candi section (cmd_section.cc): a slab's points as an image and section lines.
+struct SectionArgs {
+  std::vector<std::string> inputs;    // an archive, a build directory, or point files
+  std::string output;                 // a directory: section.png .dxf .csv .svg .json
+  std::string plane;                  // px,py,pz,nx,ny,nz
+  std::string through;                // x1,y1[,z1],x2,y2[,z2]: the vertical plane through two points
+  std::string path;                   // x1,y1,x2,y2,...: an unrolled section along a plan polyline
+  double thickness = 0;               // m, > 0
+  double spacing = 0, max_gap = 0;    // section lines (0: automatic)
+  int width = 1600;                   // image pixels across (with --pixel 0)
+  double pixel = 0;                   // m per pixel (0: from --width)
+  int repeat_level = 100;             // L of the image
+  unsigned long long seed = 1;
+  double point_size = 2.0;
+  double opacity = 0.7;               // of a pixel one slab point covers (its copies: opacity x L)
+  std::string colours = "layer";      // layer | data
+  std::string background = "255,255,255";
+  std::vector<std::string> layers;    // only these layers (empty: all)
+  std::string columns;
+  int threads = 0;
+  ClipArgs clip;
+};
+int RunSection(const SectionArgs& args);
+// The outputs of `candi section` for a given slab and clipping (world) into args.output; returns
+// the summary (section.json's text). `print`: the table on stdout.
+std::string RunSectionInto(const SectionArgs& args, const SectionPath& section, const ClipRegion& clip, bool print);
 
 // candi view (cmd_view.cc): the browser viewer (view/).
 struct ViewArgs {
@@ -94,6 +131,7 @@ struct ViewArgs {
   std::string cameras;                // a COLMAP model: up and viewing side from its cameras
   std::string columns;                // XYZ/PTS inputs
   int threads = 0;
+  ClipArgs clip;                      // the clipping the page starts with
 };
 int RunView(const ViewArgs& args);
 
@@ -110,6 +148,18 @@ struct BenchViewArgs {
   bool keep = false;                  // keep the archives, and reuse kept ones (pack s 0)
 };
 int RunBenchView(const BenchViewArgs& args);
+
+// candi bench section (cmd_bench_section.cc): section accuracy vs thickness, and time at scale.
+struct BenchSectionArgs {
+  std::string sizes = "1e7";
+  bool billion = false;
+  std::string work_dir = "candi-bench-view";  // shared with bench view: --keep reuses its archives
+  std::string drawing = "examples/borobudur/foundation.dxf";  // the accuracy table ("" skips it)
+  double thickness = 0.1;
+  int threads = 0;
+  bool keep = false;
+};
+int RunBenchSection(const BenchSectionArgs& args);
 
 struct BenchArgs {
   std::string what = "render";        // render

@@ -140,6 +140,35 @@ TEST(RenderCli, CamerasOrientTheDefaultView) {
   EXPECT_FALSE(FileExists(dir.File("bad.png")));
 }
 
+// Clipping: the red square (z = 95) cut away by a half-space, or kept alone by a box; in memory,
+// streamed and from an archive. Bad clip options name themselves.
+TEST(RenderCli, ClipPlaneAndClipBoxKeepOnlyTheirSide) {
+  Scene s;
+  const std::string archive = s.dir.File("both.archive");
+  ASSERT_EQ(RunCandi("pack " + s.Inputs() + " -o " + archive).code, 0);
+  for (const std::string& in : {s.Inputs() + " --mode memory", archive}) {  // stream mode: perspective only
+    const std::string below = s.dir.File("below.png"), box = s.dir.File("box.png");
+    Result r = RunCandi("render " + in + " --view " + s.view + " -L 8 --clip-plane 0,0,92,0,0,-1 -o " + below);
+    ASSERT_EQ(r.code, 0) << r.output;
+    const Image8 blue = ReadPng(below).image8;
+    EXPECT_LT(MeanChannel(blue, 0), 1.0) << in;  // no red left
+    EXPECT_GT(MeanChannel(blue, 2), 20.0) << in;
+    EXPECT_NE(ReadPng(below).text.at("candi:clip").find("92"), std::string::npos);
+    r = RunCandi("render " + in + " --view " + s.view + " -L 8 --clip-box 500000,4500000,94,500010,4500010,96 -o " + box);
+    ASSERT_EQ(r.code, 0) << r.output;
+    const Image8 red = ReadPng(box).image8;
+    EXPECT_LT(MeanChannel(red, 2), 1.0) << in;
+    EXPECT_GT(MeanChannel(red, 0), 20.0) << in;
+  }
+  for (const std::string bad : {"--clip-plane 0,0,92,0,0,0", "--clip-plane 1,2,3", "--clip-box 0,0,0,-1,1,1",
+                                 "--clip-box 0,0,0,1,1,nan"}) {
+    const Result r = RunCandi("render " + s.Inputs() + " -o " + s.dir.File("x.png") + " " + bad);
+    EXPECT_EQ(r.code, 1) << bad;
+    EXPECT_NE(r.output.find(bad.substr(0, bad.find(' '))), std::string::npos) << r.output;
+    EXPECT_FALSE(FileExists(s.dir.File("x.png")));
+  }
+}
+
 TEST(RenderCli, MergesInputsAndRecordsSeedAndRepeatLevel) {
   Scene s;
   const std::string out = s.dir.File("out.png");
