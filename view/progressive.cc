@@ -56,6 +56,7 @@ double ProgressiveImage::Step(int count, const std::function<bool()>& cancel) {
   o.ensemble_begin = drawn_;
   o.ensemble_end = drawn_ + count;
   o.layer_fraction = state_.settings.layer_fraction;
+  o.clip = state_.settings.clip.ToLocal(archive_.manifest().frame.origin);
   // Previews read only their slices of each chunk; the step that completes the image checks the
   // hashes of the chunks it draws (once per chunk: Archive remembers), as candi render does.
   o.verify = drawn_ + count == L;
@@ -88,17 +89,42 @@ int StepPolicy::Ensembles(double ms_per_ensemble, int step) const {
   return std::max(1, static_cast<int>(std::min(budget / per, 1e6)));
 }
 
+namespace {
+
+// Per point of a chunk: whether the layer's share draws it (some ensemble's run holds it).
+std::vector<char> DrawnPoints(const render::ArchiveChunk& c, const PickOptions& o) {
+  const double f = o.layer_fraction.empty() ? 1.0 : o.layer_fraction[c.layer];
+  std::vector<char> drawn(c.count, f >= 1 ? 1 : 0);
+  if (f >= 1) return drawn;
+  std::vector<render::PointRun> runs;
+  for (int e = 0; e < o.repeat_level; ++e) {
+    runs.clear();
+    render::EnsembleSlices(c.count, c.first, o.repeat_level, o.seed, e, f, &runs);
+    for (const render::PointRun& r : runs) std::fill(drawn.begin() + r.begin, drawn.begin() + r.end, 1);
+  }
+  return drawn;
+}
+
+}  // namespace
+
 PickResult PickPoint(const render::Archive& archive, const render::Camera& camera, double u, double v,
-                     double radius_px) {
+                     const PickOptions& o) {
   camera.Check();
   const render::Camera::Projector p = camera.MakeProjector();
   const render::ArchiveManifest& m = archive.manifest();
-  PickResult best;
-  best.depth = std::numeric_limits<double>::infinity();
-  const double r2 = radius_px * radius_px;
+  if (!o.layer_fraction.empty() && o.layer_fraction.size() != m.layers.size()) {
+    throw std::invalid_argument("pick: " + std::to_string(o.layer_fraction.size()) + " layer shares for " +
+                                std::to_string(m.layers.size()) + " layers");
+  }
+  std::vector<PickHit> best(m.layers.size());
+  for (PickHit& h : best) h.depth = std::numeric_limits<double>::infinity();
+  const double r2 = o.radius_px * o.radius_px;
   PointCloud points;
   for (size_t k = 0; k < m.chunks.size(); ++k) {
-    const Box3d& box = m.chunks[k].quantizer.box;
+    const render::ArchiveChunk& chunk = m.chunks[k];
+    if (!o.layer_fraction.empty() && o.layer_fraction[chunk.layer] == 0) continue;  // hidden
+    const Box3d& box = chunk.quantizer.box;
+    if (o.clip.Classify(box) == ClipRelation::kOutside) continue;
     double lo_u = std::numeric_limits<double>::infinity(), hi_u = -lo_u, lo_v = lo_u, hi_v = -lo_u;
     bool behind = false;
     for (int c = 0; c < 8 && !behind; ++c) {
@@ -110,22 +136,35 @@ PickResult PickPoint(const render::Archive& archive, const render::Camera& camer
     }
     // A box partly behind the camera may wrap: read it. Otherwise its projection (the hull of
     // its corners' projections) must hold the pixel's neighbourhood.
-    if (!behind && (u + radius_px < lo_u || u - radius_px > hi_u || v + radius_px < lo_v || v - radius_px > hi_v)) {
+    if (!behind && (u + o.radius_px < lo_u || u - o.radius_px > hi_u || v + o.radius_px < lo_v || v - o.radius_px > hi_v)) {
       continue;
     }
     archive.ReadChunk(k, &points, /*verify=*/true);
+    const std::vector<char> drawn = DrawnPoints(chunk, o);
+    PickHit& b = best[chunk.layer];
     for (size_t i = 0; i < points.size(); ++i) {
       double pu, pv, depth;
-      if (!p.Project(points.positions[i], &pu, &pv, &depth)) continue;
+      if (!drawn[i] || !p.Project(points.positions[i], &pu, &pv, &depth)) continue;
       const double du = pu - u, dv = pv - v;
-      if (du * du + dv * dv > r2 || depth >= best.depth) continue;
-      best.hit = true;
-      best.depth = depth;
-      best.local = points.positions[i];
+      if (du * du + dv * dv > r2 || depth >= b.depth) continue;
+      if (!o.clip.Contains(points.positions[i])) continue;
+      b.layer = chunk.layer;
+      b.depth = depth;
+      b.local = points.positions[i];
     }
   }
-  if (!best.hit) best.depth = 0;
-  return best;
+  PickResult result;
+  for (const PickHit& h : best) {
+    if (std::isfinite(h.depth)) result.hits.push_back(h);
+  }
+  std::stable_sort(result.hits.begin(), result.hits.end(),
+                   [](const PickHit& a, const PickHit& b) { return a.depth < b.depth; });
+  if (!result.hits.empty()) {
+    result.hit = true;
+    result.local = result.hits[0].local;
+    result.depth = result.hits[0].depth;
+  }
+  return result;
 }
 
 }  // namespace candi::view

@@ -68,14 +68,30 @@ struct StepPolicy {
   int Ensembles(double ms_per_ensemble, int step) const;
 };
 
-// The nearest archived point drawn within `radius_px` of pixel (u, v) of `local_camera`
-// (1-pixel points; reads only the chunks whose projected boxes hold the pixel).
-struct PickResult {
-  bool hit = false;
+// The archived points drawn within `radius_px` of pixel (u, v) of `local_camera` (1-pixel
+// points; reads only the chunks whose projected boxes hold the pixel): the nearest of each layer,
+// nearest first. Only what is shown counts: a layer at share 0 is skipped, a layer at share f < 1
+// offers only the points its ensembles draw (render/archive.h EnsembleSlices at repeat level L
+// and seed), and points outside `clip` (the archive's frame) are skipped.
+struct PickOptions {
+  double radius_px = 3;
+  int repeat_level = 100;
+  uint64_t seed = 1;
+  std::vector<double> layer_fraction;  // empty: all 1
+  ClipRegion clip;                     // archive frame
+};
+struct PickHit {
+  int layer = 0;
   Eigen::Vector3d local = Eigen::Vector3d::Zero();  // archive frame
   double depth = 0;
 };
+struct PickResult {
+  bool hit = false;
+  Eigen::Vector3d local = Eigen::Vector3d::Zero();  // archive frame: the nearest hit
+  double depth = 0;
+  std::vector<PickHit> hits;                        // per layer, nearest first
+};
 PickResult PickPoint(const render::Archive& archive, const render::Camera& local_camera, double u, double v,
-                     double radius_px);
+                     const PickOptions& options);
 
 }  // namespace candi::view

@@ -66,14 +66,33 @@ ViewSettings ParseSettings(const json& j) {
     } else if (k == "layers") {
       if (!v.is_array() || v.size() > kMaxLayers) Bad(where, "expected an array of at most 1024 numbers");
       for (size_t i = 0; i < v.size(); ++i) s.layer_fraction.push_back(Number(v[i], where + "/" + std::to_string(i), 0, 16));
+    } else if (k == "clip") {
+      if (!v.is_array() || v.size() > kMaxClipPlanes) Bad(where, "expected an array of at most 16 planes");
+      for (size_t i = 0; i < v.size(); ++i) {
+        const std::string w = where + "/" + std::to_string(i);
+        if (!v[i].is_array() || v[i].size() != 6) Bad(w, "expected [px, py, pz, nx, ny, nz]");
+        double x[6];
+        for (int c = 0; c < 6; ++c) x[c] = Number(v[i][c], w + "/" + std::to_string(c), -1e9, 1e9);
+        const Eigen::Vector3d n(x[3], x[4], x[5]);
+        if (!(n.norm() > 1e-12)) Bad(w, "the normal is zero");
+        s.clip.planes.push_back({Eigen::Vector3d(x[0], x[1], x[2]), n});
+      }
     } else {
-      Bad(where, "unknown key (known: repeat_level point_size background brightness opaque seed layers)");
+      Bad(where, "unknown key (known: repeat_level point_size background brightness opaque seed layers clip)");
     }
   }
   return s;
 }
 
 }  // namespace
+
+std::vector<std::array<double, 6>> ClipPlaneArrays(const ClipRegion& clip) {
+  std::vector<std::array<double, 6>> out;
+  for (const ClipPlane& p : clip.planes) {
+    out.push_back({p.point.x(), p.point.y(), p.point.z(), p.normal.x(), p.normal.y(), p.normal.z()});
+  }
+  return out;
+}
 
 bool SameImage(const ViewState& a, const ViewState& b) {
   const render::Camera &x = a.camera, &y = b.camera;
@@ -96,13 +115,14 @@ ClientMessage ParseClientMessage(const std::string& text) {
   }
   if (!j.is_object()) Bad("/", "expected a JSON object");
   const auto type = j.find("type");
-  if (type == j.end() || !type->is_string()) Bad("/type", "expected \"view\" or \"pick\"");
+  if (type == j.end() || !type->is_string()) Bad("/type", "expected \"view\", \"pick\" or \"section\"");
   ClientMessage m;
   const std::string t = type->get<std::string>();
   if (t == "view") m.type = MessageType::kView;
   else if (t == "pick") m.type = MessageType::kPick;
-  else Bad("/type", "unknown message type (known: view pick)");
-  bool has_camera = false;
+  else if (t == "section") m.type = MessageType::kSection;
+  else Bad("/type", "unknown message type (known: view pick section)");
+  bool has_camera = false, has_plane = false;
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& k = it.key();
     const json& v = it.value();
@@ -121,9 +141,22 @@ ClientMessage ParseClientMessage(const std::string& text) {
       m.view.settings = ParseSettings(v);
     } else if (m.type == MessageType::kPick && (k == "x" || k == "y")) {
       (k == "x" ? m.x : m.y) = Number(v, "/" + k, -1e6, 1e6);
+    } else if (m.type == MessageType::kSection && (k == "point" || k == "normal")) {
+      if (!v.is_array() || v.size() != 3) Bad("/" + k, "expected [x, y, z]");
+      Eigen::Vector3d x;
+      for (int c = 0; c < 3; ++c) x[c] = Number(v[c], "/" + k + "/" + std::to_string(c), -1e9, 1e9);
+      (k == "point" ? m.section.point : m.section.normal) = x;
+      has_plane |= k == "normal";
+    } else if (m.type == MessageType::kSection && k == "thickness") {
+      m.section.thickness = Number(v, "/thickness", 0, 1e4);
+      if (!(m.section.thickness > 0)) Bad("/thickness", "must be > 0 m");
     } else {
       Bad("/" + k, "unknown key for a " + t + " message");
     }
+  }
+  if (m.type == MessageType::kSection) {
+    if (!has_plane) Bad("/normal", "missing");
+    if (!(m.section.normal.norm() > 1e-12)) Bad("/normal", "the normal is zero");
   }
   if (m.type == MessageType::kView) {
     if (!has_camera) Bad("/camera", "missing");
@@ -160,11 +193,17 @@ std::string FrameMessage(const FrameHeader& h, const std::string& image) {
   return out;
 }
 
-std::string PickReply(uint64_t seq, bool hit, const Eigen::Vector3d& p, double depth) {
-  json j = {{"type", "pick"}, {"seq", seq}, {"hit", hit}};
-  if (hit) {
-    j["point"] = {p.x(), p.y(), p.z()};
-    j["depth"] = depth;
+std::string PickReply(uint64_t seq, const std::vector<PickHitWorld>& hits) {
+  json j = {{"type", "pick"}, {"seq", seq}, {"hit", !hits.empty()}};
+  if (!hits.empty()) {
+    j["point"] = {hits[0].world.x(), hits[0].world.y(), hits[0].world.z()};
+    j["depth"] = hits[0].depth;
+    j["layer"] = hits[0].layer;
+    json all = json::array();
+    for (const PickHitWorld& h : hits) {
+      all.push_back({{"layer", h.layer}, {"point", {h.world.x(), h.world.y(), h.world.z()}}, {"depth", h.depth}});
+    }
+    j["hits"] = all;
   }
   return j.dump();
 }

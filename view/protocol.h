@@ -9,24 +9,37 @@
 //                 "brightness": "auto" | "none" | gain (0, 100],
 //                 "opaque": false,             true: L = 1
 //                 "seed": 1,                   [0, 2^53]
-//                 "layers": [1, 0.5, 0]}}      per archive layer, the share of its points drawn,
+//                 "layers": [1, 0.5, 0],       per archive layer, the share of its points drawn,
 //                                              [0, 16] (0 hides it; opacity follows the point-number
 //                                              law, alpha' = 1 - (1 - alpha)^f); absent: all 1
-//   {"type": "pick", "seq": 8, "x": 512.5, "y": 300}   the nearest drawn point under a pixel of
-//                                              the last view (fly to a double-clicked point)
+//                 "clip": [[px, py, pz, nx, ny, nz], ...]}}   at most kMaxClipPlanes half-spaces
+//                                              (world; each keeps the side its normal points into):
+//                                              a clip box is six, a section slab two
+//   {"type": "pick", "seq": 8, "x": 512.5, "y": 300}   the drawn points under a pixel of the last
+//                                              view: only shown ones (not hidden layers, not clipped
+//                                              away, only the share of a layer that is drawn)
+//   {"type": "section", "seq": 9, "point": [x, y, z], "normal": [x, y, z], "thickness": t}
+//                                              the section lines of that slab (the last view's layers
+//                                              and clipping), as candi section writes them
 // Server -> page:
 //   binary frames: a 4-byte little-endian header length, the header (JSON: seq, ensembles,
 //   repeat_level, format "jpeg" | "png", width, height, gain, render_ms, converged), then the
 //   image file; the converged frame is PNG (lossless), the others JPEG.
-//   {"type": "pick", "seq": 8, "hit": true, "point": [x, y, z] (world), "depth": d}
+//   {"type": "pick", "seq": 8, "hit": true, "point": [x, y, z] (world), "depth": d, "layer": i,
+//    "hits": [{"layer": i, "point": [...], "depth": d}, ...]}   the nearest point of each layer
+//                                              under the pixel, nearest first ("point": the first)
+//   {"type": "section", "seq": 9, ...}         what the section exporter returns (dxf, svg, csv text
+//                                              and a summary), or {"type": "error", ...}
 //   {"type": "error", "message": "..."}
 // Limits: a message is at most kMaxMessageBytes; images at most kMaxImageSide pixels a side.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "core/clip.h"
 #include "core/point_cloud.h"
 #include "render/camera.h"
 
@@ -36,6 +49,18 @@ inline constexpr size_t kMaxMessageBytes = 16384;
 inline constexpr int kMaxImageSide = 4096;
 inline constexpr int kMaxRepeatLevel = 10000;
 inline constexpr size_t kMaxLayers = 1024;
+inline constexpr size_t kMaxClipPlanes = 16;
+
+inline bool SameClip(const ClipRegion& a, const ClipRegion& b) {
+  if (a.planes.size() != b.planes.size()) return false;
+  for (size_t i = 0; i < a.planes.size(); ++i) {
+    if (a.planes[i].point != b.planes[i].point || a.planes[i].normal != b.planes[i].normal) return false;
+  }
+  return true;
+}
+
+// The planes as the messages carry them: [px, py, pz, nx, ny, nz] each.
+std::vector<std::array<double, 6>> ClipPlaneArrays(const ClipRegion& clip);
 
 // What the page sets besides the camera.
 struct ViewSettings {
@@ -46,11 +71,13 @@ struct ViewSettings {
   bool opaque = false;
   uint64_t seed = 1;
   std::vector<double> layer_fraction;  // per archive layer; empty: all 1
+  ClipRegion clip;                     // world frame; empty: nothing clipped
   // L as drawn: 1 when opaque.
   int EffectiveRepeatLevel() const { return opaque ? 1 : repeat_level; }
   bool operator==(const ViewSettings& o) const {
     return repeat_level == o.repeat_level && point_size == o.point_size && background == o.background &&
-           brightness == o.brightness && opaque == o.opaque && seed == o.seed && layer_fraction == o.layer_fraction;
+           brightness == o.brightness && opaque == o.opaque && seed == o.seed && layer_fraction == o.layer_fraction &&
+           SameClip(clip, o.clip);
   }
 };
 
@@ -61,13 +88,20 @@ struct ViewState {
 };
 bool SameImage(const ViewState& a, const ViewState& b);
 
-enum class MessageType { kView, kPick };
+enum class MessageType { kView, kPick, kSection };
+
+// A section of the slab |(x - point) . n| <= thickness / 2 (world), n = normal / |normal|.
+struct SectionRequest {
+  Eigen::Vector3d point = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::UnitY();
+  double thickness = 0.1;   // m, (0, 1e4]
+};
 
 struct ClientMessage {
   MessageType type = MessageType::kView;
   uint64_t seq = 0;
   ViewState view;           // kView
   double x = 0, y = 0;      // kPick: pixel (continuous coordinates of the last view)
+  SectionRequest section;   // kSection
 };
 
 // Parses and checks one message. Throws std::invalid_argument naming the JSON path of the
@@ -84,7 +118,13 @@ struct FrameHeader {
 };
 std::string FrameMessage(const FrameHeader& header, const std::string& image);
 
-std::string PickReply(uint64_t seq, bool hit, const Eigen::Vector3d& world_point, double depth);
+struct PickHitWorld {
+  int layer = 0;
+  Eigen::Vector3d world = Eigen::Vector3d::Zero();
+  double depth = 0;
+};
+// `hits`: nearest first; empty: no hit.
+std::string PickReply(uint64_t seq, const std::vector<PickHitWorld>& hits);
 std::string ErrorReply(const std::string& message);
 
 }  // namespace candi::view

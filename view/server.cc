@@ -119,7 +119,7 @@ struct Client {
   std::optional<ViewState> wanted;     // the latest view the page sent
   uint64_t wanted_seq = 0;
   uint64_t wanted_generation = 0;      // bumped by every view message
-  std::deque<ClientMessage> picks;
+  std::deque<ClientMessage> picks;     // picks and sections, answered in turn
   int frames_outstanding = 0;          // posted to the socket, not yet written or dropped
   bool closed = false;
   std::weak_ptr<WsSession> session;
@@ -127,7 +127,7 @@ struct Client {
   std::unique_ptr<ProgressiveImage> image;
   uint64_t image_generation = 0, image_seq = 0;
   int steps = 0;                       // steps since the image started
-  std::optional<render::Camera> last_camera;  // of the image drawn (picks)
+  std::optional<ViewState> last_state;  // of the image drawn (picks, sections)
   std::atomic<uint64_t> generation{0};  // wanted_generation, for cancelling without the lock
 };
 
@@ -164,6 +164,8 @@ struct Server::Impl {
   void Accept();
   void RenderLoop();
   bool StepClient(const std::shared_ptr<Client>& c);
+  std::string Pick(const ClientMessage& pick, const ViewState& state);
+  std::string Section(const ClientMessage& m, const ViewState& state);
 };
 
 namespace {
@@ -490,6 +492,27 @@ void Server::Impl::Accept() {
   });
 }
 
+std::string Server::Impl::Pick(const ClientMessage& pick, const ViewState& state) {
+  const Eigen::Vector3d& origin = archive.manifest().frame.origin;
+  render::Camera local = state.camera;
+  local.eye -= origin;
+  local.target -= origin;
+  PickOptions o;
+  o.repeat_level = state.settings.EffectiveRepeatLevel();
+  o.seed = state.settings.seed;
+  o.layer_fraction = state.settings.layer_fraction;
+  o.clip = state.settings.clip.ToLocal(origin);
+  const PickResult r = PickPoint(archive, local, pick.x, pick.y, o);
+  std::vector<PickHitWorld> hits;
+  for (const PickHit& h : r.hits) hits.push_back({h.layer, h.local + origin, h.depth});
+  return PickReply(pick.seq, hits);
+}
+
+std::string Server::Impl::Section(const ClientMessage& m, const ViewState& state) {
+  if (!options.section) return ErrorReply("this viewer cannot export sections");
+  return options.section(m.seq, m.section, state);
+}
+
 // One step of one page: its picks, then (if its image is not converged and the page has room
 // for a frame) the next batch of ensembles. Returns false when the page had nothing to do.
 bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
@@ -500,7 +523,7 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
     std::lock_guard<std::mutex> lock(c->mutex);
     if (c->closed) return false;
     const bool moved = c->wanted && c->wanted_generation != c->image_generation;
-    if (!c->picks.empty() && c->last_camera) {
+    if (!c->picks.empty() && c->last_state) {
       pick = c->picks.front();
       c->picks.pop_front();
     } else if (c->frames_outstanding >= 2 || (c->frames_outstanding == 1 && !moved)) {
@@ -518,11 +541,12 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
   std::shared_ptr<WsSession> session = c->session.lock();
   if (!session) return false;
   if (pick) {
-    render::Camera local = *c->last_camera;
-    local.eye -= archive.manifest().frame.origin;
-    local.target -= archive.manifest().frame.origin;
-    const PickResult r = PickPoint(archive, local, pick->x, pick->y, 3.0);
-    const std::string reply = PickReply(pick->seq, r.hit, r.local + archive.manifest().frame.origin, r.depth);
+    std::string reply;
+    try {
+      reply = pick->type == MessageType::kSection ? Section(*pick, *c->last_state) : Pick(*pick, *c->last_state);
+    } catch (const std::exception& e) {  // a corrupt chunk, a failed export
+      reply = ErrorReply(std::string(pick->type == MessageType::kSection ? "section" : "pick") + " failed: " + e.what());
+    }
     net::post(io, [session, reply] { session->QueueText(reply); });
     return true;
   }
@@ -540,7 +564,7 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
     c->image_generation = generation;
     c->image_seq = seq;
     c->steps = 0;
-    c->last_camera = restart->camera;
+    c->last_state = *restart;
   }
   ProgressiveImage& image = *c->image;
   const int count = StepPolicy{options.first_frame_ms, options.step_ms}.Ensembles(image.ms_per_ensemble(), c->steps);

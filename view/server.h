@@ -38,6 +38,9 @@ struct ServerOptions {
   double first_frame_ms = 40, step_ms = 400;
   int jpeg_quality = 85;
   std::function<void(const std::string&)> log;  // one line per event worth knowing (may be null)
+  // Answers a section message (its seq, the slab, the page's last view: layers and clipping)
+  // with the reply's JSON text; null: sections are refused. Runs on the render thread.
+  std::function<std::string(uint64_t seq, const SectionRequest&, const ViewState&)> section;
 };
 
 struct ServerStats {

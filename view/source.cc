@@ -162,7 +162,8 @@ std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
               {"background", {settings.background.r, settings.background.g, settings.background.b}},
               {"brightness", settings.brightness < 0 ? json("auto") : json(settings.brightness)},
               {"opaque", settings.opaque},
-              {"seed", settings.seed}}}};
+              {"seed", settings.seed},
+              {"clip", ClipPlaneArrays(settings.clip)}}}};
   return s.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 

@@ -46,6 +46,38 @@ TEST(Protocol, ParsesAViewAndAPick) {
   EXPECT_EQ(p.y, -1);
 }
 
+TEST(Protocol, ParsesClippingAndSections) {
+  std::string text = kView;
+  text.insert(text.rfind("}}"), R"(,"clip":[[712345.678,9162345.1,0,0,1,0],[0,0,250.5,0,0,-1]])");
+  const ClientMessage m = ParseClientMessage(text);
+  ASSERT_EQ(m.view.settings.clip.planes.size(), 2u);
+  EXPECT_EQ(m.view.settings.clip.planes[0].point, Eigen::Vector3d(712345.678, 9162345.1, 0));
+  EXPECT_EQ(m.view.settings.clip.planes[1].normal, Eigen::Vector3d(0, 0, -1));
+  EXPECT_FALSE(m.view.settings == ParseClientMessage(kView).view.settings);  // a new image
+  const ClientMessage s = ParseClientMessage(
+      R"({"type":"section","seq":9,"point":[1,2,3],"normal":[0,1,0],"thickness":0.25})");
+  EXPECT_EQ(s.type, MessageType::kSection);
+  EXPECT_EQ(s.section.point, Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(s.section.thickness, 0.25);
+  auto refused = [](const std::string& bad, const std::string& where) {
+    try {
+      ParseClientMessage(bad);
+      ADD_FAILURE() << "accepted: " << bad;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(where), std::string::npos) << e.what();
+    }
+  };
+  refused(R"({"type":"section","point":[1,2,3],"normal":[0,0,0],"thickness":1})", "/normal");
+  refused(R"({"type":"section","point":[1,2,3],"normal":[0,1,0],"thickness":0})", "/thickness");
+  refused(R"({"type":"section","point":[1,2,3],"thickness":1})", "/normal: missing");
+  std::string bad = kView;
+  bad.insert(bad.rfind("}}"), R"(,"clip":[[0,0,0,0,0,0]])");
+  refused(bad, "/settings/clip/0");
+  bad = kView;
+  bad.insert(bad.rfind("}}"), R"(,"clip":[[0,0,0,1,0]])");
+  refused(bad, "/settings/clip/0");
+}
+
 TEST(Protocol, RefusesMalformedMessagesNamingTheField) {
   auto refused = [](const std::string& text, const std::string& where) {
     try {
@@ -225,12 +257,85 @@ TEST(Progressive, PickFindsTheNearestPointUnderThePixel) {
     }
   }
   ASSERT_LT(best, 1e300) << "the centre shows the solid";
-  const PickResult r = PickPoint(archive, local, u, v, 3.0);
+  const PickResult r = PickPoint(archive, local, u, v, PickOptions{});
   ASSERT_TRUE(r.hit);
   EXPECT_EQ(r.local, truth);
   EXPECT_DOUBLE_EQ(r.depth, best);
   // Beside the image: nothing.
-  EXPECT_FALSE(PickPoint(archive, local, -500, -500, 3.0).hit);
+  EXPECT_FALSE(PickPoint(archive, local, -500, -500, PickOptions{}).hit);
+}
+
+// Two layers, one in front of the other: the pick lists both, nearest first; a hidden layer, a
+// clipped-away one and the points a layer's share does not draw are never picked.
+TEST(Progressive, PickTakesOnlyWhatIsShown) {
+  TempDir dir;
+  auto wall = [](double y, uint8_t red) {
+    PointCloud c;
+    PointSchema schema;
+    schema.colors = true;
+    c.SetSchema(schema);
+    for (int i = 0; i < 200; ++i) {
+      for (int j = 0; j < 200; ++j) {
+        c.positions.push_back({-1 + 0.01 * i, y, -1 + 0.01 * j});
+        c.colors.push_back({red, 0, 0});
+      }
+    }
+    return c;
+  };
+  const PointCloud front = wall(0, 255), back = wall(2, 100);
+  render::PackOptions po;
+  po.chunk_points = 4096;
+  render::PackArchive(po, {render::PackInputFromGenerator("front", 40000, 40000, [&](uint64_t, uint64_t) { return front; }),
+                           render::PackInputFromGenerator("back", 40000, 40000, [&](uint64_t, uint64_t) { return back; })},
+                      dir.File("two.archive"));
+  const render::Archive archive(dir.File("two.archive"));
+  ASSERT_EQ(archive.manifest().layers.size(), 2u);
+  render::Camera camera;
+  camera.width = 64, camera.height = 64;
+  camera.eye = Eigen::Vector3d(0, -5, 0) - archive.manifest().frame.origin;
+  camera.target = Eigen::Vector3d(0, 0, 0) - archive.manifest().frame.origin;
+  PickOptions o;
+  PickResult r = PickPoint(archive, camera, 32, 32, o);
+  ASSERT_EQ(r.hits.size(), 2u);
+  EXPECT_EQ(r.hits[0].layer, 0);
+  EXPECT_EQ(r.hits[1].layer, 1);
+  EXPECT_LT(r.hits[0].depth, r.hits[1].depth);
+  EXPECT_NEAR((r.local + archive.manifest().frame.origin).y(), 0, 1e-3);
+  // The front layer hidden: the back one's point.
+  o.layer_fraction = {0, 1};
+  r = PickPoint(archive, camera, 32, 32, o);
+  ASSERT_EQ(r.hits.size(), 1u);
+  EXPECT_EQ(r.hits[0].layer, 1);
+  EXPECT_NEAR((r.local + archive.manifest().frame.origin).y(), 2, 1e-3);
+  // The front layer clipped away (keep y >= 1).
+  o.layer_fraction = {};
+  o.clip = ClipRegion{{{Eigen::Vector3d(0, 1, 0) - archive.manifest().frame.origin, Eigen::Vector3d::UnitY()}}};
+  r = PickPoint(archive, camera, 32, 32, o);
+  ASSERT_TRUE(r.hit);
+  EXPECT_EQ(r.hits[0].layer, 1);
+  // A share of 0.2 at L = 10: the picked point of the front layer is one its ensembles draw.
+  o.clip = {};
+  o.layer_fraction = {0.2, 1};
+  o.repeat_level = 10;
+  o.seed = 3;
+  r = PickPoint(archive, camera, 32, 32, o);
+  ASSERT_FALSE(r.hits.empty());
+  ASSERT_EQ(r.hits[0].layer, 0);
+  bool drawn = false;
+  PointCloud points;
+  for (size_t k = 0; k < archive.manifest().chunks.size(); ++k) {
+    const render::ArchiveChunk& c = archive.manifest().chunks[k];
+    if (c.layer != 0) continue;
+    archive.ReadChunk(k, &points);
+    for (int e = 0; e < 10; ++e) {
+      std::vector<render::PointRun> runs;
+      render::EnsembleSlices(c.count, c.first, 10, 3, e, 0.2, &runs);
+      for (const render::PointRun& run : runs) {
+        for (uint64_t i = run.begin; i < run.end; ++i) drawn |= points.positions[i] == r.hits[0].local;
+      }
+    }
+  }
+  EXPECT_TRUE(drawn);
 }
 
 TEST(Progressive, FirstViewKeepsUpUpInSurveyAndColmapFrames) {

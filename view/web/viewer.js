@@ -131,9 +131,24 @@
       onFrame(event.data);
     };
   }
+  const pending = new Map();  // seq -> resolve, for picks and sections
+  function request(message) {
+    return new Promise((resolve) => {
+      seq += 1;
+      pending.set(seq, { resolve, type: message.type });
+      send(Object.assign({ seq }, message));
+    });
+  }
   function onText(m) {
-    if (m.type === 'pick' && m.hit) flyTo(m.point);
-    if (m.type === 'error') $('status').textContent = 'server: ' + m.message;
+    if ((m.type === 'pick' || m.type === 'section') && pending.has(m.seq)) {
+      pending.get(m.seq).resolve(m);
+      pending.delete(m.seq);
+    }
+    if (m.type === 'error') {
+      $('status').textContent = 'server: ' + m.message;
+      // A failed pick or section has no seq: it answers the oldest one waiting.
+      for (const [k, p] of pending) { p.resolve(m); pending.delete(k); break; }
+    }
   }
   function onFrame(buffer) {
     const view = new DataView(buffer);
@@ -193,11 +208,22 @@
   canvas.addEventListener('pointerup', release);
   canvas.addEventListener('pointercancel', release);
   canvas.addEventListener('wheel', (e) => { e.preventDefault(); zoom(Math.exp(e.deltaY * 0.001)); }, { passive: false });
-  canvas.addEventListener('dblclick', (e) => {
+  function pixelOf(e) {
     const rect = canvas.getBoundingClientRect();
-    seq += 1;
-    send({ type: 'pick', seq, x: (e.clientX - rect.left) * camera.width / rect.width,
-           y: (e.clientY - rect.top) * camera.height / rect.height });
+    return [(e.clientX - rect.left) * camera.width / rect.width, (e.clientY - rect.top) * camera.height / rect.height];
+  }
+  canvas.addEventListener('dblclick', (e) => {
+    const [x, y] = pixelOf(e);
+    request({ type: 'pick', x, y }).then((m) => { if (m.hit) flyTo(m.point); });
+  });
+  // In measure mode a click (a press and release that did not move) picks a point.
+  let press = null;
+  canvas.addEventListener('pointerdown', (e) => { press = { x: e.clientX, y: e.clientY, button: e.button }; });
+  canvas.addEventListener('pointerup', (e) => {
+    if (!press || press.button !== 0 || !$('measure').checked) return;
+    if (Math.hypot(e.clientX - press.x, e.clientY - press.y) > 3) return;
+    const [x, y] = pixelOf(e);
+    measureAt(x, y);
   });
   window.addEventListener('keydown', (e) => {
     if (e.target !== canvas && e.target !== document.body) return;
@@ -209,6 +235,7 @@
     else if (e.key === 'r' || e.key === 'R') resetView();
     else if (e.key === 'o' || e.key === 'O') { $('projection').value = camera.projection === 'orthographic' ? 'perspective' : 'orthographic'; onProjection(); }
     else if (e.key === 't' || e.key === 'T') { $('opaque').checked = !$('opaque').checked; readSettings(); }
+    else if (e.key === 'm' || e.key === 'M') { $('measure').checked = !$('measure').checked; }
   });
   window.addEventListener('resize', () => fitCanvas(false));
 
@@ -330,6 +357,223 @@
     changed();
   });
 
+  // ---- measuring: picked points in survey coordinates ----------------------------------------
+  const measurements = [];  // { hits: the pick's hits (nearest first), index: the one used }
+  const at = (m) => m.hits[m.index];
+  const layerName = (i) => (scene.layers[i] ? scene.layers[i].name : 'layer ' + i);
+  function measureAt(x, y) {
+    return request({ type: 'pick', x, y }).then((m) => {
+      if (!m.hit) { $('status').textContent = 'nothing shown under that pixel'; return null; }
+      const last = measurements[measurements.length - 1];
+      if (last && at(last).point.every((v, k) => v === m.hits[0].point[k])) return last;  // a double click
+      measurements.push({ hits: m.hits, index: 0 });
+      showMeasurements();
+      return measurements[measurements.length - 1];
+    });
+  }
+  // Between consecutive points: distance, horizontal distance, height difference.
+  function segments() {
+    const out = [];
+    for (let i = 1; i < measurements.length; ++i) {
+      const a = at(measurements[i - 1]).point, b = at(measurements[i]).point, d = sub(b, a);
+      out.push({ from: i, to: i + 1, distance: norm(d), horizontal: Math.hypot(d[0], d[1]), dz: d[2] });
+    }
+    return out;
+  }
+  function showMeasurements() {
+    const body = $('measurements').querySelector('tbody');
+    body.textContent = '';
+    measurements.forEach((m, i) => {
+      const tr = document.createElement('tr');
+      const h = at(m);
+      const cells = [String(i + 1), layerName(h.layer) + (m.hits.length > 1 ? ' (' + (m.index + 1) + '/' + m.hits.length + ')' : ''),
+        h.point[0].toFixed(3), h.point[1].toFixed(3), h.point[2].toFixed(3)];
+      for (const c of cells) { const td = document.createElement('td'); td.textContent = c; tr.appendChild(td); }
+      const td = document.createElement('td');
+      if (m.hits.length > 1) {
+        const behind = document.createElement('button');
+        behind.textContent = 'behind';
+        behind.title = 'the next shown layer\'s point under the same pixel';
+        behind.addEventListener('click', () => { m.index = (m.index + 1) % m.hits.length; showMeasurements(); });
+        td.appendChild(behind);
+      }
+      const remove = document.createElement('button');
+      remove.textContent = '×';
+      remove.addEventListener('click', () => { measurements.splice(i, 1); showMeasurements(); });
+      td.appendChild(remove);
+      tr.appendChild(td);
+      body.appendChild(tr);
+    });
+    const lines = segments().map((g) => g.from + '→' + g.to + ': ' + g.distance.toFixed(3) + ' m · horizontal ' +
+      g.horizontal.toFixed(3) + ' · Δz ' + (g.dz >= 0 ? '+' : '') + g.dz.toFixed(3));
+    const total = segments().reduce((t, g) => t + g.distance, 0);
+    $('measure-summary').textContent = lines.join('\n') + (lines.length > 1 ? '\ntotal ' + total.toFixed(3) + ' m' : '');
+    $('measure-summary').style.whiteSpace = 'pre-line';
+    overlayKey = '';
+  }
+  function measurementsCsv() {
+    let out = 'point,layer,x,y,z,distance_m,horizontal_m,dz_m\n';
+    const g = segments();
+    measurements.forEach((m, i) => {
+      const h = at(m), s = i > 0 ? g[i - 1] : null;
+      out += [i + 1, JSON.stringify(layerName(h.layer)), ...h.point.map((v) => v.toFixed(4)),
+        s ? s.distance.toFixed(4) : '', s ? s.horizontal.toFixed(4) : '', s ? s.dz.toFixed(4) : ''].join(',') + '\n';
+    });
+    return out;
+  }
+  function measurementsJson() {
+    return JSON.stringify({ frame: 'world (survey) coordinates, metres', archive: scene.title,
+      points: measurements.map((m, i) => ({ index: i + 1, layer: layerName(at(m).layer), point: at(m).point })),
+      segments: segments() }, null, 2) + '\n';
+  }
+  $('measure-csv').addEventListener('click', () => download('measurements.csv', new Blob([measurementsCsv()], { type: 'text/csv' })));
+  $('measure-json').addEventListener('click', () => download('measurements.json', new Blob([measurementsJson()], { type: 'application/json' })));
+  $('measure-clear').addEventListener('click', () => { measurements.length = 0; showMeasurements(); });
+
+  // The overlay: measured points and the lines between them, projected as the server projects.
+  const overlay = $('overlay'), octx = overlay.getContext('2d');
+  let overlayKey = '';
+  function project(p) {
+    const b = basis(), d = sub(p, camera.eye);
+    const x = dot(d, b.r), y = -dot(d, b.u), z = dot(d, b.f);
+    if (camera.projection === 'orthographic') {
+      const s = camera.height / camera.ortho_height;
+      return [camera.width / 2 + s * x, camera.height / 2 + s * y];
+    }
+    if (z <= camera.near) return null;
+    const focal = 0.5 * camera.height / Math.tan(camera.fov_y_deg * Math.PI / 360);
+    return [camera.width / 2 + focal * x / z, camera.height / 2 + focal * y / z];
+  }
+  function drawOverlay() {
+    if (camera) {
+      const key = JSON.stringify([camera, measurements.map((m) => m.index), measurements.length]);
+      if (key !== overlayKey) {
+        overlayKey = key;
+        overlay.width = camera.width;
+        overlay.height = camera.height;
+        octx.clearRect(0, 0, overlay.width, overlay.height);
+        octx.strokeStyle = '#ff0';
+        octx.fillStyle = '#ff0';
+        octx.lineWidth = 1.5;
+        octx.font = '12px sans-serif';
+        let prev = null;
+        measurements.forEach((m, i) => {
+          const q = project(at(m).point);
+          if (q && prev) { octx.beginPath(); octx.moveTo(prev[0], prev[1]); octx.lineTo(q[0], q[1]); octx.stroke(); }
+          if (q) {
+            octx.beginPath(); octx.arc(q[0], q[1], 4, 0, 2 * Math.PI); octx.stroke();
+            octx.fillText(String(i + 1), q[0] + 6, q[1] - 6);
+          }
+          prev = q;
+        });
+      }
+    }
+    requestAnimationFrame(drawOverlay);
+  }
+
+  // ---- clipping and sections ----------------------------------------------------------------
+  let baseClip = [];        // the clipping candi view was started with (--clip-box, --clip-plane)
+  let beforeSection = null; // the camera before "show the section"
+  const boxIds = ['clip-min-x', 'clip-min-y', 'clip-min-z', 'clip-max-x', 'clip-max-y', 'clip-max-z'];
+  function boxPlanes() {
+    if (!$('clip-box').checked) return [];
+    const v = boxIds.map((id) => Number($(id).value));
+    if (v.some((x) => !Number.isFinite(x)) || v[0] > v[3] || v[1] > v[4] || v[2] > v[5]) {
+      $('section-summary').textContent = 'clip box: each minimum must be a number below its maximum';
+      return [];
+    }
+    return [[v[0], v[1], v[2], 1, 0, 0], [v[0], v[1], v[2], 0, 1, 0], [v[0], v[1], v[2], 0, 0, 1],
+            [v[3], v[4], v[5], -1, 0, 0], [v[3], v[4], v[5], 0, -1, 0], [v[3], v[4], v[5], 0, 0, -1]];
+  }
+  function sectionPlane() {
+    const mode = $('section-plane').value, t = Number($('section-thickness').value);
+    if (!(t > 0)) throw new Error('the thickness must be > 0 m');
+    const pts = measurements.map((m) => at(m).point);
+    if (mode === 'view') {
+      const f = sub(camera.target, camera.eye);
+      const h = Math.hypot(f[0], f[1]) > 1e-9 ? [f[0], f[1], 0] : [0, 1, 0];
+      return { point: camera.target.slice(), normal: unit(h), thickness: t };
+    }
+    if (mode === 'two') {
+      if (pts.length < 2) throw new Error('measure two points first');
+      const a = pts[pts.length - 2], b = pts[pts.length - 1], d = [b[0] - a[0], b[1] - a[1], 0];
+      if (norm(d) < 1e-9) throw new Error('the two points coincide in plan');
+      return { point: a.slice(), normal: unit(cross([0, 0, 1], d)), thickness: t };
+    }
+    if (pts.length < 1) throw new Error('measure a point first');
+    return { point: pts[pts.length - 1].slice(), normal: [0, 0, 1], thickness: t };
+  }
+  function updateClip() {
+    const planes = baseClip.concat(boxPlanes());
+    if ($('section-show').checked) {
+      try {
+        const s = sectionPlane(), n = s.normal, h = s.thickness / 2;
+        planes.push([...sub(s.point, mul(n, h)), ...n], [...add(s.point, mul(n, h)), ...mul(n, -1)]);
+      } catch (e) {
+        $('section-summary').textContent = e.message;
+        $('section-show').checked = false;
+      }
+    }
+    settings.clip = planes;
+    changed();
+  }
+  function onSectionShow() {
+    if ($('section-show').checked) {
+      let s;
+      try { s = sectionPlane(); } catch (e) { $('section-summary').textContent = e.message; $('section-show').checked = false; return; }
+      beforeSection = clone(camera);
+      // Orthographic, looking along the normal: the drawing's chainage to the right (candi section's image).
+      const d = norm(sub(camera.eye, camera.target));
+      camera.ortho_height = camera.projection === 'orthographic' ? camera.ortho_height : 2 * d * Math.tan(camera.fov_y_deg * Math.PI / 360);
+      camera.projection = 'orthographic';
+      camera.target = s.point;
+      camera.eye = sub(s.point, mul(s.normal, d));
+      camera.up = Math.abs(s.normal[2]) > 0.999 ? [0, 1, 0] : [0, 0, 1];
+      syncControls();
+    } else if (beforeSection) {
+      camera = beforeSection;
+      beforeSection = null;
+      fitCanvas(true);
+      syncControls();
+    }
+    updateClip();
+  }
+  function blobLink(name, blob) {
+    const a = document.createElement('a');
+    a.href = URL.createObjectURL(blob);
+    a.download = name;
+    a.textContent = name;
+    return a;
+  }
+  let lastSection = null;
+  function exportSection(s) {
+    $('section-summary').textContent = 'cutting the section…';
+    return request({ type: 'section', point: s.point, normal: s.normal, thickness: s.thickness }).then((m) => {
+      if (m.type !== 'section') { $('section-summary').textContent = 'section failed: ' + m.message; return m; }
+      lastSection = m;
+      const png = Uint8Array.from(atob(m.png_base64), (c) => c.charCodeAt(0));
+      // The SVG shows the image too: embedded, so the file stands alone.
+      const svg = m.svg.split('"section.png"').join('"data:image/png;base64,' + m.png_base64 + '"');
+      const box = $('section-summary');
+      box.textContent = m.summary.layers.map((l) => l.name + ': ' + l.points + ' points, ' + l.lines + ' lines, ' +
+        l.length_m.toFixed(2) + ' m' + (l.in_plane ? ' (in the plane)' : '')).join('\n') + '\n';
+      box.style.whiteSpace = 'pre-line';
+      [['section.dxf', m.dxf, 'application/dxf'], ['section.svg', svg, 'image/svg+xml'], ['section.csv', m.csv, 'text/csv'],
+       ['section.png', png, 'image/png']].forEach(([name, data, type], i) => {
+        if (i) box.appendChild(document.createTextNode(' · '));
+        box.appendChild(blobLink(name, new Blob([data], { type })));
+      });
+      return m;
+    });
+  }
+  $('section-export').addEventListener('click', () => {
+    try { exportSection(sectionPlane()); } catch (e) { $('section-summary').textContent = e.message; }
+  });
+  $('clip-box').addEventListener('input', updateClip);
+  boxIds.forEach((id) => $(id).addEventListener('change', updateClip));
+  $('section-show').addEventListener('input', onSectionShow);
+  ['section-plane', 'section-thickness'].forEach((id) => $(id).addEventListener('change', () => { if ($('section-show').checked) updateClip(); }));
+
   // For tests and scripts (the DevTools protocol reads these).
   window.candiViewer = {
     stats, viewJson,
@@ -346,6 +590,15 @@
       reader.readAsDataURL(stats.lastPng);
     }),
     canvasPixels: () => Array.from(ctx.getImageData(0, 0, canvas.width, canvas.height).data),
+    pick: (x, y) => request({ type: 'pick', x, y }),
+    measureAt,
+    measurements: () => measurements.map((m) => ({ layer: layerName(at(m).layer), point: at(m).point, hits: m.hits.length })),
+    segments,
+    measurementsCsv,
+    stepBehind: (i) => { const m = measurements[i]; m.index = (m.index + 1) % m.hits.length; showMeasurements(); },
+    exportSection: (s) => exportSection(s),
+    lastSection: () => lastSection,
+    project,
   };
 
   fetch('/api/scene?token=' + encodeURIComponent(token)).then((r) => {
@@ -358,6 +611,9 @@
     settings = clone(s.settings);
     for (const v of s.views) { const o = document.createElement('option'); o.value = v.name; o.textContent = v.name; $('views').appendChild(o); }
     if (!settings.layers) settings.layers = s.layers.map(() => 1);
+    baseClip = settings.clip || [];
+    settings.clip = baseClip.slice();
+    boxIds.forEach((id, k) => { $(id).value = (k < 3 ? s.bounds.min[k] : s.bounds.max[k - 3]).toFixed(3); });
     buildLayers();
     camera = clone(s.first_view);
     // The first view's own size when the window has it (so the first image is candi render's).
@@ -365,5 +621,6 @@
     syncControls();
     connect();
     requestAnimationFrame(pump);
+    requestAnimationFrame(drawOverlay);
   }).catch((e) => { $('status').textContent = String(e.message || e); });
 })();
