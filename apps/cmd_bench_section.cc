@@ -114,8 +114,8 @@ int RunBenchSection(const BenchSectionArgs& a) {
   if (!a.drawing.empty()) FoundationTable(a, dir);
   std::printf("\nscale: a vertical section %.2f m thick through the middle of the terraced solid (archive on disk)\n",
               a.thickness);
-  std::printf("%12s %8s %14s %14s %12s %8s %9s\n", "points", "pack s", "chunks read", "points read", "slab points",
-              "s", "peak MB");
+  std::printf("%12s %8s %14s %14s %12s %8s %8s %8s %8s %9s\n", "points", "pack s", "chunks read", "points read",
+              "slab points", "read s", "lines s", "image s", "total s", "peak MB");
   for (uint64_t n : sizes) {
     double pack_s = 0;
     const std::string archive_dir = BenchArchive(dir, n, a.keep, "bench section", &pack_s);
@@ -137,9 +137,11 @@ int RunBenchSection(const BenchSectionArgs& a) {
     char chunks[64];
     std::snprintf(chunks, sizeof(chunks), "%llu/%llu", static_cast<unsigned long long>(j.at("chunks_read").get<uint64_t>()),
                   static_cast<unsigned long long>(j.at("chunks").get<uint64_t>()));
-    std::printf("%12llu %8.1f %14s %14llu %12llu %8.2f %9.0f\n", static_cast<unsigned long long>(n), pack_s, chunks,
-                static_cast<unsigned long long>(j.at("points_read").get<uint64_t>()),
-                static_cast<unsigned long long>(j.at("points").get<uint64_t>()), seconds, PeakMb());
+    const nlohmann::json& t = j.at("seconds");
+    std::printf("%12llu %8.1f %14s %14llu %12llu %8.2f %8.2f %8.2f %8.2f %9.0f\n", static_cast<unsigned long long>(n),
+                pack_s, chunks, static_cast<unsigned long long>(j.at("points_read").get<uint64_t>()),
+                static_cast<unsigned long long>(j.at("points").get<uint64_t>()), t.at("read").get<double>(),
+                t.at("lines").get<double>(), t.at("image").get<double>(), seconds, PeakMb());
     std::fflush(stdout);
     if (!a.keep) fs::remove_all(archive_dir);
   }

@@ -3,6 +3,7 @@
 // one layer per archive layer, CSV, SVG), with a JSON summary. An archive (or a build directory's)
 // is read only where the slab crosses its chunks; point files are streamed.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -46,6 +47,7 @@ struct Slab {
   std::vector<std::vector<Rgb8>> colours;             // per layer: the points' own colours
   uint64_t chunks = 0, chunks_read = 0, points_read = 0;
   bool archive = false;
+  double read_s = 0, lines_s = 0, image_s = 0;  // stage timings
   std::vector<std::string> seen;                      // every layer name of the inputs (--layers)
 
   size_t Layer(const std::string& name) {
@@ -355,6 +357,8 @@ std::string SummaryJson(const SectionArgs& a, const SectionPath& s, const Slab& 
   uint64_t total = 0;
   for (const auto& l : layers) total += l.points;
   out += ",\n  \"points\": " + std::to_string(total);
+  out += ",\n  \"seconds\": {\"read\": " + num(slab.read_s) + ", \"lines\": " + num(slab.lines_s) +
+         ", \"image\": " + num(slab.image_s) + "}";
   if (total == 0) out += ",\n  \"message\": \"no points within the slab\"";
   out += ",\n  \"image\": {\"file\": \"section.png\", \"x0\": " + num(w.x0) + ", \"y0\": " + num(w.y0) +
          ", \"metres_per_pixel\": " + num(w.metres_per_pixel) + ", \"width\": " + std::to_string(w.width) +
@@ -380,6 +384,13 @@ std::string RunSectionInto(const SectionArgs& a, const SectionPath& section, con
   if (!(a.point_size >= 1 && a.point_size <= 64)) throw std::invalid_argument("--point-size: must be in [1, 64] pixels");
   const Rgb8 background = ParseBackground(a.background);
   Slab slab;
+  auto start = std::chrono::steady_clock::now();
+  auto lap = [&start] {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - start).count();
+    start = now;
+    return s;
+  };
   for (const std::string& in : a.inputs) {
     // An archive, a build directory (its archive/), or a demo's output (its build in archive/).
     std::string dir;
@@ -397,15 +408,18 @@ std::string RunSectionInto(const SectionArgs& a, const SectionPath& section, con
       throw std::invalid_argument("--layers: no layer '" + name + "' in the input (it has " + known + ")");
     }
   }
+  slab.read_s = lap();
   const SectionWindow window = MakeWindow(a, slab);
   const std::vector<SectionLayerResult> layers =
       ExtractLines(a, slab, Eigen::Vector2d(std::round(window.x0), std::round(window.y0)));
+  slab.lines_s = lap();
   uint64_t total = 0;
   for (const auto& l : layers) total += l.points;
   if (total == 0) LogWarning("section: no points within the slab (" + section.Describe() + ")");
 
   fs::create_directories(a.output);  // errors name the path
   Image8 image = RenderSlab(a, slab, layers, window, background);
+  slab.image_s = lap();
   const double bar = DrawScaleBar(window, background, &image);
   const PngText text = {{"Software", std::string("candi ") + kVersion},
                         {"candi:section", section.Describe()},

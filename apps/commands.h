@@ -105,7 +105,7 @@ struct SectionArgs {
   double spacing = 0, max_gap = 0;    // section lines (0: automatic)
   int width = 1600;                   // image pixels across (with --pixel 0)
   double pixel = 0;                   // m per pixel (0: from --width)
-  int repeat_level = 100;             // L of the image
+  int repeat_level = 10;              // L of the image (a slab is thin: few ensembles blend it)
   unsigned long long seed = 1;
   double point_size = 2.0;
   double opacity = 0.7;               // of a pixel one slab point covers (its copies: opacity x L)
