@@ -92,8 +92,8 @@ SectionPath ParseSection(const SectionArgs& a) {
   return s;
 }
 
-// The segment of a point in the slab regions `inside` (bit r: region r holds it): for a path the
-// nearest in plan among them.
+// The segment a slab point belongs to: 0 for a plane; for a path the segment nearest in plan when
+// its slab holds the point, else the first slab that does (`first_region`).
 size_t SegmentOf(const SectionPath& s, const Eigen::Vector3d& world, size_t first_region) {
   if (!s.is_path()) return 0;
   const size_t nearest = s.NearestSegment(world);
