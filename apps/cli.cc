@@ -11,8 +11,8 @@ namespace candi::app {
 namespace {
 
 void AddInfo(CLI::App& app, InfoArgs& a, std::function<int()>* run) {
-  auto* c = app.add_subcommand("info", "Print a point file's count, bounds (world), fields, format and shift");
-  c->add_option("file", a.input, "Point file (.ply .las .xyz .txt .pts)")->required();
+  auto* c = app.add_subcommand("info", "Print a point file's count, bounds (world), fields, format (LAZ: its compressor), shift and CRS");
+  c->add_option("file", a.input, "Point file (.ply .las .laz .e57 .xyz .txt .pts)")->required();
   c->add_option("--columns", a.columns, "XYZ/PTS column spec, e.g. x,y,z,r,g,b");
   c->add_flag("--json", a.json, "Print JSON instead of text");
   c->add_flag("--no-scan", a.no_scan, "Header only: do not read the points (bounds from the header)");
@@ -21,7 +21,7 @@ void AddInfo(CLI::App& app, InfoArgs& a, std::function<int()>* run) {
 }
 
 void AddConvert(CLI::App& app, ConvertArgs& a, std::function<int()>* run) {
-  auto* c = app.add_subcommand("convert", "Convert between PLY, LAS, XYZ and PTS, streaming");
+  auto* c = app.add_subcommand("convert", "Convert between PLY, LAS, E57, XYZ and PTS (and read LAZ), streaming; reproject with PROJ");
   c->add_option("input", a.input, "Input point file")->required();
   c->add_option("output", a.output, "Output point file; format from its extension")->required();
   c->add_option("--shift", a.shift,
@@ -36,8 +36,12 @@ void AddConvert(CLI::App& app, ConvertArgs& a, std::function<int()>* run) {
   c->add_option("--las-scale", a.las_scale, "LAS output scale, s or sx,sy,sz (default: keep, else 0.001)");
   c->add_option("--las-format", a.las_format, "LAS output point format: 0-3 or 6-8");
   c->add_option("--las-version", a.las_version, "LAS output minor version: 2, 3 or 4");
+  c->add_option("--crs", a.crs, "The input's CRS (e.g. EPSG:4979), for files that state none; "
+                "carried into the output");
+  c->add_option("--to-crs", a.to_crs, "Reproject into this CRS with PROJ (e.g. EPSG:32749)");
   c->callback([run, &a] { *run = [&a] { return RunConvert(a); }; });
-  c->footer("Example: candi convert scan.las scan.ply --shift auto");
+  c->footer("Examples: candi convert scan.las scan.ply --shift auto\n"
+            "          candi convert gnss_wgs84.laz site_utm.las --to-crs EPSG:32749");
 }
 
 void AddDemo(CLI::App& app, DemoArgs& a, std::function<int()>* run) {
@@ -603,6 +607,9 @@ int RunCli(int argc, char** argv) {
   int verbose = 0;
   bool quiet = false;
   app.add_flag("-v,--verbose", verbose, "More log output (debug)");
+  c->add_option("--crs", a.crs, "CRS of the survey frame (e.g. EPSG:32749), stated in OUT");
+  c->add_option("--targets-crs", a.targets_crs, "CRS the targets are given in (e.g. EPSG:4979 for "
+                "GNSS); transformed into --crs with PROJ before the fit");
   app.add_flag("-q,--quiet", quiet, "Only warnings and errors");
   app.footer("Exit codes: 0 ok, 1 usage, 2 bad input, 3 internal error.\n"
              "Run `candi <command> --help` for a command's options.");

@@ -35,6 +35,8 @@ struct ConvertArgs {
   std::string las_scale;                // "s" or "sx,sy,sz"
   int las_format = -1;
   int las_version = -1;                 // minor version: 2, 3, 4
+  std::string crs;                      // the input's CRS when the file states none
+  std::string to_crs;                   // reproject into this CRS with PROJ
 };
 int RunConvert(const ConvertArgs& args);
 
@@ -377,6 +379,8 @@ struct BuildArgs {
   std::string scene;                 // scene JSON (apps/scene.h)
   std::string output;                // archive folder (created; its parent must exist)
   int threads = 0;
+  std::string crs;                   // the CRS of the survey coordinates (stated in OUT)
+  std::string targets_crs;           // the targets' CRS; transformed into `crs` with PROJ
   bool resume = false;               // reuse the stages an earlier (interrupted) build finished
 };
 int RunBuild(const BuildArgs& args);

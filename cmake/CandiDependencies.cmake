@@ -12,6 +12,8 @@ find_package(spdlog REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)
 find_package(Boost 1.74 REQUIRED)   # header-only: Beast and Asio (candi view)
+pkg_check_modules(PROJ REQUIRED IMPORTED_TARGET proj)          # CRSs (core/crs.cc)
+pkg_check_modules(PUGIXML REQUIRED IMPORTED_TARGET pugixml)    # E57's XML section (core/e57_*.cc)
 # mesh
 find_package(CGAL REQUIRED)
 find_package(OpenMesh CONFIG REQUIRED)   # CONFIG: CGAL ships a FindOpenMesh that fails (trap 1)

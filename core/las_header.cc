@@ -81,13 +81,10 @@ void CheckSizes(const BinaryFile& file, const LasHeader& h) {
   }
 }
 
+// LASzip marks compressed point data with bits 7 (and 6) of the format byte; the LAS reader
+// decodes it (core/laz_format.h), so only the format proper is checked here.
 void CheckPointFormat(const std::string& path, const LasHeader& h) {
-  if ((h.point_format & 0xC0) != 0) {
-    throw InputError(path, Byte(104),
-                     "LAZ (compressed LAS) is not supported: decompress it "
-                     "first (e.g. `laszip -i in.laz -o out.las`)");
-  }
-  const int format = h.point_format;
+  const int format = h.point_format & 0x3F;
   const LasFormatLayout layout = LasLayoutOf(format);
   if (!layout.supported) {
     throw InputError(path, Byte(104),

@@ -57,7 +57,8 @@ struct LasHeader {
 uint16_t LasHeaderSize(int version_minor);
 
 // Parses the public header at the start of `file` and validates what does not depend on the
-// VLRs: signature, version, header size and point data offset, LAZ, point format, record length,
+// VLRs: signature, version, header size and point data offset, point format (without the LAZ
+// bits 6-7, which header.point_format keeps), record length,
 // scale and offset.
 LasHeader ReadLasHeader(BinaryFile* file);
 // The header's first header.header_size bytes (fields beyond the version's header are omitted).

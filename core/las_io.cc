@@ -11,8 +11,12 @@
 #include "core/atomic_file.h"
 #include "core/binary_file.h"
 #include "core/check.h"
+#include "core/crs.h"
 #include "core/las_columns.h"
+#include "core/las_crs.h"
 #include "core/las_header.h"
+#include "core/laz_chunks.h"
+#include "core/laz_format.h"
 #include "core/log.h"
 #include "core/parallel.h"
 
@@ -36,12 +40,14 @@ class LasReader : public PointReader {
   std::optional<PointRecordLayout> record_layout() const override;
 
  private:
-  void RefuseLaszip(const std::vector<LasVlr>& vlrs) const;
+  void TakeLaszipVlr(std::vector<LasVlr>* vlrs);
   void CheckPointDataSize() const;
   std::vector<LasExtraBytes> FillInfo(std::vector<LasVlr> vlrs);
   void BuildSchema(const std::vector<LasExtraBytes>& extra);
   void AddExtraColumns(const std::vector<LasExtraBytes>& extra);
   bool HasWideColors();
+  bool HasWideColorsLaz();
+  void DecodeRecords(const uint8_t* records, size_t n, size_t first, PointCloud* chunk) const;
   void DecodeBlock(const uint8_t* records, size_t n, size_t first, PointCloud* chunk) const;
 
   BinaryFile file_;
@@ -51,16 +57,30 @@ class LasReader : public PointReader {
   std::vector<LasColumn> columns_;
   int color_shift_ = 8;
   std::vector<uint8_t> buffer_;
+  // LAZ: point-format bits 6-7 set; the laszip VLR and the decoded chunks.
+  bool compressed_ = false;
+  laz::Vlr laz_;
+  std::unique_ptr<LazPointData> laz_data_;
 };
 
 LasReader::LasReader(const std::string& path, const PointReadOptions& options)
     : PointReader(path), file_(path), scalar_fields_(options.scalar_fields) {
   header_ = ReadLasHeader(&file_);
+  compressed_ = (header_.point_format & 0xC0) != 0;
+  header_.point_format &= 0x3F;
   layout_ = LasLayoutOf(header_.point_format);
   std::vector<LasVlr> vlrs = ReadLasVlrs(&file_, header_);
-  RefuseLaszip(vlrs);
+  TakeLaszipVlr(&vlrs);
   info_.count = LasPointCount(header_);
-  CheckPointDataSize();
+  if (compressed_) {
+    laz_data_ = std::make_unique<LazPointData>(
+        &file_, laz_,
+        ReadLazChunkTable(file_, laz_, header_.offset_to_point_data, info_.count,
+                          header_.record_length),
+        header_.record_length);
+  } else {
+    CheckPointDataSize();
+  }
   for (LasVlr& evlr : ReadLasEvlrs(&file_, header_)) vlrs.push_back(std::move(evlr));
   BuildSchema(FillInfo(std::move(vlrs)));
   if (info_.schema.colors) {
@@ -69,14 +89,29 @@ LasReader::LasReader(const std::string& path, const PointReadOptions& options)
   }
 }
 
-// LASzip marks compressed files in the format byte (checked with the header) and with a VLR.
-void LasReader::RefuseLaszip(const std::vector<LasVlr>& vlrs) const {
-  for (const LasVlr& vlr : vlrs) {
-    if (vlr.user_id == "laszip encoded") {
-      throw InputError(path_, "",
-                       "LAZ (compressed LAS) is not supported: decompress it first "
-                       "(e.g. `laszip -i in.laz -o out.las`)");
-    }
+// LASzip marks compressed files in the format byte and describes them in a VLR. The VLR leaves
+// the list (meta.las.vlrs): a LAS written from these points is not compressed.
+void LasReader::TakeLaszipVlr(std::vector<LasVlr>* vlrs) {
+  const auto it = std::find_if(vlrs->begin(), vlrs->end(), [](const LasVlr& vlr) {
+    return vlr.user_id == "laszip encoded" && vlr.record_id == 22204;
+  });
+  if (it == vlrs->end()) {
+    if (!compressed_) return;
+    throw InputError(path_, "byte 104",
+                     "the point format byte marks LAZ (compressed LAS) but the file has no "
+                     "\"laszip encoded\" VLR describing the compression");
+  }
+  const LasVlr vlr = *it;
+  vlrs->erase(it);
+  if (!compressed_) {
+    LogWarning(path_ + ": ignoring a \"laszip encoded\" VLR in an uncompressed LAS file");
+    return;
+  }
+  try {
+    laz_ = laz::ParseVlr(vlr.data);
+    laz::CheckSupported(laz_, header_.point_format, header_.record_length);
+  } catch (const laz::LazError& e) {
+    throw InputError(path_, "laszip VLR", std::string("LAZ: ") + e.what());
   }
 }
 
@@ -98,6 +133,7 @@ std::vector<LasExtraBytes> LasReader::FillInfo(std::vector<LasVlr> vlrs) {
   info_.format = PointFormat::kLas;
   info_.description =
       "LAS 1." + std::to_string(header_.version_minor) + " point format " + std::to_string(format);
+  if (compressed_) info_.description = "LAZ: " + info_.description + ", " + laz::Describe(laz_);
   info_.header_bounds = header_.bounds;
   LasMetadata& las = info_.meta.las;
   las.present = true;
@@ -111,6 +147,9 @@ std::vector<LasExtraBytes> LasReader::FillInfo(std::vector<LasVlr> vlrs) {
   las.generating_software = header_.generating_software;
   las.creation_day = header_.creation_day;
   las.creation_year = header_.creation_year;
+  std::string crs_note;
+  info_.meta.crs = LasCrsOf(vlrs, &crs_note);
+  if (!crs_note.empty()) LogInfo(path_ + ": " + crs_note);
   std::vector<LasExtraBytes> extra;
   for (LasVlr& vlr : vlrs) {
     if (!IsLasExtraBytesVlr(vlr)) {
@@ -194,6 +233,7 @@ void LasReader::AddExtraColumns(const std::vector<LasExtraBytes>& extra) {
 // Many files store 8-bit colour in the 16-bit fields; only the data tells which. Scans the high
 // bytes of every colour in large reads and stops at the first one that is set.
 bool LasReader::HasWideColors() {
+  if (compressed_) return HasWideColorsLaz();
   const size_t length = header_.record_length;
   const size_t per_read = std::max<size_t>(1, kColorScanBytes / length);
   std::vector<uint8_t> block;
@@ -211,28 +251,61 @@ bool LasReader::HasWideColors() {
   return false;
 }
 
+// The same scan over decoded chunks, a run at a time.
+bool LasReader::HasWideColorsLaz() {
+  const size_t length = header_.record_length;
+  for (uint64_t done = 0; done < info_.count;) {
+    size_t n = 0;
+    const uint8_t* p = laz_data_->Records(done, info_.count, &n) + layout_.color_offset + 1;
+    uint8_t high = 0;
+    for (size_t i = 0; i < n; ++i, p += length) high |= p[0] | p[2] | p[4];
+    if (high != 0) return true;
+    done += n;
+  }
+  return false;
+}
+
 size_t LasReader::Read(size_t max_points, PointCloud* chunk) {
   CANDI_CHECK(max_points > 0) << "Read needs max_points > 0";
   PrepareChunk(chunk);
   const size_t n = static_cast<size_t>(std::min<uint64_t>(max_points, info_.count - points_read_));
   chunk->Resize(n);
   if (n == 0) return 0;
-  const size_t length = header_.record_length;
-  buffer_.resize(n * length);
-  file_.Seek(header_.offset_to_point_data + points_read_ * length);
-  file_.ReadExact(buffer_.data(), buffer_.size(), "point records");
-  // Blocks decode independently (each writes its own range of the chunk), so they run in
-  // parallel; the result does not depend on the thread count.
-  const size_t blocks = (n + kBlockRecords - 1) / kBlockRecords;
-  ParallelFor(size_t{0}, blocks, [&](size_t b) {
-    const size_t first = b * kBlockRecords;
-    DecodeBlock(buffer_.data() + first * length, std::min(kBlockRecords, n - first), first, chunk);
-  });
+  if (compressed_) {
+    // Runs of decoded chunks; a run may end inside this read or reach beyond it.
+    for (size_t done = 0; done < n;) {
+      size_t available = 0;
+      const uint8_t* records =
+          laz_data_->Records(points_read_ + done, points_read_ + n, &available);
+      const size_t take = std::min(n - done, available);
+      DecodeRecords(records, take, done, chunk);
+      done += take;
+    }
+  } else {
+    const size_t length = header_.record_length;
+    buffer_.resize(n * length);
+    file_.Seek(header_.offset_to_point_data + points_read_ * length);
+    file_.ReadExact(buffer_.data(), buffer_.size(), "point records");
+    DecodeRecords(buffer_.data(), n, 0, chunk);
+  }
   points_read_ += n;
   return n;
 }
 
+// Blocks decode independently (each writes its own range of the chunk), so they run in
+// parallel; the result does not depend on the thread count.
+void LasReader::DecodeRecords(const uint8_t* records, size_t n, size_t first,
+                              PointCloud* chunk) const {
+  const size_t length = header_.record_length;
+  const size_t blocks = (n + kBlockRecords - 1) / kBlockRecords;
+  ParallelFor(size_t{0}, blocks, [&](size_t b) {
+    const size_t at = b * kBlockRecords;
+    DecodeBlock(records + at * length, std::min(kBlockRecords, n - at), first + at, chunk);
+  });
+}
+
 std::optional<PointRecordLayout> LasReader::record_layout() const {
+  if (compressed_) return std::nullopt;  // compressed records: Read() decodes them
   PointRecordLayout l;
   l.coordinates = PointRecordLayout::Coordinates::kLasInt32;
   l.first_byte = header_.offset_to_point_data;
@@ -368,6 +441,7 @@ class LasWriter : public PointWriter {
   void BindSource(const char* name, LasColumn* c, std::vector<bool>* used) const;
   void AddExtraBytes(const std::string& name, ScalarType type, int scalar, int axis, int* offset);
   void SplitVlrs();
+  void AddCrsVlr();
   void WriteHeaderAndVlrs();
   void EncodeBlock(const PointCloud& chunk, size_t first, size_t n, uint8_t* records);
   void EncodePositions(const PointCloud& chunk, size_t first, size_t n, uint8_t* records);
@@ -551,6 +625,31 @@ void LasWriter::SplitVlrs() {
   if (!extra_.empty()) {
     vlrs_.push_back({"LASF_Spec", 4, "Extra Bytes", EncodeLasExtraBytes(extra_), false});
   }
+  AddCrsVlr();
+}
+
+// Points from a file that stated its CRS elsewhere (E57's coordinateMetadata, a scene) carry it
+// into the LAS file as a WKT record; records kept from a LAS source already state it.
+void LasWriter::AddCrsVlr() {
+  const std::string& crs = spec_.meta.crs;
+  if (crs.empty() || HasLasCrsRecord(spec_.meta.las.vlrs)) return;
+  std::string wkt;
+  try {
+    wkt = CrsAsWkt1(crs, path_);
+  } catch (const InputError& e) {
+    LogWarning(std::string(e.what()) + "; the LAS file states no CRS");
+    return;
+  }
+  LasVlr vlr = LasWktVlr(wkt);
+  if (vlr.data.size() > 65535 && header_.version_minor < 4) {
+    LogWarning(path_ + ": the CRS's WKT (" + std::to_string(vlr.data.size()) +
+               " bytes) does not fit a LAS 1." + std::to_string(header_.version_minor) +
+               " VLR; the LAS file states no CRS");
+    return;
+  }
+  vlr.extended = vlr.data.size() > 65535;
+  (vlr.extended ? evlrs_ : vlrs_).push_back(std::move(vlr));
+  if (header_.version_minor >= 4) header_.global_encoding |= 0x10;  // WKT states the CRS
 }
 
 void LasWriter::WriteHeaderAndVlrs() {

@@ -7,7 +7,15 @@
 // reduced to 8 bits (v >> 8) unless every value in the file fits in 8 bits (files that store
 // 8-bit colour in the 16-bit fields), detected from the data and recorded in meta.las.color_16bit.
 // Extra bytes (LAS 1.4 "LASF_Spec" record 4) of numeric types become scalar fields; normals are
-// written and read as the extra-bytes fields "nx", "ny", "nz". LAZ is refused with a clear message.
+// written and read as the extra-bytes fields "nx", "ny", "nz".
+//
+// LAZ (LASzip-compressed LAS: format byte bits 6-7 and a "laszip encoded" VLR) reads through the
+// same reader: the chunked pointwise compressor (items of version 2, formats 0-3) and the layered
+// one (version 3, formats 6-8) are decoded (core/laz_format.h, core/laz_chunks.h), a run of
+// chunks at a time and in parallel; LASzip 1.x files (items of version 1, the unchunked
+// compressor), waveform items and files without a chunk table are refused with a clear message.
+// meta.las holds the uncompressed point format and no laszip VLR; record_layout() is nullopt.
+// Writing LAZ is not supported.
 //
 // Reading: the whole header, VLRs and EVLRs are parsed and validated at open (a truncated file,
 // bad signature, unsupported point format, short record length or zero scale throws InputError

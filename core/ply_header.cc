@@ -1,5 +1,6 @@
 #include "core/ply_header.h"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <sstream>
@@ -164,6 +165,13 @@ void HeaderParser::ParseComment(const std::string& line) {
     header.shift = frame;
     return;
   }
+  if (!words.empty() && words[0] == "candi_crs") {
+    // The rest of the line after the keyword (WKT holds spaces).
+    const size_t at = text.find_first_not_of(" \t", text.find("candi_crs") + 9);
+    header.crs = at == std::string::npos ? "" : text.substr(at);
+    while (!header.crs.empty() && std::isspace(static_cast<unsigned char>(header.crs.back()))) header.crs.pop_back();
+    return;
+  }
   header.comments.push_back(text);
 }
 
@@ -243,6 +251,11 @@ std::string FormatHeader(const Header& header, int vertex_count_width) {
   if (header.shift && !header.shift->IsIdentity()) {
     text += "comment candi_shift " + FormatDouble(header.shift->origin.x()) + " " +
             FormatDouble(header.shift->origin.y()) + " " + FormatDouble(header.shift->origin.z()) + "\n";
+  }
+  if (!header.crs.empty()) {
+    std::string crs = header.crs;  // one line: WKT's line breaks are white space
+    for (char& c : crs) c = (c == '\n' || c == '\r') ? ' ' : c;
+    text += "comment candi_crs " + crs + "\n";
   }
   for (const Element& element : header.elements) {
     std::string count = std::to_string(element.count);

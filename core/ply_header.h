@@ -42,6 +42,7 @@ struct Header {
   std::vector<Element> elements;
   std::vector<std::string> comments;   // comment lines (text after "comment ")
   std::optional<LocalFrame> shift;     // from "comment candi_shift x y z"
+  std::string crs;                     // from "comment candi_crs <CRS>" (PointCloudMeta::crs)
   uint64_t data_offset = 0;            // byte where the body starts
   int header_lines = 0;                // lines up to and including end_header
   int FindElement(const std::string& name) const;  // -1 when absent

@@ -244,6 +244,7 @@ PlyReader::PlyReader(const std::string& path, const PointReadOptions& options)
   const int face = header_.FindElement("face");
   info_.face_count = face >= 0 ? header_.elements[face].count : 0;
   info_.meta.comments = header_.comments;
+  info_.meta.crs = header_.crs;
   if (header_.shift) {
     info_.frame = *header_.shift;
   } else if (auto sidecar = ReadShiftSidecar(path)) {

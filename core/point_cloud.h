@@ -88,6 +88,10 @@ struct LasMetadata {
 
 struct PointCloudMeta {
   std::vector<std::string> comments;  // free-text comments (PLY comment lines)
+  // The coordinate reference system the file states for its world coordinates, as found: OGC
+  // WKT (LAS WKT VLR, E57 coordinateMetadata), "EPSG:n" (LAS GeoTIFF keys), or any string PROJ
+  // accepts. Empty: the file states none.
+  std::string crs;
   LasMetadata las;
 };
 

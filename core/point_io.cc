@@ -9,6 +9,7 @@
 #include "core/atomic_file.h"
 #include "core/binary_file.h"
 #include "core/check.h"
+#include "core/e57_io.h"
 #include "core/las_io.h"
 #include "core/ply_io.h"
 #include "core/text_format.h"
@@ -22,6 +23,7 @@ std::string PointFormatName(PointFormat format) {
     case PointFormat::kLas: return "LAS";
     case PointFormat::kXyz: return "XYZ";
     case PointFormat::kPts: return "PTS";
+    case PointFormat::kE57: return "E57";
   }
   return "?";
 }
@@ -61,7 +63,7 @@ std::string Extension(const std::string& path) {
   return ext;
 }
 
-enum class Content { kEmpty, kPly, kLas, kLaz, kAsciiDxf, kBinaryDxf, kText, kBinary };
+enum class Content { kEmpty, kPly, kLas, kLaz, kE57, kAsciiDxf, kBinaryDxf, kText, kBinary };
 
 Content Sniff(const std::string& head) {
   if (head.empty()) return Content::kEmpty;
@@ -72,6 +74,7 @@ Content Sniff(const std::string& head) {
     return Content::kLas;
   }
   if (head.rfind("AutoCAD Binary DXF", 0) == 0) return Content::kBinaryDxf;
+  if (head.rfind("ASTM-E57", 0) == 0) return Content::kE57;
   size_t i = 0;
   while (i < head.size() && std::isspace(static_cast<unsigned char>(head[i]))) ++i;
   if (head.compare(i, 1, "0") == 0) {
@@ -91,6 +94,7 @@ std::string ContentName(Content c) {
     case Content::kPly: return "PLY";
     case Content::kLas: return "LAS";
     case Content::kLaz: return "LAZ (compressed LAS)";
+    case Content::kE57: return "E57";
     case Content::kAsciiDxf: return "a DXF drawing";
     case Content::kBinaryDxf: return "a binary DXF drawing";
     case Content::kText: return "text";
@@ -106,10 +110,11 @@ PointFormat OutputPointFormat(const std::string& path) {
   if (ext == "ply") return PointFormat::kPly;
   if (ext == "las") return PointFormat::kLas;
   if (ext == "pts") return PointFormat::kPts;
+  if (ext == "e57") return PointFormat::kE57;
   if (ext == "xyz" || ext == "txt" || ext == "asc" || ext == "csv") return PointFormat::kXyz;
-  if (ext == "laz") throw InputError(path, "", "LAZ (compressed LAS) is not supported; write .las");
+  if (ext == "laz") throw InputError(path, "", "writing LAZ is not supported; write .las");
   throw InputError(path, "", "unknown point-file extension '." + ext +
-                                 "' (known: .ply .las .xyz .txt .asc .csv .pts)");
+                                 "' (known: .ply .las .xyz .txt .asc .csv .pts .e57)");
 }
 
 PointFormat DetectPointFormat(const std::string& path) {
@@ -117,10 +122,6 @@ PointFormat DetectPointFormat(const std::string& path) {
   const Content content = Sniff(file.Peek(4096));
   const std::string ext = Extension(path);
   if (content == Content::kEmpty) throw InputError(path, "byte 0", "empty file");
-  if (content == Content::kLaz || ext == "laz") {
-    throw InputError(path, "", "LAZ (compressed LAS) is not supported: Debian 12 has no LASzip; "
-                               "decompress it first (e.g. `laszip -i in.laz -o out.las`)");
-  }
   if (content == Content::kAsciiDxf || content == Content::kBinaryDxf || ext == "dxf") {
     throw InputError(path, "", "is " + ContentName(content == Content::kText ? Content::kAsciiDxf : content) +
                                    ", not a point file; CAD sections go through `candi foundation`");
@@ -132,13 +133,19 @@ PointFormat DetectPointFormat(const std::string& path) {
     expected = Content::kPly;
   } else if (ext == "las") {
     format = PointFormat::kLas;
-    expected = Content::kLas;
+    expected = content == Content::kLaz ? Content::kLaz : Content::kLas;  // LAZ named .las
+  } else if (ext == "laz") {
+    format = PointFormat::kLas;  // the LAS reader decodes LAZ (and reads a plain LAS so named)
+    expected = content == Content::kLas ? Content::kLas : Content::kLaz;
+  } else if (ext == "e57") {
+    format = PointFormat::kE57;
+    expected = Content::kE57;
   } else if (ext == "pts" || ext == "xyz" || ext == "txt" || ext == "asc" || ext == "csv") {
     format = ext == "pts" ? PointFormat::kPts : PointFormat::kXyz;
     expected = Content::kText;
   } else {
     throw InputError(path, "", "unknown point-file extension '." + ext + "' (content looks like " +
-                                   ContentName(content) + "; known: .ply .las .xyz .txt .asc .csv .pts)");
+                                   ContentName(content) + "; known: .ply .las .laz .xyz .txt .asc .csv .pts .e57)");
   }
   if (content != expected) {
     throw InputError(path, "byte 0", "extension says " + PointFormatName(format) +
@@ -154,6 +161,7 @@ std::unique_ptr<PointReader> OpenPointReader(const std::string& path,
     case PointFormat::kLas: return OpenLasReader(path, options);
     case PointFormat::kXyz: return OpenXyzReader(path, /*pts=*/false, options);
     case PointFormat::kPts: return OpenXyzReader(path, /*pts=*/true, options);
+    case PointFormat::kE57: return OpenE57Reader(path, options);
   }
   return nullptr;
 }
@@ -166,6 +174,7 @@ std::unique_ptr<PointWriter> OpenPointWriter(const std::string& path, const Poin
     case PointFormat::kLas: return OpenLasWriter(path, spec, options);
     case PointFormat::kXyz: return OpenXyzWriter(path, /*pts=*/false, spec, options);
     case PointFormat::kPts: return OpenXyzWriter(path, /*pts=*/true, spec, options);
+    case PointFormat::kE57: return OpenE57Writer(path, spec, options);
   }
   return nullptr;
 }

@@ -1,7 +1,8 @@
 // Point-file I/O: format detection and streaming readers and writers.
 //
 // Formats: PLY (ascii, binary little/big endian), LAS 1.2-1.4 (point formats 0-3, 6-8), XYZ and
-// PTS text. The format is chosen by extension and confirmed by the content; a mismatch, LAZ and
+// PTS text, LAZ (compressed LAS, read only; PointFormat::kLas) and E57 (ASTM E2807 laser scans,
+// core/e57_io.h). The format is chosen by extension and confirmed by the content; a mismatch and
 // DXF are errors, not guesses. Readers and writers stream: a file larger than memory is processed
 // chunk by chunk, counts are 64-bit. Writers are atomic (temporary file, then rename on Close()).
 // Bad input throws InputError("<path>: <position>: <what>").
@@ -23,8 +24,8 @@
 
 namespace candi {
 
-enum class PointFormat { kPly, kLas, kXyz, kPts };
-std::string PointFormatName(PointFormat format);  // "PLY", "LAS", "XYZ", "PTS"
+enum class PointFormat { kPly, kLas, kXyz, kPts, kE57 };
+std::string PointFormatName(PointFormat format);  // "PLY", "LAS", "XYZ", "PTS", "E57"
 
 constexpr uint64_t kUnknownCount = std::numeric_limits<uint64_t>::max();
 
@@ -132,11 +133,13 @@ class PointWriter {
   uint64_t points_written_ = 0;
 };
 
-// Format from the extension (.ply, .las, .xyz/.txt/.asc/.csv, .pts), confirmed by the first bytes.
-// Throws InputError for .laz (not supported), .dxf (a drawing, not a point file), unknown
-// extensions, and content that contradicts the extension.
+// Format from the extension (.ply, .las, .xyz/.txt/.asc/.csv, .pts, .e57), confirmed by the first
+// bytes (E57: the "ASTM-E57" signature).
+// .laz reads as kLas (LAZ content). Throws InputError for .dxf (a drawing, not a point file),
+// unknown extensions, and content that contradicts the extension.
 PointFormat DetectPointFormat(const std::string& path);
-// Format from the extension only, for outputs. Throws InputError for unknown extensions.
+// Format from the extension only, for outputs. Throws InputError for unknown extensions and for
+// .laz (writing LAZ is not supported).
 PointFormat OutputPointFormat(const std::string& path);
 
 std::unique_ptr<PointReader> OpenPointReader(const std::string& path,

@@ -40,14 +40,24 @@ TEST(DetectPointFormat, MismatchIsAnErrorNotAGuess) {
   EXPECT_NE(ErrorOf(dir.File("x.foo")).find("unknown point-file extension '.foo'"), std::string::npos);
 }
 
-TEST(DetectPointFormat, EmptyLazAndDxfAreRefusedClearly) {
+TEST(DetectPointFormat, EmptyAndDxfAreRefusedClearlyLazIsLas) {
   TempDir dir;
   WriteBytes(dir.File("e.ply"), "");
   EXPECT_NE(ErrorOf(dir.File("e.ply")).find("byte 0: empty file"), std::string::npos);
   std::string laz = "LASF" + std::string(300, '\0');
   laz[104] = static_cast<char>(0x83);  // LASzip: point format 3 with the compression bits
   WriteBytes(dir.File("z.las"), laz);
-  EXPECT_NE(ErrorOf(dir.File("z.las")).find("LAZ"), std::string::npos);
+  WriteBytes(dir.File("z.laz"), laz);
+  EXPECT_EQ(DetectPointFormat(dir.File("z.las")), PointFormat::kLas);  // the LAS reader decodes it
+  EXPECT_EQ(DetectPointFormat(dir.File("z.laz")), PointFormat::kLas);
+  WriteBytes(dir.File("p.laz"), "ply\nformat ascii 1.0\n");
+  EXPECT_NE(ErrorOf(dir.File("p.laz")).find("content is PLY"), std::string::npos);
+  try {
+    OutputPointFormat(dir.File("out.laz"));
+    ADD_FAILURE() << "writing .laz was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("writing LAZ is not supported"), std::string::npos);
+  }
   WriteBytes(dir.File("d.dxf"), "  0\nSECTION\n  2\nHEADER\n");
   EXPECT_NE(ErrorOf(dir.File("d.dxf")).find("not a point file"), std::string::npos);
   WriteBytes(dir.File("d.ply"), "AutoCAD Binary DXF\r\n\x1a");
@@ -55,11 +65,13 @@ TEST(DetectPointFormat, EmptyLazAndDxfAreRefusedClearly) {
   EXPECT_NE(ErrorOf(dir.File("missing.ply")).find("cannot open"), std::string::npos);
 }
 
-TEST(DetectPointFormat, RealBinaryDxfAndLazAreRefused) {
+TEST(DetectPointFormat, RealBinaryDxfIsRefusedRealLazIsLas) {
+  EXPECT_EQ(DetectPointFormat(testing::SourceDir() + "/tests/data/laz/simple.laz"),
+            PointFormat::kLas);
   CANDI_REQUIRE_SHARED_DATA(dxf, "dxf/bin_dxf_r2000.dxf");
   EXPECT_NE(ErrorOf(dxf).find("binary DXF"), std::string::npos) << ErrorOf(dxf);
   CANDI_REQUIRE_SHARED_DATA(laz, "las/autzen_trim.laz");
-  EXPECT_NE(ErrorOf(laz).find("LAZ (compressed LAS) is not supported"), std::string::npos) << ErrorOf(laz);
+  EXPECT_EQ(DetectPointFormat(laz), PointFormat::kLas);
 }
 
 TEST(ShiftSidecar, RoundTripAndStaleSidecarIgnored) {
