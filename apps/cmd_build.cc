@@ -44,6 +44,7 @@
 #include "apps/scene.h"
 #include "core/atomic_file.h"
 #include "core/check.h"
+#include "core/crs.h"
 #include "core/log.h"
 #include "core/point_io.h"
 #include "core/sha256.h"
@@ -221,6 +222,8 @@ LayerResult Photogrammetry(const Scene& scene, const SceneLayer& l, const std::s
     GeorefArgs g;
     g.input = dense;
     g.targets = l.targets;
+    g.crs = scene.crs;
+    g.targets_crs = l.targets_crs;
     if (!l.picks.empty()) g.picks = l.picks, g.model = (fs::path(workspace) / "sparse").string();
     g.output = (fs::path(work) / (l.name + "_georef.ply")).string();
     if (RunGeoref(g) != kOk) throw InputError(l.targets, "", "georeferencing failed");
@@ -274,6 +277,71 @@ size_t ReplaceWhereCovered(const PointCloud& by, double voxel, PointCloud* targe
     keep[i] = it == counts.end() || it->second < 3 || !near_by(target->positions[i]);
   }
   return target->Keep(keep);
+}
+
+// The layer's coordinates into the scene's CRS (scene.h, "crs"): a layer stating another CRS is
+// transformed with PROJ; one stating none is taken to be in the scene's, with a warning. Points
+// outside the target CRS's domain become NaN (dropped and counted by Place). Returns what
+// archive.json records of the layer's CRS.
+json ToSceneCrs(const Scene& scene, size_t k, PointCloud* cloud) {
+  const SceneLayer& l = scene.layers[k];
+  const std::string at = "/layers/" + std::to_string(k) + "/crs";
+  std::string stated = cloud->meta.crs;
+  if (l.crs == "scene") {
+    if (!stated.empty() && !SameCrs(stated, scene.crs))
+      throw InputError(scene.path, at, "layer " + l.name + " says \"scene\" (" + CrsLabel(scene.crs) +
+                                           ") but its data states " + CrsLabel(stated));
+    stated = scene.crs;
+  } else if (!l.crs.empty()) {
+    if (!stated.empty() && !SameCrs(stated, l.crs))
+      throw InputError(scene.path, at, "layer " + l.name + " declares " + CrsLabel(l.crs) +
+                                           " but its data states " + CrsLabel(stated) + "; remove one");
+    stated = l.crs;
+  }
+  json record = {{"stated", stated.empty() ? json() : json(CrsLabel(stated))}, {"transformed", false}};
+  if (stated.empty()) {
+    if (!scene.crs.empty())
+      LogWarning("layer " + l.name + " states no CRS; taken to be in the scene's, " + CrsLabel(scene.crs) +
+                 " (say so with \"crs\": \"scene\" in the layer)");
+    cloud->meta.crs = scene.crs;
+    return record;
+  }
+  cloud->meta.crs = stated;
+  if (scene.crs.empty() || SameCrs(stated, scene.crs)) return record;
+  const CrsTransform transform(stated, scene.crs, scene.path);
+  for (Eigen::Vector3d& p : cloud->positions) p = cloud->frame.ToWorld(p);
+  cloud->frame = LocalFrame();
+  const size_t outside = transform.Apply(&cloud->positions);
+  cloud->meta.crs = scene.crs;
+  LogInfo("layer " + l.name + ": " + CrsLabel(stated) + " -> " + CrsLabel(scene.crs) + " with PROJ (" +
+          transform.operation() + ")");
+  if (outside > 0) LogWarning("layer " + l.name + ": " + std::to_string(outside) + " points lie outside " + CrsLabel(scene.crs));
+  record["transformed"] = true;
+  record["to"] = CrsLabel(scene.crs);
+  record["operation"] = transform.operation();
+  record["accuracy_m"] = transform.accuracy();
+  record["outside_domain"] = outside;
+  return record;
+}
+
+// Without a scene CRS, every layer that states one must state the same: the scene's CRS then.
+std::string CommonCrs(const Scene& scene, const std::vector<PointCloud*>& clouds) {
+  if (!scene.crs.empty()) return scene.crs;
+  std::string common;
+  size_t first = 0;
+  for (size_t k = 0; k < clouds.size(); ++k) {
+    const std::string& c = clouds[k]->meta.crs;
+    if (c.empty()) continue;
+    if (common.empty()) {
+      common = c, first = k;
+    } else if (!SameCrs(common, c)) {
+      throw InputError(scene.path, "/crs", "layers " + scene.layers[first].name + " (" + CrsLabel(common) + ") and " +
+                                               scene.layers[k].name + " (" + CrsLabel(c) +
+                                               ") are in different CRSs; declare the scene's \"crs\" to transform "
+                                               "them into one with PROJ");
+    }
+  }
+  return common;
 }
 
 LayerResult Digitize(const Scene& scene, const SceneLayer& l, const std::string& work) {
@@ -479,6 +547,7 @@ int RunBuild(const BuildArgs& args) {
   std::vector<LayerResult> results;
   std::vector<std::string> layer_keys;
   std::vector<bool> layer_resumed;
+  std::vector<json> crs_records;
   Box3d world_box;
   for (size_t k = 0; k < scene.layers.size(); ++k) {
     const SceneLayer& l = scene.layers[k];
@@ -503,6 +572,7 @@ int RunBuild(const BuildArgs& args) {
       r.seconds = Seconds(t);
       if (keep) SaveLayer(checkpoints, stage, layer_keys.back(), kept, r);
     }
+    crs_records.push_back(ToSceneCrs(scene, k, &r.cloud));
     for (size_t i = 0; i < r.cloud.size(); ++i) {
       const Eigen::Vector3d w = l.world_from_layer * r.cloud.frame.ToWorld(r.cloud.positions[i]);
       if (w.allFinite()) world_box.Extend(w);
@@ -510,6 +580,9 @@ int RunBuild(const BuildArgs& args) {
     results.push_back(std::move(r));
   }
   const LocalFrame frame = scene.origin ? LocalFrame{*scene.origin} : LocalFrame::Auto(world_box);
+  std::vector<PointCloud*> digitized;
+  for (LayerResult& r : results) digitized.push_back(&r.cloud);
+  const std::string scene_crs = CommonCrs(scene, digitized);
 
   // 2. Place, colour and write each layer.
   std::vector<std::string> layer_files;
@@ -634,7 +707,7 @@ int RunBuild(const BuildArgs& args) {
                       {"method", results[k].method}, {"parameters", results[k].parameters},
                       {"sources", sources}, {"world_from_layer", matrix}, {"opacity", l.opacity},
                       {"highlight", l.highlight}, {"points", clouds[k].size()}, {"dropped_nan", dropped[k]},
-                      {"replaces", l.replaces}, {"replaced_by", replaced[k]},
+                      {"replaces", l.replaces}, {"replaced_by", replaced[k]}, {"crs", crs_records[k]},
                       {"file", "layers/" + l.name + ".ply"}, {"resumed", static_cast<bool>(layer_resumed[k])}});
     timings["layers"][l.name] = results[k].seconds;
   }
@@ -642,6 +715,7 @@ int RunBuild(const BuildArgs& args) {
       {"candi_version", CANDI_VERSION}, {"scene", {{"path", scene.path}, {"sha256", Sha256Hex(scene.text)}}},
       {"name", scene.name}, {"seed", scene.seed},
       {"frame", {{"origin", {frame.origin.x(), frame.origin.y(), frame.origin.z()}}}},
+      {"crs", scene_crs.empty() ? json() : json({{"definition", scene_crs}, {"label", CrsLabel(scene_crs)}})},
       {"points", total}, {"layers", layers}, {"archive", "archive"},
       {"pack_resumed", pack_checkpoint.has_value()},
       {"views", views}, {"meshlab", "meshlab/scene.mlp"},

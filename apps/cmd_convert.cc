@@ -1,9 +1,12 @@
 // candi convert IN OUT: streams points from one format to another, choosing the output shift.
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include "apps/arg_parse.h"
 #include "apps/commands.h"
+#include "core/check.h"
+#include "core/crs.h"
 #include "core/log.h"
 #include "core/point_io.h"
 #include "core/progress.h"
@@ -39,18 +42,53 @@ PointWriteOptions WriteOptions(const ConvertArgs& args) {
 }
 
 // The output frame: kept, none, explicit, or automatic from the header bounds or the first chunk.
+// With a reprojection the header's bounds are in the old CRS: the first chunk's count.
 LocalFrame OutputFrame(const ConvertArgs& args, const PointReader& reader, const PointCloud& first) {
-  if (args.shift.empty()) return reader.info().frame;
+  const bool reprojected = !args.to_crs.empty();
+  if (args.shift.empty()) return reprojected ? LocalFrame{} : reader.info().frame;
   if (args.shift == "none") return LocalFrame{};
   if (args.shift != "auto") return ParseShift(args.shift);
-  const Box3d box = reader.info().header_bounds ? *reader.info().header_bounds : first.WorldBounds();
+  const Box3d box = reader.info().header_bounds && !reprojected ? *reader.info().header_bounds : first.WorldBounds();
   return LocalFrame::Auto(box);
+}
+
+// The input's CRS: the file's, or --crs for a file that states none (a different one is an error).
+std::string InputCrs(const ConvertArgs& args, const PointFileInfo& info) {
+  const std::string& stated = info.meta.crs;
+  if (args.crs.empty()) return stated;
+  DescribeCrs(args.crs, "--crs");
+  if (!stated.empty() && !SameCrs(stated, args.crs)) {
+    throw InputError(args.input, "", "states " + CrsLabel(stated) + " but --crs says " + CrsLabel(args.crs) +
+                                         "; to reproject, use --to-crs");
+  }
+  return args.crs;
+}
+
+// Reprojection drops what stated the old CRS and the LAS scale/offset chosen for it (a scale of
+// 0.01 in metres means 1 km in degrees): the writer chooses them anew, 1e-7 degrees (~1 cm) for a
+// geographic CRS.
+void PrepareReprojection(const ConvertArgs& args, PointWriteSpec* spec, PointWriteOptions* options) {
+  LasMetadata& las = spec->meta.las;
+  las.vlrs.erase(std::remove_if(las.vlrs.begin(), las.vlrs.end(),
+                                [](const LasVlr& v) { return v.user_id == "LASF_Projection" || (v.user_id == "liblas" && v.record_id == 2112); }),
+                 las.vlrs.end());
+  las.present = false;
+  spec->meta.crs = args.to_crs;
+  if (!options->las_scale && DescribeCrs(args.to_crs, "--to-crs").geographic) {
+    options->las_scale = Eigen::Vector3d(1e-7, 1e-7, 0.001);
+  }
+}
+
+void Reproject(const CrsTransform& transform, PointCloud* chunk) {
+  for (Eigen::Vector3d& p : chunk->positions) p = chunk->frame.ToWorld(p);
+  chunk->frame = LocalFrame();
+  transform.Apply(&chunk->positions);
 }
 
 }  // namespace
 
 int RunConvert(const ConvertArgs& args) {
-  const PointWriteOptions write_options = WriteOptions(args);
+  PointWriteOptions write_options = WriteOptions(args);
   if (!args.shift.empty() && args.shift != "auto" && args.shift != "none") ParseShift(args.shift);
   OutputPointFormat(args.output);  // an unknown output extension fails before any reading
   PointReadOptions read_options;
@@ -62,7 +100,19 @@ int RunConvert(const ConvertArgs& args) {
   PointWriteSpec spec;
   spec.schema = reader->info().schema;
   spec.meta = reader->info().meta;
+  spec.meta.crs = InputCrs(args, reader->info());
   spec.count = reader->info().count;
+  std::unique_ptr<CrsTransform> transform;
+  if (!args.to_crs.empty()) {
+    if (spec.meta.crs.empty()) {
+      throw InputError(args.input, "", "states no CRS to reproject from; give it with --crs");
+    }
+    transform = std::make_unique<CrsTransform>(spec.meta.crs, args.to_crs, args.input);
+    const std::string from = CrsLabel(spec.meta.crs);
+    PrepareReprojection(args, &spec, &write_options);
+    Reproject(*transform, &chunk);
+    LogInfo(from + " -> " + CrsLabel(args.to_crs) + " with PROJ (" + transform->operation() + ")");
+  }
   spec.frame = OutputFrame(args, *reader, chunk);
   if (spec.frame != reader->info().frame) {
     LogInfo("output shift: " + (spec.frame.IsIdentity() ? std::string("none") : spec.frame.ToString()) +
@@ -81,6 +131,7 @@ int RunConvert(const ConvertArgs& args) {
     done += got;
     progress.Update(done, total);
     got = reader->Read(kChunk, &chunk);
+    if (transform) Reproject(*transform, &chunk);
   }
   writer->Close();
   progress.Finish();

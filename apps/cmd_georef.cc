@@ -14,6 +14,7 @@
 #include "apps/output_folder.h"
 #include "core/atomic_file.h"
 #include "core/check.h"
+#include "core/crs.h"
 #include "core/log.h"
 #include "core/point_io.h"
 #include "reconstruction/photogrammetry/georef.h"
@@ -100,6 +101,8 @@ json ReportJson(const GeorefArgs& a, const pg::GeorefResult& r) {
   j["local_translation"] = Vec(t.translation - r.frame.origin);  // survey - shift = s R x + this
   j["loss"] = a.loss;
   j["loss_scale"] = a.loss_scale;
+  if (!a.crs.empty()) j["crs"] = a.crs;
+  if (!a.targets_crs.empty()) j["targets_crs"] = a.targets_crs;
   j["outlier_threshold"] = r.fit.threshold;
   j["converged"] = r.fit.converged;
   j["solver"] = r.fit.solver_message;
@@ -122,11 +125,26 @@ json ReportJson(const GeorefArgs& a, const pg::GeorefResult& r) {
   return j;
 }
 
+// GNSS or national-grid targets into the survey CRS, with PROJ.
+void TransformTargets(const GeorefArgs& a, std::vector<pg::SurveyTarget>* targets) {
+  if (a.crs.empty()) throw std::invalid_argument("--targets-crs needs --crs (the CRS to fit in)");
+  const CrsTransform transform(a.targets_crs, a.crs, a.targets);
+  LogInfo("targets: " + CrsLabel(a.targets_crs) + " -> " + CrsLabel(a.crs) + " (" + transform.operation() + ")");
+  for (pg::SurveyTarget& t : *targets) {
+    t.survey = transform.Apply(t.survey);
+    if (!t.survey.allFinite()) {
+      throw InputError(a.targets, "line " + std::to_string(t.line),
+                       "target '" + t.name + "' lies outside " + CrsLabel(a.crs) + "'s domain (PROJ cannot transform it)");
+    }
+  }
+}
+
 void TransformPointFile(const GeorefArgs& a, const pg::GeorefResult& r) {
   auto reader = OpenPointReader(a.input);
   PointWriteSpec spec;
   spec.schema = reader->info().schema;
   spec.meta = reader->info().meta;
+  if (!a.crs.empty()) spec.meta.crs = a.crs;
   spec.frame = r.frame;
   spec.count = reader->info().count;
   auto writer = OpenPointWriter(a.output, spec);
@@ -159,6 +177,7 @@ int RunGeoref(const GeorefArgs& args) {
   }
   CheckOutputFolder(args.output);
   std::vector<pg::SurveyTarget> targets = pg::ReadSurveyTargets(args.targets);
+  if (!args.targets_crs.empty()) TransformTargets(args, &targets);
   const std::string model_dir = input_is_model ? args.input : args.model;
   pg::ColmapGeorefInput model;
   if (!model_dir.empty()) model = pg::ReadColmapForGeoref(model_dir);

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
+#include "core/crs.h"
 #include "core/point_io.h"
 #include "core/progress.h"
 #include "core/text_format.h"
@@ -71,6 +72,8 @@ nlohmann::json ToJson(const PointFileInfo& info, const Scan& scan, const std::st
   if (info.face_count > 0) j["faces"] = info.face_count;
   j["fields"] = FieldList(info.schema);
   j["shift"] = info.frame.IsIdentity() ? nlohmann::json(nullptr) : JsonVec(info.frame.origin);
+  j["crs"] = info.meta.crs.empty() ? nlohmann::json(nullptr)
+                                   : nlohmann::json({{"label", CrsLabel(info.meta.crs)}, {"definition", info.meta.crs}});
   if (scan.done && !scan.world.IsEmpty()) {
     j["bounds"] = {{"min", JsonVec(scan.world.min)}, {"max", JsonVec(scan.world.max)}};
   }
@@ -100,6 +103,7 @@ void PrintText(const PointFileInfo& info, const Scan& scan, const std::string& p
   for (const std::string& f : FieldList(info.schema)) fields += (fields.empty() ? "" : ", ") + f;
   std::printf("fields    %s\n", fields.c_str());
   std::printf("shift     %s\n", info.frame.IsIdentity() ? "none" : (Vec(info.frame.origin) + "  (world = local + shift)").c_str());
+  std::printf("crs       %s\n", info.meta.crs.empty() ? "none stated" : CrsLabel(info.meta.crs).c_str());
   if (scan.done && !scan.world.IsEmpty()) {
     std::printf("bounds    min %s\n          max %s\n", Coordinates(scan.world.min, info).c_str(),
                 Coordinates(scan.world.max, info).c_str());

@@ -10,6 +10,7 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
+#include "core/crs.h"
 
 namespace candi::app {
 
@@ -82,6 +83,18 @@ class Node {
     c.g = static_cast<uint8_t>((*this)[1].Integer(0, 255));
     c.b = static_cast<uint8_t>((*this)[2].Integer(0, 255));
     return c;
+  }
+  // A coordinate reference system PROJ reads (checked here, so a typo fails before any work).
+  std::string Crs() const {
+    const std::string text = String();
+    try {
+      DescribeCrs(text, *file_);
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      const size_t at = what.find("PROJ");
+      Fail(at == std::string::npos ? what : what.substr(at));
+    }
+    return text;
   }
   // A path relative to the scene's folder, made absolute; `must_exist` checks it (file or folder).
   std::string Path(bool must_exist, bool folder = false) const {
@@ -165,8 +178,8 @@ SceneLayer ParseLayer(const Node& n) {
   l.name = n["name"].String();
   if (!ValidName(l.name)) n["name"].Fail("a layer name is 1-64 characters of A-Z a-z 0-9 _ - (it names files)");
   l.kind = ParseKind(n["kind"]);
-  std::set<std::string> known = {"name", "kind", "world_from_layer", "color", "opacity", "highlight", "replaces",
-                                 "replace_voxel"};
+  std::set<std::string> known = {"name", "kind", "world_from_layer", "crs", "color", "opacity", "highlight",
+                                 "replaces", "replace_voxel"};
   switch (l.kind) {
     case LayerKind::kPoints: known.insert({"file", "columns"}); break;
     case LayerKind::kFoundation:
@@ -174,12 +187,13 @@ SceneLayer ParseLayer(const Node& n) {
       break;
     case LayerKind::kRelief: known.insert({"panels", "model", "placement", "width_m"}); break;
     case LayerKind::kPhotogrammetry:
-      known.insert({"dense", "workspace", "images", "targets", "picks", "max_image_size", "max_features", "resolution_scale",
-                     "iterations"});
+      known.insert({"dense", "workspace", "images", "targets", "targets_crs", "picks", "max_image_size",
+                     "max_features", "resolution_scale", "iterations"});
       break;
   }
   n.ExpectObject(known);
   if (n.Has("world_from_layer")) l.world_from_layer = ParseTransform(n["world_from_layer"]);
+  if (n.Has("crs")) l.crs = n["crs"].String() == "scene" ? "scene" : n["crs"].Crs();
   if (n.Has("color")) l.color = n["color"].Colour();
   if (n.Has("opacity")) l.opacity = n["opacity"].Number(0, 1, true);
   if (n.Has("highlight")) l.highlight = n["highlight"].Bool();
@@ -251,6 +265,10 @@ SceneLayer ParseLayer(const Node& n) {
       else if (n.Has("workspace")) l.workspace = n["workspace"].Path(true, true);
       else l.images = n["images"].Path(true, true);
       if (n.Has("targets")) l.targets = n["targets"].Path(true);
+      if (n.Has("targets_crs")) {
+        if (!n.Has("targets")) n["targets_crs"].Fail("only with \"targets\"");
+        l.targets_crs = n["targets_crs"].Crs();
+      }
       if (n.Has("picks")) {
         if (!n.Has("targets")) n["picks"].Fail("picks need \"targets\" (the surveyed coordinates)");
         if (n.Has("dense")) n["picks"].Fail("picks need the cameras: give \"images\" or \"workspace\", not \"dense\"");
@@ -355,7 +373,7 @@ Scene LoadScene(const std::string& path) {
     throw InputError(path, "", std::string("not valid JSON: ") + e.what());
   }
   const Node root(scene.path, j, "");
-  root.ExpectObject({"candi_scene", "name", "origin", "seed", "render", "views", "layers"});
+  root.ExpectObject({"candi_scene", "name", "origin", "seed", "crs", "render", "views", "layers"});
   if (!root.Has("candi_scene")) root.Fail("missing key \"candi_scene\" (the format version, 1)");
   if (root["candi_scene"].Integer(1, 1000) != 1) root["candi_scene"].Fail("this candi reads scene version 1");
   scene.name = root.Has("name") ? root["name"].String() : fs::path(path).stem().string();
@@ -368,6 +386,7 @@ Scene LoadScene(const std::string& path) {
     }
   }
   if (root.Has("seed")) scene.seed = static_cast<unsigned long long>(root["seed"].Integer(0, (1LL << 62)));
+  if (root.Has("crs")) scene.crs = root["crs"].Crs();
   if (root.Has("render")) {
     const Node r = root["render"];
     r.ExpectObject({"repeat_level", "width", "height", "background", "brightness"});
@@ -391,6 +410,10 @@ Scene LoadScene(const std::string& path) {
       layers[i]["name"].Fail("layer name \"" + scene.layers.back().name + "\" repeats");
   }
   for (size_t i = 0; i < scene.layers.size(); ++i) {
+    if (scene.layers[i].crs == "scene" && scene.crs.empty())
+      layers[i]["crs"].Fail("\"scene\" needs the scene's \"crs\"");
+    if (!scene.layers[i].targets_crs.empty() && scene.crs.empty())
+      layers[i]["targets_crs"].Fail("needs the scene's \"crs\" (the CRS to transform the targets into)");
     for (size_t r = 0; r < scene.layers[i].replaces.size(); ++r) {
       const std::string& other = scene.layers[i].replaces[r];
       const Node at = layers[i]["replaces"][r];

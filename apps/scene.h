@@ -7,6 +7,12 @@
 //   "origin": [E, N, H] | "auto",            the scene's one LocalFrame (default "auto": chosen from
 //                                            the layers' bounds, see LocalFrame::Auto)
 //   "seed": 1,                               every random step (sampling, opacity, SPBR)
+//   "crs": "EPSG:32749",                     the scene's coordinate reference system (any string
+//                                            PROJ reads). Layers stating another CRS are
+//                                            transformed into it with PROJ (before
+//                                            world_from_layer); layers stating none are taken to
+//                                            be in it, with a warning. Absent: every layer must
+//                                            state the same CRS or none (mixing is an error).
 //   "render": {"repeat_level": 100, "width": 1024, "height": 768, "background": [r, g, b],
 //              "brightness": "auto" | "none" | gain},
 //   "views": [{"name": "overview",           one PNG per view: renders/<name>.png
@@ -22,6 +28,10 @@
 //   "layers": [{
 //     "name": "foundation",                  unique; [A-Za-z0-9_-]+ (it names files)
 //     "kind": "points" | "foundation" | "relief" | "photogrammetry",
+//     "crs": "EPSG:4979",                    the CRS of the layer's coordinates, for files that
+//                                            state none (a file stating a different one is an
+//                                            error); "scene": already in the scene's CRS (no
+//                                            warning)
 //     "world_from_layer": {"matrix": [[4 x 4]]} | {"scale": s, "rotation_deg": [rx, ry, rz],
 //                          "translation": [x, y, z]}      (R = Rz Ry Rx; default identity)
 //     "color": [r, g, b],                    override every point's colour
@@ -43,6 +53,8 @@
 //     photogrammetry: "dense": "dense.ply" | "workspace": "ws/" (runs candi dense) |
 //                     "images": "photos/" (runs candi sfm, then candi dense),
 //                     "targets": "targets.csv" (georeference, candi georef's format),
+//                     "targets_crs": "EPSG:4979" (the targets' CRS, e.g. GNSS in WGS 84:
+//                     transformed into the scene's "crs" with PROJ before the fit),
 //                     "picks": "picks.csv" (the targets picked in the photos, name,image,u,v in
 //                     the undistorted images; with images or workspace),
 //                     "max_image_size": 1600, "max_features": 4096 (SIFT, images),
@@ -79,6 +91,7 @@ struct SceneLayer {
   std::string name;
   LayerKind kind = LayerKind::kPoints;
   Sim3 world_from_layer;
+  std::string crs;  // "" (none stated), "scene", or a CRS PROJ reads
   std::optional<Rgb8> color;
   double opacity = 1.0;
   bool highlight = false;
@@ -97,6 +110,7 @@ struct SceneLayer {
   double width_m = 2.7;
   // photogrammetry
   std::string dense, workspace, images, targets, picks;
+  std::string targets_crs;  // "" : the targets are in the scene's CRS
   int max_image_size = 1600, max_features = 4096;  // sfm (images)
   double resolution_scale = 1.0;  // dense stereo (images, workspace)
   int iterations = 3;
@@ -124,6 +138,7 @@ struct Scene {
   std::string name;
   std::optional<Eigen::Vector3d> origin;  // none: auto
   unsigned long long seed = 1;
+  std::string crs;    // "" : none declared
   int repeat_level = 100, width = 1024, height = 768;
   Rgb8 background{255, 255, 255};
   std::string brightness = "auto";
