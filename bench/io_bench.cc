@@ -1,12 +1,18 @@
-// Point-file throughput: binary PLY (float and double positions) and LAS (point format 3), read
-// and write, 10^7 points with colour, from and to the page cache. Prints Google Benchmark's
-// table with points/s; medians of 5 repetitions. Target (issue 2): read >= 50 M points/s,
-// write >= 30 M points/s. Set CANDI_BENCH_POINTS to change the size.
+// Point-file throughput: binary PLY (float and double positions), LAS (point format 3) and E57
+// (float and double Cartesian fields), read and write, 10^7 points with colour, from and to the
+// page cache; and LAZ decoding of files other tools wrote (../shared/data/las/autzen_trim.laz,
+// pointwise v2, format 3; tests/data/laz/append-bug.laz, layered v3, format 8), each read
+// repeatedly, on 1 and 2 threads. Prints Google Benchmark's table with points/s; medians of 5
+// repetitions. Targets: read >= 50 M points/s, write >= 30 M points/s (issue 2); E57 float read
+// >= 20 M points/s, LAZ >= 10 M points/s on one core (issue 25). Set CANDI_BENCH_POINTS to change
+// the size.
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+
+#include <tbb/global_control.h>
 
 #include "core/point_io.h"
 #include "core/rng.h"
@@ -53,7 +59,8 @@ struct Case {
   ScalarType type;
 };
 const Case kCases[] = {{"float.ply", ScalarType::kFloat32}, {"double.ply", ScalarType::kFloat64},
-                       {"fmt3.las", ScalarType::kFloat64}};
+                       {"fmt3.las", ScalarType::kFloat64},  {"float.e57", ScalarType::kFloat32},
+                       {"double.e57", ScalarType::kFloat64}};
 
 void BM_Write(benchmark::State& state) {
   const Case& c = kCases[state.range(0)];
@@ -82,9 +89,47 @@ void BM_Read(benchmark::State& state) {
   state.SetLabel(std::string(c.file) + (options.scalar_fields ? "" : " xyz+rgb only"));
 }
 
-BENCHMARK(BM_Write)->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->UseRealTime()
+// LAZ written by other tools, read `repeat` times; range(0): file, range(1): threads,
+// range(2) = 0: every field, 1: geometry and colour only.
+struct LazCase {
+  const char* path;  // relative to the repository
+  int repeat;
+};
+const LazCase kLazCases[] = {{"../shared/data/las/autzen_trim.laz", 30}, {"tests/data/laz/append-bug.laz", 80}};
+
+void BM_ReadLaz(benchmark::State& state) {
+  const LazCase& c = kLazCases[state.range(0)];
+  const std::string path = std::string(CANDI_SOURCE_DIR) + "/" + c.path;
+  if (!std::filesystem::exists(path)) {
+    state.SkipWithError((path + " is absent").c_str());
+    return;
+  }
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(1));
+  PointReadOptions options;
+  options.scalar_fields = state.range(2) == 0;
+  size_t n = 0;
+  std::string description;
+  for (auto _ : state) {
+    n = 0;
+    for (int r = 0; r < c.repeat; ++r) {
+      auto reader = OpenPointReader(path, options);
+      description = reader->info().description;
+      PointCloud chunk;
+      while (size_t got = reader->Read(1 << 16, &chunk)) n += got;
+      benchmark::DoNotOptimize(chunk.positions.data());
+    }
+  }
+  state.SetItemsProcessed(state.iterations() * n);
+  state.SetLabel(std::filesystem::path(c.path).filename().string() + ", " + std::to_string(state.range(1)) +
+                 " thread(s)" + (options.scalar_fields ? "" : ", xyz+rgb only") + " [" +
+                 description.substr(0, description.find(',')) + "]");
+}
+
+BENCHMARK(BM_Write)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(5)->ReportAggregatesOnly(true)->Iterations(1);
-BENCHMARK(BM_Read)->ArgsProduct({{0, 1, 2}, {0}})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime()
+BENCHMARK(BM_Read)->ArgsProduct({{0, 1, 2, 3, 4}, {0}})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime()
+    ->Repetitions(5)->ReportAggregatesOnly(true)->Iterations(1);
+BENCHMARK(BM_ReadLaz)->ArgsProduct({{0, 1}, {1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(5)->ReportAggregatesOnly(true)->Iterations(1);
 
 }  // namespace

@@ -17,7 +17,7 @@ seconds=${FUZZ_SECONDS:-60}
 max_len=${FUZZ_MAX_LEN:-65536}
 jobs=${FUZZ_JOBS:-2}
 runs=${FUZZ_RUNS:--1}
-all_targets=(ply las xyz dxf colmap_bin colmap_text colmap_array scene archive view_protocol)
+all_targets=(ply las laz e57 xyz dxf colmap_bin colmap_text colmap_array scene archive view_protocol)
 targets=("$@")
 [[ ${#targets[@]} -gt 0 ]] || targets=("${all_targets[@]}")
 
@@ -36,7 +36,8 @@ stage_shared() {
   [[ -d $shared ]] || return 0
   case $t in
     ply) cp "$shared"/ply/*.ply "$dir"/ 2>/dev/null || true ;;
-    las) cp "$shared"/las/*.las "$shared"/las/*.laz "$dir"/ 2>/dev/null || true ;;
+    las) cp "$shared"/las/*.las "$dir"/ 2>/dev/null || true ;;
+    laz) cp "$shared"/las/*.laz "$dir"/ 2>/dev/null || true ;;
     dxf) cp "$shared"/dxf/* "$dir"/ 2>/dev/null || true ;;
     colmap_bin)
       local m=$shared/colmap/sceaux_1600_sparse
