@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <array>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -248,5 +249,62 @@ inline int32_t IntegerDecompressor::Decompress(ArithmeticDecoder* decoder, int32
   }
   return static_cast<int32_t>(real);
 }
+
+// Median of the last five values (LASzip StreamingMedian5): an insertion into a sorted window
+// that alternately drops the lowest and the highest value. Both compressors predict with it, and
+// its exact update order matters: the decoder must predict what the encoder predicted.
+class Median5 {
+ public:
+  int32_t Get() const { return v_[2]; }
+  void Add(int32_t v) {
+    if (high_) {
+      AddHigh(v);
+    } else {
+      AddLow(v);
+    }
+  }
+
+ private:
+  void AddHigh(int32_t v) {
+    if (v < v_[2]) {
+      v_[4] = v_[3], v_[3] = v_[2];
+      if (v < v_[0]) {
+        v_[2] = v_[1], v_[1] = v_[0], v_[0] = v;
+      } else if (v < v_[1]) {
+        v_[2] = v_[1], v_[1] = v;
+      } else {
+        v_[2] = v;
+      }
+    } else {
+      if (v < v_[3]) {
+        v_[4] = v_[3], v_[3] = v;
+      } else {
+        v_[4] = v;
+      }
+      high_ = false;
+    }
+  }
+  void AddLow(int32_t v) {
+    if (v_[2] < v) {
+      v_[0] = v_[1], v_[1] = v_[2];
+      if (v_[4] < v) {
+        v_[2] = v_[3], v_[3] = v_[4], v_[4] = v;
+      } else if (v_[3] < v) {
+        v_[2] = v_[3], v_[3] = v;
+      } else {
+        v_[2] = v;
+      }
+    } else {
+      if (v_[1] < v) {
+        v_[0] = v_[1], v_[1] = v;
+      } else {
+        v_[0] = v;
+      }
+      high_ = true;
+    }
+  }
+  std::array<int32_t, 5> v_{};
+  bool high_ = true;
+};
 
 }  // namespace candi::laz

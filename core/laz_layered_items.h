@@ -117,62 +117,6 @@ inline void PackPoint14(const Point14& q, uint8_t* p) {
   StoreU64(p + 22, q.gps_time);
 }
 
-// Median of the last five values (LASzip StreamingMedian5): an insertion into a sorted window
-// that alternately drops the lowest and the highest value.
-class Median5 {
- public:
-  int32_t Get() const { return v_[2]; }
-  void Add(int32_t v) {
-    if (high_) {
-      AddHigh(v);
-    } else {
-      AddLow(v);
-    }
-  }
-
- private:
-  void AddHigh(int32_t v) {
-    if (v < v_[2]) {
-      v_[4] = v_[3], v_[3] = v_[2];
-      if (v < v_[0]) {
-        v_[2] = v_[1], v_[1] = v_[0], v_[0] = v;
-      } else if (v < v_[1]) {
-        v_[2] = v_[1], v_[1] = v;
-      } else {
-        v_[2] = v;
-      }
-    } else {
-      if (v < v_[3]) {
-        v_[4] = v_[3], v_[3] = v;
-      } else {
-        v_[4] = v;
-      }
-      high_ = false;
-    }
-  }
-  void AddLow(int32_t v) {
-    if (v_[2] < v) {
-      v_[0] = v_[1], v_[1] = v_[2];
-      if (v_[4] < v) {
-        v_[2] = v_[3], v_[3] = v_[4], v_[4] = v;
-      } else if (v_[3] < v) {
-        v_[2] = v_[3], v_[3] = v;
-      } else {
-        v_[2] = v;
-      }
-    } else {
-      if (v_[1] < v) {
-        v_[0] = v_[1], v_[1] = v;
-      } else {
-        v_[0] = v;
-      }
-      high_ = true;
-    }
-  }
-  std::array<int32_t, 5> v_{};
-  bool high_ = true;
-};
-
 // GPS time prediction state: up to four interleaved time sequences (LASzip "multi-sequence"),
 // each with its last time and last integer difference of the float64 bits.
 struct GpsSequences {

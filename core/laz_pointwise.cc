@@ -29,58 +29,6 @@ constexpr uint8_t kNumberReturnLevel[8][8] = {
     {3, 2, 1, 0, 1, 2, 3, 4}, {4, 3, 2, 1, 0, 1, 2, 3}, {5, 4, 3, 2, 1, 0, 1, 2},
     {6, 5, 4, 3, 2, 1, 0, 1}, {7, 6, 5, 4, 3, 2, 1, 0}};
 
-// The median of the last five values, maintained incrementally as LASzip's StreamingMedian5
-// does (its exact update order matters: the decoder must predict what the encoder predicted).
-class Median5 {
- public:
-  int32_t Get() const { return v_[2]; }
-  void Add(int32_t v) {
-    if (high_) {
-      if (v < v_[2]) {
-        v_[4] = v_[3];
-        v_[3] = v_[2];
-        if (v < v_[0]) {
-          v_[2] = v_[1], v_[1] = v_[0], v_[0] = v;
-        } else if (v < v_[1]) {
-          v_[2] = v_[1], v_[1] = v;
-        } else {
-          v_[2] = v;
-        }
-      } else {
-        if (v < v_[3]) {
-          v_[4] = v_[3], v_[3] = v;
-        } else {
-          v_[4] = v;
-        }
-        high_ = false;
-      }
-    } else {
-      if (v_[2] < v) {
-        v_[0] = v_[1];
-        v_[1] = v_[2];
-        if (v_[4] < v) {
-          v_[2] = v_[3], v_[3] = v_[4], v_[4] = v;
-        } else if (v_[3] < v) {
-          v_[2] = v_[3], v_[3] = v;
-        } else {
-          v_[2] = v;
-        }
-      } else {
-        if (v_[1] < v) {
-          v_[0] = v_[1], v_[1] = v;
-        } else {
-          v_[0] = v;
-        }
-        high_ = true;
-      }
-    }
-  }
-
- private:
-  int32_t v_[5] = {0, 0, 0, 0, 0};
-  bool high_ = true;
-};
-
 // A 256-symbol model per previous byte value, created on first use (most never are, and a
 // chunk would otherwise spend more time initialising 768 models than decoding).
 class LazyModels {
