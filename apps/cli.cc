@@ -298,8 +298,19 @@ void AddReliefDataset(CLI::App& relief, ReliefDatasetArgs& a, std::function<int(
   c->add_option("--panel-width-m", a.panel_width_m, "Width of photo inputs without recorded resolution, m");
   c->add_flag("--no-relight", a.no_relight, "Scans: use the scan's grey, not a raking-light photo");
   c->add_option("--seed", a.seed, "Random seed (simulated photos)");
+  auto* colmap = c->add_option("--colmap", a.colmap, "Real photos: a COLMAP sparse model; the inputs are "
+                               "dense clouds in its frame (views/, holdout/: whole pairs with masks)");
+  auto* images = c->add_option("--images", a.images, "Real photos: the folder of the model's photos");
+  colmap->needs(images);
+  images->needs(colmap);
+  c->add_option("--holdout", a.holdout, "Real photos: images kept out of training (names or stems, "
+                "comma-separated)")->delimiter(',');
+  c->add_option("--max-side", a.max_side, "Real photos: longer side of a pair, pixels")
+      ->check(CLI::Range(32, 16384));
   c->callback([run, &a] { *run = [&a] { return RunReliefDataset(a); }; });
-  c->footer("Example: candi relief dataset scan.ply panels/ -o data --patch 128");
+  c->footer("Examples: candi relief dataset scan.ply panels/ -o data --patch 128\n"
+            "          candi relief dataset dense.ply --colmap sparse/ --images photos/ --holdout "
+            "100_7105.JPG -o pairs --max-side 512");
 }
 
 void AddReliefTrain(CLI::App& relief, ReliefTrainArgs& a, std::function<int()>* run) {
@@ -316,10 +327,17 @@ void AddReliefTrain(CLI::App& relief, ReliefTrainArgs& a, std::function<int()>* 
   c->add_option("--max-seconds", a.max_seconds, "Stop after this many seconds (0: no limit)");
   c->add_option("--checkpoint", a.checkpoint, "Checkpoint file (default: <out>.ckpt)");
   c->add_flag("--resume", a.resume, "Continue from the checkpoint");
+  auto* finetune = c->add_option("--finetune", a.finetune, "Start from this model's weights with a fresh "
+                                 "optimiser (e.g. the shipped model on pairs of real photos)");
+  for (const char* net : {"--growth", "--blocks", "--width"}) finetune->excludes(c->get_option(net));
+  c->add_option("--edge-loss", a.edge_weight, "Weight of the edge term (log-depth differences 1, 2, 4 "
+                "pixels apart; 0: off)")->check(CLI::Range(0.0, 1000.0));
   c->add_option("--seed", a.seed, "Random seed (weights, order, augmentation)");
   c->add_option("--threads", a.threads, "libtorch threads")->check(CLI::Range(1, 256));
   c->callback([run, &a] { *run = [&a] { return RunReliefTrain(a); }; });
-  c->footer("Example: candi relief train --data data --out model.pt --epochs 20");
+  c->footer("Examples: candi relief train --data data --out model.pt --epochs 20\n"
+            "          candi relief train --data pairs --finetune examples/relief/relief_model.pt "
+            "--out tuned.pt --lr 3e-4 --epochs 4");
 }
 
 void AddReliefPredict(CLI::App& relief, ReliefPredictArgs& a, std::function<int()>* run) {
@@ -355,12 +373,22 @@ void AddReliefPoints(CLI::App& relief, ReliefPointsArgs& a, std::function<int()>
 void AddReliefEval(CLI::App& relief, ReliefEvalArgs& a, std::function<int()>* run) {
   auto* c = relief.add_subcommand("eval", "The paper's Table 2 metrics: model, intensity-as-depth, "
                                           "linear SFS and the paper's BTS");
-  c->add_option("--model", a.model, "Model file (without it: the baselines only)");
+  c->add_option("--model", a.models, "Model file, repeatable (without it: the baselines only)");
   c->add_option("--panels", a.panels, "Held-out synthetic panels")->check(CLI::Range(1, 10000));
   c->add_option("--width", a.width, "Their width, pixels")->check(CLI::Range(32, 16384));
   c->add_option("--seed", a.seed, "Their seed (keep it apart from the training seeds)");
   c->add_option("--photo", a.photo, "Or: one photo ...");
   c->add_option("--depth", a.depth, "... and its ground-truth depth PNG");
+  c->add_option("--pairs", a.pairs, "Or: a folder of <name>_photo.png + _depth.png [+ _mask.png] pairs "
+                "(real photos: `relief dataset --colmap`), scored as they are (no resampling)");
+  c->add_option("--level-per-pixel", a.level_per_pixel, "Normals: one depth level in pixel widths "
+                "(default: depth_m/255 over the panel's metres per pixel; 1 for --pairs)");
+  c->add_option("--normal-step", a.normal_step, "Normals: differences over this many pixels each side "
+                "(default 1; 4 for --pairs, whose depth is noisy at one pixel)")->check(CLI::Range(1, 16));
+  c->add_option("--edge-jump", a.edge_jump, "Edges: a depth step of more than this many levels")
+      ->check(CLI::Range(0.001, 255.0));
+  c->add_option("--edge-tolerance", a.edge_tolerance, "Edges: match within this many pixels")
+      ->check(CLI::Range(0, 16));
   c->add_option("--light-azimuth", a.light_azimuth, "SFS light azimuth, degrees (default: from the photo)");
   c->add_option("--light-elevation", a.light_elevation, "SFS light elevation, degrees");
   c->add_option("--width-m", a.width_m, "Panel width in --photo, m");
@@ -368,7 +396,9 @@ void AddReliefEval(CLI::App& relief, ReliefEvalArgs& a, std::function<int()>* ru
   c->add_option("--overlap", a.overlap, "Tile overlap, pixels");
   c->add_option("--threads", a.threads, "libtorch threads")->check(CLI::Range(1, 256));
   c->callback([run, &a] { *run = [&a] { return RunReliefEval(a); }; });
-  c->footer("Example: candi relief eval --model examples/relief/relief_model.pt --panels 4");
+  c->footer("Examples: candi relief eval --model examples/relief/relief_model.pt --panels 4\n"
+            "          candi relief eval --pairs pairs/holdout --model examples/relief/relief_model.pt "
+            "--model tuned.pt");
 }
 
 void AddBenchRelief(CLI::App& app, BenchReliefArgs& a, std::function<int()>* run) {
@@ -381,8 +411,17 @@ void AddBenchRelief(CLI::App& app, BenchReliefArgs& a, std::function<int()>* run
   c->add_option("--eval-panels", a.eval_panels, "Held-out panels")->check(CLI::Range(1, 10000));
   c->add_option("--seed", a.seed, "Seed of the training series");
   c->add_option("--threads", a.threads, "libtorch threads")->check(CLI::Range(1, 256));
+  c->add_option("--pairs", a.pairs, "Real photos instead: a `relief dataset --colmap` folder; the model "
+                "is fine-tuned on train/ for each budget and scored on holdout/");
+  c->add_option("--model", a.model, "Real photos: the model to fine-tune");
+  c->add_option("--finetune-seconds", a.finetune_seconds, "Real photos: fine-tuning budgets, s");
+  c->add_option("--edge-loss", a.edge_weight, "Weight of the edge term in the edge-guided "
+                "rows (0: plain rows only)")->check(CLI::Range(0.0, 1000.0));
+  c->add_option("--lr", a.learning_rate, "Real photos: fine-tuning learning rate");
   c->callback([run, &a] { *run = [&a] { return RunBenchRelief(a); }; });
-  c->footer("Example: candi bench relief --widths 32,64 --seconds 60");
+  c->footer("Examples: candi bench relief --widths 32,64 --seconds 60\n"
+            "          candi bench relief --pairs pairs --model examples/relief/relief_model.pt "
+            "--finetune-seconds 60,240");
 }
 
 void AddReliefPlace(CLI::App& relief, ReliefPlaceArgs& a, std::function<int()>* run) {
@@ -570,6 +609,9 @@ void AddGeoref(CLI::App& app, GeorefArgs& a, std::function<int()>* run) {
   c->add_option("--outlier-threshold", a.outlier_threshold, "Flag residuals above this, m "
                 "(default: 4 x max(robust sigma, target accuracy))")->check(CLI::NonNegativeNumber);
   c->add_flag("--rigid", a.rigid, "Rigid fit (scale 1)");
+  c->add_option("--crs", a.crs, "CRS of the survey frame (e.g. EPSG:32749), stated in OUT");
+  c->add_option("--targets-crs", a.targets_crs, "CRS the targets are given in (e.g. EPSG:4979 for "
+                "GNSS); transformed into --crs with PROJ before the fit");
   c->callback([run, &a] { *run = [&a] { return RunGeoref(a); }; });
   c->footer("Example: candi georef chunk1.ply --targets targets.csv -o chunk1_utm.ply");
 }
@@ -607,9 +649,6 @@ int RunCli(int argc, char** argv) {
   int verbose = 0;
   bool quiet = false;
   app.add_flag("-v,--verbose", verbose, "More log output (debug)");
-  c->add_option("--crs", a.crs, "CRS of the survey frame (e.g. EPSG:32749), stated in OUT");
-  c->add_option("--targets-crs", a.targets_crs, "CRS the targets are given in (e.g. EPSG:4979 for "
-                "GNSS); transformed into --crs with PROJ before the fit");
   app.add_flag("-q,--quiet", quiet, "Only warnings and errors");
   app.footer("Exit codes: 0 ok, 1 usage, 2 bad input, 3 internal error.\n"
              "Run `candi <command> --help` for a command's options.");

@@ -133,6 +133,7 @@ int RunReliefSynth(const ReliefSynthArgs& a) {
 }
 
 int RunReliefDataset(const ReliefDatasetArgs& a) {
+  if (!a.colmap.empty() || !a.images.empty()) return RunReliefPhotoDataset(a);
   if (!(a.pixels_per_m > 0) || !(a.panel_width_m > 0)) {
     throw std::invalid_argument("--pixels-per-m and --panel-width-m must be > 0");
   }

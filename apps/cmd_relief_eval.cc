@@ -1,6 +1,8 @@
-// candi relief eval: the paper's Table 2 for a model beside intensity-as-depth, linear shape
-// from shading and the paper's BTS figures, on held-out synthetic panels or one photo/depth pair.
+// candi relief eval: the paper's Table 2 (and normal and edge metrics) for models beside
+// intensity-as-depth, linear shape from shading and the paper's BTS figures, on held-out synthetic
+// panels, one photo/depth pair, or a folder of real-photo pairs.
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -41,40 +43,71 @@ int RunReliefEval(const ReliefEvalArgs& a) {
   predict.tiles.overlap = a.overlap;
   predict.Check();
   if (a.photo.empty() != a.depth.empty()) throw std::invalid_argument("--photo and --depth go together");
+  if (!a.pairs.empty() && !a.photo.empty()) throw std::invalid_argument("--pairs or --photo/--depth, not both");
+  if (!(a.level_per_pixel >= 0)) throw std::invalid_argument("--level-per-pixel must be >= 0");
   relief::SetTorchThreads(a.threads);
-  std::optional<relief::DepthModel> model;
-  if (!a.model.empty()) model = relief::DepthModel::Load(a.model);
+  std::vector<relief::DepthModel> models;
+  for (const std::string& path : a.models) models.push_back(relief::DepthModel::Load(path));
+  std::vector<relief::NamedModel> named;
+  for (size_t k = 0; k < models.size(); ++k) {
+    const std::string stem = std::filesystem::path(a.models[k]).stem().string();
+    named.push_back({stem + " (" + std::to_string(models[k].ParameterCount()) + " par.)", &models[k]});
+  }
   std::vector<relief::EvalPanel> panels;
   relief::SynthOptions synth;
   synth.width = a.width;
   synth.seed = a.seed;
-  if (a.photo.empty()) {
+  relief::SurfaceMetricOptions surface;
+  surface.edge_jump_levels = a.edge_jump;
+  surface.edge_tolerance_px = a.edge_tolerance;
+  double level_per_pixel = 1;  // pairs of photographs: levels are per photo, not metric
+  std::string what;
+  if (!a.pairs.empty()) {
+    panels = relief::PhotoEvalPanels(a.pairs);
+    what = std::to_string(panels.size()) + " photo pairs of " + a.pairs;
+  } else if (a.photo.empty()) {
     synth.Check();
     panels = relief::SyntheticEvalPanels(synth, a.panels);
+    level_per_pixel = synth.depth_m / relief::kMaxLevel / synth.PixelM();
+    char line[160];
+    std::snprintf(line, sizeof(line), "%d held-out synthetic panels (seed %llu, %dx%d)", a.panels, a.seed,
+                  synth.width, synth.Height());
+    what = line;
   } else {
     panels.push_back(PanelFromFiles(a));
+    level_per_pixel = synth.depth_m / relief::kMaxLevel / (a.width_m > 0 ? a.width_m / panels[0].photo.width() : synth.PixelM());
+    what = a.photo + " against " + a.depth;
   }
+  surface.level_per_pixel = a.level_per_pixel > 0 ? a.level_per_pixel : level_per_pixel;
+  surface.normal_step = a.normal_step > 0 ? a.normal_step : (a.pairs.empty() ? 1 : 4);
+  surface.Check();
   ConsoleProgressOptions po;
   po.unit = "panels";
   ConsoleProgress progress("relief eval", po);
-  const auto scores = relief::EvaluatePanels(panels, model ? &*model : nullptr, predict, progress.Callback());
+  const auto scores = relief::EvaluatePanels(panels, named, predict, surface, progress.Callback());
   progress.Finish();
-  if (a.photo.empty()) {
-    std::printf("%d held-out synthetic panels (seed %llu, %dx%d)\n", a.panels, a.seed, synth.width, synth.Height());
-  } else {
-    std::printf("%s against %s\n", a.photo.c_str(), a.depth.c_str());
-  }
+  std::printf("%s\n", what.c_str());
   std::printf("%s %8s\n", relief::MetricsTableHeader().c_str(), "seconds");
   std::printf("%s %8s\n", relief::MetricsTableRow("BTS DenseNet-161 (paper)", relief::PaperBtsMetrics()).c_str(), "-");
   for (const relief::MethodScore& s : scores) {
-    const std::string name = s.name == "candi BTS" ? "candi BTS (" + std::to_string(model->ParameterCount()) + " par.)" : s.name;
-    std::printf("%s %8.2f\n", relief::MetricsTableRow(name, s.metrics).c_str(), s.seconds);
+    std::printf("%s %8.2f\n", relief::MetricsTableRow(s.name, s.metrics).c_str(), s.seconds);
+  }
+  std::printf("\n%s\n", relief::SurfaceTableHeader().c_str());
+  for (const relief::MethodScore& s : scores) {
+    std::printf("%s\n", relief::SurfaceTableRow(s.name, s.normals, s.edges).c_str());
   }
   std::printf("Convention: depth levels 0..255 from the panel's front plane (255 = the wall, 1 level = "
-              "depth_m / 255); ground truth below level 1 masked (%lld pixels scored); RMSE in levels.\n"
+              "depth_m / 255; for photo pairs levels 1..255 span the photo's 2nd..98th percentile of "
+              "camera depth); unknown ground truth masked (%lld pixels scored); RMSE in levels.\n"
+              "Normals of the height field with one level = %.4g pixel widths, differences over %d px "
+              "(%lld pixels scored), "
+              "angles in degrees; edges: depth steps of more than %.4g levels matched within %d px "
+              "(%lld true edge pixels).\n"
               "* scale and offset fitted to the ground truth by least squares (an oracle the network "
               "does not get). The paper's row is its visible panel, not these panels.\n",
-              static_cast<long long>(scores.front().metrics.count));
+              static_cast<long long>(scores.front().metrics.count), surface.level_per_pixel, surface.normal_step,
+              static_cast<long long>(scores.front().normals.count), surface.edge_jump_levels,
+              surface.edge_tolerance_px, static_cast<long long>(scores.front().edges.truth));
   return kOk;
 }
 

@@ -17,7 +17,8 @@ namespace candi::app {
 
 namespace {
 
-// pixels_per_m from DIR/dataset.txt ("key value" lines); throws InputError when absent.
+// pixels_per_m from DIR/dataset.txt ("key value" lines); 0 for pairs of photographs (no metric
+// resolution); throws InputError when absent or negative.
 double DatasetPixelsPerM(const std::string& dir) {
   const std::string path = dir + "/dataset.txt";
   std::ifstream in(path);
@@ -25,9 +26,9 @@ double DatasetPixelsPerM(const std::string& dir) {
   std::string key;
   double value = 0;
   while (in >> key >> value) {
-    if (key == "pixels_per_m" && value > 0) return value;
+    if (key == "pixels_per_m" && value >= 0) return value;
   }
-  throw InputError(path, "", "no positive pixels_per_m line");
+  throw InputError(path, "", "no pixels_per_m line with a value >= 0");
 }
 
 relief::NetOptions NetOptionsOf(const ReliefTrainArgs& a) {
@@ -60,8 +61,8 @@ int RunReliefTrain(const ReliefTrainArgs& a) {
   o.seed = a.seed;
   o.checkpoint = a.checkpoint.empty() ? a.output + ".ckpt" : a.checkpoint;
   o.resume = a.resume;
+  o.edge_weight = a.edge_weight;
   o.Check();
-  const relief::NetOptions net = NetOptionsOf(a);
   relief::SetTorchThreads(a.threads);
   const double ppm = DatasetPixelsPerM(a.data_dir);
   const std::vector<relief::TrainingPair> train = relief::ReadPairs(a.data_dir + "/train");
@@ -75,12 +76,16 @@ int RunReliefTrain(const ReliefTrainArgs& a) {
       }
     }
   }
-  relief::DepthModel model = relief::DepthModel::Create(net, a.seed);
-  model.set_pixels_per_m(ppm);
-  std::fprintf(stderr, "training %lld parameters on %zu pairs (%zu validation), %d thread(s)\n",
+  // Fine-tuning starts from the given model's weights and architecture (the network options of
+  // the command line do not apply) and keeps its resolution unless the data has one.
+  relief::DepthModel model = a.finetune.empty() ? relief::DepthModel::Create(NetOptionsOf(a), a.seed)
+                                                : relief::DepthModel::Load(a.finetune);
+  if (ppm > 0) model.set_pixels_per_m(ppm);
+  std::fprintf(stderr, "%s %lld parameters on %zu pairs (%zu validation), %d thread(s)\n",
+               a.finetune.empty() ? "training" : ("fine-tuning " + a.finetune + ":").c_str(),
                static_cast<long long>(model.ParameterCount()), train.size(), val.size(), a.threads);
   const relief::TrainSummary s = relief::TrainDepthModel(o, train, val, &model, PrintEpoch);
-  model.set_pixels_per_m(ppm);
+  if (ppm > 0) model.set_pixels_per_m(ppm);
   model.Save(a.output);
   std::printf("model %s: %lld parameters, %lld steps, %.1f s%s%s\n", a.output.c_str(),
               static_cast<long long>(model.ParameterCount()), static_cast<long long>(s.steps), s.seconds,

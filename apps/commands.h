@@ -201,8 +201,15 @@ struct ReliefDatasetArgs {
   double panel_width_m = 2.7;         // width of a photo input without a recorded resolution
   bool no_relight = false;            // scans: use the scan's grey instead of a raking-light photo
   unsigned long long seed = 1;
+  // Real photographs: pairs (photo, depth in its camera, mask) from a COLMAP model + its photos,
+  // the inputs being the dense cloud(s) in the model's frame.
+  std::string colmap, images;          // sparse model folder, photo folder
+  std::vector<std::string> holdout;    // image names (or stems) kept out of training -> holdout/
+  int max_side = 512;                  // pair size: longer side, pixels
 };
 int RunReliefDataset(const ReliefDatasetArgs& args);
+// The real-photo mode of RunReliefDataset (cmd_relief_photos.cc; candi-relief only).
+int RunReliefPhotoDataset(const ReliefDatasetArgs& args);
 
 struct ReliefTrainArgs {
   std::string data_dir, output;
@@ -213,6 +220,8 @@ struct ReliefTrainArgs {
   double max_seconds = 0;
   std::string checkpoint;             // default: <output>.ckpt
   bool resume = false;
+  std::string finetune;               // start from this model's weights (fresh optimiser)
+  double edge_weight = 0;             // weight of the edge loss term (0 = off)
   unsigned long long seed = 1;
   int threads = 1;
 };
@@ -234,10 +243,15 @@ struct ReliefPointsArgs {
 int RunReliefPoints(const ReliefPointsArgs& args);
 
 struct ReliefEvalArgs {
-  std::string model;                  // optional: baselines only without it
+  std::vector<std::string> models;    // optional: baselines only without one
   int panels = 4, width = 800;
   unsigned long long seed = 1000;     // held-out series (training uses other seeds)
   std::string photo, depth;           // or: one photo and its ground-truth depth
+  std::string pairs;                  // or: a folder of photo pairs (relief_photo_pairs.h)
+  double level_per_pixel = 0;         // normals (0: from the panel geometry; 1 for pairs)
+  int normal_step = 0;                // normals: difference step, pixels (0: 1, 4 for pairs)
+  double edge_jump = 10;              // edges: levels
+  int edge_tolerance = 2;             // edges: pixels
   double light_azimuth = -1, light_elevation = -1;  // for SFS on a photo (default: its PNG text)
   double width_m = 2.7;
   int tile = 128, overlap = 32;
@@ -251,6 +265,11 @@ struct BenchReliefArgs {
   int train_panels = 12, eval_panels = 3;
   unsigned long long seed = 1;
   int threads = 1;
+  std::string pairs;                  // real photos: a `relief dataset --colmap` folder
+  std::string model = "examples/relief/relief_model.pt";
+  std::string finetune_seconds = "60,240";
+  double edge_weight = 1;
+  double learning_rate = 3e-4;
 };
 int RunBenchRelief(const BenchReliefArgs& args);
 
@@ -361,6 +380,8 @@ struct GeorefArgs {
   double loss_scale = 0.05;          // m
   double outlier_threshold = 0;      // m; 0 = robust (k * max(MAD sigma, accuracy))
   bool rigid = false;                // scale fixed to 1
+  std::string crs;                   // the CRS of the survey coordinates (stated in OUT)
+  std::string targets_crs;           // the targets' CRS; transformed into `crs` with PROJ
 };
 int RunGeoref(const GeorefArgs& args);
 
@@ -379,8 +400,6 @@ struct BuildArgs {
   std::string scene;                 // scene JSON (apps/scene.h)
   std::string output;                // archive folder (created; its parent must exist)
   int threads = 0;
-  std::string crs;                   // the CRS of the survey coordinates (stated in OUT)
-  std::string targets_crs;           // the targets' CRS; transformed into `crs` with PROJ
   bool resume = false;               // reuse the stages an earlier (interrupted) build finished
 };
 int RunBuild(const BuildArgs& args);

@@ -2,7 +2,9 @@
 // points -> eval, exit codes and messages for bad input, and `candi bench relief`.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -81,7 +83,7 @@ TEST_F(ReliefCli, PredictPointsAndEvalOnAnyPhoto) {
   EXPECT_TRUE(cloud.schema.colors);
   const Result e = RunCandi("relief eval --model " + dir_->File("m.pt") + " --panels 1 --width 192 --tile 32 --overlap 8");
   ASSERT_EQ(e.code, 0) << e.output;
-  for (const char* row : {"BTS DenseNet-161 (paper)", "intensity as depth*", "linear SFS, Pentland*", "candi BTS"}) {
+  for (const char* row : {"BTS DenseNet-161 (paper)", "intensity as depth*", "linear SFS, Pentland*", "m (", "normal", "edge F1"}) {
     EXPECT_NE(e.out.find(row), std::string::npos) << row << "\n" << e.out;
   }
   const Result one = RunCandi("relief eval --photo " + photo + " --depth " +
@@ -118,6 +120,119 @@ TEST_F(ReliefCli, BadInputsAreExitTwoNamingTheFile) {
   EXPECT_EQ(r.code, 1) << r.output;
   r = RunCandi("relief synth -o " + dir_->File("s") + " --width 8");
   EXPECT_EQ(r.code, 1) << r.output;
+}
+
+// The real-photo workflow on the Sceaux photos: pairs from the COLMAP model and OpenMVS's dense
+// cloud, fine-tuning, scoring the held-out photo, predicting its JPEG and making points of it.
+TEST_F(ReliefCli, RealPhotoPairsFineTuneScoreAndPredict) {
+  CANDI_REQUIRE_SHARED_DATA(model, "colmap/sceaux_1600_sparse");
+  CANDI_REQUIRE_SHARED_DATA(photos, "photos/sceaux_castle");
+  CANDI_REQUIRE_SHARED_DATA(dense, "dense/sceaux_openmvs_dense.ply");
+  const std::string pairs = dir_->File("sceaux");
+  const std::string common = "relief dataset " + dense + " --colmap " + model + " --images " + photos +
+                             " --max-side 128 --patch 64 --stride 32 -o " + pairs;
+  Result r = RunCandi(common + " --holdout nosuch.JPG");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("nosuch.JPG"), std::string::npos) << r.output;
+  r = RunCandi("-q " + common + " --holdout 100_7105.JPG,100_7109");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.out.find("11 views (2 held out)"), std::string::npos) << r.out;
+  EXPECT_TRUE(FileExists(pairs + "/holdout/100_7105_mask.png"));
+  EXPECT_TRUE(FileExists(pairs + "/views/100_7100_depth.png"));
+  EXPECT_FALSE(FileExists(pairs + "/views/100_7105_depth.png")) << "held out from training";
+  EXPECT_TRUE(FileExists(pairs + "/train/000000_photo.png"));
+  const PngImage depth = ReadPng(pairs + "/holdout/100_7105_depth.png");
+  EXPECT_EQ(depth.image16.width(), 128);
+  EXPECT_EQ(depth.text.count("candi_depth_near"), 1u);
+
+  r = RunCandi("-q relief train --data " + pairs + " --finetune " + dir_->File("m.pt") + " --out " +
+               dir_->File("tuned.pt") + " --epochs 1 --batch 4 --edge-loss 1");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = RunCandi("relief train --data " + pairs + " --finetune " + dir_->File("m.pt") + " --out " +
+               dir_->File("t2.pt") + " --growth 8");
+  EXPECT_NE(r.code, 0) << "network options do not apply to a fine-tuned model";
+
+  r = RunCandi("relief eval --pairs " + pairs + "/holdout --model " + dir_->File("m.pt") + " --model " +
+               dir_->File("tuned.pt") + " --tile 64 --overlap 16");
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* row : {"2 photo pairs", "intensity as depth*", "m (", "tuned (", "normal", "edge F1",
+                          "differences over 4 px"}) {
+    EXPECT_NE(r.out.find(row), std::string::npos) << row << "\n" << r.out;
+  }
+
+  r = RunCandi("relief predict " + photos + "/100_7105.JPG --model " + dir_->File("tuned.pt") +
+               " --width-m 0 --tile 64 --overlap 16 -o " + dir_->File("7105_depth.png"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(ReadPng(dir_->File("7105_depth.png")).image8.width(), 2832) << "the photo's own size";
+  r = RunCandi("-q relief points " + pairs + "/holdout/100_7105_photo.png " + dir_->File("7105_128.png") +
+               " -o " + dir_->File("7105.ply"));
+  EXPECT_EQ(r.code, 2) << "no such depth map: " << r.output;
+
+  // To points, placed by Ceres: the held-out view as a 12.8 x 9.6 m "panel" whose depth range is
+  // the view's; its control points are where the reconstruction puts those pixels (true depth)
+  // in a survey frame at 10^6 m, the panel's own points where the network puts them.
+  const std::string photo128 = pairs + "/holdout/100_7105_photo.png";
+  r = RunCandi("-q relief predict " + photo128 + " --model " + dir_->File("tuned.pt") +
+               " --width-m 0 --tile 64 --overlap 16 -o " + dir_->File("7105_128.png"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const double range = std::stod(depth.text.at("candi_depth_far")) - std::stod(depth.text.at("candi_depth_near"));
+  ASSERT_GT(range, 0);
+  const std::string panels = dir_->File("panels_7105");
+  std::filesystem::create_directories(panels);
+  r = RunCandi("-q relief points " + photo128 + " " + dir_->File("7105_128.png") + " -o " + panels +
+               "/100_7105.ply --width-m 12.8 --height-m 9.6 --depth-m " + std::to_string(range));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const PngImage predicted = ReadPng(dir_->File("7105_128.png"));
+  std::string csv = "panel,point,x,y,z,E,N,H\n";
+  int controls = 0;
+  for (int py = 8; py < 96; py += 16) {
+    for (int px = 8; px < 128; px += 16) {
+      const double truth = depth.image16.at(px, py) / 256.0;
+      if (truth < 1) continue;  // unknown
+      const double x = (px + 0.5) * 0.1, y = 9.6 - (py + 0.5) * 0.1;
+      const double z_net = range * (1 - predicted.image8.at(px, py) / 255.0), z_true = range * (1 - truth / 255.0);
+      char line[256];
+      std::snprintf(line, sizeof(line), "100_7105,c%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", controls++, x, y,
+                    z_net, 652000.0 + x, 9170000.0 - z_true, 240.0 + y);
+      csv += line;
+    }
+  }
+  ASSERT_GE(controls, 6);
+  testing::WriteBytes(dir_->File("facade.csv"), csv);
+  r = RunCandi("relief place " + dir_->File("facade.csv") + " -o " + dir_->File("placements.json") +
+               " --panels " + panels + " --points-out " + dir_->File("world"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json placed = nlohmann::json::parse(testing::ReadBytes(dir_->File("placements.json")));
+  ASSERT_EQ(placed["panels"].size(), 1u);
+  EXPECT_TRUE(std::isfinite(placed["panels"][0]["rms_mm"].get<double>()));
+  const PointCloud world = ReadPointCloud(dir_->File("world/100_7105.ply"));
+  ASSERT_EQ(world.size(), 128u * 96u);
+  const Eigen::Vector3d corner = world.WorldPosition(0);
+  EXPECT_NEAR(corner.x(), 652000.05, 5) << "the top-left pixel lands at the left edge of the facade";
+  EXPECT_NEAR(corner.z(), 240.0 + 9.55, 5);
+
+  // Fine-tuning seconds -> accuracy on the held-out photos, plain and with the edge term.
+  r = RunCandi("bench relief --pairs " + pairs + " --model " + dir_->File("m.pt") +
+               " --finetune-seconds 1 --edge-loss 2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* row : {"as shipped", "linear SFS, Pentland*", "fine-tuned ", "fine-tuned, edge term 2"}) {
+    EXPECT_NE(r.out.find(row), std::string::npos) << row << "\n" << r.out;
+  }
+
+  // A depth map of the wrong size in a folder of pairs: exit 2 naming it.
+  WritePng(pairs + "/holdout/100_7109_depth.png", Image16(20, 10, 1, 300));
+  r = RunCandi("relief eval --pairs " + pairs + "/holdout");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("100_7109_depth.png"), std::string::npos) << r.output;
+}
+
+TEST(ReliefBenchCli, WidthTableHasPlainAndEdgeRows) {
+  const Result r = RunCandi("bench relief --widths 32 --seconds 1 --train-panels 1 --eval-panels 1 --edge-loss 1");
+  ASSERT_EQ(r.code, 0) << r.output;
+  size_t rows = 0;
+  for (size_t at = r.out.find("\n    32 "); at != std::string::npos; at = r.out.find("\n    32 ", at + 1)) ++rows;
+  EXPECT_EQ(rows, 2u) << r.out;
+  EXPECT_NE(r.out.find("edge F1"), std::string::npos) << r.out;
 }
 
 TEST(ReliefCliScan, DatasetFromARealScan) {

@@ -2,7 +2,10 @@
 // dataset. Data is built in code.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "core/rng.h"
 #include "reconstruction/relief/relief_baselines.h"
@@ -280,6 +283,218 @@ TEST(ReliefDataset, ScanOfATiltedPlaneRendersItsDepthAndPatchesAugment) {
   ASSERT_EQ(back.size(), cut.size());
   EXPECT_NEAR(back[3].depth.at(4, 4), cut[3].depth.at(4, 4), 1.0 / 256);
   EXPECT_THROW(RasterizeScan(o, PointCloud(), "empty.ply"), InputError);
+}
+
+// ---- surface metrics ----
+
+constexpr double kDegPerRad = 180 / 3.14159265358979323846;
+
+// Level `near` left of column x_edge, `far` from it on: the true edge is column x_edge - 1.
+ImageF Step(int w, int h, int x_edge, float near = 50, float far = 150) {
+  ImageF im(w, h, 1, near);
+  for (int y = 0; y < h; ++y) {
+    for (int x = x_edge; x < w; ++x) im.at(x, y) = far;
+  }
+  return im;
+}
+
+NormalMetrics Normals(const ImageF& prediction, const ImageF& truth,
+                      const SurfaceMetricOptions& o = {}, const Image8& mask = Image8()) {
+  SurfaceMetricsAccumulator acc(o);
+  acc.Add(prediction, truth, mask);
+  return acc.Normals();
+}
+
+EdgeMetrics Edges(const ImageF& prediction, const ImageF& truth,
+                  const SurfaceMetricOptions& o = {}) {
+  SurfaceMetricsAccumulator acc(o);
+  acc.Add(prediction, truth);
+  return acc.Edges();
+}
+
+TEST(SurfaceMetricOptions, DefaultsPassAndBadValuesAreRejected) {
+  EXPECT_NO_THROW(SurfaceMetricOptions().Check());
+  SurfaceMetricOptions o;
+  o.level_per_pixel = NAN;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  EXPECT_THROW(SurfaceMetricsAccumulator{o}, std::invalid_argument);
+  o = {};
+  o.level_per_pixel = 0;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = {};
+  o.edge_jump_levels = -1;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o.edge_jump_levels = NAN;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = {};
+  o.edge_tolerance_px = -1;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o.edge_tolerance_px = 17;
+  try {
+    o.Check();
+    ADD_FAILURE() << "edge_tolerance_px = 17 passed";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("edge_tolerance_px = 17"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SurfaceMetrics, IdenticalMapsScorePerfectly) {
+  const ImageF gt = Step(12, 8, 6);
+  SurfaceMetricsAccumulator acc;
+  acc.Add(gt, gt);
+  acc.Add(Ramp(40, 8), Ramp(40, 8));  // sums over images; 5 levels a pixel is smooth
+  const NormalMetrics n = acc.Normals();
+  EXPECT_EQ(n.count, 10 * 6 + 38 * 6);
+  EXPECT_NEAR(n.mean_deg, 0, 1e-9);
+  EXPECT_NEAR(n.median_deg, 0, 1e-9);
+  EXPECT_EQ(n.within_11, 1.0);
+  EXPECT_EQ(n.within_30, 1.0);
+  const EdgeMetrics e = acc.Edges();
+  EXPECT_EQ(e.truth, 8) << "column 5 of the step only; the ramp is smooth";
+  EXPECT_EQ(e.predicted, 8);
+  EXPECT_EQ(e.precision, 1.0);
+  EXPECT_EQ(e.recall, 1.0);
+  EXPECT_EQ(e.f1, 1.0);
+}
+
+TEST(SurfaceMetrics, TiltedPlaneAgainstFlatReadsItsSlopeAngle) {
+  SurfaceMetricOptions o;
+  o.level_per_pixel = 0.25;
+  const double slope = 3;  // levels per pixel
+  ImageF tilted(10, 7, 1);
+  for (int y = 0; y < 7; ++y) {
+    for (int x = 0; x < 10; ++x) tilted.at(x, y) = static_cast<float>(100 + slope * x);
+  }
+  const NormalMetrics n = Normals(tilted, ImageF(10, 7, 1, 100.0f), o);
+  const double expected = std::atan(slope * o.level_per_pixel) * kDegPerRad;  // 36.87 degrees
+  EXPECT_EQ(n.count, 8 * 5);
+  EXPECT_NEAR(n.mean_deg, expected, 1e-6);
+  EXPECT_NEAR(n.median_deg, expected, 1e-6);
+  EXPECT_EQ(n.within_30, 0.0);
+  EXPECT_EQ(Normals(ImageF(10, 7, 1, 100.0f), tilted, o).mean_deg, n.mean_deg) << "symmetric";
+  o.level_per_pixel = 1;
+  EXPECT_NEAR(Normals(tilted, ImageF(10, 7, 1, 100.0f), o).mean_deg, std::atan(slope) * kDegPerRad,
+              1e-6);
+}
+
+TEST(SurfaceMetrics, MedianComesFromTheHistogramToItsResolution) {
+  // Left half flat, right half tilted: per row 9 angles of 0, one of 45 (the kink), 8 of
+  // atan(2); the median lies between the two middle ranks, 0 and 45.
+  ImageF mixed(20, 5, 1, 100.0f);
+  for (int y = 0; y < 5; ++y) {
+    for (int x = 10; x < 20; ++x) mixed.at(x, y) = static_cast<float>(100 + 2 * (x - 10));
+  }
+  const NormalMetrics n = Normals(mixed, ImageF(20, 5, 1, 100.0f));
+  ASSERT_EQ(n.count, 18 * 3);
+  EXPECT_GT(n.median_deg, 0.0);
+  std::vector<double> angles;
+  for (int x = 1; x < 19; ++x) {
+    const double d = (mixed.at(x + 1, 2) - mixed.at(x - 1, 2)) / 2.0;
+    angles.push_back(std::atan(d) * kDegPerRad);
+  }
+  std::sort(angles.begin(), angles.end());
+  EXPECT_NEAR(n.median_deg, 0.5 * (angles[8] + angles[9]), 0.01);
+}
+
+TEST(SurfaceMetrics, ShiftedEdgeMatchesWithinTheTolerance) {
+  const ImageF gt = Step(16, 6, 8), shifted = Step(16, 6, 9);
+  SurfaceMetricOptions o;
+  const EdgeMetrics near = Edges(shifted, gt, o);
+  EXPECT_EQ(near.truth, 6);
+  EXPECT_EQ(near.predicted, 6);
+  EXPECT_EQ(near.precision, 1.0);
+  EXPECT_EQ(near.recall, 1.0);
+  EXPECT_EQ(near.f1, 1.0);
+  o.edge_tolerance_px = 0;
+  const EdgeMetrics exact = Edges(shifted, gt, o);
+  EXPECT_EQ(exact.precision, 0.0);
+  EXPECT_EQ(exact.recall, 0.0);
+  EXPECT_EQ(exact.f1, 0.0);
+  EXPECT_EQ(Edges(gt, gt, o).f1, 1.0);
+  o.edge_jump_levels = 100;  // the step is exactly 100: not more than, so no edge at all
+  const EdgeMetrics none = Edges(gt, gt, o);
+  EXPECT_EQ(none.truth, 0);
+  EXPECT_EQ(none.f1, 0.0);
+}
+
+TEST(SurfaceMetrics, EdgesAreOnTheNearSideAndMatchWithinAEuclideanDisc) {
+  // A pit (one far pixel in a near plane) is occluded by its four neighbours; a bump (one near
+  // pixel) occludes by itself.
+  ImageF pit(9, 9, 1, 50.0f), bump(9, 9, 1, 150.0f);
+  pit.at(4, 4) = 150;
+  bump.at(4, 4) = 50;
+  EXPECT_EQ(Edges(pit, pit).truth, 4);
+  EXPECT_EQ(Edges(bump, bump).truth, 1);
+  // The bump moved diagonally by (1, 1): 1.41 pixels away.
+  ImageF moved(9, 9, 1, 150.0f);
+  moved.at(5, 5) = 50;
+  SurfaceMetricOptions o;
+  o.edge_tolerance_px = 1;
+  EXPECT_EQ(Edges(moved, bump, o).recall, 0.0) << "a square, not a disc, of radius 1";
+  o.edge_tolerance_px = 2;
+  EXPECT_EQ(Edges(moved, bump, o).recall, 1.0);
+}
+
+TEST(SurfaceMetrics, PredictionWithoutEdgesHasNoRecall) {
+  const EdgeMetrics e = Edges(ImageF(16, 6, 1, 100.0f), Step(16, 6, 8));
+  EXPECT_EQ(e.truth, 6);
+  EXPECT_EQ(e.predicted, 0);
+  EXPECT_EQ(e.recall, 0.0);
+  EXPECT_EQ(e.precision, 0.0) << "undefined with no predicted edges: reported as 0";
+  EXPECT_EQ(e.f1, 0.0);
+}
+
+TEST(SurfaceMetrics, NanPredictionsAndTinyImagesAreGuarded) {
+  const ImageF gt = Ramp(40, 10);  // smooth: no true edges
+  ImageF bad = gt;
+  bad.at(4, 4) = NAN;
+  bad.at(6, 6) = INFINITY;
+  SurfaceMetricsAccumulator acc;
+  acc.Add(bad, gt);
+  acc.Add(ImageF(40, 10, 1, NAN), gt);
+  const NormalMetrics n = acc.Normals();
+  EXPECT_EQ(n.count, 2 * 38 * 8) << "NaN counts as the front plane, never skipped";
+  for (double v : {n.mean_deg, n.median_deg, n.within_11, n.within_22, n.within_30}) {
+    EXPECT_TRUE(std::isfinite(v)) << v;
+  }
+  EXPECT_GT(n.mean_deg, 0.0);
+  const EdgeMetrics e = acc.Edges();
+  EXPECT_EQ(e.predicted, 2) << "each non-finite pixel reads as a pit in front of its neighbours";
+  EXPECT_EQ(e.truth, 0);
+  for (double v : {e.precision, e.recall, e.f1}) EXPECT_TRUE(std::isfinite(v)) << v;
+  SurfaceMetricsAccumulator tiny;
+  tiny.Add(Step(2, 2, 1), Step(2, 2, 1));
+  tiny.Add(ImageF(1, 1, 1, NAN), ImageF(1, 1, 1, 5.0f));
+  tiny.Add(ImageF(0, 0, 1), ImageF(0, 0, 1));
+  EXPECT_EQ(tiny.Normals().count, 0);
+  EXPECT_EQ(tiny.Normals().mean_deg, 0.0);
+  EXPECT_EQ(tiny.Edges().truth, 2) << "a 2x2 step still has a discontinuity";
+  EXPECT_THROW(tiny.Add(ImageF(3, 3, 1), ImageF(3, 4, 1)), InternalError);
+}
+
+TEST(SurfaceMetrics, MaskAndMissingTruthExcludePixels) {
+  const ImageF gt = Step(12, 8, 6);
+  EXPECT_EQ(Normals(gt, gt).count, 10 * 6);
+  Image8 mask(12, 8, 1, 1);
+  mask.at(3, 3) = 0;  // itself and its four neighbours' stencils
+  EXPECT_EQ(Normals(gt, gt, {}, mask).count, 10 * 6 - 5);
+  ImageF holes = gt;
+  holes.at(3, 3) = NAN;
+  holes.at(9, 4) = 0;  // "no data", below kMinValidLevel
+  EXPECT_EQ(Normals(gt, holes).count, 10 * 6 - 10);
+  // The far side of an edge masked out: that edge pixel is no longer an edge in either map, and
+  // a wrong prediction under the mask is not judged.
+  mask.at(6, 2) = 0;
+  ImageF wrong = gt;
+  wrong.at(1, 1) = 200;
+  SurfaceMetricsAccumulator acc;
+  Image8 hide_wrong = mask;
+  hide_wrong.at(1, 1) = 0;
+  acc.Add(wrong, gt, hide_wrong);
+  const EdgeMetrics e = acc.Edges();
+  EXPECT_EQ(e.truth, 7);
+  EXPECT_EQ(e.predicted, 7);
+  EXPECT_EQ(e.precision, 1.0);
 }
 
 }  // namespace

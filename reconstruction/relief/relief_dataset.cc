@@ -246,9 +246,9 @@ void WritePairs(const std::string& dir, const std::vector<TrainingPair>& pairs, 
   }
 }
 
-std::vector<TrainingPair> ReadPairs(const std::string& dir) {
+std::vector<std::string> PairPhotoPaths(const std::string& dir) {
   std::error_code ec;
-  if (!std::filesystem::is_directory(dir, ec)) throw InputError(dir, "", "not a folder of training pairs");
+  if (!std::filesystem::is_directory(dir, ec)) throw InputError(dir, "", "not a folder of pairs");
   std::vector<std::string> photos;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     const std::string name = entry.path().filename().string();
@@ -257,8 +257,12 @@ std::vector<TrainingPair> ReadPairs(const std::string& dir) {
     }
   }
   std::sort(photos.begin(), photos.end());
+  return photos;
+}
+
+std::vector<TrainingPair> ReadPairs(const std::string& dir) {
   std::vector<TrainingPair> pairs;
-  for (const std::string& photo : photos) {
+  for (const std::string& photo : PairPhotoPaths(dir)) {
     const std::string depth = photo.substr(0, photo.size() - 10) + "_depth.png";
     TrainingPair p{ReadPhoto(photo), ReadDepth(depth)};
     if (p.photo.width() != p.depth.width() || p.photo.height() != p.depth.height()) {

@@ -3,7 +3,9 @@
 #include <chrono>
 #include <cstdio>
 
+#include "core/check.h"
 #include "reconstruction/relief/relief_baselines.h"
+#include "reconstruction/relief/relief_photo_pairs.h"
 
 namespace candi::relief {
 
@@ -30,30 +32,75 @@ std::vector<EvalPanel> SyntheticEvalPanels(const SynthOptions& synth, int count)
   return panels;
 }
 
-std::vector<MethodScore> EvaluatePanels(const std::vector<EvalPanel>& panels, const DepthModel* model,
-                                        const PredictOptions& predict, const ProgressCallback& progress) {
-  DepthMetricsAccumulator intensity, sfs, net;
-  double t_intensity = 0, t_sfs = 0, t_net = 0;
+std::vector<EvalPanel> PhotoEvalPanels(const std::string& dir) {
+  std::vector<EvalPanel> panels;
+  for (PhotoPair& pair : ReadPhotoPairs(dir)) {
+    EvalPanel e;
+    e.name = dir + "/" + pair.name;
+    e.photo = std::move(pair.photo);
+    e.depth = std::move(pair.depth);
+    e.mask = std::move(pair.mask);
+    panels.push_back(std::move(e));
+  }
+  return panels;
+}
+
+std::vector<MethodScore> EvaluatePanels(const std::vector<EvalPanel>& panels,
+                                        const std::vector<NamedModel>& models,
+                                        const PredictOptions& predict,
+                                        const SurfaceMetricOptions& surface,
+                                        const ProgressCallback& progress) {
+  struct Method {
+    Method(std::string name, const SurfaceMetricOptions& surface) : shape(surface) {
+      score.name = std::move(name);
+    }
+    MethodScore score;
+    DepthMetricsAccumulator depth;
+    SurfaceMetricsAccumulator shape;
+  };
+  std::vector<Method> methods;
+  methods.emplace_back("intensity as depth*", surface);
+  methods.emplace_back("linear SFS, Pentland*", surface);
+  for (const NamedModel& m : models) {
+    CANDI_CHECK(m.model != nullptr) << m.name;
+    methods.emplace_back(m.name, surface);
+  }
+  auto score = [](Method* m, const ImageF& prediction, const EvalPanel& p, double seconds) {
+    m->depth.Add(prediction, p.depth, p.mask);
+    m->shape.Add(prediction, p.depth, p.mask);
+    m->score.seconds += seconds;
+  };
   uint64_t done = 0;
   for (const EvalPanel& p : panels) {
+    // The oracle fits of the baselines use only the pixels that are scored.
+    ImageF fit_truth = p.depth;
+    if (!p.mask.empty()) {
+      for (size_t i = 0; i < fit_truth.values().size(); ++i) {
+        if (p.mask.values()[i] == 0) fit_truth.values()[i] = 0;
+      }
+    }
     auto t0 = std::chrono::steady_clock::now();
-    intensity.Add(FitLevels(IntensityAsHeight(p.photo), p.depth), p.depth);
-    t_intensity += Since(t0);
+    ImageF prediction = FitLevels(IntensityAsHeight(p.photo), fit_truth);
+    score(&methods[0], prediction, p, Since(t0));
     t0 = std::chrono::steady_clock::now();
-    sfs.Add(FitLevels(PentlandHeight(p.photo, p.light_azimuth_deg, p.light_elevation_deg), p.depth), p.depth);
-    t_sfs += Since(t0);
-    if (model != nullptr) {
+    prediction = FitLevels(PentlandHeight(p.photo, p.light_azimuth_deg, p.light_elevation_deg), fit_truth);
+    score(&methods[1], prediction, p, Since(t0));
+    for (size_t k = 0; k < models.size(); ++k) {
       t0 = std::chrono::steady_clock::now();
       PredictOptions o = predict;
       o.photo_pixels_per_m = p.pixels_per_m;
-      net.Add(model->Predict(o, p.photo), p.depth);
-      t_net += Since(t0);
+      prediction = models[k].model->Predict(o, p.photo);
+      score(&methods[2 + k], prediction, p, Since(t0));
     }
     if (progress) progress(++done, panels.size());
   }
-  std::vector<MethodScore> scores = {{"intensity as depth*", intensity.Result(), t_intensity},
-                                     {"linear SFS, Pentland*", sfs.Result(), t_sfs}};
-  if (model != nullptr) scores.push_back({"candi BTS", net.Result(), t_net});
+  std::vector<MethodScore> scores;
+  for (Method& m : methods) {
+    m.score.metrics = m.depth.Result();
+    m.score.normals = m.shape.Normals();
+    m.score.edges = m.shape.Edges();
+    scores.push_back(std::move(m.score));
+  }
   return scores;
 }
 
@@ -68,6 +115,21 @@ std::string MetricsTableHeader() {
   char line[160];
   std::snprintf(line, sizeof(line), "%-26s %7s %7s %7s %8s %8s %8s %8s", "method", "d<1.25",
                 "d<1.25^2", "d<1.25^3", "RMSE", "RMSE_log", "abs_rel", "sq_rel");
+  return line;
+}
+
+std::string SurfaceTableHeader() {
+  char line[160];
+  std::snprintf(line, sizeof(line), "%-26s %8s %8s %7s %7s %7s %8s %8s %8s", "method", "normal",
+                "median", "<11.25", "<22.5", "<30", "edge P", "edge R", "edge F1");
+  return line;
+}
+
+std::string SurfaceTableRow(const std::string& name, const NormalMetrics& n, const EdgeMetrics& e) {
+  char line[200];
+  std::snprintf(line, sizeof(line), "%-26s %8.2f %8.2f %7.4f %7.4f %7.4f %8.4f %8.4f %8.4f",
+                name.c_str(), n.mean_deg, n.median_deg, n.within_11, n.within_22, n.within_30,
+                e.precision, e.recall, e.f1);
   return line;
 }
 

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <vector>
 
 #include "core/check.h"
+#include "core/jpeg_io.h"
 
 namespace candi::relief {
 
@@ -35,6 +37,15 @@ bool IsGrey(const Image<T>& image) {
     }
   }
   return true;
+}
+
+// The PNG signature (ReadPng gives the clear error for a damaged PNG).
+bool IsPngFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char signature[8] = {};
+  in.read(signature, sizeof(signature));
+  static const char kPng[8] = {'\x89', 'P', 'N', 'G', '\r', '\n', '\x1a', '\n'};
+  return !in || std::equal(signature, signature + 8, kPng);  // unreadable: ReadPng says why
 }
 
 float Clamped(float v, float lo, float hi) { return std::isnan(v) ? lo : std::clamp(v, lo, hi); }
@@ -80,6 +91,10 @@ ImageF GreyFromPng(const PngImage& png) {
 }
 
 ImageF ReadPhoto(const std::string& path, PngText* text) {
+  if (!IsPngFile(path)) {  // a JPEG (the camera's own file), or a clear error naming the format
+    if (text != nullptr) text->clear();
+    return GreyOf(ReadImageRgb8(path), 255.0);
+  }
   PngImage png = ReadPng(path);
   if (text != nullptr) *text = png.text;
   const ImageF grey = GreyFromPng(png);

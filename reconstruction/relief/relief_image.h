@@ -32,7 +32,8 @@ inline double HeightFromLevel(double level, double depth_m) {
 
 // A one-channel float image of a PNG: 8-bit values / 255, 16-bit / 65535, colour as luminance.
 ImageF GreyFromPng(const PngImage& png);
-// Reads a photo as grey [0, 1]. Throws InputError (path) for unreadable files.
+// Reads a photo (PNG, or JPEG as cameras write them) as grey [0, 1]. Throws InputError (path)
+// for unreadable files and other formats.
 ImageF ReadPhoto(const std::string& path, PngText* text = nullptr);
 // Writes grey [0, 1] as an 8-bit PNG (clamped, rounded; NaN becomes 0).
 void WritePhoto(const std::string& path, const ImageF& grey, const PngText& text = {});

@@ -1,12 +1,14 @@
 // Training the relief network on (photo, depth) pairs.
 //
 // Adam (lr -> end_lr by polynomial decay, power 0.9, as BTS), scale-invariant log loss with the
-// "no data" pixels masked, the paper's augmentation drawn per (seed, epoch, sample), batches in a
-// seeded shuffled order. After each epoch: the validation metrics (relief_metrics.h) and, with a
-// checkpoint path, a checkpoint (weights, optimiser state, epoch) written atomically; `resume`
-// continues from it. Deterministic for a seed and thread count (libtorch's float sums may differ
-// in the last bits between thread counts). Running out of time (`max_seconds`) is a result in
-// the summary, not an error.
+// "no data" pixels masked (with edge_weight > 0 plus an edge term: the mean error of log-depth
+// differences 1, 2 and 4 pixels apart, edge guidance as a loss), the paper's augmentation drawn
+// per (seed, epoch, sample), batches in a seeded shuffled order. After each epoch: the validation
+// metrics (relief_metrics.h) and, with a checkpoint path, a checkpoint (weights, optimiser state,
+// epoch) written atomically; `resume` continues from it. Fine-tuning is training a loaded model
+// (DepthModel::Load) with a fresh optimiser. Deterministic for a seed and thread count (libtorch's
+// float sums may differ in the last bits between thread counts). Running out of time
+// (`max_seconds`) is a result in the summary, not an error.
 #pragma once
 
 #include <cstdint>
@@ -31,6 +33,7 @@ struct TrainOptions {
   std::string checkpoint;     // path written after every epoch ("" = none)
   bool resume = false;        // continue from `checkpoint` when it exists
   double max_seconds = 0;     // stop after the step that passes this many seconds (0 = no limit)
+  double edge_weight = 0;     // weight of the edge (depth-gradient matching) loss term, >= 0; 0 = off
   void Check() const;
 };
 

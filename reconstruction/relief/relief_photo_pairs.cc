@@ -1,0 +1,194 @@
+#include "reconstruction/relief/relief_photo_pairs.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <stdexcept>
+
+#include "core/check.h"
+#include "core/png_io.h"
+#include "core/text_format.h"
+#include "reconstruction/relief/relief_dataset.h"
+#include "reconstruction/relief/relief_image.h"
+
+namespace candi::relief {
+
+namespace {
+
+constexpr float kNoDepth = std::numeric_limits<float>::infinity();
+
+// The q-quantile (nearest rank) of values; values is reordered.
+double Quantile(std::vector<float>* values, double q) {
+  const size_t k = std::min(values->size() - 1, static_cast<size_t>(q * (values->size() - 1) + 0.5));
+  std::nth_element(values->begin(), values->begin() + static_cast<std::ptrdiff_t>(k), values->end());
+  return (*values)[k];
+}
+
+std::string Stem(const std::string& image_name) {
+  return std::filesystem::path(image_name).stem().string();
+}
+
+double TextNumber(const PngText& text, const char* key) {
+  const auto it = text.find(key);
+  if (it == text.end()) return 0;
+  try {
+    return std::stod(it->second);
+  } catch (const std::exception&) {
+    return 0;
+  }
+}
+
+}  // namespace
+
+void PhotoPairOptions::Check() const {
+  if (max_side < 32 || max_side > 16384) throw std::invalid_argument("max_side must be in [32, 16384]");
+  if (occlusion_radius < 0 || occlusion_radius > 16) {
+    throw std::invalid_argument("occlusion_radius must be in [0, 16]");
+  }
+  if (!(occlusion_tolerance >= 0 && occlusion_tolerance <= 1)) {
+    throw std::invalid_argument("occlusion_tolerance must be in [0, 1]");
+  }
+  if (!(near_percentile >= 0 && near_percentile < 1)) {
+    throw std::invalid_argument("near_percentile must be in [0, 1)");
+  }
+  if (!(far_percentile > near_percentile && far_percentile <= 1)) {
+    throw std::invalid_argument("far_percentile must be in (near_percentile, 1]");
+  }
+}
+
+double LevelOfCameraDepth(double z, double near, double far) {
+  if (!(far > near)) return 128;
+  const double level = kMinValidLevel + (kMaxLevel - kMinValidLevel) * (z - near) / (far - near);
+  return std::clamp(level, kMinValidLevel, kMaxLevel);
+}
+
+double CameraDepthOfLevel(double level, double near, double far) {
+  return near + (level - kMinValidLevel) * (far - near) / (kMaxLevel - kMinValidLevel);
+}
+
+PhotoPair BuildPhotoPair(const PhotoPairOptions& options, const photogrammetry::ColmapCamera& camera,
+                         const photogrammetry::ColmapImage& image, const ImageF& photo,
+                         const std::string& photo_path, const std::vector<Eigen::Vector3d>& points) {
+  options.Check();
+  CANDI_CHECK(camera.width > 0 && camera.height > 0) << "camera " << camera.camera_id << " has no size";
+  if (photo.empty()) throw InputError(photo_path, "", "photo has no pixels");
+  const double aspect_photo = static_cast<double>(photo.width()) / photo.height();
+  const double aspect_camera = static_cast<double>(camera.width) / camera.height;
+  if (std::abs(aspect_photo / aspect_camera - 1) > 0.01) {
+    throw InputError(photo_path, "", "photo is " + std::to_string(photo.width()) + "x" +
+                                         std::to_string(photo.height()) + ", its camera " +
+                                         std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                                         ": not the same aspect ratio");
+  }
+  const double s = std::min(1.0, static_cast<double>(options.max_side) / std::max(camera.width, camera.height));
+  const int w = std::max(1, static_cast<int>(std::lround(camera.width * s)));
+  const int h = std::max(1, static_cast<int>(std::lround(camera.height * s)));
+  const double sx = static_cast<double>(w) / camera.width, sy = static_cast<double>(h) / camera.height;
+
+  // z-buffer of the nearest point per pixel.
+  std::vector<float> z(static_cast<size_t>(w) * h, kNoDepth);
+  const Eigen::Matrix3d r = image.cam_from_world_rotation.normalized().toRotationMatrix();
+  for (const Eigen::Vector3d& p : points) {
+    if (!p.allFinite()) continue;
+    const double depth = (r * p + image.cam_from_world_translation).z();
+    if (!(depth > 0)) continue;
+    const Eigen::Vector2d uv = photogrammetry::ProjectToImage(camera, image, p);
+    if (!uv.allFinite()) continue;
+    const double px = std::floor(uv.x() * sx), py = std::floor(uv.y() * sy);
+    if (px < 0 || py < 0 || px >= w || py >= h) continue;
+    float& cell = z[static_cast<size_t>(py) * w + static_cast<size_t>(px)];
+    cell = std::min(cell, static_cast<float>(depth));
+  }
+
+  // Points hidden by a nearer neighbour: the surface behind showing through a sparse spot.
+  std::vector<float> visible = z;
+  const int rad = options.occlusion_radius;
+  if (rad > 0) {
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const float d = z[static_cast<size_t>(y) * w + x];
+        if (d == kNoDepth) continue;
+        const double limit = d * (1 - options.occlusion_tolerance);
+        bool hidden = false;
+        for (int v = std::max(0, y - rad); v <= std::min(h - 1, y + rad) && !hidden; ++v) {
+          for (int u = std::max(0, x - rad); u <= std::min(w - 1, x + rad); ++u) {
+            if (z[static_cast<size_t>(v) * w + u] < limit) {
+              hidden = true;
+              break;
+            }
+          }
+        }
+        if (hidden) visible[static_cast<size_t>(y) * w + x] = kNoDepth;
+      }
+    }
+  }
+
+  PhotoPair pair;
+  pair.name = Stem(image.name);
+  pair.photo = Resample(photo, w, h);
+  pair.depth = ImageF(w, h, 1, 0.0f);
+  pair.mask = Image8(w, h, 1, 0);
+  std::vector<float> known;
+  for (float d : visible) {
+    if (d != kNoDepth) known.push_back(d);
+  }
+  if (known.empty()) return pair;
+  pair.near = Quantile(&known, options.near_percentile);
+  pair.far = Quantile(&known, options.far_percentile);
+  if (!(pair.far - pair.near > 1e-9 * std::abs(pair.far))) pair.far = pair.near;  // flat: level 128
+  for (size_t i = 0; i < visible.size(); ++i) {
+    if (visible[i] == kNoDepth) continue;
+    pair.depth.values()[i] = static_cast<float>(LevelOfCameraDepth(visible[i], pair.near, pair.far));
+    pair.mask.values()[i] = 255;
+  }
+  return pair;
+}
+
+void WritePhotoPair(const std::string& dir, const PhotoPair& pair) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError(dir, "", "cannot create the folder: " + ec.message());
+  const std::string base = dir + "/" + pair.name;
+  const PngText text = {{"candi_depth_near", FormatDouble(pair.near)},
+                        {"candi_depth_far", FormatDouble(pair.far)}};
+  WritePhoto(base + "_photo.png", pair.photo);
+  WriteDepth16(base + "_depth.png", pair.depth, text);
+  WritePng(base + "_mask.png", pair.mask);
+}
+
+std::vector<PhotoPair> ReadPhotoPairs(const std::string& dir) {
+  std::vector<PhotoPair> pairs;
+  for (const std::string& photo : PairPhotoPaths(dir)) {
+    const std::string base = photo.substr(0, photo.size() - 10);
+    PhotoPair p;
+    p.name = std::filesystem::path(base).filename().string();
+    p.photo = ReadPhoto(photo);
+    PngText text;
+    p.depth = ReadDepth(base + "_depth.png", &text);
+    p.near = TextNumber(text, "candi_depth_near");
+    p.far = TextNumber(text, "candi_depth_far");
+    auto same_size = [&](int width, int height, const std::string& path) {
+      if (width != p.photo.width() || height != p.photo.height()) {
+        throw InputError(path, "", std::to_string(width) + "x" + std::to_string(height) +
+                                       ", its photo " + photo + " is " + std::to_string(p.photo.width()) +
+                                       "x" + std::to_string(p.photo.height()));
+      }
+    };
+    same_size(p.depth.width(), p.depth.height(), base + "_depth.png");
+    std::error_code ec;
+    if (std::filesystem::exists(base + "_mask.png", ec)) {
+      const PngImage mask = ReadPng(base + "_mask.png");
+      if (mask.bit_depth != 8 || mask.image8.channels() != 1) {
+        throw InputError(base + "_mask.png", "", "a mask must be an 8-bit grey PNG");
+      }
+      same_size(mask.image8.width(), mask.image8.height(), base + "_mask.png");
+      p.mask = mask.image8;
+    }
+    pairs.push_back(std::move(p));
+  }
+  if (pairs.empty()) throw InputError(dir, "", "holds no <name>_photo.png + <name>_depth.png pairs");
+  return pairs;
+}
+
+}  // namespace candi::relief
