@@ -1,6 +1,11 @@
 // The `candi` command line: every subcommand's options, in one translation unit (CLI11 is heavy).
 #include <CLI/CLI.hpp>
 
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
 #include "apps/commands.h"
 #include "apps/logging.h"
 #include "core/progress.h"
@@ -464,7 +469,6 @@ void AddRelief(CLI::App& app, ReliefArgs& a, std::function<int()>* run) {
   AddReliefPoints(*relief, a.points, run);
   AddReliefEval(*relief, a.eval, run);
   AddReliefPlace(*relief, a.place, run);
-  AddBenchRelief(app, a.bench, run);
 }
 
 
@@ -639,11 +643,45 @@ void AddColorCorrect(CLI::App& app, ColorCorrectArgs& a, std::function<int()>* r
   c->footer("Example: candi colorcorrect photo.png -o photo_corrected.png --patches card.csv");
 }
 
+// `candi --help` lists the commands in groups along a user's path, not alphabetically. CLI11 prints
+// the groups in the order their first command was added and a group's commands in the order they
+// were added, so RunCli adds them in this order; GroupCommands checks that it did.
+const std::vector<std::pair<std::string, std::vector<std::string>>>& CommandGroups() {
+  static const std::vector<std::pair<std::string, std::vector<std::string>>> groups = {
+      {"Inspect and convert", {"info", "convert"}},
+      {"Digitize",
+       {"sfm", "dense", "georef", "register", "clean", "colorcorrect", "foundation", "relief"}},
+      {"Assemble", {"build", "pack"}},
+      {"Look", {"render", "view", "section"}},
+      {"Other", {"opacity", "demo", "bench"}},
+  };
+  return groups;
+}
+
+// Puts every top-level command in its group; a command missing from CommandGroups(), or added out
+// of its order, is a programming error (caught by any test that runs candi).
+void GroupCommands(CLI::App& app) {
+  std::vector<std::string> expected;
+  for (const auto& [group, names] : CommandGroups()) {
+    for (const std::string& name : names) {
+      app.get_subcommand(name)->group(group);
+      expected.push_back(name);
+    }
+  }
+  std::vector<std::string> added;
+  for (const CLI::App* c : app.get_subcommands({})) added.push_back(c->get_name());
+  if (added != expected) {
+    throw std::logic_error("cli.cc: the commands are not added in the order of CommandGroups(), "
+                           "or one is missing from it");
+  }
+}
+
 }  // namespace
 
 int RunCli(int argc, char** argv) {
+  // Named, so that the usage lines say `candi`, not the path the executable was called by.
   CLI::App app{"candi: heritage records (photos, CAD sections, old photos) to one point archive, "
-               "rendered see-through with stochastic point-based rendering"};
+               "rendered see-through with stochastic point-based rendering", "candi"};
   app.set_version_flag("--version", std::string("candi ") + kVersion);
   app.require_subcommand(1);
   int verbose = 0;
@@ -653,48 +691,55 @@ int RunCli(int argc, char** argv) {
   app.footer("Exit codes: 0 ok, 1 usage, 2 bad input, 3 internal error.\n"
              "Run `candi <command> --help` for a command's options.");
   std::function<int()> run;
+  // Inspect and convert.
   InfoArgs info;
-  ConvertArgs convert;
-  DemoArgs demo;
   AddInfo(app, info, &run);
+  ConvertArgs convert;
   AddConvert(app, convert, &run);
-  AddDemo(app, demo, &run);
-  OpacityArgs opacity;
-  AddOpacity(app, opacity, &run);
+  // Digitize.
+  SfmArgs sfm;
+  AddSfm(app, sfm, &run);
+  DenseArgs dense;
+  AddDense(app, dense, &run);
+  GeorefArgs georef;
+  AddGeoref(app, georef, &run);
+  RegisterArgs register_args;
+  AddRegister(app, register_args, &run);
+  CleanArgs clean;
+  AddClean(app, clean, &run);
+  ColorCorrectArgs colorcorrect;
+  AddColorCorrect(app, colorcorrect, &run);
+  FoundationArgs foundation;
+  AddFoundation(app, foundation, &run);
+  ReliefArgs relief;
+  AddRelief(app, relief, &run);
+  // Assemble.
+  BuildArgs build;
+  AddBuild(app, build, &run);
+  PackArgs pack;
+  AddPack(app, pack, &run);
+  // Look.
   RenderArgs render;
   AddRender(app, render, &run);
   ViewArgs view;
   AddView(app, view, &run);
   SectionArgs section;
   AddSection(app, section, &run);
+  // Other.
+  OpacityArgs opacity;
+  AddOpacity(app, opacity, &run);
+  DemoArgs demo;
+  AddDemo(app, demo, &run);
   BenchArgs bench;
   AddBench(app, bench, &run);
-  PackArgs pack;
-  AddPack(app, pack, &run);
   BenchScaleArgs bench_scale;
   AddBenchScale(app, bench_scale, &run);
   BenchViewArgs bench_view;
   AddBenchView(app, bench_view, &run);
   BenchSectionArgs bench_section;
   AddBenchSection(app, bench_section, &run);
-  FoundationArgs foundation;
-  AddFoundation(app, foundation, &run);
-  DenseArgs dense;
-  AddDense(app, dense, &run);
-  ReliefArgs relief;
-  AddRelief(app, relief, &run);
-  SfmArgs sfm;
-  AddSfm(app, sfm, &run);
-  RegisterArgs register_args;
-  AddRegister(app, register_args, &run);
-  CleanArgs clean;
-  AddClean(app, clean, &run);
-  GeorefArgs georef;
-  AddGeoref(app, georef, &run);
-  ColorCorrectArgs colorcorrect;
-  AddColorCorrect(app, colorcorrect, &run);
-  BuildArgs build;
-  AddBuild(app, build, &run);
+  AddBenchRelief(app, relief.bench, &run);  // its arguments live with relief's
+  GroupCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

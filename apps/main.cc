@@ -31,8 +31,20 @@ namespace {
 // same arguments).
 enum Group { kCore, kPcl, kRelief };
 
-// The group of `candi [global flags] COMMAND ...`; `bench ... relief` is a relief command.
+// True for `-h` or `--help` among the arguments (before a `--`).
+bool AsksForHelp(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--")) return false;
+    if (!std::strcmp(argv[i], "-h") || !std::strcmp(argv[i], "--help")) return true;
+  }
+  return false;
+}
+
+// The group of `candi [global flags] COMMAND ...`; `bench ... relief` is a relief command. Help is
+// answered here, whatever the command: cli.cc is the same in every executable, and so is the text,
+// without the seconds libtorch takes to load (or the sibling, when it is not built).
 Group CommandGroup(int argc, char** argv) {
+  if (AsksForHelp(argc, argv)) return kCore;
   int i = 1;
   while (i < argc && argv[i][0] == '-') ++i;
   if (i >= argc) return kCore;

@@ -41,7 +41,7 @@
 //     "replace_voxel": 0.5,                    their points in the cubes (metres, on the scene frame's grid)
 //                                              holding >= 3 of this layer's points are dropped
 //                                              (close-range data over a coarse scan)
-//     points:         "file": "scan.las", "columns": "xyzrgb" (XYZ/PTS only)
+//     points:         "file": "scan.las", "columns": "x,y,z,r,g,b" (XYZ/PTS only)
 //     foundation:     "dxf": "foundation.dxf", "sections": ["A", ...], "samples_per_side": 1000,
 //                     "angular_steps": 90, "density": 50 | "count": K, "mode": "auto"|"blend"|"sweep"
 //     relief:         "panels": [{"id": "P01", "photo": "p01.png" | "points": "p01.ply",

@@ -2,8 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/point_io.h"
 #include "core/rng.h"
@@ -53,6 +57,56 @@ TEST(Cli, VersionHelpAndUsageErrors) {
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("--las-scale '-1'"), std::string::npos) << r.output;
   EXPECT_EQ(RunCandi("convert a.ply b.ply --shift 1,2").code, 1);
+}
+
+// `candi --help` lists the commands in groups along a user's path, every command once.
+TEST(Cli, HelpGroupsTheCommandsAlongTheUsersPath) {
+  const std::vector<std::pair<std::string, std::vector<std::string>>> expected = {
+      {"Inspect and convert", {"info", "convert"}},
+      {"Digitize",
+       {"sfm", "dense", "georef", "register", "clean", "colorcorrect", "foundation", "relief"}},
+      {"Assemble", {"build", "pack"}},
+      {"Look", {"render", "view", "section"}},
+      {"Other", {"opacity", "demo", "bench"}},
+  };
+  const Result r = RunCandi("--help");
+  ASSERT_EQ(r.code, 0);
+  // Sections are a heading line `Name:` and the indented lines up to a blank one.
+  std::vector<std::pair<std::string, std::vector<std::string>>> groups;
+  std::map<std::string, int> seen;
+  std::istringstream in(r.out);
+  std::string line, section;
+  while (std::getline(in, line)) {
+    if (line.empty()) {
+      section.clear();
+    } else if (line[0] != ' ' && line.back() == ':') {
+      section = line.substr(0, line.size() - 1);
+      if (section != "Options" && section != "Positionals") groups.push_back({section, {}});
+    } else if (!section.empty() && section != "Options" && section != "Positionals" &&
+               line.rfind("  ", 0) == 0 && line[2] != ' ' && line[2] != '-') {
+      const std::string name = line.substr(2, line.find(' ', 2) - 2);
+      groups.back().second.push_back(name);
+      ++seen[name];
+    }
+  }
+  EXPECT_EQ(groups, expected) << r.out;
+  for (const auto& [name, count] : seen) {
+    EXPECT_EQ(count, 1) << name << " is listed " << count << " times";
+  }
+  EXPECT_EQ(r.out.find("Subcommands:"), std::string::npos)
+      << "a command outside the groups:\n" << r.out;
+  // The usage line names `candi`, not the path it was run by (the reference docs are generated).
+  EXPECT_NE(r.out.find("Usage: candi [OPTIONS] SUBCOMMAND"), std::string::npos) << r.out;
+}
+
+// Every command's help is answered by `candi` itself (relief and PCL commands too), the same text.
+TEST(Cli, SubcommandHelpNamesTheWholeCommand) {
+  for (const char* command : {"relief train", "bench relief", "register", "demo", "relief place"}) {
+    const Result r = RunCandi(std::string(command) + " --help");
+    EXPECT_EQ(r.code, 0) << command << ": " << r.output;
+    EXPECT_NE(r.out.find(std::string("Usage: candi ") + command + " [OPTIONS]"), std::string::npos)
+        << r.out;
+  }
 }
 
 TEST(Cli, MissingInputIsExitTwoNamingTheFile) {
