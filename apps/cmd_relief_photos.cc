@@ -75,7 +75,9 @@ int RunReliefPhotoDataset(const ReliefDatasetArgs& a) {
     for (size_t i = 0; i < cloud.size(); ++i) points.push_back(cloud.frame.ToWorld(cloud.positions[i]));
   }
 
-  fs::create_directories(a.output_dir);
+  std::error_code ec;
+  fs::create_directories(a.output_dir, ec);
+  if (ec || !fs::is_directory(a.output_dir)) throw InputError(a.output_dir, "", "cannot create the output folder");
   ConsoleProgressOptions po;
   po.unit = "views";
   ConsoleProgress progress("relief dataset", po);
