@@ -74,13 +74,6 @@ void FillHoles(ImageF* h, ImageF* grey, int passes) {
   }
 }
 
-float PercentileOf(std::vector<float> v, double q) {
-  if (v.empty()) return 0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * v.size()));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[k];
-}
-
 float Bilinear(const ImageF& im, double x, double y, float outside) {
   if (x < -0.5 || y < -0.5 || x > im.width() - 0.5 || y > im.height() - 0.5) return outside;
   x = std::clamp(x, 0.0, im.width() - 1.0), y = std::clamp(y, 0.0, im.height() - 1.0);
@@ -98,6 +91,13 @@ std::string PairName(const std::string& dir, size_t i, const char* kind) {
 }
 
 }  // namespace
+
+float PercentileOf(std::vector<float> v, double q) {
+  if (v.empty()) return 0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * v.size()));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[k];
+}
 
 void ScanRasterOptions::Check() const {
   Require(pixels_per_m > 0 && std::isfinite(pixels_per_m),

@@ -70,6 +70,9 @@ TrainingPair Augment(const AugmentOptions& options, const TrainingPair& pair, ui
 
 // Writes pairs as DIR/NNNNNN_photo.png + NNNNNN_depth.png, numbered from `first`.
 void WritePairs(const std::string& dir, const std::vector<TrainingPair>& pairs, size_t first = 0);
+// The q-quantile (rank floor(q n), clamped) of values; 0 for none.
+float PercentileOf(std::vector<float> values, double q);
+
 // The *_photo.png files of a folder, in name order; throws InputError when dir is not a folder.
 std::vector<std::string> PairPhotoPaths(const std::string& dir);
 // Reads every NNNNNN_photo.png / NNNNNN_depth.png pair of a folder, in name order.

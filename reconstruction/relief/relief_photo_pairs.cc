@@ -18,13 +18,6 @@ namespace {
 
 constexpr float kNoDepth = std::numeric_limits<float>::infinity();
 
-// The q-quantile (nearest rank) of values; values is reordered.
-double Quantile(std::vector<float>* values, double q) {
-  const size_t k = std::min(values->size() - 1, static_cast<size_t>(q * (values->size() - 1) + 0.5));
-  std::nth_element(values->begin(), values->begin() + static_cast<std::ptrdiff_t>(k), values->end());
-  return (*values)[k];
-}
-
 std::string Stem(const std::string& image_name) {
   return std::filesystem::path(image_name).stem().string();
 }
@@ -134,8 +127,8 @@ PhotoPair BuildPhotoPair(const PhotoPairOptions& options, const photogrammetry::
     if (d != kNoDepth) known.push_back(d);
   }
   if (known.empty()) return pair;
-  pair.near = Quantile(&known, options.near_percentile);
-  pair.far = Quantile(&known, options.far_percentile);
+  pair.near = PercentileOf(known, options.near_percentile);
+  pair.far = PercentileOf(std::move(known), options.far_percentile);
   if (!(pair.far - pair.near > 1e-9 * std::abs(pair.far))) pair.far = pair.near;  // flat: level 128
   for (size_t i = 0; i < visible.size(); ++i) {
     if (visible[i] == kNoDepth) continue;
