@@ -1,0 +1,154 @@
+#!/usr/bin/env python3
+"""Proves a refactoring changed no behaviour: the same commands give the same bytes.
+
+  scripts/same_bytes.py record BUILD_DIR OUT_DIR [--no-full-demo] [--docs PAGE ...]
+      Runs, with BUILD_DIR's candi, `candi demo --quick`, `candi demo` (the full demo) and every
+      ```sh block of every page of docs/ (through candi_docs_runner, each page's working directory
+      kept), and keeps every file they write under OUT_DIR (demo_quick/, demo/, docs/<page>/).
+  scripts/same_bytes.py compare OLD_DIR NEW_DIR
+      Compares two recorded trees file by file and lists every file that is missing on one side or
+      differs. Exit 0 when the outputs are the same bytes, 1 otherwise.
+
+What is not behaviour, and so is normalised before comparing (each rule is printed by compare):
+  - the recording's own folder (OUT_DIR) and the docs runner's random working-directory names in
+    text files: outputs that record an absolute input path name these;
+  - in JSON files, values under keys that hold run times ("seconds", "*_seconds", "timings",
+    "stages" of section.json, "total"), which differ between any two runs;
+  - timings.json (a build's run times, kept apart from archive.json for this reason) and the
+    runner's block logs.
+Binary files are compared as they are: record both trees at the same OUT_DIR path (move the
+first aside before recording the second) in case one names it.
+"""
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+
+SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+TIMING_KEYS = re.compile(r"(^|_)(seconds|timings|ms|elapsed|stages)$|^total$|^time")
+SKIP_FILES = re.compile(r"(^|/)(timings\.json|block_\d+\.(sh|log))$")
+RUNNER_DIR = re.compile(r"candi-docs-[A-Za-z0-9]{6}")
+
+
+def run(cmd, env=None, log=None):
+    start = time.time()
+    print("+ " + " ".join(cmd), file=sys.stderr, flush=True)
+    with open(log, "w") if log else open(os.devnull, "w") as out:
+        code = subprocess.call(cmd, env=env, stdout=out, stderr=subprocess.STDOUT)
+    print(f"  exit {code}, {time.time() - start:.0f} s", file=sys.stderr, flush=True)
+    return code
+
+
+def record(build, out, full_demo, pages):
+    build = os.path.abspath(build)
+    out = os.path.abspath(out)
+    candi = os.path.join(build, "apps", "candi")
+    runner = os.path.join(build, "tests", "candi_docs_runner")
+    if os.path.exists(out):
+        sys.exit(f"same_bytes: {out} exists; record into a new folder")
+    os.makedirs(out)
+    failures = []
+    if run([candi, "-q", "demo", "--quick", "-o", os.path.join(out, "demo_quick")]) != 0:
+        failures.append("demo --quick")
+    if full_demo and run([candi, "-q", "demo", "-o", os.path.join(out, "demo")]) != 0:
+        failures.append("demo")
+    if not pages:
+        for root, _, files in os.walk(os.path.join(SOURCE, "docs")):
+            for f in files:
+                if f.endswith(".md"):
+                    pages.append(os.path.relpath(os.path.join(root, f), SOURCE))
+    for page in sorted(pages):
+        work = os.path.join(out, "docs", page.replace("/", "_"))
+        os.makedirs(work)
+        env = dict(os.environ, TMPDIR=work, CANDI_DOCS_KEEP="1", CANDI_DOCS_TIMEOUT="1200")
+        code = run([runner, SOURCE, os.path.dirname(candi), page], env=env,
+                   log=os.path.join(out, "docs", page.replace("/", "_") + ".log"))
+        if code not in (0, 77):
+            failures.append(page)
+    # The links the runner makes to examples/ and the shared data are inputs, not outputs.
+    for root, dirs, files in os.walk(out):
+        for name in list(dirs) + files:
+            p = os.path.join(root, name)
+            if os.path.islink(p):
+                os.unlink(p)
+                if name in dirs:
+                    dirs.remove(name)
+    if failures:
+        sys.exit("same_bytes: failed: " + ", ".join(failures))
+
+
+def normalise_json(value):
+    if isinstance(value, dict):
+        return {k: ("<time>" if TIMING_KEYS.search(k) else normalise_json(v)) for k, v in value.items()}
+    if isinstance(value, list):
+        return [normalise_json(v) for v in value]
+    return value
+
+
+def content(path, root):
+    with open(path, "rb") as f:
+        data = f.read()
+    if b"\0" in data[:65536]:
+        return data
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data
+    text = text.replace(root, "<OUT>")
+    text = RUNNER_DIR.sub("candi-docs-XXXXXX", text)
+    if path.endswith(".json"):
+        try:
+            return json.dumps(normalise_json(json.loads(text)), sort_keys=True).encode()
+        except ValueError:
+            pass
+    return text.encode()
+
+
+def files(root):
+    found = {}
+    for dirpath, _, names in os.walk(root):
+        for name in names:
+            p = os.path.join(dirpath, name)
+            rel = RUNNER_DIR.sub("candi-docs-XXXXXX", os.path.relpath(p, root))
+            if rel.endswith(".log") and rel.count("/") == 1 or SKIP_FILES.search(rel):
+                continue
+            found[rel] = p
+    return found
+
+
+def compare(old, new):
+    old, new = os.path.abspath(old), os.path.abspath(new)
+    a, b = files(old), files(new)
+    print("normalised: absolute paths of the recording; JSON keys matching " + TIMING_KEYS.pattern +
+          "; files matching " + SKIP_FILES.pattern + " are skipped")
+    bad = 0
+    for rel in sorted(set(a) | set(b)):
+        if rel not in a or rel not in b:
+            print(("only in new: " if rel in b else "only in old: ") + rel)
+            bad += 1
+            continue
+        ca, cb = content(a[rel], old), content(b[rel], new)
+        if ca != cb:
+            print(f"differs: {rel} ({len(ca)} vs {len(cb)} bytes)")
+            bad += 1
+    print(f"{len(a)} files in old, {len(b)} in new; {bad} differ or are missing")
+    return 0 if bad == 0 else 1
+
+
+def main(argv):
+    if len(argv) >= 3 and argv[0] == "record":
+        rest = argv[3:]
+        full = "--no-full-demo" not in rest
+        pages = rest[rest.index("--docs") + 1:] if "--docs" in rest else []
+        record(argv[1], argv[2], full, pages)
+        return 0
+    if len(argv) == 3 and argv[0] == "compare":
+        return compare(argv[1], argv[2])
+    print(__doc__, file=sys.stderr)
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
