@@ -22,13 +22,13 @@ int RunBench(const BenchArgs& args) {
               static_cast<unsigned long long>(args.points), args.width, args.height, args.threads);
   std::printf("%6s %12s %12s %12s %12s %10s\n", "L", "copies", "opacity ms", "build ms", "render ms", "RMSE");
   for (int L : {1, 4, 16, 64, 256, 1024}) {
-    OpacityOptions opacity;
+    sampling::OpacityOptions opacity;
     opacity.alpha = 0.5;
     opacity.repeat_level = L;
     opacity.image_size = std::max(args.width, args.height);
     opacity.density.threads = args.threads;
     auto t0 = std::chrono::steady_clock::now();
-    const PointCloud adjusted = AdjustOpacity(opacity, scene).cloud;
+    const PointCloud adjusted = sampling::AdjustOpacity(opacity, scene).cloud;
     const double opacity_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     render::SplatCloudOptions build;
     build.repeat_level = L;

@@ -20,11 +20,11 @@
 #include <string>
 #include <vector>
 
+#include "apps/commands.h"
 #include "mesh/foundation.h"
 #include "sampling/layer_clouds.h"
 #include "sampling/layer_colours.h"
 #include "sampling/surface_sampling.h"
-#include "apps/commands.h"
 
 namespace candi::app {
 namespace {
@@ -53,7 +53,7 @@ Polyline2 Hemisphere() {
 
 // Max and RMS distance from the sphere of the centroids of the grid's triangles (the triangles
 // BuildSurfaceMesh makes).
-std::pair<double, double> SphereError(const SurfaceGrid& g) {
+std::pair<double, double> SphereError(const mesh::SurfaceGrid& g) {
   double worst = 0, sum = 0;
   size_t count = 0;
   auto add = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
@@ -79,22 +79,22 @@ void AccuracyTable() {
   const Polyline2 line = Hemisphere();
   for (int n : {10, 100, 1000, 10000}) {
     for (int m : {8, 32, 128, 512}) {
-      ProfileOptions po;
+      mesh::ProfileOptions po;
       po.samples_per_side = n;
-      RevolveOptions ro;
+      mesh::RevolveOptions ro;
       ro.angular_steps = m;
-      ro.mode = RevolveMode::kSweep;
+      ro.mode = mesh::RevolveMode::kSweep;
       auto t = std::chrono::steady_clock::now();
-      const Profile profile = BuildProfile(po, line, {"hemisphere", "-"});
+      const mesh::Profile profile = mesh::BuildProfile(po, line, {"hemisphere", "-"});
       const double profile_ms = Ms(t);
       t = std::chrono::steady_clock::now();
-      const SurfaceGrid grid = RevolveProfile(ro, profile);
+      const mesh::SurfaceGrid grid = mesh::RevolveProfile(ro, profile);
       const double grid_ms = Ms(t);
       const size_t vertices = static_cast<size_t>(n) * 2 * m;
       std::string mesh_ms = "grid only";
       if (vertices <= 4000000) {
         t = std::chrono::steady_clock::now();
-        const TriMesh mesh = BuildSurfaceMesh({}, grid);
+        const TriMesh mesh = mesh::BuildSurfaceMesh({}, grid);
         char buf[32];
         std::snprintf(buf, sizeof(buf), "%.1f", Ms(t));
         mesh_ms = buf;
@@ -113,33 +113,33 @@ struct Stages {
 };
 
 Stages PaperScale(const std::string& path, bool check, int threads, const std::string& output) {
-  FoundationOptions o;
+  mesh::FoundationOptions o;
   o.check = check;
   Stages s;
   auto t = std::chrono::steady_clock::now();
-  const DxfDrawing drawing = ReadDxf(o.dxf, path);
+  const mesh::DxfDrawing drawing = mesh::ReadDxf(o.dxf, path);
   s.import_ms = Ms(t);
   t = std::chrono::steady_clock::now();
   const std::vector<std::string> names = drawing.LayerNames();
-  const std::vector<LayerSurface> layers = BuildLayerSurfaces(o, drawing, names, threads);
+  const std::vector<mesh::LayerSurface> layers = mesh::BuildLayerSurfaces(o, drawing, names, threads);
   std::vector<double> areas;
-  for (const LayerSurface& layer : layers) areas.push_back(MeshArea(layer.mesh));  // as the CLI
+  for (const mesh::LayerSurface& layer : layers) areas.push_back(sampling::MeshArea(layer.mesh));  // as the CLI
   s.mesh_ms = Ms(t);
   t = std::chrono::steady_clock::now();
-  const std::vector<uint64_t> counts = SplitCount(4470000, areas);
+  const std::vector<uint64_t> counts = sampling::SplitCount(4470000, areas);
   std::vector<PointCloud> clouds;
   for (size_t k = 0; k < layers.size(); ++k) {
-    SurfaceSampleOptions so;
+    sampling::SurfaceSampleOptions so;
     so.count = counts[k];
     so.threads = threads;
-    so.colour = DefaultLayerColour(layers[k].layer, k).rgb;
+    so.colour = sampling::DefaultLayerColour(layers[k].layer, k).rgb;
     so.layer = static_cast<int>(k);
-    clouds.push_back(SampleSurface(so, layers[k].mesh));
+    clouds.push_back(sampling::SampleSurface(so, layers[k].mesh));
     s.points += clouds.back().size();
   }
   s.sample_ms = Ms(t);
   t = std::chrono::steady_clock::now();
-  WriteLayerClouds(output, clouds, names);
+  sampling::WriteLayerClouds(output, clouds, names);
   s.write_ms = Ms(t);
   return s;
 }

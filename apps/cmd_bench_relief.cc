@@ -12,7 +12,7 @@
 #include "apps/commands.h"
 #include "core/check.h"
 #include "core/text_format.h"
-#include "core/point_io.h"
+#include "io/point_io.h"
 #include "reconstruction/relief/relief_dataset.h"
 #include "reconstruction/relief/relief_eval.h"
 #include "reconstruction/relief/relief_image.h"
@@ -50,7 +50,7 @@ void TimeFullPhoto(const relief::DepthModel& model, const relief::SynthPanel& pa
   t0 = std::chrono::steady_clock::now();
   const PointCloud cloud = relief::DepthToPoints({}, panel.photo.photo, depth);
   const std::string path = (std::filesystem::temp_directory_path() / "candi_bench_relief.ply").string();
-  WritePointCloud(path, cloud);
+  io::WritePointCloud(path, cloud);
   *points_s = Seconds(t0);
   std::filesystem::remove(path);
 }

@@ -24,9 +24,9 @@
 #include "core/check.h"
 #include "core/interrupt.h"
 #include "core/log.h"
-#include "core/png_io.h"
-#include "core/point_io.h"
 #include "core/progress.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "render/archive_pack.h"
 #include "render/synthetic_scene.h"
 
@@ -100,7 +100,7 @@ double RenderMs(const std::string& out) {
 }
 
 bool SamePixels(const std::string& a, const std::string& b) {
-  const PngImage x = ReadPng(a), y = ReadPng(b);
+  const io::PngImage x = io::ReadPng(a), y = io::ReadPng(b);
   return x.image16.width() == y.image16.width() && x.image16.height() == y.image16.height() &&
          std::memcmp(x.image16.data(), y.image16.data(), sizeof(uint16_t) * x.image16.width() * x.image16.height() * 3) == 0;
 }
@@ -109,13 +109,13 @@ bool SamePixels(const std::string& a, const std::string& b) {
 // and flushes it to disk.
 void WriteScene(const std::string& path, uint64_t n) {
   constexpr uint64_t kPiece = 1000000;
-  PointWriteSpec spec;
+  io::PointWriteSpec spec;
   spec.schema.colors = true;
   spec.schema.position_type = ScalarType::kFloat32;
   spec.count = n;
-  PointWriteOptions wo;
-  wo.precision = PositionPrecision::kFloat32;
-  auto writer = OpenPointWriter(path, spec, wo);
+  io::PointWriteOptions wo;
+  wo.precision = io::PositionPrecision::kFloat32;
+  auto writer = io::OpenPointWriter(path, spec, wo);
   ConsoleProgress progress("bench scale: writing " + path);
   for (uint64_t k = 0; k * kPiece < n; ++k) {
     PointCloud piece = render::TerracedSolid(std::min(kPiece, n - k * kPiece), 1000 + k);

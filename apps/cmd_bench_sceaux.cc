@@ -20,8 +20,8 @@
 #include "apps/commands.h"
 #include "core/check.h"
 #include "core/interrupt.h"
-#include "core/jpeg_io.h"
-#include "core/point_io.h"
+#include "io/image/jpeg_io.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/colmap_model.h"
 #include "reconstruction/photogrammetry/colmap_runner.h"
 #include "reconstruction/photogrammetry/dense_workspace.h"
@@ -71,8 +71,8 @@ std::string PrepareWorkspace(const pg::ColmapModel& model, const std::string& ph
   fs::create_directories(images);
   for (const auto& [id, image] : model.images) {
     const pg::ColmapCamera& camera = model.cameras.at(image.camera_id);
-    const Image8 full = ReadImageRgb8(photos + "/" + image.name);
-    WriteJpeg(images + "/" + image.name, pg::ResampleArea(full, camera.width, camera.height), 95);
+    const Image8 full = io::ReadImageRgb8(photos + "/" + image.name);
+    io::WriteJpeg(images + "/" + image.name, pg::ResampleArea(full, camera.width, camera.height), 95);
   }
   const std::string dense = temp + "/dense";
   const std::vector<std::string> argv = {"colmap", "image_undistorter", "--image_path", images,
@@ -123,7 +123,7 @@ int RunBenchDenseSceaux(const BenchArgs& args) {
   const double stereo_s = Since(t0);
   const PointCloud ours = pg::FuseDepthMaps(pg::FusionOptions(), stereo.maps);
   const double dense_s = Since(t0);
-  const PointCloud openmvs = ReadPointCloud(reference);
+  const PointCloud openmvs = io::ReadPointCloud(reference);
 
   // Scale of the scene: median depth of the sparse points in the cameras that see them.
   std::vector<double> depths;

@@ -61,11 +61,11 @@ void FoundationTable(const BenchSectionArgs& a, const std::string& dir) {
   f.no_self_intersection = true;
   f.threads = a.threads;
   RunFoundation(f);
-  const FoundationOptions o;
-  const DxfDrawing drawing = ReadDxf(o.dxf, drawing_path);
+  const mesh::FoundationOptions o;
+  const mesh::DxfDrawing drawing = mesh::ReadDxf(o.dxf, drawing_path);
   std::map<std::string, std::vector<Eigen::Vector2d>> profiles;
   for (const std::string& layer : drawing.LayerNames()) {
-    const Profile p = BuildProfile(o.profile, LayerSection(o, drawing, layer), {drawing_path, layer});
+    const mesh::Profile p = mesh::BuildProfile(o.profile, mesh::LayerSection(o, drawing, layer), {drawing_path, layer});
     std::vector<Eigen::Vector2d>& line = profiles[layer];
     for (auto it = p.left.rbegin(); it != p.left.rend(); ++it) line.push_back(*it + p.origin);
     for (size_t i = 1; i < p.right.size(); ++i) line.push_back(p.right[i] + p.origin);
@@ -80,10 +80,10 @@ void FoundationTable(const BenchSectionArgs& a, const std::string& dir) {
     s.threads = a.threads;
     s.output = dir + "/foundation-section";
     const auto start = std::chrono::steady_clock::now();
-    const std::string summary = RunSectionInto(s, SectionPath::Plane({0, 0, 0}, {0, 1, 0}, t), ClipRegion{}, false);
+    const std::string summary = RunSectionInto(s, section::SectionPath::Plane({0, 0, 0}, {0, 1, 0}, t), ClipRegion{}, false);
     const double seconds = Seconds(start);
     const nlohmann::json j = nlohmann::json::parse(summary);
-    const DxfDrawing section = ReadDxf(DxfReadOptions{}, s.output + "/section.dxf");
+    const mesh::DxfDrawing section = mesh::ReadDxf(mesh::DxfReadOptions{}, s.output + "/section.dxf");
     double sum = 0, worst = 0;
     size_t n = 0;
     for (const auto& [layer, lines] : section.layers) {
@@ -131,7 +131,7 @@ int RunBenchSection(const BenchSectionArgs& a) {
     s.output = dir + "/scene-section";
     const auto start = std::chrono::steady_clock::now();
     const std::string summary =
-        RunSectionInto(s, SectionPath::Plane(centre, {1, 0.3, 0}, a.thickness), ClipRegion{}, false);
+        RunSectionInto(s, section::SectionPath::Plane(centre, {1, 0.3, 0}, a.thickness), ClipRegion{}, false);
     const double seconds = Seconds(start);
     const nlohmann::json j = nlohmann::json::parse(summary);
     char chunks[64];

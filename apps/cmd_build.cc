@@ -44,15 +44,15 @@
 #include "apps/scene.h"
 #include "core/atomic_file.h"
 #include "core/check.h"
-#include "core/crs.h"
 #include "core/log.h"
-#include "core/point_io.h"
-#include "core/sha256.h"
 #include "core/progress.h"
+#include "core/sha256.h"
 #include "core/text_format.h"
+#include "io/crs.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/colmap_runner.h"
-#include "render/archive.h"
 #include "reconstruction/relief/relief_place.h"
+#include "render/archive.h"
 
 namespace candi::app {
 
@@ -87,9 +87,9 @@ struct LayerResult {
 };
 
 PointCloud ReadAny(const std::string& path, const std::string& columns = "") {
-  PointReadOptions o;
+  io::PointReadOptions o;
   o.columns = columns;
-  return ReadPointCloud(path, o);
+  return io::ReadPointCloud(path, o);
 }
 
 LayerResult Foundation(const Scene& scene, const SceneLayer& l, const std::string& work) {
@@ -288,36 +288,36 @@ json ToSceneCrs(const Scene& scene, size_t k, PointCloud* cloud) {
   const std::string at = "/layers/" + std::to_string(k) + "/crs";
   std::string stated = cloud->meta.crs;
   if (l.crs == "scene") {
-    if (!stated.empty() && !SameCrs(stated, scene.crs))
-      throw InputError(scene.path, at, "layer " + l.name + " says \"scene\" (" + CrsLabel(scene.crs) +
-                                           ") but its data states " + CrsLabel(stated));
+    if (!stated.empty() && !io::SameCrs(stated, scene.crs))
+      throw InputError(scene.path, at, "layer " + l.name + " says \"scene\" (" + io::CrsLabel(scene.crs) +
+                                           ") but its data states " + io::CrsLabel(stated));
     stated = scene.crs;
   } else if (!l.crs.empty()) {
-    if (!stated.empty() && !SameCrs(stated, l.crs))
-      throw InputError(scene.path, at, "layer " + l.name + " declares " + CrsLabel(l.crs) +
-                                           " but its data states " + CrsLabel(stated) + "; remove one");
+    if (!stated.empty() && !io::SameCrs(stated, l.crs))
+      throw InputError(scene.path, at, "layer " + l.name + " declares " + io::CrsLabel(l.crs) +
+                                           " but its data states " + io::CrsLabel(stated) + "; remove one");
     stated = l.crs;
   }
-  json record = {{"stated", stated.empty() ? json() : json(CrsLabel(stated))}, {"transformed", false}};
+  json record = {{"stated", stated.empty() ? json() : json(io::CrsLabel(stated))}, {"transformed", false}};
   if (stated.empty()) {
     if (!scene.crs.empty())
-      LogWarning("layer " + l.name + " states no CRS; taken to be in the scene's, " + CrsLabel(scene.crs) +
+      LogWarning("layer " + l.name + " states no CRS; taken to be in the scene's, " + io::CrsLabel(scene.crs) +
                  " (say so with \"crs\": \"scene\" in the layer)");
     cloud->meta.crs = scene.crs;
     return record;
   }
   cloud->meta.crs = stated;
-  if (scene.crs.empty() || SameCrs(stated, scene.crs)) return record;
-  const CrsTransform transform(stated, scene.crs, scene.path);
+  if (scene.crs.empty() || io::SameCrs(stated, scene.crs)) return record;
+  const io::CrsTransform transform(stated, scene.crs, scene.path);
   for (Eigen::Vector3d& p : cloud->positions) p = cloud->frame.ToWorld(p);
   cloud->frame = LocalFrame();
   const size_t outside = transform.Apply(&cloud->positions);
   cloud->meta.crs = scene.crs;
-  LogInfo("layer " + l.name + ": " + CrsLabel(stated) + " -> " + CrsLabel(scene.crs) + " with PROJ (" +
+  LogInfo("layer " + l.name + ": " + io::CrsLabel(stated) + " -> " + io::CrsLabel(scene.crs) + " with PROJ (" +
           transform.operation() + ")");
-  if (outside > 0) LogWarning("layer " + l.name + ": " + std::to_string(outside) + " points lie outside " + CrsLabel(scene.crs));
+  if (outside > 0) LogWarning("layer " + l.name + ": " + std::to_string(outside) + " points lie outside " + io::CrsLabel(scene.crs));
   record["transformed"] = true;
-  record["to"] = CrsLabel(scene.crs);
+  record["to"] = io::CrsLabel(scene.crs);
   record["operation"] = transform.operation();
   record["accuracy_m"] = transform.accuracy();
   record["outside_domain"] = outside;
@@ -334,9 +334,9 @@ std::string CommonCrs(const Scene& scene, const std::vector<PointCloud*>& clouds
     if (c.empty()) continue;
     if (common.empty()) {
       common = c, first = k;
-    } else if (!SameCrs(common, c)) {
-      throw InputError(scene.path, "/crs", "layers " + scene.layers[first].name + " (" + CrsLabel(common) + ") and " +
-                                               scene.layers[k].name + " (" + CrsLabel(c) +
+    } else if (!io::SameCrs(common, c)) {
+      throw InputError(scene.path, "/crs", "layers " + scene.layers[first].name + " (" + io::CrsLabel(common) + ") and " +
+                                               scene.layers[k].name + " (" + io::CrsLabel(c) +
                                                ") are in different CRSs; declare the scene's \"crs\" to transform "
                                                "them into one with PROJ");
     }
@@ -440,9 +440,9 @@ std::string Key(const std::vector<std::string>& parts) {
 // and what archive.json says of it.
 void SaveLayer(const Checkpoints& checkpoints, const std::string& stage, const std::string& key,
                const fs::path& points, const LayerResult& r) {
-  PointWriteOptions o;
-  o.precision = PositionPrecision::kFloat64;
-  WritePointCloud(points.string(), r.cloud, o);
+  io::PointWriteOptions o;
+  o.precision = io::PositionPrecision::kFloat64;
+  io::WritePointCloud(points.string(), r.cloud, o);
   checkpoints.Save(stage, key, {{"method", r.method}, {"parameters", r.parameters}, {"seconds", r.seconds}});
 }
 
@@ -490,10 +490,10 @@ size_t Place(const SceneLayer& l, uint16_t id, const LocalFrame& scene_frame, Po
 // comment and sidecar (CloudCompare, PDAL, ...) read the real positions; the scene's frame is in
 // archive.json and meshlab/shift.txt. (Double keeps 10^-9 m at 10^7 m.)
 void WriteWorldPly(const std::string& path, const PointCloud& cloud) {
-  PointWriteOptions o;
-  o.precision = PositionPrecision::kFloat64;
-  const std::unique_ptr<PointWriter> writer =
-      OpenPointWriter(path, PointWriteSpec{cloud.schema, LocalFrame(), cloud.meta, cloud.size()}, o);
+  io::PointWriteOptions o;
+  o.precision = io::PositionPrecision::kFloat64;
+  const std::unique_ptr<io::PointWriter> writer =
+      io::OpenPointWriter(path, io::PointWriteSpec{cloud.schema, LocalFrame(), cloud.meta, cloud.size()}, o);
   writer->Write(cloud);  // re-expressed from the scene's frame (exact for its integer origin)
   writer->Close();
 }
@@ -506,9 +506,9 @@ void WriteMeshlab(const Scene& scene, const std::vector<PointCloud>& clouds, con
   for (size_t k = 0; k < clouds.size(); ++k) {
     PointCloud local = clouds[k];
     local.frame = LocalFrame();
-    PointWriteOptions o;
-    o.precision = PositionPrecision::kFloat32;
-    WritePointCloud((fs::path(dir) / (scene.layers[k].name + ".ply")).string(), local, o);
+    io::PointWriteOptions o;
+    o.precision = io::PositionPrecision::kFloat32;
+    io::WritePointCloud((fs::path(dir) / (scene.layers[k].name + ".ply")).string(), local, o);
     mlp += "  <MLMesh label=\"" + scene.layers[k].name + "\" filename=\"" + scene.layers[k].name +
            ".ply\" visible=\"1\">\n   <MLMatrix44>\n1 0 0 0 \n0 1 0 0 \n0 0 1 0 \n0 0 0 1 \n</MLMatrix44>\n"
            "   <RenderingOption pointSize=\"1\" wireColor=\"64 64 64 255\" boxColor=\"234 234 234 255\" "
@@ -715,7 +715,7 @@ int RunBuild(const BuildArgs& args) {
       {"candi_version", CANDI_VERSION}, {"scene", {{"path", scene.path}, {"sha256", Sha256Hex(scene.text)}}},
       {"name", scene.name}, {"seed", scene.seed},
       {"frame", {{"origin", {frame.origin.x(), frame.origin.y(), frame.origin.z()}}}},
-      {"crs", scene_crs.empty() ? json() : json({{"definition", scene_crs}, {"label", CrsLabel(scene_crs)}})},
+      {"crs", scene_crs.empty() ? json() : json({{"definition", scene_crs}, {"label", io::CrsLabel(scene_crs)}})},
       {"points", total}, {"layers", layers}, {"archive", "archive"},
       {"pack_resumed", pack_checkpoint.has_value()},
       {"views", views}, {"meshlab", "meshlab/scene.mlp"},

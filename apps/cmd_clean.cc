@@ -7,8 +7,8 @@
 
 #include "apps/commands.h"
 #include "apps/output_folder.h"
-#include "core/point_io.h"
 #include "core/progress.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/cleaning.h"
 
 namespace candi::app {
@@ -34,10 +34,10 @@ void PrintRow(const char* what, uint64_t count, uint64_t input) {
 
 int RunClean(const CleanArgs& args) {
   const photogrammetry::CleanOptions options = Options(args);  // std::invalid_argument, exit 1
-  OutputPointFormat(args.output);
+  io::OutputPointFormat(args.output);
   CheckOutputFolder(args.output);
   const auto start = std::chrono::steady_clock::now();
-  const PointCloud cloud = ReadPointCloud(args.input);
+  const PointCloud cloud = io::ReadPointCloud(args.input);
   photogrammetry::CleanResult result;
   {
     ConsoleProgressOptions po;
@@ -45,7 +45,7 @@ int RunClean(const CleanArgs& args) {
     ConsoleProgress progress("clean", po);
     result = photogrammetry::CleanPointCloud(options, cloud, progress.Callback());
   }
-  WritePointCloud(args.output, result.cloud);
+  io::WritePointCloud(args.output, result.cloud);
   const photogrammetry::CleanSummary& s = result.summary;
   std::printf("input %s\n", args.input.c_str());
   PrintRow("points in", s.input, s.input);

@@ -12,8 +12,8 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/log.h"
-#include "core/png_io.h"
-#include "core/point_io.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/color_correct.h"
 
 namespace candi::app {
@@ -30,7 +30,7 @@ bool IsPng(const std::string& path) {
 
 std::vector<pg::ColorPatch> Patches(const ColorCorrectArgs& a) {
   if (!a.patches.empty()) return pg::ReadColorPatches(a.patches);
-  const PngImage card = ReadPng(a.card);
+  const io::PngImage card = io::ReadPng(a.card);
   if (card.bit_depth != 8) throw InputError(a.card, "", "the card photo must be an 8-bit PNG");
   return pg::SamplePatches(card.image8, pg::ReadPatchQuads(a.corners), a.corners);
 }
@@ -71,23 +71,23 @@ std::string ReportJson(const pg::ColorCorrection& c) {
 }
 
 void CorrectPointFile(const ColorCorrectArgs& a, const pg::ColorMatrix& m) {
-  PointCloud cloud = ReadPointCloud(a.input);
+  PointCloud cloud = io::ReadPointCloud(a.input);
   if (!cloud.schema.colors) throw InputError(a.input, "", "the points have no colours");
   pg::ApplyColorMatrix(m, &cloud);
-  WritePointCloud(a.output, cloud);
+  io::WritePointCloud(a.output, cloud);
 }
 
 void CorrectImage(const ColorCorrectArgs& a, const pg::ColorMatrix& m) {
-  PngImage png = ReadPng(a.input);
+  io::PngImage png = io::ReadPng(a.input);
   Image8& image8 = png.image8;
   const int channels = png.bit_depth == 8 ? image8.channels() : png.image16.channels();
   if (channels < 3) throw InputError(a.input, "", "a grey image cannot be colour-corrected");
   if (png.bit_depth == 8) {
     pg::ApplyColorMatrix(m, &image8);
-    WritePng(a.output, image8, png.text);
+    io::WritePng(a.output, image8, png.text);
   } else {
     pg::ApplyColorMatrix(m, &png.image16);
-    WritePng(a.output, png.image16, png.text);
+    io::WritePng(a.output, png.image16, png.text);
   }
 }
 
@@ -106,8 +106,8 @@ int RunColorCorrect(const ColorCorrectArgs& args) {
     throw std::invalid_argument("IN and OUT must both be PNG images or both point files");
   }
   if (!png) {
-    DetectPointFormat(args.input);
-    OutputPointFormat(args.output);
+    io::DetectPointFormat(args.input);
+    io::OutputPointFormat(args.output);
   } else if (!std::filesystem::is_regular_file(args.input)) {
     throw InputError(args.input, "", "cannot read the image (no such file)");
   }

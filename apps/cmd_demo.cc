@@ -26,9 +26,9 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/log.h"
-#include "core/point_io.h"
 #include "core/rng.h"
 #include "core/transform.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/synthetic_views.h"
 
 namespace candi::app {
@@ -308,7 +308,7 @@ int RunDemo(const DemoArgs& args) {
           "which is not public; foundation: examples/borobudur/foundation.dxf)");
   const PointCloud building = Building(args.seed, density);
   const std::string building_ply = (out / "inputs" / "building.ply").string();
-  WritePointCloud(building_ply, building);
+  io::WritePointCloud(building_ply, building);
   LogInfo("building: " + std::to_string(building.size()) + " points");
 
   const std::string source_dir = CANDI_SOURCE_DIR;

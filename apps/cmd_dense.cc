@@ -8,8 +8,8 @@
 
 #include "apps/commands.h"
 #include "core/log.h"
-#include "core/point_io.h"
 #include "core/progress.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/dense_workspace.h"
 #include "reconstruction/photogrammetry/fusion.h"
 #include "reconstruction/photogrammetry/patch_match.h"
@@ -38,7 +38,7 @@ int RunDense(const DenseArgs& args) {
   pg::FusionOptions fusion;
   fusion.min_views = args.min_views;
   fusion.Check();
-  OutputPointFormat(args.output);  // an unknown extension fails before the work
+  io::OutputPointFormat(args.output);  // an unknown extension fails before the work
 
   const auto t0 = std::chrono::steady_clock::now();
   const pg::StereoInput input = pg::ReadDenseWorkspace(args.workspace);
@@ -65,7 +65,7 @@ int RunDense(const DenseArgs& args) {
     cloud = pg::FuseDepthMaps(fusion, stereo.maps, progress.Callback());
   }
   cloud.meta.comments.push_back("candi dense " + args.workspace);
-  WritePointCloud(args.output, cloud);
+  io::WritePointCloud(args.output, cloud);
   const double total_s = Since(t0);
   std::printf("depth maps: %llu of %llu pixels valid (%.1f %%)\n",
               static_cast<unsigned long long>(stereo.valid_pixels),

@@ -14,7 +14,7 @@
 #include "apps/commands.h"
 #include "core/check.h"
 #include "core/log.h"
-#include "core/point_io.h"
+#include "io/point_io.h"
 #include "mesh/foundation.h"
 #include "mesh/mesh_export.h"
 #include "sampling/layer_clouds.h"
@@ -27,12 +27,12 @@ namespace {
 
 constexpr double kDefaultDensity = 50.0;  // points per m^2: the example at the paper's scale
 
-FoundationOptions Options(const FoundationArgs& a) {
-  FoundationOptions o;
+mesh::FoundationOptions Options(const FoundationArgs& a) {
+  mesh::FoundationOptions o;
   o.dxf.chord_tolerance = a.chord_tolerance;
   o.section.join_tolerance = a.join_tolerance;
   o.profile.samples_per_side = a.samples_per_side;
-  o.revolve.mode = ParseRevolveMode(a.mode);
+  o.revolve.mode = mesh::ParseRevolveMode(a.mode);
   o.revolve.angular_steps = a.angular_steps;
   if (!a.axis_x.empty()) o.revolve.axis_x = ParseNumbers(a.axis_x, ',', "--axis-x").at(0);
   o.revolve.symmetry_tolerance = a.symmetry_tolerance;
@@ -43,10 +43,10 @@ FoundationOptions Options(const FoundationArgs& a) {
   return o;
 }
 
-SurfaceSampleOptions SampleOptions(const FoundationArgs& a) {
-  SurfaceSampleOptions s;
+sampling::SurfaceSampleOptions SampleOptions(const FoundationArgs& a) {
+  sampling::SurfaceSampleOptions s;
   if (a.per_triangle > 0) {
-    s.mode = SurfaceSamplingMode::kPerTriangle;
+    s.mode = sampling::SurfaceSamplingMode::kPerTriangle;
     s.per_triangle = a.per_triangle;
   } else if (a.count > 0) {
     s.count = a.count;
@@ -65,25 +65,25 @@ std::string LayerPath(const std::string& path, const std::string& layer) {
   return (p.parent_path() / (p.stem().string() + "_" + layer + p.extension().string())).string();
 }
 
-std::string Symmetric(const LayerSurface& s) {
-  return s.mode == RevolveMode::kSweep ? "yes" : "no";
+std::string Symmetric(const mesh::LayerSurface& s) {
+  return s.mode == mesh::RevolveMode::kSweep ? "yes" : "no";
 }
 
-void PrintTable(const std::vector<LayerSurface>& layers, const std::vector<PointCloud>& clouds,
-                const std::vector<double>& areas, const RevolveOptions& revolve) {
+void PrintTable(const std::vector<mesh::LayerSurface>& layers, const std::vector<PointCloud>& clouds,
+                const std::vector<double>& areas, const mesh::RevolveOptions& revolve) {
   std::printf("%-8s %-8s %10s %-9s %-6s %10s %12s %10s  %s\n", "layer", "colour", "points",
               "symmetric", "mode", "asymmetry", "area m^2", "triangles", "mesh check");
   size_t total = 0;
   for (size_t k = 0; k < layers.size(); ++k) {
-    const LayerSurface& s = layers[k];
+    const mesh::LayerSurface& s = layers[k];
     total += clouds[k].size();
     std::printf("%-8s %-8s %10zu %-9s %-6s %10.2e %12.1f %10zu  %s\n", s.layer.c_str(),
-                DefaultLayerColour(s.layer, k).name.c_str(), clouds[k].size(), Symmetric(s).c_str(),
-                RevolveModeName(s.mode).c_str(), s.asymmetry, areas[k], s.mesh.faces.size(),
+                sampling::DefaultLayerColour(s.layer, k).name.c_str(), clouds[k].size(), Symmetric(s).c_str(),
+                mesh::RevolveModeName(s.mode).c_str(), s.asymmetry, areas[k], s.mesh.faces.size(),
                 s.checked ? s.check.Summary().c_str() : "not checked");
   }
   std::printf("%-8s %-8s %10zu\n", "total", "", total);
-  if (revolve.mode == RevolveMode::kAuto) {
+  if (revolve.mode == mesh::RevolveMode::kAuto) {
     std::printf(
         "mode auto: layers whose sides mirror within %.3g of their extent are swept, the "
         "others blended\n",
@@ -91,18 +91,18 @@ void PrintTable(const std::vector<LayerSurface>& layers, const std::vector<Point
   }
 }
 
-void WriteOutputs(const FoundationArgs& a, const std::vector<LayerSurface>& layers,
+void WriteOutputs(const FoundationArgs& a, const std::vector<mesh::LayerSurface>& layers,
                   const std::vector<PointCloud>& clouds) {
   for (size_t k = 0; k < layers.size(); ++k) {
     if (!a.mesh.empty()) {
-      WriteMesh(layers.size() == 1 ? a.mesh : LayerPath(a.mesh, layers[k].layer), layers[k].mesh);
+      mesh::WriteMesh(layers.size() == 1 ? a.mesh : LayerPath(a.mesh, layers[k].layer), layers[k].mesh);
     }
-    if (a.split) WritePointCloud(LayerPath(a.output, layers[k].layer), clouds[k]);
+    if (a.split) io::WritePointCloud(LayerPath(a.output, layers[k].layer), clouds[k]);
   }
   if (!a.split) {  // one file with a layer field, streamed layer by layer (no merged copy)
     std::vector<std::string> names;
-    for (const LayerSurface& layer : layers) names.push_back(layer.layer);
-    WriteLayerClouds(a.output, clouds, names);
+    for (const mesh::LayerSurface& layer : layers) names.push_back(layer.layer);
+    sampling::WriteLayerClouds(a.output, clouds, names);
   }
 }
 
@@ -113,38 +113,38 @@ double Seconds(std::chrono::steady_clock::time_point since) {
 }  // namespace
 
 int RunFoundation(const FoundationArgs& args) {
-  const FoundationOptions options = Options(args);  // bad values: std::invalid_argument, exit 1
-  const SurfaceSampleOptions sample = SampleOptions(args);
-  OutputPointFormat(args.output);  // a known extension, before the work
+  const mesh::FoundationOptions options = Options(args);  // bad values: std::invalid_argument, exit 1
+  const sampling::SurfaceSampleOptions sample = SampleOptions(args);
+  io::OutputPointFormat(args.output);  // a known extension, before the work
   const auto start = std::chrono::steady_clock::now();
-  const DxfDrawing drawing = ReadDxf(options.dxf, args.input);
+  const mesh::DxfDrawing drawing = mesh::ReadDxf(options.dxf, args.input);
   const std::vector<std::string> names = args.layers.empty() ? drawing.LayerNames() : args.layers;
   if (names.empty()) {
     throw InputError(args.input, "",
                      "no layer holds a section (LWPOLYLINE, POLYLINE, LINE or "
                      "SPLINE in model space)");
   }
-  const std::vector<LayerSurface> layers =
-      BuildLayerSurfaces(options, drawing, names, args.threads);
+  const std::vector<mesh::LayerSurface> layers =
+      mesh::BuildLayerSurfaces(options, drawing, names, args.threads);
   std::vector<double> areas;
-  for (const LayerSurface& layer : layers) {
-    areas.push_back(MeshArea(layer.mesh));
-    LogInfo("layer " + layer.layer + ": " + RevolveModeName(layer.mode) + ", " +
+  for (const mesh::LayerSurface& layer : layers) {
+    areas.push_back(sampling::MeshArea(layer.mesh));
+    LogInfo("layer " + layer.layer + ": " + mesh::RevolveModeName(layer.mode) + ", " +
             std::to_string(layer.mesh.faces.size()) + " triangles");
   }
   const double mesh_s = Seconds(start);
   std::vector<uint64_t> counts;
-  if (sample.count > 0) counts = SplitCount(sample.count, areas);
+  if (sample.count > 0) counts = sampling::SplitCount(sample.count, areas);
   std::vector<PointCloud> clouds;
   for (size_t k = 0; k < layers.size(); ++k) {
-    SurfaceSampleOptions o = sample;
+    sampling::SurfaceSampleOptions o = sample;
     if (!counts.empty()) o.count = counts[k];
     if (!counts.empty() && counts[k] == 0) {  // rounds to no points: an empty cloud, same schema
       o.density = std::numeric_limits<double>::min();
     }
-    o.colour = DefaultLayerColour(layers[k].layer, k).rgb;
+    o.colour = sampling::DefaultLayerColour(layers[k].layer, k).rgb;
     o.layer = static_cast<int>(k);
-    clouds.push_back(SampleSurface(o, layers[k].mesh));
+    clouds.push_back(sampling::SampleSurface(o, layers[k].mesh));
   }
   const double sample_s = Seconds(start) - mesh_s;
   WriteOutputs(args, layers, clouds);

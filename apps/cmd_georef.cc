@@ -14,9 +14,9 @@
 #include "apps/output_folder.h"
 #include "core/atomic_file.h"
 #include "core/check.h"
-#include "core/crs.h"
 #include "core/log.h"
-#include "core/point_io.h"
+#include "io/crs.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/georef.h"
 #include "reconstruction/photogrammetry/georef_colmap.h"
 
@@ -128,26 +128,26 @@ json ReportJson(const GeorefArgs& a, const pg::GeorefResult& r) {
 // GNSS or national-grid targets into the survey CRS, with PROJ.
 void TransformTargets(const GeorefArgs& a, std::vector<pg::SurveyTarget>* targets) {
   if (a.crs.empty()) throw std::invalid_argument("--targets-crs needs --crs (the CRS to fit in)");
-  const CrsTransform transform(a.targets_crs, a.crs, a.targets);
-  LogInfo("targets: " + CrsLabel(a.targets_crs) + " -> " + CrsLabel(a.crs) + " (" + transform.operation() + ")");
+  const io::CrsTransform transform(a.targets_crs, a.crs, a.targets);
+  LogInfo("targets: " + io::CrsLabel(a.targets_crs) + " -> " + io::CrsLabel(a.crs) + " (" + transform.operation() + ")");
   for (pg::SurveyTarget& t : *targets) {
     t.survey = transform.Apply(t.survey);
     if (!t.survey.allFinite()) {
       throw InputError(a.targets, "line " + std::to_string(t.line),
-                       "target '" + t.name + "' lies outside " + CrsLabel(a.crs) + "'s domain (PROJ cannot transform it)");
+                       "target '" + t.name + "' lies outside " + io::CrsLabel(a.crs) + "'s domain (PROJ cannot transform it)");
     }
   }
 }
 
 void TransformPointFile(const GeorefArgs& a, const pg::GeorefResult& r) {
-  auto reader = OpenPointReader(a.input);
-  PointWriteSpec spec;
+  auto reader = io::OpenPointReader(a.input);
+  io::PointWriteSpec spec;
   spec.schema = reader->info().schema;
   spec.meta = reader->info().meta;
   if (!a.crs.empty()) spec.meta.crs = a.crs;
   spec.frame = r.frame;
   spec.count = reader->info().count;
-  auto writer = OpenPointWriter(a.output, spec);
+  auto writer = io::OpenPointWriter(a.output, spec);
   PointCloud chunk;
   while (reader->Read(kChunk, &chunk) > 0) {
     pg::ApplySimilarity(r.survey_from_model, r.frame, &chunk);
@@ -163,7 +163,7 @@ void TransformModel(const GeorefArgs& a, const pg::GeorefResult& r, PointCloud p
                               r.survey_from_model.translation - r.frame.origin);
   pg::WriteGeoreferencedColmapModel(a.input, local_from_model, a.output);
   pg::ApplySimilarity(r.survey_from_model, r.frame, &points);
-  WritePointCloud(a.output + "/points.ply", points);
+  io::WritePointCloud(a.output + "/points.ply", points);
 }
 
 }  // namespace
@@ -172,8 +172,8 @@ int RunGeoref(const GeorefArgs& args) {
   const pg::SimilarityFitOptions options = Options(args);  // bad values: exit 1
   const bool input_is_model = std::filesystem::is_directory(args.input);
   if (!input_is_model) {
-    DetectPointFormat(args.input);   // readable and known, before the work
-    OutputPointFormat(args.output);
+    io::DetectPointFormat(args.input);   // readable and known, before the work
+    io::OutputPointFormat(args.output);
   }
   CheckOutputFolder(args.output);
   std::vector<pg::SurveyTarget> targets = pg::ReadSurveyTargets(args.targets);

@@ -3,10 +3,10 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
-#include "core/crs.h"
-#include "core/point_io.h"
 #include "core/progress.h"
 #include "core/text_format.h"
+#include "io/crs.h"
+#include "io/point_io.h"
 
 namespace candi::app {
 
@@ -28,7 +28,7 @@ std::string Vec(const Eigen::Vector3d& v) {
 }
 
 // Positions stored as float print as the float's shortest text (0.1f, not 0.100000001490116).
-std::string Coordinates(const Eigen::Vector3d& v, const PointFileInfo& info) {
+std::string Coordinates(const Eigen::Vector3d& v, const io::PointFileInfo& info) {
   if (info.schema.position_type != ScalarType::kFloat32 || !info.frame.IsIdentity()) return Vec(v);
   return FormatFloat(static_cast<float>(v.x())) + " " + FormatFloat(static_cast<float>(v.y())) +
          " " + FormatFloat(static_cast<float>(v.z()));
@@ -49,11 +49,11 @@ struct Scan {
   bool done = false;
 };
 
-Scan ScanPoints(PointReader& reader) {
+Scan ScanPoints(io::PointReader& reader) {
   Scan scan;
   ConsoleProgressOptions options;
   ConsoleProgress progress("info: reading " + reader.path(), options);
-  const uint64_t total = reader.info().count == kUnknownCount ? 0 : reader.info().count;
+  const uint64_t total = reader.info().count == io::kUnknownCount ? 0 : reader.info().count;
   PointCloud chunk;
   while (reader.Read(1 << 20, &chunk) > 0) {
     scan.world.Extend(chunk.WorldBounds());
@@ -64,7 +64,7 @@ Scan ScanPoints(PointReader& reader) {
   return scan;
 }
 
-nlohmann::json ToJson(const PointFileInfo& info, const Scan& scan, const std::string& path) {
+nlohmann::json ToJson(const io::PointFileInfo& info, const Scan& scan, const std::string& path) {
   nlohmann::json j;
   j["file"] = path;
   j["format"] = info.description;
@@ -73,7 +73,7 @@ nlohmann::json ToJson(const PointFileInfo& info, const Scan& scan, const std::st
   j["fields"] = FieldList(info.schema);
   j["shift"] = info.frame.IsIdentity() ? nlohmann::json(nullptr) : JsonVec(info.frame.origin);
   j["crs"] = info.meta.crs.empty() ? nlohmann::json(nullptr)
-                                   : nlohmann::json({{"label", CrsLabel(info.meta.crs)}, {"definition", info.meta.crs}});
+                                   : nlohmann::json({{"label", io::CrsLabel(info.meta.crs)}, {"definition", info.meta.crs}});
   if (scan.done && !scan.world.IsEmpty()) {
     j["bounds"] = {{"min", JsonVec(scan.world.min)}, {"max", JsonVec(scan.world.max)}};
   }
@@ -92,18 +92,18 @@ nlohmann::json ToJson(const PointFileInfo& info, const Scan& scan, const std::st
   return j;
 }
 
-void PrintText(const PointFileInfo& info, const Scan& scan, const std::string& path) {
+void PrintText(const io::PointFileInfo& info, const Scan& scan, const std::string& path) {
   std::printf("file      %s\n", path.c_str());
   std::printf("format    %s\n", info.description.c_str());
   const uint64_t count = scan.done ? scan.count : info.count;
-  if (count == kUnknownCount) std::printf("points    unknown (run without --no-scan)\n");
+  if (count == io::kUnknownCount) std::printf("points    unknown (run without --no-scan)\n");
   else std::printf("points    %llu\n", static_cast<unsigned long long>(count));
   if (info.face_count > 0) std::printf("faces     %llu\n", static_cast<unsigned long long>(info.face_count));
   std::string fields;
   for (const std::string& f : FieldList(info.schema)) fields += (fields.empty() ? "" : ", ") + f;
   std::printf("fields    %s\n", fields.c_str());
   std::printf("shift     %s\n", info.frame.IsIdentity() ? "none" : (Vec(info.frame.origin) + "  (world = local + shift)").c_str());
-  std::printf("crs       %s\n", info.meta.crs.empty() ? "none stated" : CrsLabel(info.meta.crs).c_str());
+  std::printf("crs       %s\n", info.meta.crs.empty() ? "none stated" : io::CrsLabel(info.meta.crs).c_str());
   if (scan.done && !scan.world.IsEmpty()) {
     std::printf("bounds    min %s\n          max %s\n", Coordinates(scan.world.min, info).c_str(),
                 Coordinates(scan.world.max, info).c_str());
@@ -123,10 +123,10 @@ void PrintText(const PointFileInfo& info, const Scan& scan, const std::string& p
 }  // namespace
 
 int RunInfo(const InfoArgs& args) {
-  PointReadOptions options;
+  io::PointReadOptions options;
   options.columns = args.columns;
-  auto reader = OpenPointReader(args.input, options);
-  const PointFileInfo info = reader->info();
+  auto reader = io::OpenPointReader(args.input, options);
+  const io::PointFileInfo info = reader->info();
   Scan scan;
   if (!args.no_scan) scan = ScanPoints(*reader);
   // Header bounds that disagree with the points are worth a warning (a stale LAS header).

@@ -7,23 +7,23 @@
 #include "apps/commands.h"
 #include "apps/output_folder.h"
 #include "core/check.h"
-#include "core/point_io.h"
 #include "core/progress.h"
 #include "core/text_format.h"
+#include "io/point_io.h"
 #include "sampling/opacity.h"
 
 namespace candi::app {
 
 namespace {
 
-OpacityOptions Options(const OpacityArgs& args) {
-  OpacityOptions o;
+sampling::OpacityOptions Options(const OpacityArgs& args) {
+  sampling::OpacityOptions o;
   o.alpha = args.alpha;
   o.repeat_level = args.repeat_level;
   o.image_size = args.image_size;
   o.pixel_size = args.pixel_size;
   o.seed = args.seed;
-  o.density.method = ParseDensityMethod(args.method);
+  o.density.method = sampling::ParseDensityMethod(args.method);
   o.density.target_neighbours = args.neighbours;
   o.density.radius = args.radius;
   o.density.seed = args.seed;
@@ -32,12 +32,12 @@ OpacityOptions Options(const OpacityArgs& args) {
   return o;
 }
 
-std::string Comment(const OpacityOptions& o, const OpacitySummary& s) {
+std::string Comment(const sampling::OpacityOptions& o, const sampling::OpacitySummary& s) {
   return "candi_opacity alpha=" + FormatDouble(o.alpha) +
          " repeat_level=" + std::to_string(o.repeat_level) +
          " pixel_size=" + FormatDouble(s.pixel_size) +
          (o.image_size > 0 ? " image_size=" + std::to_string(o.image_size) : std::string()) +
-         " seed=" + std::to_string(o.seed) + " method=" + DensityMethodName(o.density.method) +
+         " seed=" + std::to_string(o.seed) + " method=" + sampling::DensityMethodName(o.density.method) +
          " radius=" + FormatDouble(s.radius);
 }
 
@@ -47,7 +47,7 @@ std::string Percent(size_t part, size_t whole) {
   return buf;
 }
 
-void PrintSummary(const OpacityOptions& o, const OpacitySummary& s) {
+void PrintSummary(const sampling::OpacityOptions& o, const sampling::OpacitySummary& s) {
   std::printf("points in        %zu\n", s.points_in);
   std::printf("points out       %zu\n", s.points_out);
   std::printf("copies drawn     %llu (sum of spbr_multiplicity)\n",
@@ -70,16 +70,16 @@ void PrintSummary(const OpacityOptions& o, const OpacitySummary& s) {
 }  // namespace
 
 int RunOpacity(const OpacityArgs& args) {
-  OpacityOptions options = Options(args);  // bad values: std::invalid_argument, exit 1
-  OutputPointFormat(args.output);  // a known extension, and a writable folder, before the work
+  sampling::OpacityOptions options = Options(args);  // bad values: std::invalid_argument, exit 1
+  io::OutputPointFormat(args.output);  // a known extension, and a writable folder, before the work
   CheckOutputFolder(args.output);
-  const PointCloud cloud = ReadPointCloud(args.input);
+  const PointCloud cloud = io::ReadPointCloud(args.input);
   ConsoleProgress progress("opacity: density of " + args.input);
   options.density.progress = progress.Callback();
-  OpacityResult result = AdjustOpacity(options, cloud);
+  sampling::OpacityResult result = sampling::AdjustOpacity(options, cloud);
   progress.Finish();
   result.cloud.meta.comments.push_back(Comment(options, result.summary));
-  WritePointCloud(args.output, result.cloud);
+  io::WritePointCloud(args.output, result.cloud);
   PrintSummary(options, result.summary);
   return kOk;
 }

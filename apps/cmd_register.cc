@@ -12,9 +12,9 @@
 #include "apps/output_folder.h"
 #include "core/atomic_file.h"
 #include "core/check.h"
-#include "core/point_io.h"
 #include "core/progress.h"
 #include "core/transform.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/local_points.h"
 #include "reconstruction/photogrammetry/registration.h"
 
@@ -72,7 +72,7 @@ Rigid3 ReadTransform(const std::string& path) {
 }
 
 PointCloud ReadInput(const std::string& path) {
-  PointCloud cloud = ReadPointCloud(path);
+  PointCloud cloud = io::ReadPointCloud(path);
   if (cloud.empty()) throw InputError(path, "", "no points");
   photogrammetry::CheckFinitePositions(cloud, path);
   return cloud;
@@ -126,7 +126,7 @@ void WriteTransformJson(const RegisterArgs& a, const RegistrationResult& r) {
 
 int RunRegister(const RegisterArgs& args) {
   RegistrationOptions options = Options(args);  // bad values: std::invalid_argument, exit 1
-  OutputPointFormat(args.output);                // a known extension, before the work
+  io::OutputPointFormat(args.output);                // a known extension, before the work
   CheckOutputFolder(args.output);
   if (!args.transform_out.empty()) CheckOutputFolder(args.transform_out);
   if (!args.initial.empty()) options.initial = ReadTransform(args.initial);
@@ -146,7 +146,7 @@ int RunRegister(const RegisterArgs& args) {
     throw InputError(args.moving, "", "cannot be registered onto " + args.fixed + ": " +
                                           result.message);
   }
-  WritePointCloud(args.output, photogrammetry::TransformPointCloud(result.fixed_from_moving, moving));
+  io::WritePointCloud(args.output, photogrammetry::TransformPointCloud(result.fixed_from_moving, moving));
   if (result.status == photogrammetry::RegistrationStatus::kNotConverged) {
     std::fprintf(stderr, "candi: warning: ICP did not converge; the last transform was applied "
                          "(raise --iterations)\n");

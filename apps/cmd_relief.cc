@@ -11,9 +11,9 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/log.h"
-#include "core/point_io.h"
 #include "core/progress.h"
 #include "core/text_format.h"
+#include "io/point_io.h"
 #include "reconstruction/relief/relief_dataset.h"
 #include "reconstruction/relief/relief_image.h"
 #include "reconstruction/relief/relief_net.h"
@@ -70,7 +70,7 @@ bool EndsWith(const std::string& s, const std::string& end) {
 
 // A synthetic (or any) panel photo with its *_depth.png, resampled to pixels_per_m.
 TrainingPair LoadPanel(const ReliefDatasetArgs& a, const std::string& photo_path) {
-  PngText text;
+  io::PngText text;
   TrainingPair p{relief::ReadPhoto(photo_path, &text), {}};
   const std::string depth_path = photo_path.substr(0, photo_path.size() - 10) + "_depth.png";
   p.depth = relief::ReadDepth(depth_path);
@@ -97,7 +97,7 @@ TrainingPair LoadInput(const ReliefDatasetArgs& a, const std::string& path, uint
   o.depth_m = a.depth_m;
   o.relight = !a.no_relight;
   o.seed = a.seed + index;
-  return relief::RasterizeScan(o, ReadPointCloud(path), path);
+  return relief::RasterizeScan(o, io::ReadPointCloud(path), path);
 }
 
 }  // namespace
@@ -116,7 +116,7 @@ int RunReliefSynth(const ReliefSynthArgs& a) {
   ConsoleProgress progress("relief synth", po);
   for (int i = 0; i < a.count; ++i) {
     const relief::SynthPanel p = relief::SynthesizePanel(o, static_cast<uint64_t>(i));
-    const PngText text = {
+    const io::PngText text = {
         {"candi_seed", std::to_string(a.seed)}, {"candi_panel", std::to_string(i)},
         {"candi_pixels_per_m", FormatDouble(1.0 / p.pixel_m)},
         {"candi_depth_m", FormatDouble(a.depth_m)},
@@ -197,7 +197,7 @@ int RunReliefPoints(const ReliefPointsArgs& a) {
   relief::ReliefPointsOptions o;
   o.width_m = a.width_m, o.height_m = a.height_m, o.depth_m = a.depth_m;
   o.Check();
-  OutputPointFormat(a.output);  // a known extension before any work
+  io::OutputPointFormat(a.output);  // a known extension before any work
   const auto t0 = std::chrono::steady_clock::now();
   const ImageF photo = relief::ReadPhoto(a.photo);
   const ImageF depth = relief::ReadDepth(a.depth);
@@ -209,7 +209,7 @@ int RunReliefPoints(const ReliefPointsArgs& a) {
   PointCloud cloud = relief::DepthToPoints(o, photo, depth);
   cloud.meta.comments.push_back("candi_relief_points frame=panel width_m=" + FormatDouble(o.width_m) +
                                 " height_m=" + FormatDouble(o.height_m) + " depth_m=" + FormatDouble(o.depth_m));
-  WritePointCloud(a.output, cloud);
+  io::WritePointCloud(a.output, cloud);
   std::printf("%zu points (%dx%d pixels, %.4g x %.4g x %.4g m) in %.2f s -> %s\n", cloud.size(),
               depth.width(), depth.height(), o.width_m, o.height_m, o.depth_m, Seconds(t0), a.output.c_str());
   return kOk;

@@ -18,7 +18,7 @@ namespace {
 
 // One photo and its ground truth; light from the options, else the PNG text, else 135/25 deg.
 relief::EvalPanel PanelFromFiles(const ReliefEvalArgs& a) {
-  PngText text;
+  io::PngText text;
   relief::EvalPanel p;
   p.photo = relief::ReadPhoto(a.photo, &text);
   p.depth = relief::ReadDepth(a.depth);

@@ -18,9 +18,9 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/log.h"
-#include "core/point_io.h"
 #include "core/progress.h"
 #include "core/text_format.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/colmap_model.h"
 #include "reconstruction/relief/relief_dataset.h"
 #include "reconstruction/relief/relief_image.h"
@@ -69,7 +69,7 @@ int RunReliefPhotoDataset(const ReliefDatasetArgs& a) {
 
   std::vector<Eigen::Vector3d> points;
   for (const std::string& input : a.inputs) {
-    const PointCloud cloud = ReadPointCloud(input);
+    const PointCloud cloud = io::ReadPointCloud(input);
     if (cloud.size() == 0) throw InputError(input, "", "no points");
     points.reserve(points.size() + cloud.size());
     for (size_t i = 0; i < cloud.size(); ++i) points.push_back(cloud.frame.ToWorld(cloud.positions[i]));

@@ -19,8 +19,8 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/log.h"
-#include "core/point_io.h"
 #include "core/progress.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/georef.h"
 #include "reconstruction/relief/relief_place.h"
 
@@ -63,7 +63,7 @@ std::map<std::string, std::string> PanelFiles(const std::vector<std::string>& in
     const std::string id = p.stem().string();
     const auto [it, added] = files.emplace(id, p.string());
     if (!added) throw InputError(p.string(), "", "panel '" + id + "' also has the file " + it->second);
-    DetectPointFormat(p.string());  // readable and a point file, before the work
+    io::DetectPointFormat(p.string());  // readable and a point file, before the work
   };
   for (const std::string& in : inputs) {
     std::error_code ec;
@@ -144,15 +144,15 @@ json PanelJson(const PanelPlacement& p, const LocalFrame& frame, const std::stri
 // Streams a panel's points into world coordinates, in the shift `frame` (positions in double).
 void TransformPanel(const std::string& in, const Sim3& world_from_panel, const LocalFrame& frame,
                     const std::string& out) {
-  auto reader = OpenPointReader(in);
-  PointWriteSpec spec;
+  auto reader = io::OpenPointReader(in);
+  io::PointWriteSpec spec;
   spec.schema = reader->info().schema;
   spec.meta = reader->info().meta;
   spec.frame = frame;
   spec.count = reader->info().count;
-  PointWriteOptions options;
-  options.precision = PositionPrecision::kFloat64;
-  auto writer = OpenPointWriter(out, spec, options);
+  io::PointWriteOptions options;
+  options.precision = io::PositionPrecision::kFloat64;
+  auto writer = io::OpenPointWriter(out, spec, options);
   PointCloud chunk;
   while (reader->Read(kChunk, &chunk) > 0) {
     pg::ApplySimilarity(world_from_panel, frame, &chunk);

@@ -18,11 +18,11 @@
 #include "apps/view_orientation.h"
 #include "core/check.h"
 #include "core/log.h"
-#include "core/png_io.h"
-#include "core/point_io.h"
 #include "core/progress.h"
 #include "core/text_format.h"
 #include "core/version.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "render/archive.h"
 #include "render/archive_render.h"
 #include "render/mpi/mpi_session.h"
@@ -128,21 +128,21 @@ render::Camera InFrame(render::Camera c, const LocalFrame& frame) {
 // file's canonical path, XYZ columns, size and modification time, so a rewritten file is estimated again;
 // the density options are the same for every render (AdjustInput sets only threads, which do
 // not change the result). Not thread-safe: commands run one at a time.
-const DensityResult& CachedDensity(const std::string& path, const std::string& columns,
-                                   const OpacityOptions& o, const PointCloud& cloud) {
+const sampling::DensityResult& CachedDensity(const std::string& path, const std::string& columns,
+                                   const sampling::OpacityOptions& o, const PointCloud& cloud) {
   namespace fs = std::filesystem;
   using Key = std::tuple<std::string, std::string, uintmax_t, fs::file_time_type::rep>;
-  static std::map<Key, DensityResult> cache;
+  static std::map<Key, sampling::DensityResult> cache;
   std::error_code ec;
   const fs::path canonical = fs::canonical(path, ec);
   const uintmax_t size = fs::file_size(path, ec);
   const auto mtime = fs::last_write_time(path, ec).time_since_epoch().count();
-  static DensityResult uncached;
-  if (ec) return uncached = OpacityDensity(o, cloud);
+  static sampling::DensityResult uncached;
+  if (ec) return uncached = sampling::OpacityDensity(o, cloud);
   const Key key{canonical.string(), columns, size, mtime};
   auto it = cache.find(key);
   if (it == cache.end() || it->second.density.size() != cloud.size()) {
-    it = cache.insert_or_assign(key, OpacityDensity(o, cloud)).first;
+    it = cache.insert_or_assign(key, sampling::OpacityDensity(o, cloud)).first;
   }
   return it->second;
 }
@@ -151,14 +151,14 @@ const DensityResult& CachedDensity(const std::string& path, const std::string& c
 // target, so the law is met where the view is focused.
 void AdjustInput(const RenderArgs& a, const Plan& p, const render::Camera& world_camera, size_t k,
                  PointCloud* cloud) {
-  OpacityOptions o;
+  sampling::OpacityOptions o;
   o.alpha = a.alpha.size() == 1 ? a.alpha[0] : a.alpha[k];
   o.repeat_level = p.repeat_level;
   o.image_size = 0;
   o.pixel_size = world_camera.PixelFootprint((world_camera.target - world_camera.eye).norm());
   o.seed = a.seed;
   o.density.threads = a.threads;
-  OpacityResult r = AdjustOpacity(o, *cloud, CachedDensity(a.inputs[k], a.columns, o, *cloud));
+  sampling::OpacityResult r = sampling::AdjustOpacity(o, *cloud, CachedDensity(a.inputs[k], a.columns, o, *cloud));
   LogInfo(a.inputs[k] + ": opacity " + FormatDouble(o.alpha) + " at pixel " + FormatDouble(o.pixel_size) +
           " m: " + std::to_string(r.summary.points_in) + " points -> " + std::to_string(r.summary.total_copies) +
           " copies (predicted alpha " + FormatDouble(r.summary.predicted_alpha) + ")");
@@ -168,12 +168,12 @@ void AdjustInput(const RenderArgs& a, const Plan& p, const render::Camera& world
 
 render::SpbrResult RenderInMemory(const RenderArgs& a, const Plan& p, render::Camera* world_camera) {
   std::vector<PointCloud> clouds;
-  PointReadOptions read;
+  io::PointReadOptions read;
   read.columns = a.columns;
   uint64_t total = 0;
   Box3d world;
   for (const std::string& in : a.inputs) {
-    clouds.push_back(ReadPointCloud(in, read));
+    clouds.push_back(io::ReadPointCloud(in, read));
     total += clouds.back().size();
     if (!clouds.back().empty()) world.Extend(clouds.back().WorldBounds());
   }
@@ -207,14 +207,14 @@ render::SpbrResult RenderInMemory(const RenderArgs& a, const Plan& p, render::Ca
 }
 
 // Bounds from the headers when every input states them, else from a pass over the points.
-Box3d StreamBounds(const RenderArgs& a, const PointReadOptions& read, uint64_t* total) {
+Box3d StreamBounds(const RenderArgs& a, const io::PointReadOptions& read, uint64_t* total) {
   Box3d world;
   bool all_headers = true;
   *total = 0;
   for (const std::string& in : a.inputs) {
-    auto r = OpenPointReader(in, read);
+    auto r = io::OpenPointReader(in, read);
     if (r->info().header_bounds) world.Extend(*r->info().header_bounds); else all_headers = false;
-    if (r->info().count != kUnknownCount) *total += r->info().count;
+    if (r->info().count != io::kUnknownCount) *total += r->info().count;
   }
   if (all_headers) return world;
   world = Box3d();
@@ -222,7 +222,7 @@ Box3d StreamBounds(const RenderArgs& a, const PointReadOptions& read, uint64_t* 
   ConsoleProgress progress("render: bounds");
   PointCloud chunk;
   for (const std::string& in : a.inputs) {
-    auto r = OpenPointReader(in, read);
+    auto r = io::OpenPointReader(in, read);
     while (r->Read(1 << 20, &chunk) > 0) {
       world.Extend(chunk.WorldBounds());
       *total += chunk.size();
@@ -233,7 +233,7 @@ Box3d StreamBounds(const RenderArgs& a, const PointReadOptions& read, uint64_t* 
 }
 
 render::SpbrResult RenderStreaming(const RenderArgs& a, const Plan& p, render::Camera* world_camera) {
-  PointReadOptions read;
+  io::PointReadOptions read;
   read.columns = a.columns;
   read.scalar_fields = false;  // geometry and colour; multiplicities need --mode memory
   uint64_t total = 0;
@@ -258,7 +258,7 @@ render::SpbrResult RenderStreaming(const RenderArgs& a, const Plan& p, render::C
   for (int pass = 0; pass < renderer.passes(); ++pass) {
     renderer.BeginPass(pass);
     for (const std::string& in : a.inputs) {
-      auto r = OpenPointReader(in, read);
+      auto r = io::OpenPointReader(in, read);
       while (r->Read(1 << 20, &chunk) > 0) {
         done += chunk.size();
         ClipCloud(p.clip, &chunk);
@@ -280,7 +280,7 @@ void WriteOutputs(const RenderArgs& a, const Plan& p, const render::SpbrResult& 
   const ImageF average = render::AverageImage(result, p.background, gain);
   std::string inputs;
   for (const std::string& in : a.inputs) inputs += (inputs.empty() ? "" : " ") + in;
-  PngText text = {{"Software", std::string("candi ") + kVersion},
+  io::PngText text = {{"Software", std::string("candi ") + kVersion},
                         {"candi:seed", std::to_string(result.seed)},
                         {"candi:repeat_level", std::to_string(result.repeat_level)},
                         {"candi:ensembles", std::to_string(result.ensembles)},
@@ -289,8 +289,8 @@ void WriteOutputs(const RenderArgs& a, const Plan& p, const render::SpbrResult& 
                         {"candi:inputs", inputs},
                         {"candi:view", ViewToJson(world_camera)}};
   if (!p.clip.empty()) text["candi:clip"] = p.clip.Describe();
-  WritePng(a.output, render::ToImage8(average), text);
-  if (!a.output16.empty()) WritePng(a.output16, render::ToImage16(average), text);
+  io::WritePng(a.output, render::ToImage8(average), text);
+  if (!a.output16.empty()) io::WritePng(a.output16, render::ToImage16(average), text);
   if (!a.save_view.empty()) SaveView(a.save_view, world_camera);
   std::printf("%s: %dx%d, SPBR L=%d (%d ensembles), %llu point copies, %.0f ms, gain %.2f, seed %llu\n",
               a.output.c_str(), world_camera.width, world_camera.height, result.repeat_level,
@@ -407,10 +407,10 @@ int RunRender(const RenderArgs& args) {
   if (args.mode == "auto" && args.alpha.empty()) {
     uint64_t stated = 0;
     for (const std::string& in : args.inputs) {
-      PointReadOptions read;
+      io::PointReadOptions read;
       read.columns = args.columns;
-      const uint64_t count = OpenPointReader(in, read)->info().count;
-      if (count != kUnknownCount) stated += count;
+      const uint64_t count = io::OpenPointReader(in, read)->info().count;
+      if (count != io::kUnknownCount) stated += count;
     }
     stream = stated > kStreamThreshold;
   }

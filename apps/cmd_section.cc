@@ -15,23 +15,23 @@
 
 #include "apps/arg_parse.h"
 #include "apps/commands.h"
-#include "apps/section_outputs.h"
 #include "core/check.h"
 #include "core/log.h"
-#include "core/png_io.h"
-#include "core/point_io.h"
 #include "core/progress.h"
-#include "core/section_path.h"
 #include "core/text_format.h"
 #include "core/version.h"
-#include "mesh/dxf_export.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "render/archive.h"
 #include "render/archive_clip.h"
 #include "render/spbr.h"
 #include "render/splat_cloud.h"
 #include "sampling/layer_colours.h"
-#include "sampling/section_corners.h"
-#include "sampling/section_lines.h"
+#include "section/section_corners.h"
+#include "section/section_dxf.h"
+#include "section/section_lines.h"
+#include "section/section_outputs.h"
+#include "section/section_path.h"
 
 namespace candi::app {
 
@@ -60,7 +60,7 @@ struct Slab {
     colours.emplace_back();
     return names.size() - 1;
   }
-  void Add(size_t layer, const SectionPath& s, const Eigen::Vector3d& world, size_t segment, Rgb8 colour) {
+  void Add(size_t layer, const section::SectionPath& s, const Eigen::Vector3d& world, size_t segment, Rgb8 colour) {
     double d = 0;
     drawing[layer].push_back(s.ToDrawing(world, segment, &d));
     depth[layer].push_back(static_cast<float>(d));
@@ -68,39 +68,39 @@ struct Slab {
   }
 };
 
-SectionPath ParseSection(const SectionArgs& a) {
+section::SectionPath ParseSection(const SectionArgs& a) {
   const int given = !a.plane.empty() + !a.through.empty() + !a.path.empty();
   if (given != 1) throw std::invalid_argument("give one of --plane, --through and --path");
   if (!a.plane.empty()) {
     const std::vector<double> v = ParseNumbers(a.plane, ',', "--plane");
     if (v.size() != 6) throw std::invalid_argument("--plane '" + a.plane + "': expected px,py,pz,nx,ny,nz");
-    return SectionPath::Plane({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, a.thickness);
+    return section::SectionPath::Plane({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, a.thickness);
   }
   if (!a.through.empty()) {
     const std::vector<double> v = ParseNumbers(a.through, ',', "--through");
-    if (v.size() == 4) return SectionPath::Through({v[0], v[1], 0}, {v[2], v[3], 0}, a.thickness);
+    if (v.size() == 4) return section::SectionPath::Through({v[0], v[1], 0}, {v[2], v[3], 0}, a.thickness);
     if (v.size() != 6) throw std::invalid_argument("--through '" + a.through + "': expected x1,y1,x2,y2 or x1,y1,z1,x2,y2,z2");
-    return SectionPath::Through({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, a.thickness);
+    return section::SectionPath::Through({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, a.thickness);
   }
   const std::vector<double> v = ParseNumbers(a.path, ',', "--path");
   if (v.size() % 2 != 0) throw std::invalid_argument("--path '" + a.path + "': expected x1,y1,x2,y2,... (plan vertices)");
   std::vector<Eigen::Vector2d> plan;
   for (size_t i = 0; i + 1 < v.size(); i += 2) plan.push_back({v[i], v[i + 1]});
   size_t merged = 0;
-  SectionPath s = SectionPath::Path(plan, a.thickness, &merged);
+  section::SectionPath s = section::SectionPath::Path(plan, a.thickness, &merged);
   if (merged > 0) LogWarning("--path: " + std::to_string(merged) + " repeated vertices merged");
   return s;
 }
 
 // The segment a slab point belongs to: 0 for a plane; for a path the segment nearest in plan when
 // its slab holds the point, else the first slab that does (`first_region`).
-size_t SegmentOf(const SectionPath& s, const Eigen::Vector3d& world, size_t first_region) {
+size_t SegmentOf(const section::SectionPath& s, const Eigen::Vector3d& world, size_t first_region) {
   if (!s.is_path()) return 0;
   const size_t nearest = s.NearestSegment(world);
   return s.regions()[nearest].Contains(world) ? nearest : first_region;
 }
 
-void ReadArchiveSlab(const SectionArgs& a, const std::string& dir, const SectionPath& s, const ClipRegion& clip,
+void ReadArchiveSlab(const SectionArgs& a, const std::string& dir, const section::SectionPath& s, const ClipRegion& clip,
                      Slab* slab) {
   const render::Archive archive(dir);
   const render::ArchiveManifest& m = archive.manifest();
@@ -161,12 +161,12 @@ std::map<int, std::string> LayerNamesOf(const PointCloudMeta& meta) {
   return names;
 }
 
-void ReadFileSlab(const SectionArgs& a, const std::string& path, const SectionPath& s, const ClipRegion& clip,
+void ReadFileSlab(const SectionArgs& a, const std::string& path, const section::SectionPath& s, const ClipRegion& clip,
                   Slab* slab) {
-  PointReadOptions read;
+  io::PointReadOptions read;
   read.columns = a.columns;
   read.scalar_fields = false;
-  auto reader = OpenPointReader(path, read);
+  auto reader = io::OpenPointReader(path, read);
   const std::string stem = fs::path(path).stem().string();
   const std::map<int, std::string> named = LayerNamesOf(reader->info().meta);
   std::unordered_map<int, size_t> layer_of;  // the file's layer id -> slab layer (kSkipped: not wanted)
@@ -203,7 +203,7 @@ void ReadFileSlab(const SectionArgs& a, const std::string& path, const SectionPa
       }
     }
     slab->points_read += chunk.size();
-    progress.Update(reader->points_read(), reader->info().count == kUnknownCount ? 0 : reader->info().count);
+    progress.Update(reader->points_read(), reader->info().count == io::kUnknownCount ? 0 : reader->info().count);
   }
   progress.Finish();
 }
@@ -232,23 +232,23 @@ bool FillsAnArea(const std::vector<Eigen::Vector2d>& points, double cell) {
 
 // Section lines of every layer (drawing coordinates; extracted around a local origin so that
 // survey coordinates keep their digits).
-std::vector<SectionLayerResult> ExtractLines(const SectionArgs& a, const Slab& slab, const Eigen::Vector2d& origin) {
-  std::vector<SectionLayerResult> out;
-  SectionLineOptions o;
+std::vector<section::SectionLayerResult> ExtractLines(const SectionArgs& a, const Slab& slab, const Eigen::Vector2d& origin) {
+  std::vector<section::SectionLayerResult> out;
+  section::SectionLineOptions o;
   o.spacing = a.spacing;
   o.max_gap = a.max_gap;
   o.Check();
   for (size_t k = 0; k < slab.names.size(); ++k) {
-    SectionLayerResult r;
+    section::SectionLayerResult r;
     r.name = slab.names[k];
-    r.colour = DefaultLayerColour(r.name, k).rgb;
+    r.colour = sampling::DefaultLayerColour(r.name, k).rgb;
     r.points = slab.drawing[k].size();
     std::vector<Eigen::Vector2d> local;
     local.reserve(r.points);
     for (const Eigen::Vector2d& p : slab.drawing[k]) local.push_back(p - origin);
-    SectionLines lines = ExtractSectionLines(o, local);
+    section::SectionLines lines = section::ExtractSectionLines(o, local);
     r.area = FillsAnArea(local, 1.5 * lines.spacing);
-    if (!r.area) RefineSectionCorners(SectionCornerOptions{}, local, lines.spacing, &lines.lines);
+    if (!r.area) section::RefineSectionCorners(section::SectionCornerOptions{}, local, lines.spacing, &lines.lines);
     if (r.area) {
       LogWarning("layer " + r.name + ": its " + std::to_string(r.points) +
                  " slab points fill an area (the layer lies in the section plane): no section lines");
@@ -265,7 +265,7 @@ std::vector<SectionLayerResult> ExtractLines(const SectionArgs& a, const Slab& s
   return out;
 }
 
-SectionWindow MakeWindow(const SectionArgs& a, const Slab& slab) {
+section::SectionWindow MakeWindow(const SectionArgs& a, const Slab& slab) {
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (const auto& layer : slab.drawing) {
     for (const Eigen::Vector2d& p : layer) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
@@ -275,7 +275,7 @@ SectionWindow MakeWindow(const SectionArgs& a, const Slab& slab) {
   const double margin = 0.05 * extent.maxCoeff();
   lo -= Eigen::Vector2d(margin, 3 * margin);  // room for the scale bar below
   extent += Eigen::Vector2d(2 * margin, 4 * margin);
-  SectionWindow w;
+  section::SectionWindow w;
   w.x0 = lo.x();
   w.y0 = lo.y();
   w.metres_per_pixel = a.pixel > 0 ? a.pixel : extent.x() / a.width;
@@ -296,8 +296,8 @@ Rgb8 ParseBackground(const std::string& text) {
 
 // The slab's points seen along the plane's normal: orthographic SPBR of (x, depth, y) with the
 // drawing's x to the right and y up.
-Image8 RenderSlab(const SectionArgs& a, const Slab& slab, const std::vector<SectionLayerResult>& layers,
-                  const SectionWindow& w, Rgb8 background) {
+Image8 RenderSlab(const SectionArgs& a, const Slab& slab, const std::vector<section::SectionLayerResult>& layers,
+                  const section::SectionWindow& w, Rgb8 background) {
   PointCloud cloud;
   PointSchema schema;
   schema.colors = true;
@@ -344,8 +344,8 @@ Image8 RenderSlab(const SectionArgs& a, const Slab& slab, const std::vector<Sect
   return render::ToImage8(render::AverageImage(result, background, 1.0));
 }
 
-std::string SummaryJson(const SectionArgs& a, const SectionPath& s, const Slab& slab,
-                        const std::vector<SectionLayerResult>& layers, const SectionWindow& w, double bar) {
+std::string SummaryJson(const SectionArgs& a, const section::SectionPath& s, const Slab& slab,
+                        const std::vector<section::SectionLayerResult>& layers, const section::SectionWindow& w, double bar) {
   auto num = [](double v) { return FormatDouble(v); };
   std::string out = "{\n  \"candi\": \"" + std::string(kVersion) + "\",\n  \"section\": " + s.ToJson() + ",\n";
   out += "  \"inputs\": [";
@@ -365,7 +365,7 @@ std::string SummaryJson(const SectionArgs& a, const SectionPath& s, const Slab& 
          ", \"height\": " + std::to_string(w.height) + ", \"scale_bar_m\": " + num(bar) + ", \"repeat_level\": " +
          std::to_string(a.repeat_level) + ", \"opacity\": " + num(a.opacity) + ", \"seed\": " + std::to_string(a.seed) + "},\n  \"layers\": [";
   for (size_t k = 0; k < layers.size(); ++k) {
-    const SectionLayerResult& l = layers[k];
+    const section::SectionLayerResult& l = layers[k];
     out += std::string(k ? "," : "") + "\n    {\"name\": " + nlohmann::json(l.name).dump() + ", \"points\": " +
            std::to_string(l.points) + ", \"lines\": " + std::to_string(l.lines.size()) + ", \"length_m\": " +
            num(l.length) + ", \"in_plane\": " + (l.area ? "true" : "false") + "}";
@@ -375,7 +375,7 @@ std::string SummaryJson(const SectionArgs& a, const SectionPath& s, const Slab& 
 
 }  // namespace
 
-std::string RunSectionInto(const SectionArgs& a, const SectionPath& section, const ClipRegion& clip, bool print) {
+std::string RunSectionInto(const SectionArgs& a, const section::SectionPath& section, const ClipRegion& clip, bool print) {
   if (a.colours != "layer" && a.colours != "data") throw std::invalid_argument("--colours '" + a.colours + "': expected layer or data");
   if (a.repeat_level < 1 || a.repeat_level > 10000) throw std::invalid_argument("--repeat-level: must be in [1, 10000]");
   if (!(a.width >= 16 && a.width <= 8192)) throw std::invalid_argument("--width: must be in [16, 8192] pixels");
@@ -409,8 +409,8 @@ std::string RunSectionInto(const SectionArgs& a, const SectionPath& section, con
     }
   }
   slab.read_s = lap();
-  const SectionWindow window = MakeWindow(a, slab);
-  const std::vector<SectionLayerResult> layers =
+  const section::SectionWindow window = MakeWindow(a, slab);
+  const std::vector<section::SectionLayerResult> layers =
       ExtractLines(a, slab, Eigen::Vector2d(std::round(window.x0), std::round(window.y0)));
   slab.lines_s = lap();
   uint64_t total = 0;
@@ -420,25 +420,25 @@ std::string RunSectionInto(const SectionArgs& a, const SectionPath& section, con
   fs::create_directories(a.output);  // errors name the path
   Image8 image = RenderSlab(a, slab, layers, window, background);
   slab.image_s = lap();
-  const double bar = DrawScaleBar(window, background, &image);
-  const PngText text = {{"Software", std::string("candi ") + kVersion},
+  const double bar = section::DrawScaleBar(window, background, &image);
+  const io::PngText text = {{"Software", std::string("candi ") + kVersion},
                         {"candi:section", section.Describe()},
                         {"candi:window", "x0 " + FormatDouble(window.x0) + " y0 " + FormatDouble(window.y0) +
                                              " metres_per_pixel " + FormatDouble(window.metres_per_pixel)},
                         {"candi:points", total == 0 ? "none: no points within the slab" : std::to_string(total)}};
   const fs::path out(a.output);
-  WritePng((out / "section.png").string(), image, text);
-  std::vector<DxfLayerLines> dxf;
-  for (const SectionLayerResult& l : layers) {
+  io::WritePng((out / "section.png").string(), image, text);
+  std::vector<section::DxfLayerLines> dxf;
+  for (const section::SectionLayerResult& l : layers) {
     dxf.push_back({l.name, uint32_t{l.colour.r} << 16 | uint32_t{l.colour.g} << 8 | l.colour.b, l.lines});
   }
-  DxfWriteOptions dxf_options;
+  section::DxfWriteOptions dxf_options;
   dxf_options.comment = "candi section: " + section.Describe();
-  WriteSectionDxf(dxf_options, dxf, (out / "section.dxf").string());
-  WriteSectionCsv((out / "section.csv").string(), layers, section);
-  WriteSectionSvg((out / "section.svg").string(), layers, window, "section.png", section.Describe(), bar);
+  section::WriteSectionDxf(dxf_options, dxf, (out / "section.dxf").string());
+  section::WriteSectionCsv((out / "section.csv").string(), layers, section);
+  section::WriteSectionSvg((out / "section.svg").string(), layers, window, "section.png", section.Describe(), bar);
   const std::string summary = SummaryJson(a, section, slab, layers, window, bar);
-  WriteTextFile((out / "section.json").string(), summary);
+  section::WriteTextFile((out / "section.json").string(), summary);
   if (!print) return summary;
 
   std::printf("%s: %s\n", a.output.c_str(), section.Describe().c_str());
@@ -447,7 +447,7 @@ std::string RunSectionInto(const SectionArgs& a, const SectionPath& section, con
                 static_cast<unsigned long long>(slab.chunks), static_cast<unsigned long long>(slab.points_read));
   }
   std::printf("  %-16s %10s %6s %10s\n", "layer", "points", "lines", "length m");
-  for (const SectionLayerResult& l : layers) {
+  for (const section::SectionLayerResult& l : layers) {
     std::printf("  %-16s %10llu %6zu %10.3f%s\n", l.name.c_str(), static_cast<unsigned long long>(l.points),
                 l.lines.size(), l.length, l.area ? "  (lies in the plane: no lines)" : "");
   }

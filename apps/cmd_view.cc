@@ -8,9 +8,9 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/arg_parse.h"
+#include "apps/commands.h"
 #include "apps/failure.h"
 #include "apps/view_orientation.h"
-#include "apps/commands.h"
 #include "core/interrupt.h"
 #include "core/log.h"
 #include "core/progress.h"
@@ -151,7 +151,7 @@ std::string SectionReply(const std::string& archive_dir, const render::ArchiveMa
   } remove{pattern};
   a.output = pattern;
   const std::string summary =
-      RunSectionInto(a, SectionPath::Plane(r.point, r.normal, r.thickness), state.settings.clip, /*print=*/false);
+      RunSectionInto(a, section::SectionPath::Plane(r.point, r.normal, r.thickness), state.settings.clip, /*print=*/false);
   const fs::path out(pattern);
   return nlohmann::json{{"type", "section"},
                         {"seq", seq},

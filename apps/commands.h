@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/clip.h"
-#include "core/section_path.h"
+#include "section/section_path.h"
 
 namespace candi::app {
 
@@ -121,7 +121,7 @@ struct SectionArgs {
 int RunSection(const SectionArgs& args);
 // The outputs of `candi section` for a given slab and clipping (world) into args.output; returns
 // the summary (section.json's text). `print`: the table on stdout.
-std::string RunSectionInto(const SectionArgs& args, const SectionPath& section, const ClipRegion& clip, bool print);
+std::string RunSectionInto(const SectionArgs& args, const section::SectionPath& section, const ClipRegion& clip, bool print);
 
 // candi view (cmd_view.cc): the browser viewer (view/).
 struct ViewArgs {

@@ -10,7 +10,7 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
-#include "core/crs.h"
+#include "io/crs.h"
 
 namespace candi::app {
 
@@ -88,7 +88,7 @@ class Node {
   std::string Crs() const {
     const std::string text = String();
     try {
-      DescribeCrs(text, *file_);
+      io::DescribeCrs(text, *file_);
     } catch (const InputError& e) {
       const std::string what = e.what();
       const size_t at = what.find("PROJ");

@@ -44,15 +44,15 @@ PointCloud Sphere(size_t n) {
 
 struct Timing {
   double ms = 0;
-  DensityResult result;
+  sampling::DensityResult result;
 };
 
-Timing Run(const DensityOptions& options, const PointCloud& cloud, size_t runs) {
+Timing Run(const sampling::DensityOptions& options, const PointCloud& cloud, size_t runs) {
   std::vector<double> ms;
   Timing t;
   for (size_t k = 0; k < runs; ++k) {
     const auto start = std::chrono::steady_clock::now();
-    t.result = EstimateSurfaceDensity(options, cloud);
+    t.result = sampling::EstimateSurfaceDensity(options, cloud);
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                      .count());
   }
@@ -61,7 +61,7 @@ Timing Run(const DensityOptions& options, const PointCloud& cloud, size_t runs) 
   return t;
 }
 
-void PrintRow(const char* label, int k, const DensityResult& r, double truth, double ms1,
+void PrintRow(const char* label, int k, const sampling::DensityResult& r, double truth, double ms1,
               double ms2) {
   double sum = 0, sq = 0;
   for (double d : r.density) {
@@ -86,17 +86,17 @@ int main() {
       n, kSphereRadius, truth, runs);
   std::printf("%-16s %5s %10s %9s %8s %10s %10s\n", "method", "k", "radius m", "bias %", "rms %",
               "ms 1 thr", "ms 2 thr");
-  for (DensityMethod method : {DensityMethod::kKdTree, DensityMethod::kVoxel}) {
+  for (sampling::DensityMethod method : {sampling::DensityMethod::kKdTree, sampling::DensityMethod::kVoxel}) {
     for (int k : {8, 16, 32, 64, 128}) {
-      DensityOptions o;
+      sampling::DensityOptions o;
       o.method = method;
       o.target_neighbours = k;
       o.threads = 1;
       const Timing one = Run(o, cloud, runs);
       o.threads = 2;
       const Timing two = Run(o, cloud, runs);
-      PrintRow(DensityMethodName(method).c_str(), k, one.result, truth, one.ms, two.ms);
-      if (method != DensityMethod::kVoxel) continue;
+      PrintRow(sampling::DensityMethodName(method).c_str(), k, one.result, truth, one.ms, two.ms);
+      if (method != sampling::DensityMethod::kVoxel) continue;
       o.radius = one.result.radius;
       o.threads = 1;
       const Timing given_one = Run(o, cloud, runs);

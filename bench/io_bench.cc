@@ -14,8 +14,8 @@
 
 #include <tbb/global_control.h>
 
-#include "core/point_io.h"
 #include "core/rng.h"
+#include "io/point_io.h"
 
 namespace {
 
@@ -65,7 +65,7 @@ const Case kCases[] = {{"float.ply", ScalarType::kFloat32}, {"double.ply", Scala
 void BM_Write(benchmark::State& state) {
   const Case& c = kCases[state.range(0)];
   const PointCloud& cloud = Cloud(c.type);
-  for (auto _ : state) WritePointCloud(Dir() + "/" + c.file, cloud);
+  for (auto _ : state) io::WritePointCloud(Dir() + "/" + c.file, cloud);
   state.SetItemsProcessed(state.iterations() * cloud.size());
   state.SetLabel(c.file);
 }
@@ -74,12 +74,12 @@ void BM_Write(benchmark::State& state) {
 void BM_Read(benchmark::State& state) {
   const Case& c = kCases[state.range(0)];
   const std::string path = Dir() + "/" + c.file;
-  if (!std::filesystem::exists(path)) WritePointCloud(path, Cloud(c.type));
-  PointReadOptions options;
+  if (!std::filesystem::exists(path)) io::WritePointCloud(path, Cloud(c.type));
+  io::PointReadOptions options;
   options.scalar_fields = state.range(1) == 0;
   size_t n = 0;
   for (auto _ : state) {
-    auto reader = OpenPointReader(path, options);
+    auto reader = io::OpenPointReader(path, options);
     PointCloud chunk;
     n = 0;
     while (size_t got = reader->Read(1 << 16, &chunk)) n += got;
@@ -105,14 +105,14 @@ void BM_ReadLaz(benchmark::State& state) {
     return;
   }
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(1));
-  PointReadOptions options;
+  io::PointReadOptions options;
   options.scalar_fields = state.range(2) == 0;
   size_t n = 0;
   std::string description;
   for (auto _ : state) {
     n = 0;
     for (int r = 0; r < c.repeat; ++r) {
-      auto reader = OpenPointReader(path, options);
+      auto reader = io::OpenPointReader(path, options);
       description = reader->info().description;
       PointCloud chunk;
       while (size_t got = reader->Read(1 << 16, &chunk)) n += got;

@@ -6,7 +6,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = candi::fuzz::WriteScratchFile("input.dxf", data, size);
   try {
-    candi::ReadDxf(candi::DxfReadOptions{}, path);
+    candi::mesh::ReadDxf(candi::mesh::DxfReadOptions{}, path);
   } catch (const candi::InputError&) {
   }
   return 0;

@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "core/atomic_file.h"
-#include "core/ply_io.h"
-#include "core/point_io.h"
 #include "fuzz/fuzz_util.h"
-#include "mesh/testing/dxf_text.h"
+#include "io/ply/ply_io.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/colmap_model.h"
+#include "tests/util/dxf_text.h"
 
 namespace {
 
@@ -54,30 +54,30 @@ class Seeds {
 };
 
 void PointSeeds(Seeds& seeds) {
-  using candi::PlyEncoding;
+  using candi::io::PlyEncoding;
   struct Ply {
     const char* name;
-    PlyEncoding encoding;
+    io::PlyEncoding encoding;
     bool colors, normals, scalar;
   };
-  for (const Ply& p : {Ply{"ascii.ply", PlyEncoding::kAscii, true, true, true},
-                       Ply{"binary_le.ply", PlyEncoding::kBinaryLittleEndian, true, false, true},
-                       Ply{"binary_be.ply", PlyEncoding::kBinaryBigEndian, false, true, false}}) {
-    candi::PointWriteOptions options;
+  for (const Ply& p : {Ply{"ascii.ply", io::PlyEncoding::kAscii, true, true, true},
+                       Ply{"binary_le.ply", io::PlyEncoding::kBinaryLittleEndian, true, false, true},
+                       Ply{"binary_be.ply", io::PlyEncoding::kBinaryBigEndian, false, true, false}}) {
+    candi::io::PointWriteOptions options;
     options.ply_encoding = p.encoding;
     candi::PointCloud cloud = SmallCloud(p.colors, p.normals, p.scalar);
-    if (p.encoding == PlyEncoding::kBinaryBigEndian) cloud.frame.origin = {500000, 9000000, 200};
-    candi::WritePointCloud(seeds.Tmp("seed.ply"), cloud, options);
+    if (p.encoding == io::PlyEncoding::kBinaryBigEndian) cloud.frame.origin = {500000, 9000000, 200};
+    candi::io::WritePointCloud(seeds.Tmp("seed.ply"), cloud, options);
     seeds.Put("ply", p.name, Read(seeds.Tmp("seed.ply")));
   }
   candi::TriMesh mesh;
   mesh.vertices = SmallCloud(true, false, false, 4);
   mesh.faces = {{0, 1, 2}, {1, 3, 2}};
-  candi::PointWriteOptions ascii;
-  ascii.ply_encoding = PlyEncoding::kAscii;
-  candi::WritePlyMesh(seeds.Tmp("mesh.ply"), mesh, ascii);
+  candi::io::PointWriteOptions ascii;
+  ascii.ply_encoding = io::PlyEncoding::kAscii;
+  candi::io::WritePlyMesh(seeds.Tmp("mesh.ply"), mesh, ascii);
   seeds.Put("ply", "mesh_ascii.ply", Read(seeds.Tmp("mesh.ply")));
-  candi::WritePlyMesh(seeds.Tmp("mesh.ply"), mesh);
+  candi::io::WritePlyMesh(seeds.Tmp("mesh.ply"), mesh);
   seeds.Put("ply", "mesh_binary.ply", Read(seeds.Tmp("mesh.ply")));
 
   struct Las {
@@ -89,19 +89,19 @@ void PointSeeds(Seeds& seeds) {
                        Las{"f3_v12.las", 2, 3, true, false, false},
                        Las{"f7_v14.las", 4, 7, true, false, false},
                        Las{"f6_extra_v14.las", 4, 6, false, true, true}}) {
-    candi::PointWriteOptions options;
+    candi::io::PointWriteOptions options;
     options.las_version_minor = l.minor;
     options.las_point_format = l.format;
-    candi::WritePointCloud(seeds.Tmp("seed.las"), SmallCloud(l.colors, l.normals, l.scalar, 3),
+    candi::io::WritePointCloud(seeds.Tmp("seed.las"), SmallCloud(l.colors, l.normals, l.scalar, 3),
                            options);
     seeds.Put("las", l.name, Read(seeds.Tmp("seed.las")));
   }
 
-  candi::WritePointCloud(seeds.Tmp("seed.xyz"), SmallCloud(true, false, true));
+  candi::io::WritePointCloud(seeds.Tmp("seed.xyz"), SmallCloud(true, false, true));
   seeds.Put("xyz", "xyzirgb.xyz", Read(seeds.Tmp("seed.xyz")));
-  candi::WritePointCloud(seeds.Tmp("seed.xyz"), SmallCloud(false, true, false));
+  candi::io::WritePointCloud(seeds.Tmp("seed.xyz"), SmallCloud(false, true, false));
   seeds.Put("xyz", "xyz_normals.xyz", Read(seeds.Tmp("seed.xyz")));
-  candi::WritePointCloud(seeds.Tmp("seed.pts"), SmallCloud(true, false, true));
+  candi::io::WritePointCloud(seeds.Tmp("seed.pts"), SmallCloud(true, false, true));
   seeds.Put("xyz", "leica.pts", Read(seeds.Tmp("seed.pts")));
   seeds.Put("xyz", "commented.csv",
             "# x;y;z\nX;Y;Z\n1,5; 2; 3\n// note\n4;5;6\r\n\n7;8;9\n");

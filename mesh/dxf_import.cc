@@ -16,7 +16,7 @@
 #include "core/log.h"
 #include "core/text_format.h"
 
-namespace candi {
+namespace candi::mesh {
 
 namespace {
 
@@ -353,4 +353,4 @@ DxfDrawing ReadDxf(const DxfReadOptions& options, const std::string& path) {
   return drawing;
 }
 
-}  // namespace candi
+}  // namespace candi::mesh

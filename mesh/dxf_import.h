@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
-#include "mesh/section.h"
+#include "mesh/cad_section.h"
 
-namespace candi {
+namespace candi::mesh {
 
 struct DxfReadOptions {
   double chord_tolerance = 0.005;  // m, > 0: largest distance of a bulge arc from its chords
@@ -66,4 +66,4 @@ double InsUnitsToMetres(int code, double unitless_scale, const std::string& path
 std::vector<Eigen::Vector2d> TessellateBulge(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                                              double bulge, double chord_tolerance);
 
-}  // namespace candi
+}  // namespace candi::mesh

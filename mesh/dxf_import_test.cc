@@ -10,11 +10,11 @@
 #include <map>
 
 #include "core/check.h"
-#include "mesh/testing/dxf_text.h"
+#include "tests/util/dxf_text.h"
 #include "tests/util/input_error.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::mesh {
 namespace {
 
 using testing::DxfText;
@@ -265,4 +265,4 @@ TEST(ReadDxf, EverySharedDrawingImportsWithCheckedCountsOrFailsClearly) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::mesh

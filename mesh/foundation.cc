@@ -7,7 +7,7 @@
 
 #include "core/check.h"
 
-namespace candi {
+namespace candi::mesh {
 
 void FoundationOptions::Check() const {
   dxf.Check();
@@ -77,4 +77,4 @@ std::vector<LayerSurface> BuildLayerSurfaces(const FoundationOptions& options,
   return out;
 }
 
-}  // namespace candi
+}  // namespace candi::mesh

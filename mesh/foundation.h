@@ -1,5 +1,5 @@
 // From a section drawing to one layer's surface mesh (ALGORITHMS.md §2): the section pieces of a
-// layer are joined (mesh/section.h), split and resampled (mesh/profile.h), blended or swept
+// layer are joined (mesh/cad_section.h), split and resampled (mesh/profile.h), blended or swept
 // (mesh/revolve.h), meshed in OpenMesh (mesh/surface_mesh.h) and checked with CGAL
 // (mesh/mesh_check.h).
 // Failures: InputError naming the file and layer (a missing layer lists the drawing's layers).
@@ -10,14 +10,14 @@
 #include <vector>
 
 #include "core/tri_mesh.h"
+#include "mesh/cad_section.h"
 #include "mesh/dxf_import.h"
 #include "mesh/mesh_check.h"
 #include "mesh/profile.h"
 #include "mesh/revolve.h"
-#include "mesh/section.h"
 #include "mesh/surface_mesh.h"
 
-namespace candi {
+namespace candi::mesh {
 
 struct FoundationOptions {
   DxfReadOptions dxf;
@@ -55,4 +55,4 @@ std::vector<LayerSurface> BuildLayerSurfaces(const FoundationOptions& options,
                                              const std::vector<std::string>& layers,
                                              int threads = 0);
 
-}  // namespace candi
+}  // namespace candi::mesh

@@ -3,10 +3,10 @@
 #include <gtest/gtest.h>
 
 #include "core/check.h"
-#include "mesh/testing/dxf_text.h"
+#include "tests/util/dxf_text.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::mesh {
 namespace {
 
 using testing::DxfText;
@@ -85,4 +85,4 @@ TEST(BuildLayerSurfaces, SameAsOneByOneInOrderAndTheFirstErrorIsRethrown) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::mesh

@@ -5,7 +5,7 @@
 
 #include "core/check.h"
 
-namespace candi {
+namespace candi::mesh {
 
 namespace {
 
@@ -84,4 +84,4 @@ std::vector<Eigen::Vector2d> ResampleByArcLength(const std::vector<Eigen::Vector
   return out;
 }
 
-}  // namespace candi
+}  // namespace candi::mesh

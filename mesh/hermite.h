@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-namespace candi {
+namespace candi::mesh {
 
 struct MonotoneCubic {
   std::vector<double> t;      // knots, strictly increasing
@@ -31,4 +31,4 @@ MonotoneCubic FitMonotoneCubic(const std::vector<double>& t, const std::vector<d
 std::vector<Eigen::Vector2d> ResampleByArcLength(const std::vector<Eigen::Vector2d>& vertices,
                                                  int count);
 
-}  // namespace candi
+}  // namespace candi::mesh

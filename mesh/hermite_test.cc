@@ -6,7 +6,7 @@
 
 #include "core/check.h"
 
-namespace candi {
+namespace candi::mesh {
 namespace {
 
 TEST(FitMonotoneCubic, ExactAtKnotsAndReproducesLines) {
@@ -61,4 +61,4 @@ TEST(ResampleByArcLength, NearlyCollinearAndUnevenVerticesStayOnTheLine) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::mesh

@@ -16,7 +16,7 @@
 
 #include "core/check.h"
 
-namespace candi {
+namespace candi::mesh {
 
 namespace {
 
@@ -120,4 +120,4 @@ MeshCheckReport CheckMesh(const MeshCheckOptions& options, const TriMesh& mesh) 
   return report;
 }
 
-}  // namespace candi
+}  // namespace candi::mesh

@@ -16,7 +16,7 @@
 
 #include "core/tri_mesh.h"
 
-namespace candi {
+namespace candi::mesh {
 
 struct MeshCheckOptions {
   bool self_intersections = true;  // run CGAL's self-intersection test
@@ -42,4 +42,4 @@ struct MeshCheckReport {
 
 MeshCheckReport CheckMesh(const MeshCheckOptions& options, const TriMesh& mesh);
 
-}  // namespace candi
+}  // namespace candi::mesh

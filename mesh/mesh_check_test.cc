@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-namespace candi {
+namespace candi::mesh {
 namespace {
 
 // A unit tetrahedron, faces counter-clockwise seen from outside.
@@ -69,4 +69,4 @@ TEST(CheckMesh, CrossingSheetsSelfIntersect) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::mesh

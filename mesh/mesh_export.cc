@@ -9,12 +9,13 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
-#include "core/ply_io.h"
-#include "core/point_io.h"
 #include "core/text_format.h"
+#include "io/ply/ply_io.h"
+#include "io/point_io.h"
+#include "io/shift_sidecar.h"
 #include "mesh/open_mesh.h"
 
-namespace candi {
+namespace candi::mesh {
 
 namespace {
 
@@ -58,7 +59,7 @@ std::string MeshText(const TriMesh& mesh, bool obj) {
 void WriteMesh(const std::string& path, const TriMesh& mesh) {
   const std::string ext = Extension(path);
   if (ext == ".ply") {
-    WritePlyMesh(path, mesh);
+    io::WritePlyMesh(path, mesh);
     return;
   }
   if (ext != ".obj" && ext != ".off") {
@@ -66,9 +67,9 @@ void WriteMesh(const std::string& path, const TriMesh& mesh) {
   }
   WriteFileAtomic(path, MeshText(mesh, ext == ".obj"));
   if (!mesh.vertices.frame.IsIdentity()) {
-    WriteShiftSidecar(path, mesh.vertices.frame);
+    io::WriteShiftSidecar(path, mesh.vertices.frame);
   } else {
-    std::remove(ShiftSidecarPath(path).c_str());  // a stale sidecar would mislead
+    std::remove(io::ShiftSidecarPath(path).c_str());  // a stale sidecar would mislead
   }
 }
 
@@ -77,8 +78,8 @@ TriMesh ReadMesh(const std::string& path) {
   if (!OpenMesh::IO::read_mesh(om, path)) {
     throw InputError(path, "", "OpenMesh could not read the mesh");
   }
-  const std::optional<LocalFrame> shift = ReadShiftSidecar(path);
+  const std::optional<LocalFrame> shift = io::ReadShiftSidecar(path);
   return internal::FromOpenMesh(om, shift ? *shift : LocalFrame());
 }
 
-}  // namespace candi
+}  // namespace candi::mesh

@@ -11,7 +11,7 @@
 
 #include "core/tri_mesh.h"
 
-namespace candi {
+namespace candi::mesh {
 
 void WriteMesh(const std::string& path, const TriMesh& mesh);
 
@@ -20,4 +20,4 @@ void WriteMesh(const std::string& path, const TriMesh& mesh);
 // when it cannot be read.
 TriMesh ReadMesh(const std::string& path);
 
-}  // namespace candi
+}  // namespace candi::mesh

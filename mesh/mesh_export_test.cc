@@ -5,11 +5,12 @@
 #include <cstdlib>
 
 #include "core/check.h"
-#include "core/point_io.h"
+#include "io/point_io.h"
+#include "io/shift_sidecar.h"
 #include "mesh/surface_mesh.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::mesh {
 namespace {
 
 using testing::FileExists;
@@ -40,7 +41,7 @@ TEST(WriteMesh, ObjOffAndPlyRoundTripThroughOpenMesh) {
       for (size_t i = 0; i < mesh.vertices.size(); ++i) {
         EXPECT_NEAR((back.vertices.positions[i] - mesh.vertices.positions[i]).norm(), 0, 1e-6);
       }
-      EXPECT_EQ(FileExists(ShiftSidecarPath(dir.File(name))), !mesh.vertices.frame.IsIdentity());
+      EXPECT_EQ(FileExists(io::ShiftSidecarPath(dir.File(name))), !mesh.vertices.frame.IsIdentity());
     }
   }
 }
@@ -66,4 +67,4 @@ TEST(WriteMesh, UnknownExtensionIsAnInputErrorAndNothingIsWritten) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::mesh

@@ -11,7 +11,7 @@
 #include "core/check.h"
 #include "core/tri_mesh.h"
 
-namespace candi::internal {
+namespace candi::mesh::internal {
 
 struct OpenMeshTraits : public OpenMesh::DefaultTraits {
   typedef OpenMesh::Vec3d Point;  // double: local coordinates keep millimetres at any scale
@@ -56,4 +56,4 @@ inline TriMesh FromOpenMesh(const OpenTriMesh& om, const LocalFrame& frame) {
   return mesh;
 }
 
-}  // namespace candi::internal
+}  // namespace candi::mesh::internal

@@ -8,7 +8,7 @@
 #include "core/text_format.h"
 #include "mesh/hermite.h"
 
-namespace candi {
+namespace candi::mesh {
 
 namespace {
 
@@ -158,4 +158,4 @@ Profile BuildProfile(const ProfileOptions& options, const Polyline2& section,
   return profile;
 }
 
-}  // namespace candi
+}  // namespace candi::mesh

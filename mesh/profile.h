@@ -24,9 +24,9 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "mesh/section.h"
+#include "mesh/cad_section.h"
 
-namespace candi {
+namespace candi::mesh {
 
 struct ProfileOptions {
   int samples_per_side = 1000;     // N, points per side, >= 2
@@ -49,4 +49,4 @@ struct Profile {
 Profile BuildProfile(const ProfileOptions& options, const Polyline2& section,
                      const SectionSource& source);
 
-}  // namespace candi
+}  // namespace candi::mesh

@@ -7,7 +7,7 @@
 #include "core/check.h"
 #include "tests/util/input_error.h"
 
-namespace candi {
+namespace candi::mesh {
 namespace {
 
 using V = Eigen::Vector2d;
@@ -129,4 +129,4 @@ TEST(BuildProfile, AClosedSectionSplitsAtItsTopAndBottom) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::mesh

@@ -7,7 +7,7 @@
 #include "core/check.h"
 #include "core/text_format.h"
 
-namespace candi {
+namespace candi::mesh {
 
 namespace {
 
@@ -135,4 +135,4 @@ SurfaceGrid RevolveProfile(const RevolveOptions& options, const Profile& profile
   return grid;
 }
 
-}  // namespace candi
+}  // namespace candi::mesh

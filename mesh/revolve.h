@@ -27,7 +27,7 @@
 #include "core/local_frame.h"
 #include "mesh/profile.h"
 
-namespace candi {
+namespace candi::mesh {
 
 enum class RevolveMode { kAuto, kBlend, kSweep };
 std::string RevolveModeName(RevolveMode mode);          // "auto", "blend", "sweep"
@@ -64,4 +64,4 @@ SurfaceGrid RevolveProfile(const RevolveOptions& options, const Profile& profile
 // max_i max(|rl_i - rr_i|, |y_A,i - y_B,i|) / extent for the axis at local x = axis_local_x.
 double ProfileAsymmetry(const Profile& profile, double axis_local_x);
 
-}  // namespace candi
+}  // namespace candi::mesh

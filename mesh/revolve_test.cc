@@ -6,7 +6,7 @@
 
 #include "core/check.h"
 
-namespace candi {
+namespace candi::mesh {
 namespace {
 
 using V = Eigen::Vector2d;
@@ -113,4 +113,4 @@ TEST(RevolveProfile, ASideCrossingTheAxisIsAClearError) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::mesh

@@ -2,7 +2,7 @@
 
 #include "core/check.h"
 
-namespace candi {
+namespace candi::mesh {
 
 TriMesh BuildSurfaceMesh(const SurfaceMeshOptions& options, const SurfaceGrid& grid) {
   const int n = grid.rings, cols = grid.columns;
@@ -56,4 +56,4 @@ TriMesh BuildSurfaceMesh(const SurfaceMeshOptions& options, const SurfaceGrid& g
   return mesh;
 }
 
-}  // namespace candi
+}  // namespace candi::mesh

@@ -16,7 +16,7 @@
 #include "core/tri_mesh.h"
 #include "mesh/revolve.h"
 
-namespace candi {
+namespace candi::mesh {
 
 struct SurfaceMeshOptions {
   bool close_base = false;  // close the bottom ring with a fan (a watertight solid for a dome)
@@ -24,4 +24,4 @@ struct SurfaceMeshOptions {
 
 TriMesh BuildSurfaceMesh(const SurfaceMeshOptions& options, const SurfaceGrid& grid);
 
-}  // namespace candi
+}  // namespace candi::mesh

@@ -8,7 +8,7 @@
 #include "mesh/mesh_check.h"
 #include "mesh/open_mesh.h"
 
-namespace candi {
+namespace candi::mesh {
 namespace {
 
 using V = Eigen::Vector2d;
@@ -162,4 +162,4 @@ TEST(SweepConvergence, HemisphereApproachesTheSphereAtSecondOrder) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::mesh

@@ -15,11 +15,11 @@
 #include <type_traits>
 
 #include "core/atomic_file.h"
-#include "core/interrupt.h"
 #include "core/binary_file.h"
 #include "core/check.h"
-#include "core/rng.h"
+#include "core/interrupt.h"
 #include "core/parallel.h"
+#include "core/rng.h"
 #include "render/morton_sort.h"
 #include "render/pack_input.h"
 #include "render/pack_records.h"
@@ -57,21 +57,21 @@ PackInput PackInputFromFile(const std::string& path, const std::string& columns)
   in.path = path;
   in.layer = fs::path(path).stem().string();
   in.open = [path, columns] {
-    PointReadOptions read;
+    io::PointReadOptions read;
     read.columns = columns;
     read.scalar_fields = false;
-    return OpenPointReader(path, read);
+    return io::OpenPointReader(path, read);
   };
   return in;
 }
 
 namespace {
 
-class GeneratedReader : public PointReader {
+class GeneratedReader : public io::PointReader {
  public:
   GeneratedReader(const std::string& name, uint64_t total, uint64_t piece,
                   std::function<PointCloud(uint64_t, uint64_t)> make)
-      : PointReader(name), total_(total), piece_(piece), make_(std::move(make)) {
+      : io::PointReader(name), total_(total), piece_(piece), make_(std::move(make)) {
     info_.count = total;
     info_.description = "generated";
     info_.schema.colors = true;
@@ -113,7 +113,7 @@ PackInput PackInputFromGenerator(const std::string& name, uint64_t total, uint64
   PackInput in;
   in.name = name;
   in.layer = name;
-  in.open = [=] { return std::unique_ptr<PointReader>(new GeneratedReader(name, total, piece, make)); };
+  in.open = [=] { return std::unique_ptr<io::PointReader>(new GeneratedReader(name, total, piece, make)); };
   return in;
 }
 
@@ -448,28 +448,28 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   // LasPoints), and that frame and decoder.
   bool las = options.direct_reads;
   std::optional<Eigen::Vector3d> las_origin;
-  LasPositionDecoder las_decoder;
+  io::LasPositionDecoder las_decoder;
   auto pass1 = [&] {
     for (size_t k = 0; k < inputs.size(); ++k) {
       auto reader = inputs[k].open();
-      const PointFileInfo& info = reader->info();
-      const std::optional<PointRecordLayout> layout = reader->record_layout();
+      const io::PointFileInfo& info = reader->info();
+      const std::optional<io::PointRecordLayout> layout = reader->record_layout();
       const bool direct = options.direct_reads && layout && !inputs[k].path.empty() && reader->path() == inputs[k].path;
-      if (direct && layout->coordinates == PointRecordLayout::Coordinates::kLasInt32) {
-        const LasPositionDecoder decoder(layout->scale, layout->offset);
+      if (direct && layout->coordinates == io::PointRecordLayout::Coordinates::kLasInt32) {
+        const io::LasPositionDecoder decoder(layout->scale, layout->offset);
         if (!las_origin) las_origin = info.frame.origin, las_decoder = decoder;
         las = las && *las_origin == info.frame.origin && decoder == las_decoder;
       } else {
         las = false;
       }
-      if (info.header_bounds && info.count != kUnknownCount) {
+      if (info.header_bounds && info.count != io::kUnknownCount) {
         hash_later(k);
         counts[k] = info.count;
         if (info.count > 0) world.Extend(*info.header_bounds);
         floats = false;  // its points are not read here
         continue;
       }
-      if (direct && layout->coordinates == PointRecordLayout::Coordinates::kFloat32) {
+      if (direct && layout->coordinates == io::PointRecordLayout::Coordinates::kFloat32) {
         const RecordScan scan = ScanRecords(reader->path(), *layout, info.frame);
         hashes[k] = scan.hash;
         hashed_bytes[k] = scan.bytes;

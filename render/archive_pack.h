@@ -27,8 +27,8 @@
 #include <string>
 #include <vector>
 
-#include "core/point_io.h"
 #include "core/progress.h"
+#include "io/point_io.h"
 #include "render/archive.h"
 
 namespace candi::render {
@@ -43,7 +43,7 @@ struct PackOptions {
   // Sort 28-byte double records even when every point is a float in one frame (16-byte ones
   // then; the same archive either way). For tests and benchmarks.
   bool wide_records = false;
-  // Read files of records (core/point_io.h's PointRecordLayout: binary PLY of floats, LAS)
+  // Read files of records (io/point_io.h's PointRecordLayout: binary PLY of floats, LAS)
   // directly: PLY's bounds and hash from one read, records without widening to doubles. false:
   // through their point readers (the same archive). For tests and benchmarks.
   bool direct_reads = true;
@@ -58,9 +58,9 @@ struct PackInput {
   // The archive layer the points go to; inputs naming the same layer are packed together.
   // PackInputFromFile: the file's stem; PackInputFromGenerator: the name.
   std::string layer;
-  std::function<std::unique_ptr<PointReader>()> open;
+  std::function<std::unique_ptr<io::PointReader>()> open;
 };
-// `columns`: the XYZ/PTS column spec (core/point_io.h), "" for the default.
+// `columns`: the XYZ/PTS column spec (io/point_io.h), "" for the default.
 PackInput PackInputFromFile(const std::string& path, const std::string& columns = "");
 // Points made on demand, `piece` at a time: make(k, n) returns piece k (n points, any frame).
 // For generated data (benchmarks, tests) that never touches a point file.

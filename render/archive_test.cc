@@ -12,8 +12,8 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
-#include "core/point_io.h"
 #include "core/rng.h"
+#include "io/point_io.h"
 #include "render/archive_pack.h"
 #include "render/archive_render.h"
 #include "render/spbr_stream.h"
@@ -344,8 +344,8 @@ TEST(Archive, PackOptionsOutOfRangeAreRefused) {
 TEST(Archive, PacksPlyFilesRecordingTheirHashes) {
   TempDir dir;
   PointCloud a = TerracedSolid(3000, 1), b = TerracedSolid(2000, 2);
-  WritePointCloud(dir.path() + "/a.ply", a);
-  WritePointCloud(dir.path() + "/b.ply", b);
+  io::WritePointCloud(dir.path() + "/a.ply", a);
+  io::WritePointCloud(dir.path() + "/b.ply", b);
   PackOptions o;
   o.chunk_points = 256;
   PackArchive(o, {PackInputFromFile(dir.path() + "/a.ply"), PackInputFromFile(dir.path() + "/b.ply")},
@@ -361,7 +361,7 @@ TEST(Archive, PacksPlyFilesRecordingTheirHashes) {
   PackArchive(o, {PackInputFromFile(dir.path() + "/b.ply")}, dir.path() + "/out");
   EXPECT_EQ(Archive(dir.path() + "/out").manifest().points, 2000u);
   EXPECT_THROW(PackArchive(o, {PackInputFromFile(dir.path() + "/b.ply")}, dir.path() + "/a.ply"), InputError);
-  EXPECT_EQ(ReadPointCloud(dir.path() + "/a.ply").size(), 3000u);
+  EXPECT_EQ(io::ReadPointCloud(dir.path() + "/a.ply").size(), 3000u);
 }
 
 TEST(Archive, RefusesEmptyAndNanInputs) {

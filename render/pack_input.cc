@@ -10,9 +10,9 @@
 #include <type_traits>
 
 #include "core/binary_file.h"
-#include "core/byte_stream.h"
 #include "core/check.h"
 #include "core/parallel.h"
+#include "io/byte_stream.h"
 
 namespace candi::render {
 
@@ -47,7 +47,7 @@ inline float LoadFloat(const uint8_t* p) {
 }
 
 // The first record in [0, n) with a NaN or infinite coordinate, or n.
-size_t FirstNonFinite(const PointRecordLayout& l, const uint8_t* records, size_t n) {
+size_t FirstNonFinite(const io::PointRecordLayout& l, const uint8_t* records, size_t n) {
   for (size_t i = 0; i < n; ++i) {
     const uint8_t* r = records + i * l.stride;
     for (int a = 0; a < 3; ++a) {
@@ -62,7 +62,7 @@ size_t FirstNonFinite(const PointRecordLayout& l, const uint8_t* records, size_t
 }
 
 // A file too short for its records is refused as the PLY reader refuses it.
-void CheckHoldsRecords(const std::string& path, const PointRecordLayout& l, uint64_t file_bytes) {
+void CheckHoldsRecords(const std::string& path, const io::PointRecordLayout& l, uint64_t file_bytes) {
   const uint64_t end = l.first_byte + l.count * l.stride;
   if (file_bytes >= end) return;
   const uint64_t whole = file_bytes > l.first_byte ? (file_bytes - l.first_byte) / l.stride : 0;
@@ -78,7 +78,7 @@ struct FloatBox {
                  -std::numeric_limits<float>::infinity()};
   bool bad = false;
 };
-FloatBox BoxOfRecords(const PointRecordLayout& l, const uint8_t* records, size_t n) {
+FloatBox BoxOfRecords(const io::PointRecordLayout& l, const uint8_t* records, size_t n) {
   FloatBox box;
   uint32_t bad = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -104,7 +104,7 @@ struct RecordFile::Impl {
   UninitVector<uint8_t> buffer;
 };
 
-RecordFile::RecordFile(const std::string& path, const PointRecordLayout& layout)
+RecordFile::RecordFile(const std::string& path, const io::PointRecordLayout& layout)
     : impl_(std::make_unique<Impl>(path)), layout_(layout) {
   CheckHoldsRecords(path, layout_, impl_->file.size());
 }
@@ -117,7 +117,7 @@ size_t RecordFile::Next(size_t max_points, const uint8_t** records) {
   const size_t bytes = n * layout_.stride;
   impl_->buffer.resize(bytes);
   const uint64_t at = layout_.first_byte + next_ * layout_.stride;
-  if (ReadAtInParts(impl_->file, at, impl_->buffer.data(), bytes) != bytes) {
+  if (io::ReadAtInParts(impl_->file, at, impl_->buffer.data(), bytes) != bytes) {
     CheckHoldsRecords(impl_->file.path(), layout_, BinaryFile(impl_->file.path()).size());  // it shrank
     throw InputError(impl_->file.path(), "byte " + std::to_string(at), "short read of point records");
   }
@@ -126,7 +126,7 @@ size_t RecordFile::Next(size_t max_points, const uint8_t** records) {
   return n;
 }
 
-RecordScan ScanRecords(const std::string& path, const PointRecordLayout& l, const LocalFrame& frame) {
+RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& l, const LocalFrame& frame) {
   BinaryFile file(path);
   RecordScan scan;
   scan.bytes = file.size();
@@ -139,7 +139,7 @@ RecordScan ScanRecords(const std::string& path, const PointRecordLayout& l, cons
   for (uint64_t at = 0; at < scan.bytes; at += kHashBlock) {
     const size_t block = static_cast<size_t>(std::min<uint64_t>(kHashBlock, scan.bytes - at));
     const size_t want = static_cast<size_t>(std::min<uint64_t>(kHashBlock + l.stride, scan.bytes - at));
-    if (ReadAtInParts(file, at, buffer.data(), want) != want) {
+    if (io::ReadAtInParts(file, at, buffer.data(), want) != want) {
       throw InputError(path, "byte " + std::to_string(at), "short read (did the file change?)");
     }
     // The records that start in this block.
@@ -182,7 +182,7 @@ RecordScan ScanRecords(const std::string& path, const PointRecordLayout& l, cons
 
 template <typename P>
 InputBatches<P>::InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color,
-                              const Eigen::Vector3d& compact_origin, const LasPositionDecoder& las,
+                              const Eigen::Vector3d& compact_origin, const io::LasPositionDecoder& las,
                               bool direct)
     : inputs_(inputs),
       frame_(frame),
@@ -199,7 +199,7 @@ bool InputBatches<P>::ReadRecords(UninitVector<P>* out) {
   const uint8_t* records = nullptr;
   const size_t n = records_->Next(1 << 20, &records);
   if (n == 0) return false;
-  const PointRecordLayout& l = records_->layout();
+  const io::PointRecordLayout& l = records_->layout();
   out->resize(n);
   const uint32_t fallback = PackColor(default_color_);
   std::atomic<bool> bad{false};
@@ -239,12 +239,12 @@ bool InputBatches<P>::operator()(UninitVector<P>* out) {
       if (next_ >= inputs_.size()) return false;
       reader_ = inputs_[next_++].open();
       index_ = 0;
-      const std::optional<PointRecordLayout> layout = reader_->record_layout();
-      using Coordinates = PointRecordLayout::Coordinates;
+      const std::optional<io::PointRecordLayout> layout = reader_->record_layout();
+      using Coordinates = io::PointRecordLayout::Coordinates;
       const Coordinates wanted = std::is_same_v<P, LasPoint> ? Coordinates::kLasInt32 : Coordinates::kFloat32;
       if (direct_ && layout && layout->coordinates == wanted) {
         if (reader_->info().frame.origin != compact_origin_ ||
-            (wanted == Coordinates::kLasInt32 && !(LasPositionDecoder(layout->scale, layout->offset) == las_))) {
+            (wanted == Coordinates::kLasInt32 && !(io::LasPositionDecoder(layout->scale, layout->offset) == las_))) {
           throw InputError(inputs_[next_ - 1].name, "", "changed between the two reads (its frame, scale or offset)");
         }
         records_ = std::make_unique<RecordFile>(reader_->path(), *layout);

@@ -1,6 +1,6 @@
 // The packer's reading of its inputs (render/archive_pack.cc), private to it: the points as
 // records in the archive frame, batch by batch, and the direct reading of files whose points are
-// fixed-size records (core/point_io.h's PointRecordLayout): binary PLY of floats, which pass 1
+// fixed-size records (io/point_io.h's PointRecordLayout): binary PLY of floats, which pass 1
 // scans for bounds and the manifest's hash in one read and pass 2 turns into CompactPoints
 // without widening every coordinate to a double, and LAS, turned into LasPoints.
 #pragma once
@@ -13,8 +13,8 @@
 #include <Eigen/Core>
 
 #include "core/box.h"
-#include "core/las_columns.h"
-#include "core/point_io.h"
+#include "io/las/las_columns.h"
+#include "io/point_io.h"
 #include "render/archive_pack.h"
 #include "render/pack_records.h"
 #include "render/splat_cloud.h"
@@ -28,18 +28,18 @@ constexpr size_t kHashBlock = size_t{64} << 20;
 // preads). Refuses (InputError naming the file and the vertex) a file too short for them.
 class RecordFile {
  public:
-  RecordFile(const std::string& path, const PointRecordLayout& layout);
+  RecordFile(const std::string& path, const io::PointRecordLayout& layout);
   ~RecordFile();
   RecordFile(const RecordFile&) = delete;
   RecordFile& operator=(const RecordFile&) = delete;
-  const PointRecordLayout& layout() const { return layout_; }
+  const io::PointRecordLayout& layout() const { return layout_; }
   // Reads up to max_points next records; returns how many (0 at the end), at *records.
   size_t Next(size_t max_points, const uint8_t** records);
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  PointRecordLayout layout_;
+  io::PointRecordLayout layout_;
   uint64_t next_ = 0;
 };
 
@@ -50,7 +50,7 @@ struct RecordScan {
   Box3d world;
   uint64_t hash = 0, bytes = 0;
 };
-RecordScan ScanRecords(const std::string& path, const PointRecordLayout& layout, const LocalFrame& frame);
+RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& layout, const LocalFrame& frame);
 
 // Reads all inputs as points P in the archive frame (CompactPoints: in their shared frame),
 // ~2^20 points a batch. Files of records are read directly (`direct`, PackOptions::direct_reads):
@@ -61,7 +61,7 @@ class InputBatches {
   // compact_origin: CompactPoint's frame, the one all inputs share.
   // las: LasPoint's decoder, the one all inputs share.
   InputBatches(const std::vector<PackInput>& inputs, const LocalFrame& frame, Rgb8 default_color,
-               const Eigen::Vector3d& compact_origin, const LasPositionDecoder& las, bool direct);
+               const Eigen::Vector3d& compact_origin, const io::LasPositionDecoder& las, bool direct);
   ~InputBatches();
   // The next batch into *out; false after the last.
   bool operator()(UninitVector<P>* out);
@@ -74,11 +74,11 @@ class InputBatches {
   LocalFrame frame_;
   Rgb8 default_color_;
   Eigen::Vector3d compact_origin_;
-  LasPositionDecoder las_;
+  io::LasPositionDecoder las_;
   bool direct_;
   size_t next_ = 0;
   uint64_t index_ = 0;
-  std::unique_ptr<PointReader> reader_;
+  std::unique_ptr<io::PointReader> reader_;
   std::unique_ptr<RecordFile> records_;
   PointCloud chunk_;
 };

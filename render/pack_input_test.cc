@@ -7,8 +7,8 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
-#include "core/point_io.h"
 #include "core/rng.h"
+#include "io/point_io.h"
 #include "render/archive.h"
 #include "render/archive_pack.h"
 #include "render/pack_records.h"
@@ -23,9 +23,9 @@ using candi::testing::TempDir;
 
 // A binary PLY of float positions (local, in the cloud's frame) via the project's writer.
 void WriteFloatPly(const std::string& path, const PointCloud& cloud) {
-  PointWriteOptions o;
-  o.precision = PositionPrecision::kFloat32;
-  WritePointCloud(path, cloud, o);
+  io::PointWriteOptions o;
+  o.precision = io::PositionPrecision::kFloat32;
+  io::WritePointCloud(path, cloud, o);
 }
 
 PointCloud Scene(uint64_t n, uint64_t seed, bool colors, bool normals) {
@@ -92,8 +92,8 @@ TEST(PackRecords, VectorizedMortonCodesEqualTheGridsCode) {
   check(frame, compact, "floats");
   check(RecordFrame(), wide, "doubles");
   RecordFrame decimal = frame, other = frame;
-  decimal.las = LasPositionDecoder(Eigen::Vector3d::Constant(0.001), Eigen::Vector3d(2.0, -1.0, 0.0));
-  other.las = LasPositionDecoder(Eigen::Vector3d::Constant(0.003), Eigen::Vector3d(-488.0, 0.3, 0.0));
+  decimal.las = io::LasPositionDecoder(Eigen::Vector3d::Constant(0.001), Eigen::Vector3d(2.0, -1.0, 0.0));
+  other.las = io::LasPositionDecoder(Eigen::Vector3d::Constant(0.003), Eigen::Vector3d(-488.0, 0.3, 0.0));
   ASSERT_TRUE(decimal.las.decimal);
   ASSERT_FALSE(other.las.decimal);
   check(decimal, las, "LAS, decimal scale");
@@ -105,8 +105,8 @@ TEST(PackDirect, PlyRecordsGiveTheSameArchiveAsThePointReaders) {
   // Two files in one shifted frame: colours, and no colours with normals (another record size).
   WriteFloatPly(dir.File("a.ply"), Scene(20000, 1, true, false));
   WriteFloatPly(dir.File("b.ply"), Scene(9000, 2, false, true));
-  ASSERT_TRUE(OpenPointReader(dir.File("a.ply"))->record_layout().has_value());
-  ASSERT_TRUE(OpenPointReader(dir.File("b.ply"))->record_layout().has_value());
+  ASSERT_TRUE(io::OpenPointReader(dir.File("a.ply"))->record_layout().has_value());
+  ASSERT_TRUE(io::OpenPointReader(dir.File("b.ply"))->record_layout().has_value());
   const std::vector<PackInput> inputs = {PackInputFromFile(dir.File("a.ply")), PackInputFromFile(dir.File("b.ply"))};
   PackOptions o;
   o.chunk_points = 512;
@@ -142,15 +142,15 @@ TEST(PackDirect, LasRecordsGiveTheSameArchiveAsThePointReaders) {
   // that is not (positions X * scale + offset).
   for (const double scale : {0.001, 0.0003}) {
     const std::string tag = scale == 0.001 ? "mm" : "odd";
-    PointWriteOptions w;
+    io::PointWriteOptions w;
     w.las_scale = Eigen::Vector3d::Constant(scale);
     w.las_offset = Eigen::Vector3d(500000, 4200000, 100);
-    WritePointCloud(dir.File(tag + "a.las"), Scene(20000, 7, true, false), w);
-    WritePointCloud(dir.File(tag + "b.las"), Scene(7000, 8, true, false), w);
+    io::WritePointCloud(dir.File(tag + "a.las"), Scene(20000, 7, true, false), w);
+    io::WritePointCloud(dir.File(tag + "b.las"), Scene(7000, 8, true, false), w);
     {
       // 16-bit colours whose low bytes are not copies of the high ones (the writer's v * 257):
       // the colour is the high byte.
-      const PointRecordLayout l = *OpenPointReader(dir.File(tag + "a.las"))->record_layout();
+      const io::PointRecordLayout l = *io::OpenPointReader(dir.File(tag + "a.las"))->record_layout();
       ASSERT_EQ(l.color_shift, 8);
       std::string bytes = ReadFileToString(dir.File(tag + "a.las"));
       for (uint64_t i = 0; i < l.count; ++i) {
@@ -184,7 +184,7 @@ TEST(PackDirect, HashOfAFileOfSeveralBlocksIsHashFiles) {
   PointCloud cloud = Scene(4600000, 4, true, false);
   WriteFloatPly(dir.File("big.ply"), cloud);
   // The record across the cut holds the largest x, so the bounds miss it if that record is lost.
-  const uint64_t first = OpenPointReader(dir.File("big.ply"))->record_layout()->first_byte;
+  const uint64_t first = io::OpenPointReader(dir.File("big.ply"))->record_layout()->first_byte;
   const size_t across = static_cast<size_t>(((uint64_t{64} << 20) - first) / 15);
   ASSERT_GT(first + 15 * (across + 1), uint64_t{64} << 20);
   cloud.positions[across].x() = cloud.LocalBounds().max.x() + 1.5;
@@ -199,7 +199,7 @@ TEST(PackDirect, HashOfAFileOfSeveralBlocksIsHashFiles) {
   EXPECT_EQ(archive.manifest().sources.at(0).hash, hash);
   EXPECT_EQ(archive.manifest().sources.at(0).bytes, bytes);
   EXPECT_EQ(archive.manifest().points, 4600000u);
-  const Box3d world = ReadPointCloud(dir.File("big.ply")).WorldBounds();
+  const Box3d world = io::ReadPointCloud(dir.File("big.ply")).WorldBounds();
   EXPECT_EQ(archive.manifest().bounds.max, world.Translated(-archive.manifest().frame.origin).max);
   EXPECT_EQ(archive.manifest().bounds.min, world.Translated(-archive.manifest().frame.origin).min);
 }

@@ -18,7 +18,7 @@
 #include <Eigen/Core>
 
 #include "core/check.h"
-#include "core/las_columns.h"
+#include "io/las/las_columns.h"
 #include "render/archive.h"
 
 namespace candi::render::pack_internal {
@@ -35,7 +35,7 @@ namespace candi::render::pack_internal {
 // holds the position itself.
 struct RecordFrame {
   Eigen::Vector3d shift = Eigen::Vector3d::Zero();
-  LasPositionDecoder las;
+  io::LasPositionDecoder las;
 };
 
 #pragma pack(push, 1)

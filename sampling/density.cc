@@ -18,9 +18,9 @@
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/rng.h"
-#include "sampling/cube_section.h"
+#include "sampling/plane_in_cube.h"
 
-namespace candi {
+namespace candi::sampling {
 
 namespace {
 
@@ -354,4 +354,4 @@ DensityResult EstimateSurfaceDensity(const DensityOptions& options, const PointC
   return result;
 }
 
-}  // namespace candi
+}  // namespace candi::sampling

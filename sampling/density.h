@@ -10,7 +10,7 @@
 //  - kVoxel: counts per cubic cell of side h = sqrt(pi) r (face area = the disc's area):
 //        density_i = (count_cell - 1) / A_cell,
 //    A_cell = the area of the cell's section by the plane fitted to the cell's points (PCA
-//    through their mean; sampling/cube_section.h), h^2 when they define none (< 3 points,
+//    through their mean; sampling/plane_in_cube.h), h^2 when they define none (< 3 points,
 //    collinear). Plain count / h^2 is right only for axis-aligned surfaces: 7 % low on average
 //    for tilted ones, and from 29 % low to 41 % high on a wall at 45° to the grid, depending
 //    on where the wall lies. Cheaper than kKdTree: one sort instead of a search per point;
@@ -45,7 +45,7 @@
 #include "core/point_cloud.h"
 #include "core/progress.h"
 
-namespace candi {
+namespace candi::sampling {
 
 enum class DensityMethod { kKdTree, kVoxel };
 
@@ -79,4 +79,4 @@ struct DensityResult {
 // Empty cloud: empty result (radius 0). See the file comment for the estimators and failures.
 DensityResult EstimateSurfaceDensity(const DensityOptions& options, const PointCloud& cloud);
 
-}  // namespace candi
+}  // namespace candi::sampling

@@ -11,7 +11,7 @@
 #include "core/check.h"
 #include "core/rng.h"
 
-namespace candi {
+namespace candi::sampling {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -222,4 +222,4 @@ INSTANTIATE_TEST_SUITE_P(Both, DensityMethods,
                          [](const auto& info) { return DensityMethodName(info.param); });
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::sampling

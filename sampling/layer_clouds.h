@@ -9,11 +9,11 @@
 #include <vector>
 
 #include "core/point_cloud.h"
-#include "core/point_io.h"
+#include "io/point_io.h"
 
-namespace candi {
+namespace candi::sampling {
 
 void WriteLayerClouds(const std::string& path, const std::vector<PointCloud>& clouds,
-                      const std::vector<std::string>& names, const PointWriteOptions& options = {});
+                      const std::vector<std::string>& names, const io::PointWriteOptions& options = {});
 
-}  // namespace candi
+}  // namespace candi::sampling

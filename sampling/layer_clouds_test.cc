@@ -5,7 +5,7 @@
 #include "core/check.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::sampling {
 namespace {
 
 using testing::FileExists;
@@ -39,7 +39,7 @@ TEST(WriteLayerClouds, EqualsTheAppendedCloudAndNamesTheLayers) {
   PointCloud merged = clouds[0];
   merged.Append(clouds[1]);
   merged.Append(clouds[2]);
-  const PointCloud back = ReadPointCloud(dir.File("l.ply"));
+  const PointCloud back = io::ReadPointCloud(dir.File("l.ply"));
   EXPECT_EQ(back.frame, clouds[0].frame);
   EXPECT_EQ(back.positions, merged.positions);
   EXPECT_EQ(back.layers, merged.layers);
@@ -53,4 +53,4 @@ TEST(WriteLayerClouds, EqualsTheAppendedCloudAndNamesTheLayers) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::sampling

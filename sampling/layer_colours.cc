@@ -1,6 +1,6 @@
 #include "sampling/layer_colours.h"
 
-namespace candi {
+namespace candi::sampling {
 
 LayerColour DefaultLayerColour(const std::string& layer, size_t index) {
   if (layer == "A") return {{40, 90, 230}, "blue"};
@@ -13,4 +13,4 @@ LayerColour DefaultLayerColour(const std::string& layer, size_t index) {
   return kPalette[index % (sizeof(kPalette) / sizeof(kPalette[0]))];
 }
 
-}  // namespace candi
+}  // namespace candi::sampling

@@ -8,7 +8,7 @@
 
 #include "core/point_cloud.h"
 
-namespace candi {
+namespace candi::sampling {
 
 struct LayerColour {
   Rgb8 rgb;
@@ -17,4 +17,4 @@ struct LayerColour {
 
 LayerColour DefaultLayerColour(const std::string& layer, size_t index);
 
-}  // namespace candi
+}  // namespace candi::sampling

@@ -10,7 +10,7 @@
 #include "core/check.h"
 #include "core/rng.h"
 
-namespace candi {
+namespace candi::sampling {
 
 namespace {
 
@@ -218,4 +218,4 @@ OpacityResult AdjustOpacity(const OpacityOptions& options, const PointCloud& clo
   return result;
 }
 
-}  // namespace candi
+}  // namespace candi::sampling

@@ -21,7 +21,7 @@
 #include "core/point_cloud.h"
 #include "sampling/density.h"
 
-namespace candi {
+namespace candi::sampling {
 
 // The scalar field holding a point's number of copies (PLY property "scalar_spbr_multiplicity").
 inline constexpr char kMultiplicityField[] = "spbr_multiplicity";
@@ -113,4 +113,4 @@ OpacityResult AdjustOpacity(const OpacityOptions& options, const PointCloud& clo
 // The density AdjustOpacity(options, cloud) estimates.
 DensityResult OpacityDensity(const OpacityOptions& options, const PointCloud& cloud);
 
-}  // namespace candi
+}  // namespace candi::sampling

@@ -10,7 +10,7 @@
 #include "core/check.h"
 #include "core/rng.h"
 
-namespace candi {
+namespace candi::sampling {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -321,4 +321,4 @@ TEST(AdjustOpacity, ReadjustingKeepsTheCopyCount) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::sampling

@@ -14,7 +14,7 @@
 #include "core/rng.h"
 #include "core/text_format.h"
 
-namespace candi {
+namespace candi::sampling {
 
 namespace {
 
@@ -242,4 +242,4 @@ std::vector<uint64_t> SplitCount(uint64_t total, const std::vector<double>& weig
   return parts;
 }
 
-}  // namespace candi
+}  // namespace candi::sampling

@@ -23,7 +23,7 @@
 #include "core/point_cloud.h"
 #include "core/tri_mesh.h"
 
-namespace candi {
+namespace candi::sampling {
 
 enum class SurfaceSamplingMode { kArea, kPerTriangle };
 
@@ -49,4 +49,4 @@ double MeshArea(const TriMesh& mesh);
 // to total (largest remainder; ties to the lower index).
 std::vector<uint64_t> SplitCount(uint64_t total, const std::vector<double>& weights);
 
-}  // namespace candi
+}  // namespace candi::sampling

@@ -7,7 +7,7 @@
 
 #include "core/check.h"
 
-namespace candi {
+namespace candi::sampling {
 namespace {
 
 // The unit square z = 0 cut into very unequal triangles: a fan from (0.01, 0.01) to a boundary
@@ -149,4 +149,4 @@ TEST(SplitCount, SplitsExactlyInProportion) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::sampling

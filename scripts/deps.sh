@@ -10,7 +10,7 @@ packages=(
   g++ cmake ninja-build pkg-config make git ca-certificates
   # core
   libeigen3-dev libpng-dev libjpeg-dev libtbb-dev
-  # CRSs through PROJ (core/crs.cc; cs2cs checks candi's transforms in tests), E57's XML section
+  # CRSs through PROJ (io/crs.cc; cs2cs checks candi's transforms in tests), E57's XML section
   libproj-dev proj-data proj-bin libpugixml-dev
   # mesh
   libcgal-dev libopenmesh-dev libdxflib-dev

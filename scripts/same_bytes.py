@@ -10,14 +10,14 @@
       differs. Exit 0 when the outputs are the same bytes, 1 otherwise.
 
 What is not behaviour, and so is normalised before comparing (each rule is printed by compare):
-  - the recording's own folder (OUT_DIR) and the docs runner's random working-directory names in
-    text files: outputs that record an absolute input path name these;
+  - the docs runner's random working-directory names, in every file (outputs that record an
+    absolute input path name them); PNG chunks compare without their CRCs (which cover such
+    names). Record both trees at the same OUT_DIR (move the first aside before recording the
+    second): hashes over text that names the folder (a scene's key) match only then;
   - in JSON files, values under keys that hold run times ("seconds", "*_seconds", "timings",
     "stages" of section.json, "total"), which differ between any two runs;
-  - timings.json (a build's run times, kept apart from archive.json for this reason) and the
-    runner's block logs.
-Binary files are compared as they are: record both trees at the same OUT_DIR path (move the
-first aside before recording the second) in case one names it.
+  - timings.json (a build's run times, kept apart from archive.json for this reason), logs (the
+    runner's block logs, COLMAP's logs) and the runner's block scripts.
 """
 import json
 import os
@@ -28,8 +28,10 @@ import time
 
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TIMING_KEYS = re.compile(r"(^|_)(seconds|timings|ms|elapsed|stages)$|^total$|^time")
-SKIP_FILES = re.compile(r"(^|/)(timings\.json|block_\d+\.(sh|log))$")
+SKIP_FILES = re.compile(r"(^|/)(timings\.json|block_line\d+\.sh|[^/]*\.log|[^/]*\.log\.[A-Z]+\.[0-9.-]+)$")
+RECORDED_AT = ".recorded_at"  # the folder the recording was made in (outputs name it)
 RUNNER_DIR = re.compile(r"candi-docs-[A-Za-z0-9]{6}")
+RUNNER_DIR_BYTES = re.compile(rb"candi-docs-[A-Za-z0-9]{6}")
 
 
 def run(cmd, env=None, log=None):
@@ -49,6 +51,8 @@ def record(build, out, full_demo, pages):
     if os.path.exists(out):
         sys.exit(f"same_bytes: {out} exists; record into a new folder")
     os.makedirs(out)
+    with open(os.path.join(out, RECORDED_AT), "w") as f:
+        f.write(out)
     failures = []
     if run([candi, "-q", "demo", "--quick", "-o", os.path.join(out, "demo_quick")]) != 0:
         failures.append("demo --quick")
@@ -87,17 +91,29 @@ def normalise_json(value):
     return value
 
 
+def png_chunks(data):
+    """A PNG's chunks without their CRCs (text chunks are normalised like text files)."""
+    out, pos = [data[:8]], 8
+    while pos + 8 <= len(data):
+        length = int.from_bytes(data[pos:pos + 4], "big")
+        out.append(data[pos + 4:pos + 8] + data[pos + 8:pos + 8 + length])
+        pos += 12 + length
+    return b"\n".join(out)
+
+
 def content(path, root):
     with open(path, "rb") as f:
         data = f.read()
+    data = data.replace(root.encode(), b"<OUT>" + b"_" * (len(root) - 5))
+    data = RUNNER_DIR_BYTES.sub(b"candi-docs-XXXXXX", data)
+    if data.startswith(b"\x89PNG"):
+        return png_chunks(data)
     if b"\0" in data[:65536]:
         return data
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
         return data
-    text = text.replace(root, "<OUT>")
-    text = RUNNER_DIR.sub("candi-docs-XXXXXX", text)
     if path.endswith(".json"):
         try:
             return json.dumps(normalise_json(json.loads(text)), sort_keys=True).encode()
@@ -111,6 +127,8 @@ def files(root):
     for dirpath, _, names in os.walk(root):
         for name in names:
             p = os.path.join(dirpath, name)
+            if os.path.islink(p) or name == RECORDED_AT:
+                continue
             rel = RUNNER_DIR.sub("candi-docs-XXXXXX", os.path.relpath(p, root))
             if rel.endswith(".log") and rel.count("/") == 1 or SKIP_FILES.search(rel):
                 continue
@@ -118,9 +136,18 @@ def files(root):
     return found
 
 
+def recorded_at(tree):
+    try:
+        with open(os.path.join(tree, RECORDED_AT)) as f:
+            return f.read().strip()
+    except OSError:
+        return tree
+
+
 def compare(old, new):
     old, new = os.path.abspath(old), os.path.abspath(new)
     a, b = files(old), files(new)
+    root_a, root_b = recorded_at(old), recorded_at(new)
     print("normalised: absolute paths of the recording; JSON keys matching " + TIMING_KEYS.pattern +
           "; files matching " + SKIP_FILES.pattern + " are skipped")
     bad = 0
@@ -129,7 +156,7 @@ def compare(old, new):
             print(("only in new: " if rel in b else "only in old: ") + rel)
             bad += 1
             continue
-        ca, cb = content(a[rel], old), content(b[rel], new)
+        ca, cb = content(a[rel], root_a), content(b[rel], root_b)
         if ca != cb:
             print(f"differs: {rel} ({len(ca)} vs {len(cb)} bytes)")
             bad += 1

@@ -8,9 +8,9 @@
 #include <fstream>
 #include <string>
 
-#include "core/png_io.h"
-#include "core/point_io.h"
 #include "core/rng.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -36,11 +36,11 @@ void WriteScene(const std::string& path, size_t n) {
     c.positions[i] = Eigen::Vector3d(rng.Uniform(0, 10) + 2 * layer, rng.Uniform(0, 10), 3.0 * layer);
     c.colors[i] = {static_cast<uint8_t>(80 * layer + 60), static_cast<uint8_t>(200 - 60 * layer), 90};
   }
-  WritePointCloud(path, c);
+  io::WritePointCloud(path, c);
 }
 
 std::vector<uint16_t> Pixels16(const std::string& path) {
-  const PngImage png = ReadPng(path);
+  const io::PngImage png = io::ReadPng(path);
   const Image16& im = png.image16;
   return std::vector<uint16_t>(im.data(), im.data() + size_t{3} * im.width() * im.height());
 }
@@ -76,7 +76,7 @@ TEST_F(ArchiveCli, PackReportsAndRenderDrawsTheScene) {
   const testing::CommandResult r = RunCandi("render " + Render(d + "/arc", d + "/one"));
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("chunks in view"), std::string::npos) << r.output;
-  const PngImage png = ReadPng(d + "/one.png");
+  const io::PngImage png = io::ReadPng(d + "/one.png");
   EXPECT_EQ(png.text.at("candi:mode"), "archive");
   int covered = 0;
   const size_t values = size_t{3} * png.image8.width() * png.image8.height();

@@ -7,9 +7,9 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/png_io.h"
-#include "core/point_io.h"
 #include "core/sha256.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -34,7 +34,7 @@ void WriteSurveyWall(const std::string& path) {
       c.positions.emplace_back(0.01 * i + 0.0007, 5.0, 0.01 * j);
       c.colors.push_back({200, 60, 40});
     }
-  WritePointCloud(path, c);
+  io::WritePointCloud(path, c);
 }
 
 json BaseScene() {
@@ -66,7 +66,7 @@ TEST(BuildCli, TwoLayerSceneGivesLayersArchiveRendersProvenanceAndMeshlab) {
   ASSERT_EQ(r.code, 0) << r.output;
 
   // Layers: the wall keeps its millimetres at survey coordinates; the hill has its exact count.
-  const PointCloud wall = ReadPointCloud(dir.File("out/layers/wall.ply"));
+  const PointCloud wall = io::ReadPointCloud(dir.File("out/layers/wall.ply"));
   ASSERT_EQ(wall.size(), 80000u);
   const Eigen::Vector3d first = wall.frame.ToWorld(wall.positions[0]);
   EXPECT_NEAR(first.x(), 416000.0007, 1e-6);
@@ -74,7 +74,7 @@ TEST(BuildCli, TwoLayerSceneGivesLayersArchiveRendersProvenanceAndMeshlab) {
   EXPECT_EQ(wall.colors[0], (Rgb8{200, 60, 40}));
   ASSERT_NE(wall.FindScalar("scene_layer"), nullptr);
   ASSERT_NE(wall.FindScalar("quality"), nullptr);
-  const PointCloud hill = ReadPointCloud(dir.File("out/layers/hill.ply"));
+  const PointCloud hill = io::ReadPointCloud(dir.File("out/layers/hill.ply"));
   ASSERT_EQ(hill.size(), 3000u);
   EXPECT_EQ(hill.colors[17], (Rgb8{0, 160, 0}));
   EXPECT_EQ(hill.FindScalar("scene_layer")->Get(5), 1.0);
@@ -86,12 +86,12 @@ TEST(BuildCli, TwoLayerSceneGivesLayersArchiveRendersProvenanceAndMeshlab) {
 
   // Renders: three PNGs of the scene's size; the opaque one differs from the transparent one.
   for (const char* v : {"all", "opaque", "focus"}) {
-    const PngImage png = ReadPng(dir.File(std::string("out/renders/") + v + ".png"));
+    const io::PngImage png = io::ReadPng(dir.File(std::string("out/renders/") + v + ".png"));
     EXPECT_EQ(png.image8.width(), 96);
     EXPECT_EQ(png.image8.height(), 64);
     EXPECT_TRUE(FileExists(dir.File(std::string("out/renders/") + v + ".view.json")));
   }
-  EXPECT_FALSE(ReadPng(dir.File("out/renders/all.png")).image8 == ReadPng(dir.File("out/renders/opaque.png")).image8);
+  EXPECT_FALSE(io::ReadPng(dir.File("out/renders/all.png")).image8 == io::ReadPng(dir.File("out/renders/opaque.png")).image8);
 
   // Provenance: sources with their hashes, methods, counts, the frame; scanned vs reconstructed.
   const json a = json::parse(testing::ReadBytes(dir.File("out/archive.json")));
@@ -113,7 +113,7 @@ TEST(BuildCli, TwoLayerSceneGivesLayersArchiveRendersProvenanceAndMeshlab) {
   const std::string mlp = testing::ReadBytes(dir.File("out/meshlab/scene.mlp"));
   EXPECT_NE(mlp.find("filename=\"wall.ply\""), std::string::npos);
   EXPECT_NE(mlp.find("filename=\"hill.ply\""), std::string::npos);
-  const PointCloud local = ReadPointCloud(dir.File("out/meshlab/wall.ply"));
+  const PointCloud local = io::ReadPointCloud(dir.File("out/meshlab/wall.ply"));
   EXPECT_TRUE(local.frame.IsIdentity());
   EXPECT_LT(local.positions[0].cwiseAbs().maxCoeff(), 1e4);
   EXPECT_NE(testing::ReadBytes(dir.File("out/meshlab/shift.txt")).find("416000"), std::string::npos);
@@ -122,13 +122,13 @@ TEST(BuildCli, TwoLayerSceneGivesLayersArchiveRendersProvenanceAndMeshlab) {
   const Result again = RunCandi("build " + dir.File("scene.json") + " -o " + dir.File("out2"));
   ASSERT_EQ(again.code, 0) << again.output;
   EXPECT_EQ(testing::ReadBytes(dir.File("out/layers/hill.ply")), testing::ReadBytes(dir.File("out2/layers/hill.ply")));
-  EXPECT_TRUE(ReadPng(dir.File("out/renders/all.png")).image8 == ReadPng(dir.File("out2/renders/all.png")).image8);
+  EXPECT_TRUE(io::ReadPng(dir.File("out/renders/all.png")).image8 == io::ReadPng(dir.File("out2/renders/all.png")).image8);
 }
 
 // Builds the scene {wall.ply (written by the caller), `name` replacing it} and returns its
 // archive.json (an empty object, after a test failure, when the build fails).
 json BuildWallReplacedBy(const TempDir& dir, const std::string& name, const PointCloud& cloud) {
-  WritePointCloud(dir.File(name + ".ply"), cloud);
+  io::WritePointCloud(dir.File(name + ".ply"), cloud);
   json scene = json::parse(R"({"candi_scene": 1, "seed": 3,
     "render": {"repeat_level": 4, "width": 64, "height": 48},
     "layers": [{"name": "wall", "kind": "points", "file": "wall.ply"}]})");
@@ -154,7 +154,7 @@ TEST(BuildCli, ReplacingLayerDropsTheCoveredPointsOfTheOther) {
   EXPECT_EQ(a["layers"][0]["replaced_by"]["fine"], 40000);
   EXPECT_EQ(a["layers"][1]["points"], 10000);
   EXPECT_EQ(a["layers"][1]["replaces"], json::array({"wall"}));
-  const PointCloud wall = ReadPointCloud(dir.File("out/layers/wall.ply"));
+  const PointCloud wall = io::ReadPointCloud(dir.File("out/layers/wall.ply"));
   ASSERT_EQ(wall.size(), 40000u);
   double min_x = 1e300;
   for (size_t i = 0; i < wall.size(); ++i) min_x = std::min(min_x, wall.WorldPosition(i).x());

@@ -3,10 +3,10 @@
 
 #include <string>
 
-#include "core/point_io.h"
 #include "core/rng.h"
-#include "reconstruction/photogrammetry/testing/surface_cloud.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
+#include "tests/util/surface_cloud.h"
 #include "tests/util/test_util.h"
 
 namespace candi {
@@ -31,7 +31,7 @@ void WriteNoisy(const std::string& path) {
     c.positions[i] = Eigen::Vector3d(x, y, testing::SurfaceHeight(x, y) + 1.0);
     c.scalars[0].f64[i] = 1e6 + static_cast<double>(k);
   }
-  WritePointCloud(path, c);
+  io::WritePointCloud(path, c);
 }
 
 TEST(CleanCli, RemovesOutliersThinsAndKeepsFieldsAndShift) {
@@ -43,8 +43,8 @@ TEST(CleanCli, RemovesOutliersThinsAndKeepsFieldsAndShift) {
   EXPECT_NE(r.out.find("points in"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("removed: outliers"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("removed: voxel 0.2 m"), std::string::npos) << r.out;
-  const PointCloud in = ReadPointCloud(dir.File("in.ply"));
-  const PointCloud out = ReadPointCloud(dir.File("out.ply"));
+  const PointCloud in = io::ReadPointCloud(dir.File("in.ply"));
+  const PointCloud out = io::ReadPointCloud(dir.File("out.ply"));
   EXPECT_EQ(out.frame, in.frame);
   EXPECT_EQ(out.schema, in.schema);
   ASSERT_GT(out.size(), 1000u);
@@ -60,7 +60,7 @@ TEST(CleanCli, RemovesOutliersThinsAndKeepsFieldsAndShift) {
   const Result plain = RunCandi("-q clean " + dir.File("in.ply") + " -o " + dir.File("p.xyz") +
                                 " --no-sor");
   ASSERT_EQ(plain.code, 0) << plain.output;
-  EXPECT_EQ(ReadPointCloud(dir.File("p.xyz")).size(), in.size());
+  EXPECT_EQ(io::ReadPointCloud(dir.File("p.xyz")).size(), in.size());
 }
 
 TEST(CleanCli, MissingInputIsExitTwoNamingIt) {

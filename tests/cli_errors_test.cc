@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "core/png_io.h"
-#include "core/point_io.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -60,16 +60,16 @@ void WriteInputs(const TempDir& dir) {
     c.positions.emplace_back(0.01 * (i % 20), 0.01 * (i / 20), 0.001 * i);
     c.colors.push_back({static_cast<uint8_t>(i), 80, 160});
   }
-  WritePointCloud(dir.File("in.ply"), c);
-  WritePointCloud(dir.File("in.xyz"), c);
+  io::WritePointCloud(dir.File("in.ply"), c);
+  io::WritePointCloud(dir.File("in.xyz"), c);
   Image8 rgb(32, 24, 3);
   for (int y = 0; y < 24; ++y)
     for (int x = 0; x < 32; ++x)
       for (int k = 0; k < 3; ++k) rgb.at(x, y, k) = static_cast<uint8_t>(40 + 5 * x + 3 * y + 20 * k);
-  WritePng(dir.File("img.png"), rgb);
+  io::WritePng(dir.File("img.png"), rgb);
   fs::create_directories(dir.File("photos"));
-  WritePng(dir.File("photos/a.png"), rgb);
-  WritePng(dir.File("photos/b.png"), rgb);
+  io::WritePng(dir.File("photos/a.png"), rgb);
+  io::WritePng(dir.File("photos/b.png"), rgb);
   testing::WriteBytes(dir.File("card.csv"),
                       "patch,measured_r,measured_g,measured_b,reference_r,reference_g,reference_b\n"
                       "1,10,20,30,12,22,32\n2,100,50,30,110,55,33\n3,30,200,60,33,210,66\n"

@@ -9,8 +9,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/point_io.h"
 #include "core/rng.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -121,7 +121,7 @@ TEST(Cli, MissingInputIsExitTwoNamingTheFile) {
 
 TEST(Cli, UnwritableOutputIsExitTwoAndCreatesNothing) {
   TempDir dir;
-  WritePointCloud(dir.File("in.ply"), SurveyCloud(10));
+  io::WritePointCloud(dir.File("in.ply"), SurveyCloud(10));
   const Result r = RunCandi("convert " + dir.File("in.ply") + " " + dir.File("no/such/dir/out.ply"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("no/such/dir/out.ply"), std::string::npos) << r.output;
@@ -129,7 +129,7 @@ TEST(Cli, UnwritableOutputIsExitTwoAndCreatesNothing) {
 
 TEST(Cli, BadInputLeavesTheEarlierOutputIntact) {
   TempDir dir;
-  WritePointCloud(dir.File("good.ply"), SurveyCloud(10));
+  io::WritePointCloud(dir.File("good.ply"), SurveyCloud(10));
   RunCandi("convert " + dir.File("good.ply") + " " + dir.File("out.las"));
   const std::string before = ReadBytes(dir.File("out.las"));
   ASSERT_FALSE(before.empty());
@@ -145,16 +145,16 @@ TEST(Cli, BadInputLeavesTheEarlierOutputIntact) {
 TEST(Cli, RoundTripPlyLasXyzAtSurveyScale) {
   TempDir dir;
   const PointCloud cloud = SurveyCloud(2000);
-  WritePointCloud(dir.File("a.ply"), cloud);
+  io::WritePointCloud(dir.File("a.ply"), cloud);
   ASSERT_EQ(RunCandi("-q convert " + dir.File("a.ply") + " " + dir.File("b.las") + " --las-scale 0.001").output, "");
   ASSERT_EQ(RunCandi("convert " + dir.File("b.las") + " " + dir.File("c.xyz") + " --shift auto").code, 0);
   EXPECT_TRUE(FileExists(dir.File("c.xyz.shift.json")));
   Result r = RunCandi("convert " + dir.File("c.xyz") + " " + dir.File("d.ply"));
   ASSERT_EQ(r.code, 0) << r.output;
   ASSERT_EQ(RunCandi("convert " + dir.File("d.ply") + " " + dir.File("e.ply") + " --shift none").code, 0);
-  const PointCloud las = ReadPointCloud(dir.File("b.las"));
-  const PointCloud d = ReadPointCloud(dir.File("d.ply"));
-  const PointCloud e = ReadPointCloud(dir.File("e.ply"));
+  const PointCloud las = io::ReadPointCloud(dir.File("b.las"));
+  const PointCloud d = io::ReadPointCloud(dir.File("d.ply"));
+  const PointCloud e = io::ReadPointCloud(dir.File("e.ply"));
   ASSERT_EQ(las.size(), cloud.size());
   ASSERT_EQ(d.size(), cloud.size());
   EXPECT_FALSE(d.frame.IsIdentity()) << "the shift travelled through XYZ's sidecar into PLY";
@@ -173,7 +173,7 @@ TEST(Cli, RoundTripPlyLasXyzAtSurveyScale) {
 
 TEST(Cli, InfoReportsCountBoundsFieldsAndJson) {
   TempDir dir;
-  WritePointCloud(dir.File("a.ply"), SurveyCloud(100));
+  io::WritePointCloud(dir.File("a.ply"), SurveyCloud(100));
   Result r = RunCandi("info " + dir.File("a.ply"));
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.output.find("points    100"), std::string::npos) << r.output;

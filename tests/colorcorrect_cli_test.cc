@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/png_io.h"
-#include "core/point_io.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -67,13 +67,13 @@ Image8 CastImage() {
 TEST(ColorCorrectCli, RemovesACastFromAPngAndReportsDeltaE) {
   TempDir dir;
   WriteBytes(dir.File("card.csv"), PatchesCsv());
-  WritePng(dir.File("photo.png"), CastImage());
+  io::WritePng(dir.File("photo.png"), CastImage());
   const Result r = RunCandi("colorcorrect " + dir.File("photo.png") + " -o " + dir.File("fixed.png") +
                             " --patches " + dir.File("card.csv"));
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.out.find("CIEDE2000"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("mean (fitted)"), std::string::npos) << r.out;
-  const PngImage fixed = ReadPng(dir.File("fixed.png"));
+  const io::PngImage fixed = io::ReadPng(dir.File("fixed.png"));
   for (int i = 0; i < kCount; ++i) {
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(fixed.image8.at(20 * i + 10, 10, c), kPatches[i][c], 2.0) << i;
   }
@@ -85,7 +85,7 @@ TEST(ColorCorrectCli, RemovesACastFromAPngAndReportsDeltaE) {
 
 TEST(ColorCorrectCli, LocatesPatchesInACardPhotoAndCorrectsPointColours) {
   TempDir dir;
-  WritePng(dir.File("card.png"), CastImage());
+  io::WritePng(dir.File("card.png"), CastImage());
   std::string csv = "patch,x0,y0,x1,y1,x2,y2,x3,y3,reference_r,reference_g,reference_b\n";
   for (int i = 0; i < kCount; ++i) {
     char line[200];
@@ -100,11 +100,11 @@ TEST(ColorCorrectCli, LocatesPatchesInACardPhotoAndCorrectsPointColours) {
     cloud.positions.emplace_back(i, 0, 0);
     cloud.colors.push_back(Rgb8{Cast(kPatches[i], 0), Cast(kPatches[i], 1), Cast(kPatches[i], 2)});
   }
-  WritePointCloud(dir.File("in.ply"), cloud);
+  io::WritePointCloud(dir.File("in.ply"), cloud);
   const Result r = RunCandi("colorcorrect " + dir.File("in.ply") + " -o " + dir.File("out.ply") +
                             " --card " + dir.File("card.png") + " --corners " + dir.File("corners.csv"));
   ASSERT_EQ(r.code, 0) << r.output;
-  const PointCloud out = ReadPointCloud(dir.File("out.ply"));
+  const PointCloud out = io::ReadPointCloud(dir.File("out.ply"));
   ASSERT_EQ(out.size(), static_cast<size_t>(kCount));
   for (int i = 0; i < kCount; ++i) {
     EXPECT_NEAR(out.colors[i].r, kPatches[i][0], 2.0) << i;
@@ -115,7 +115,7 @@ TEST(ColorCorrectCli, LocatesPatchesInACardPhotoAndCorrectsPointColours) {
 TEST(ColorCorrectCli, BadInputsAndOptionsGiveClearErrorsAndExitCodes) {
   TempDir dir;
   WriteBytes(dir.File("card.csv"), PatchesCsv());
-  WritePng(dir.File("photo.png"), CastImage());
+  io::WritePng(dir.File("photo.png"), CastImage());
   const std::string patches = " --patches " + dir.File("card.csv");
   Result r = RunCandi("colorcorrect " + dir.File("missing.png") + " -o " + dir.File("o.png") + patches);
   EXPECT_EQ(r.code, 2);

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "core/point_io.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -36,9 +36,9 @@ void WritePly(const std::string& path, const std::vector<Eigen::Vector3d>& point
   c.SetSchema(c.schema);
   c.positions = points;
   c.meta.crs = crs;
-  PointWriteOptions o;
-  o.precision = PositionPrecision::kFloat64;
-  WritePointCloud(path, c, o);
+  io::PointWriteOptions o;
+  o.precision = io::PositionPrecision::kFloat64;
+  io::WritePointCloud(path, c, o);
 }
 
 // cs2cs from EPSG:4326 (its axis order: latitude, longitude) to EPSG:32749 (easting, northing).
@@ -82,7 +82,7 @@ TEST(CrsCli, Wgs84AndUtmLayersMeetInTheScenesCrsAsCs2csPutsThem) {
   const testing::CommandResult r = RunCandi("build " + dir.File("scene.json") + " -o " + dir.File("out"));
   ASSERT_EQ(r.code, 0) << r.output;
 
-  const PointCloud gnss = ReadPointCloud(dir.File("out/layers/gnss.ply"));
+  const PointCloud gnss = io::ReadPointCloud(dir.File("out/layers/gnss.ply"));
   ASSERT_EQ(gnss.size(), expected.size());
   double worst = 0;
   for (size_t i = 0; i < gnss.size(); ++i) {
@@ -91,7 +91,7 @@ TEST(CrsCli, Wgs84AndUtmLayersMeetInTheScenesCrsAsCs2csPutsThem) {
     EXPECT_NEAR(w.z(), lonlat[i].z(), 1e-6);  // a 2-D CRS pair: heights pass through
   }
   EXPECT_LT(worst, 1e-6) << "metres from cs2cs";  // cs2cs prints micrometres
-  const PointCloud g = ReadPointCloud(dir.File("out/layers/grid.ply"));
+  const PointCloud g = io::ReadPointCloud(dir.File("out/layers/grid.ply"));
   ASSERT_EQ(g.size(), 2u);
   EXPECT_NEAR((g.frame.ToWorld(g.positions[1]) - grid[1]).norm(), 0, 1e-9);  // untouched
 
@@ -167,7 +167,7 @@ TEST(CrsCli, ConvertReprojectsLikeCs2csAndCarriesTheCrsIntoLas) {
   EXPECT_NE(r.output.find("give it with --crs"), std::string::npos) << r.output;
   r = RunCandi("convert " + dir.File("gnss.ply") + " " + dir.File("utm.las") + " --crs EPSG:4326 --to-crs EPSG:32749");
   ASSERT_EQ(r.code, 0) << r.output;
-  const PointCloud utm = ReadPointCloud(dir.File("utm.las"));
+  const PointCloud utm = io::ReadPointCloud(dir.File("utm.las"));
   ASSERT_EQ(utm.size(), expected.size());
   for (size_t i = 0; i < utm.size(); ++i) {
     EXPECT_NEAR(utm.positions[i].x(), expected[i].x(), 0.0006);  // LAS's 1 mm grid
@@ -226,7 +226,7 @@ TEST(CrsCli, GeorefFitsGnssTargetsTransformedIntoTheSurveyCrs) {
   EXPECT_LT(report["rmse"]["control"]["3d"].get<double>(), 0.001) << report.dump(2);
   EXPECT_LT(report["rmse"]["check"]["3d"].get<double>(), 0.001) << report.dump(2);
   EXPECT_EQ(report["targets_crs"], "EPSG:4326");
-  const PointCloud site = ReadPointCloud(dir.File("site.ply"));
+  const PointCloud site = io::ReadPointCloud(dir.File("site.ply"));
   EXPECT_EQ(site.meta.crs, "EPSG:32749");
   EXPECT_LT((site.frame.ToWorld(site.positions[1]) - utm[2]).head<2>().norm(), 0.001);
   // Without --crs there is nothing to transform into.

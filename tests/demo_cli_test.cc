@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "core/png_io.h"
-#include "core/point_io.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "render/camera.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
@@ -110,7 +110,7 @@ TEST(DemoCli, QuickDemoHidesThePanelsBehindTheEncasementAndShowsThemSeeThrough) 
   EXPECT_LT(georef["rmse_m"]["control"]["3d"].get<double>(), 0.03) << georef.dump();
   EXPECT_GT(a["layers"][0]["replaced_by"]["corner"].get<int>(), 1000) << "the close range replaces the scan in the dig";
   // Its points on the exposed foot wall (y = -56.5) lie on it: the whole chain's accuracy.
-  const PointCloud close_range = ReadPointCloud(dir.File("demo/archive/layers/corner.ply"));
+  const PointCloud close_range = io::ReadPointCloud(dir.File("demo/archive/layers/corner.ply"));
   std::vector<double> off_wall;
   for (size_t i = 0; i < close_range.size(); ++i) {
     const Eigen::Vector3d p = close_range.WorldPosition(i);
@@ -127,7 +127,7 @@ TEST(DemoCli, QuickDemoHidesThePanelsBehindTheEncasementAndShowsThemSeeThrough) 
   std::printf("close range to the foot wall: median %.4f m over %zu points\n", median, off_wall.size());
   EXPECT_LT(median, 0.04) << "median distance of the close range to the foot wall, m (a stereo pixel is 0.074)";
 
-  const auto png = [&](const char* name) { return ReadPng(dir.File(std::string("demo/archive/renders/") + name + ".png")).image8; };
+  const auto png = [&](const char* name) { return io::ReadPng(dir.File(std::string("demo/archive/renders/") + name + ".png")).image8; };
   const Image8 opaque = png("corner_opaque"), opaque_building = png("corner_opaque_building");
   const Image8 see_through = png("corner_transparent"), see_through_building = png("corner_transparent_building");
   const render::Camera camera = LoadCamera(dir.File("demo/archive/renders/corner_opaque.view.json"));

@@ -28,8 +28,8 @@
 #include <thread>
 #include <vector>
 
-#include "core/png_io.h"
-#include "core/point_io.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "tests/util/test_util.h"
 
 namespace candi {
@@ -126,7 +126,7 @@ void WriteCloud(const std::string& path, int n, uint32_t seed) {
     c.positions.emplace_back(u(rng), u(rng), 0.1 * u(rng));
     c.colors.push_back({static_cast<uint8_t>(i), 120, static_cast<uint8_t>(200 - i % 100)});
   }
-  WritePointCloud(path, c);
+  io::WritePointCloud(path, c);
 }
 
 std::string LogDir(const TempDir& dir) {
@@ -152,7 +152,7 @@ TEST(Fault, AReadErrorMidFileIsReportedAndTheOutputKept) {
   // The same command without the fault succeeds: the failure was the injected one.
   const auto [ok, ok_err] = RunToEnd({"convert", dir.File("in.ply"), dir.File("out.ply")}, LogDir(dir));
   EXPECT_EQ(ok, 0) << ok_err;
-  EXPECT_EQ(ReadPointCloud(dir.File("out.ply")).size(), 200000u);
+  EXPECT_EQ(io::ReadPointCloud(dir.File("out.ply")).size(), 200000u);
 }
 
 TEST(Fault, AFullDiskIsReportedAndTheOutputKept) {
@@ -216,7 +216,7 @@ TEST(Fault, AFileSizeLimitDuringBuildKeepsTheEarlierArchive) {
   EXPECT_TRUE(Contains(err, "the destination is unchanged")) << err;
   EXPECT_EQ(ReadBytes(dir.File("out/archive.json")), manifest);
   EXPECT_EQ(ReadBytes(dir.File("out/layers/cloud.ply")), layer);
-  EXPECT_NO_THROW(ReadPointCloud(dir.File("out/layers/hill.ply")));
+  EXPECT_NO_THROW(io::ReadPointCloud(dir.File("out/layers/hill.ply")));
   EXPECT_TRUE(Temporaries(dir.path()).empty());
 }
 
@@ -254,7 +254,7 @@ TEST(Fault, ColmapKilledMidStageIsReported) {
     for (int y = 0; y < 240; ++y)
       for (int x = 0; x < 320; ++x)
         for (int c = 0; c < 3; ++c) img.at(x, y, c) = static_cast<uint8_t>((((x + 7 * k) / 8 * 37 + y / 8 * 91 + c * 50) % 251) ^ (rng() & 31));
-    WritePng(dir.File("photos/p" + std::to_string(k) + ".png"), img);
+    io::WritePng(dir.File("photos/p" + std::to_string(k) + ".png"), img);
   }
   const std::string colmap = candi::testing::RunCommand("command -v colmap").output;
   WriteBytes(dir.File("colmap-held"), "#!/bin/sh\nif [ \"$1\" = matches_importer ]; then kill -STOP $$; fi\nexec " +
@@ -302,7 +302,7 @@ TEST(Fault, AnInterruptedBuildLeavesFinishedFilesAndResumes) {
   EXPECT_FALSE(fs::exists(dir.File("out/archive.json"))) << "the build did not finish";
   // What it finished is complete.
   EXPECT_EQ(ReadBytes(dir.File("out/layers/hill.ply")), ReadBytes(dir.File("ref/layers/hill.ply")));
-  EXPECT_TRUE(ReadPng(dir.File("out/renders/v0.png")).image8 == ReadPng(dir.File("ref/renders/v0.png")).image8);
+  EXPECT_TRUE(io::ReadPng(dir.File("out/renders/v0.png")).image8 == io::ReadPng(dir.File("ref/renders/v0.png")).image8);
 
   // Resumed: the foundation and the first view are reused, the rest done; the same archive.
   const auto [code, resumed_err] = RunToEnd({"build", dir.File("scene.json"), "-o", dir.File("out"), "--resume"}, LogDir(dir));
@@ -319,7 +319,7 @@ TEST(Fault, AnInterruptedBuildLeavesFinishedFilesAndResumes) {
               ReadBytes(dir.File(std::string("ref/layers/") + layer + ".ply"))) << layer;
   for (int v = 0; v < 4; ++v) {
     const std::string png = "/renders/v" + std::to_string(v) + ".png";
-    EXPECT_TRUE(ReadPng(dir.File("out" + png)).image8 == ReadPng(dir.File("ref" + png)).image8) << png;
+    EXPECT_TRUE(io::ReadPng(dir.File("out" + png)).image8 == io::ReadPng(dir.File("ref" + png)).image8) << png;
   }
 
   // A changed input is not resumed: the foundation's count.
@@ -330,7 +330,7 @@ TEST(Fault, AnInterruptedBuildLeavesFinishedFilesAndResumes) {
   ASSERT_EQ(again, 0) << again_err;
   EXPECT_FALSE(Contains(again_err, "layer hill (foundation): resumed")) << again_err;
   EXPECT_FALSE(Contains(again_err, "view v0: resumed")) << again_err;
-  EXPECT_EQ(ReadPointCloud(dir.File("out/layers/hill.ply")).size(), 21000u);
+  EXPECT_EQ(io::ReadPointCloud(dir.File("out/layers/hill.ply")).size(), 21000u);
 }
 
 }  // namespace

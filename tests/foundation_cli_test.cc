@@ -4,9 +4,9 @@
 #include <map>
 #include <string>
 
-#include "core/point_io.h"
-#include "mesh/testing/dxf_text.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
+#include "tests/util/dxf_text.h"
 #include "tests/util/test_util.h"
 
 namespace candi {
@@ -46,7 +46,7 @@ TEST(FoundationCli, ExampleBuildsFourCheckedLayersWithExactCountAndLayerField) {
   EXPECT_NE(Row(r.out, "D").find("green"), std::string::npos);
   EXPECT_NE(Row(r.out, "A").find("blue"), std::string::npos);
   EXPECT_NE(r.out.find("units millimetre"), std::string::npos) << r.out;
-  const PointCloud cloud = ReadPointCloud(dir.File("f.ply"));
+  const PointCloud cloud = io::ReadPointCloud(dir.File("f.ply"));
   ASSERT_EQ(cloud.size(), 40000u);
   ASSERT_TRUE(cloud.schema.layers);
   ASSERT_TRUE(cloud.schema.colors);
@@ -84,7 +84,7 @@ TEST(FoundationCli, PaperModeAndSurveyCoordinatesKeepTheWorldPosition) {
   const Result r = RunCandi("foundation " + dir.File("s.dxf") + " -o " + dir.File("s.ply") +
                             kQuick + " --per-triangle 1");
   ASSERT_EQ(r.code, 0) << r.output;
-  const PointCloud cloud = ReadPointCloud(dir.File("s.ply"));
+  const PointCloud cloud = io::ReadPointCloud(dir.File("s.ply"));
   EXPECT_EQ(cloud.size(), 2u * 36 * (2 * 119 - 1)) << "one point per triangle";
   for (size_t i = 0; i < cloud.size(); i += 101) {
     const Eigen::Vector3d p = cloud.WorldPosition(i);

@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/point_io.h"
 #include "core/rng.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -72,7 +72,7 @@ std::vector<V> Overlap() {
 void WriteChunk(const std::string& path, const Chunk& chunk) {
   PointCloud cloud;
   for (const V& w : Overlap()) cloud.positions.push_back(chunk.Model(w));
-  WritePointCloud(path, cloud);
+  io::WritePointCloud(path, cloud);
 }
 
 std::string Row(const std::string& out, const std::string& name) {
@@ -91,7 +91,7 @@ TEST(GeorefCli, FlagsTheBlunderAndWritesSurveyCoordinatesWithTheShift) {
   EXPECT_NE(Row(r.out, "P3").find(" ok"), std::string::npos) << r.out;
   EXPECT_NE(Row(r.out, "P10").find("check"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("control (outliers out)"), std::string::npos);
-  const PointCloud out = ReadPointCloud(dir.File("a_utm.ply"));
+  const PointCloud out = io::ReadPointCloud(dir.File("a_utm.ply"));
   EXPECT_EQ(out.frame.origin, V(416000, 9168000, 300));
   const std::vector<V> truth = Overlap();
   ASSERT_EQ(out.size(), truth.size());
@@ -114,7 +114,7 @@ TEST(GeorefCli, TiesTwoChunksIntoOneFrame) {
                               " --loss cauchy --loss-scale 0.02");
     ASSERT_EQ(r.code, 0) << r.output;
   }
-  const PointCloud a = ReadPointCloud(dir.File("a_utm.ply")), b = ReadPointCloud(dir.File("b_utm.ply"));
+  const PointCloud a = io::ReadPointCloud(dir.File("a_utm.ply")), b = io::ReadPointCloud(dir.File("b_utm.ply"));
   ASSERT_EQ(a.size(), b.size());
   EXPECT_EQ(a.frame, b.frame);
   for (size_t i = 0; i < a.size(); ++i) EXPECT_LT((a.positions[i] - b.positions[i]).norm(), 0.002) << i;

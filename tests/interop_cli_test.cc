@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "core/point_io.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -69,7 +69,7 @@ Result BuildScene(const TempDir& dir) {
       wall.positions.emplace_back(0.05 * i + 0.0007, 5.0 + 0.0003 * j, 0.05 * j + 0.0009);
       wall.colors.push_back(kLayers[0].color);
     }
-  WritePointCloud(dir.File("wall.ply"), wall);
+  io::WritePointCloud(dir.File("wall.ply"), wall);
   std::string xyz;
   char line[128];
   for (int i = 0; i < 800; ++i) {
@@ -91,7 +91,7 @@ Result BuildScene(const TempDir& dir) {
 
 // World coordinates of layer k as candi wrote it (layers/<name>.ply, read by candi).
 std::vector<Eigen::Vector3d> WorldOf(const TempDir& dir, size_t k) {
-  const PointCloud c = ReadPointCloud(dir.File("out/layers/" + kLayers[k].name + ".ply"));
+  const PointCloud c = io::ReadPointCloud(dir.File("out/layers/" + kLayers[k].name + ".ply"));
   std::vector<Eigen::Vector3d> world;
   for (size_t i = 0; i < c.size(); ++i) world.push_back(c.WorldPosition(i));
   return world;
@@ -184,10 +184,10 @@ TEST(Interop, MeshLabOpensTheProjectAndTheLocalPlysKeepingQualityAndColour) {
   ASSERT_EQ(saved.size(), kLayers.size());
   for (size_t k = 0; k < kLayers.size(); ++k) {
     SCOPED_TRACE(kLayers[k].name);
-    const PointCloud local = ReadPointCloud(ml + kLayers[k].name + ".ply");  // what candi wrote
+    const PointCloud local = io::ReadPointCloud(ml + kLayers[k].name + ".ply");  // what candi wrote
     ASSERT_TRUE(local.frame.IsIdentity());
     for (const char* prefix : {"p_", "i_"}) {
-      const PointCloud c = ReadPointCloud(ml + prefix + kLayers[k].name + ".ply");
+      const PointCloud c = io::ReadPointCloud(ml + prefix + kLayers[k].name + ".ply");
       ExpectLayer(c, k, "quality");
       EXPECT_EQ(c.schema.position_type, ScalarType::kFloat32);
       EXPECT_LT(MaxDistance(c.positions, local.positions), 1e-6) << prefix;  // float in, float out
@@ -196,7 +196,7 @@ TEST(Interop, MeshLabOpensTheProjectAndTheLocalPlysKeepingQualityAndColour) {
     // shift.txt, gives the world coordinates of layers/<name>.ply to well under a millimetre.
     EXPECT_EQ(saved[k].filename, kLayers[k].name + "_out.ply");
     EXPECT_TRUE(saved[k].matrix.isIdentity(0.0)) << saved[k].matrix;
-    const PointCloud out = ReadPointCloud(ml + saved[k].filename);
+    const PointCloud out = io::ReadPointCloud(ml + saved[k].filename);
     ExpectLayer(out, k, "quality");
     std::vector<Eigen::Vector3d> world;
     for (const Eigen::Vector3d& p : out.positions)
@@ -216,7 +216,7 @@ TEST(Interop, CloudCompareKeepsScalarFieldsAndDoubleCoordinatesWithGlobalShiftAu
   // The layer files hold double world coordinates themselves: CloudCompare ignores candi's shift
   // comment and sidecar.
   for (const Layer& l : kLayers) {
-    const PointFileInfo info = OpenPointReader(dir.File("out/layers/" + l.name + ".ply"))->info();
+    const io::PointFileInfo info = io::OpenPointReader(dir.File("out/layers/" + l.name + ".ply"))->info();
     EXPECT_TRUE(info.frame.IsIdentity()) << l.name;
     EXPECT_EQ(info.schema.position_type, ScalarType::kFloat64) << l.name;
   }
@@ -237,7 +237,7 @@ TEST(Interop, CloudCompareKeepsScalarFieldsAndDoubleCoordinatesWithGlobalShiftAu
   for (size_t k = 0; k < kLayers.size(); ++k) {
     SCOPED_TRACE(kLayers[k].name);
     ASSERT_TRUE(FileExists(dir.File("cc/" + kLayers[k].name + ".ply"))) << r.output;
-    const PointCloud c = ReadPointCloud(dir.File("cc/" + kLayers[k].name + ".ply"));
+    const PointCloud c = io::ReadPointCloud(dir.File("cc/" + kLayers[k].name + ".ply"));
     ExpectLayer(c, k, "scene_layer");  // scalar_scene_layer, written back under its name
     EXPECT_EQ(c.schema.position_type, ScalarType::kFloat64);
     std::vector<Eigen::Vector3d> world;
@@ -245,7 +245,7 @@ TEST(Interop, CloudCompareKeepsScalarFieldsAndDoubleCoordinatesWithGlobalShiftAu
     EXPECT_LT(MaxDistance(world, WorldOf(dir, k)), 1e-3);
   }
   // Without -GLOBAL_SHIFT: float coordinates, the millimetres (and more) lost at N 9168000.
-  const PointCloud plain = ReadPointCloud(dir.File("cc/wall_default.ply"));
+  const PointCloud plain = io::ReadPointCloud(dir.File("cc/wall_default.ply"));
   ExpectLayer(plain, 0, "scene_layer");
   EXPECT_EQ(plain.schema.position_type, ScalarType::kFloat32);
   std::vector<Eigen::Vector3d> world;

@@ -4,8 +4,8 @@
 #include <cstdio>
 #include <string>
 
-#include "core/point_io.h"
 #include "core/rng.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -31,7 +31,7 @@ void WritePlane(const std::string& path) {
         Eigen::Vector3d(500000.0 + rng.Uniform(0, 5), 4500000.0 + rng.Uniform(0, 5), 90);
     c.colors[i] = {static_cast<uint8_t>(i), 100, 200};
   }
-  WritePointCloud(path, c);
+  io::WritePointCloud(path, c);
 }
 
 const char kGood[] = " --alpha 0.5 --repeat-level 20 --image-size 256";
@@ -47,7 +47,7 @@ TEST(OpacityCli, WritesTheMultiplicityFieldCommentAndSummary) {
   EXPECT_NE(bytes.find("property float scalar_spbr_multiplicity"), std::string::npos);
   EXPECT_NE(bytes.find("comment candi_opacity alpha=0.5 repeat_level=20 pixel_size="),
             std::string::npos);
-  const PointCloud out = ReadPointCloud(dir.File("out.ply"));
+  const PointCloud out = io::ReadPointCloud(dir.File("out.ply"));
   const ScalarField* m = out.FindScalar("spbr_multiplicity");
   ASSERT_NE(m, nullptr);
   ASSERT_GT(out.size(), 0u);

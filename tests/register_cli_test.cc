@@ -6,10 +6,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/point_io.h"
 #include "core/transform.h"
-#include "reconstruction/photogrammetry/testing/surface_cloud.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
+#include "tests/util/surface_cloud.h"
 #include "tests/util/test_util.h"
 
 namespace candi {
@@ -37,16 +37,16 @@ void WriteClouds(const TempDir& dir) {
   f.seed = 1;
   m.seed = 2;
   f.origin = m.origin = kSite;
-  WritePointCloud(dir.File("fixed.ply"), testing::SurfaceCloud(f));
+  io::WritePointCloud(dir.File("fixed.ply"), testing::SurfaceCloud(f));
   PointCloud moving = testing::SurfaceCloud(m);
   const Rigid3 inverse = Truth().Inverse();
   for (size_t i = 0; i < moving.size(); ++i) {
     moving.positions[i] = inverse * moving.WorldPosition(i) - moving.frame.origin;
   }
   moving.schema.position_type = ScalarType::kFloat32;
-  PointWriteOptions o;
-  o.precision = PositionPrecision::kFloat32;
-  WritePointCloud(dir.File("moving.ply"), moving, o);
+  io::PointWriteOptions o;
+  o.precision = io::PositionPrecision::kFloat32;
+  io::WritePointCloud(dir.File("moving.ply"), moving, o);
 }
 
 TEST(RegisterCli, RecoversTheMotionPrintsFiguresAndKeepsShiftAndPrecision) {
@@ -70,8 +70,8 @@ TEST(RegisterCli, RecoversTheMotionPrintsFiguresAndKeepsShiftAndPrecision) {
   EXPECT_LT((m * x - truth * x).norm(), 2e-3);
   EXPECT_LT(j["rms_after_m"].get<double>(), j["rms_before_m"].get<double>());
   EXPECT_GT(j["overlap_after"].get<double>(), 0.95);
-  const PointCloud in = ReadPointCloud(dir.File("moving.ply"));
-  const PointCloud out = ReadPointCloud(dir.File("out.ply"));
+  const PointCloud in = io::ReadPointCloud(dir.File("moving.ply"));
+  const PointCloud out = io::ReadPointCloud(dir.File("out.ply"));
   ASSERT_EQ(out.size(), in.size());
   EXPECT_EQ(out.frame, in.frame);
   // Colours, normals, layer, id kept; the writer may widen float positions to double when the
@@ -121,7 +121,7 @@ TEST(RegisterCli, UnwritableOutputFolderAndNoOverlapAreExitTwo) {
   testing::SurfaceCloudSpec s;
   s.count = 500;
   s.origin = kSite + Eigen::Vector3d(1000, 0, 0);
-  WritePointCloud(other.File("away.ply"), testing::SurfaceCloud(s));
+  io::WritePointCloud(other.File("away.ply"), testing::SurfaceCloud(s));
   const Result none = RunCandi("register " + other.File("away.ply") + " " + dir.File("fixed.ply") +
                                " -o " + dir.File("out2.ply"));
   EXPECT_EQ(none.code, 2);

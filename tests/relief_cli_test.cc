@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/png_io.h"
-#include "core/point_io.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -48,7 +48,7 @@ std::string* ReliefCli::train_output_ = nullptr;
 
 TEST_F(ReliefCli, SynthDatasetAndTrainWriteTheirFiles) {
   EXPECT_TRUE(FileExists(dir_->File("panels/panel_0002_photo.png")));
-  const PngImage depth = ReadPng(dir_->File("panels/panel_0000_depth.png"));
+  const io::PngImage depth = io::ReadPng(dir_->File("panels/panel_0000_depth.png"));
   EXPECT_EQ(depth.bit_depth, 16);
   EXPECT_EQ(depth.image16.width(), 192);
   EXPECT_EQ(depth.text.count("candi_light_azimuth_deg"), 1u);
@@ -66,13 +66,13 @@ TEST_F(ReliefCli, PredictPointsAndEvalOnAnyPhoto) {
   const Result p = RunCandi("relief predict " + photo + " --model " + dir_->File("m.pt") + " -o " +
                             dir_->File("d.png") + " --tile 32 --overlap 8");
   ASSERT_EQ(p.code, 0) << p.output;
-  const PngImage d = ReadPng(dir_->File("d.png"));
+  const io::PngImage d = io::ReadPng(dir_->File("d.png"));
   EXPECT_EQ(d.bit_depth, 8);
   EXPECT_EQ(d.image8.width(), 192);
   const Result pts = RunCandi("relief points " + photo + " " + dir_->File("d.png") + " -o " +
                               dir_->File("panel.ply") + " --width-m 2.7 --height-m 0.92 --depth-m 0.15");
   ASSERT_EQ(pts.code, 0) << pts.output;
-  const PointCloud cloud = ReadPointCloud(dir_->File("panel.ply"));
+  const PointCloud cloud = io::ReadPointCloud(dir_->File("panel.ply"));
   EXPECT_EQ(cloud.size(), 192u * 65u);
   const Box3d box = cloud.LocalBounds();
   EXPECT_GE(box.min.x(), 0.0);
@@ -94,11 +94,11 @@ TEST_F(ReliefCli, PredictPointsAndEvalOnAnyPhoto) {
 TEST_F(ReliefCli, SixteenBitColourAndTinyPhotosPredict) {
   Image16 colour16(40, 20, 3, 30000);
   colour16.at(5, 5, 0) = 65535;
-  WritePng(dir_->File("c16.png"), colour16);
+  io::WritePng(dir_->File("c16.png"), colour16);
   const Result r = RunCandi("-q relief predict " + dir_->File("c16.png") + " --model " + dir_->File("m.pt") +
                             " -o " + dir_->File("c16_depth.png") + " --width-m 0 --tile 64 --overlap 16");
   ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_EQ(ReadPng(dir_->File("c16_depth.png")).image8.width(), 40);
+  EXPECT_EQ(io::ReadPng(dir_->File("c16_depth.png")).image8.width(), 40);
 }
 
 TEST_F(ReliefCli, BadInputsAreExitTwoNamingTheFile) {
@@ -109,7 +109,7 @@ TEST_F(ReliefCli, BadInputsAreExitTwoNamingTheFile) {
   r = RunCandi("relief predict " + photo + " --model " + photo + " -o " + dir_->File("x.png"));
   EXPECT_EQ(r.code, 2) << "a PNG is not a model: " << r.output;
   Image8 small(10, 10, 1, 3);
-  WritePng(dir_->File("small.png"), small);
+  io::WritePng(dir_->File("small.png"), small);
   r = RunCandi("relief points " + photo + " " + dir_->File("small.png") + " -o " + dir_->File("p.ply"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("small.png"), std::string::npos) << r.output;
@@ -141,7 +141,7 @@ TEST_F(ReliefCli, RealPhotoPairsFineTuneScoreAndPredict) {
   EXPECT_TRUE(FileExists(pairs + "/views/100_7100_depth.png"));
   EXPECT_FALSE(FileExists(pairs + "/views/100_7105_depth.png")) << "held out from training";
   EXPECT_TRUE(FileExists(pairs + "/train/000000_photo.png"));
-  const PngImage depth = ReadPng(pairs + "/holdout/100_7105_depth.png");
+  const io::PngImage depth = io::ReadPng(pairs + "/holdout/100_7105_depth.png");
   EXPECT_EQ(depth.image16.width(), 128);
   EXPECT_EQ(depth.text.count("candi_depth_near"), 1u);
 
@@ -163,7 +163,7 @@ TEST_F(ReliefCli, RealPhotoPairsFineTuneScoreAndPredict) {
   r = RunCandi("relief predict " + photos + "/100_7105.JPG --model " + dir_->File("tuned.pt") +
                " --width-m 0 --tile 64 --overlap 16 -o " + dir_->File("7105_depth.png"));
   ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_EQ(ReadPng(dir_->File("7105_depth.png")).image8.width(), 2832) << "the photo's own size";
+  EXPECT_EQ(io::ReadPng(dir_->File("7105_depth.png")).image8.width(), 2832) << "the photo's own size";
   r = RunCandi("-q relief points " + pairs + "/holdout/100_7105_photo.png " + dir_->File("7105_128.png") +
                " -o " + dir_->File("7105.ply"));
   EXPECT_EQ(r.code, 2) << "no such depth map: " << r.output;
@@ -182,7 +182,7 @@ TEST_F(ReliefCli, RealPhotoPairsFineTuneScoreAndPredict) {
   r = RunCandi("-q relief points " + photo128 + " " + dir_->File("7105_128.png") + " -o " + panels +
                "/100_7105.ply --width-m 12.8 --height-m 9.6 --depth-m " + std::to_string(range));
   ASSERT_EQ(r.code, 0) << r.output;
-  const PngImage predicted = ReadPng(dir_->File("7105_128.png"));
+  const io::PngImage predicted = io::ReadPng(dir_->File("7105_128.png"));
   std::string csv = "panel,point,x,y,z,E,N,H\n";
   int controls = 0;
   for (int py = 8; py < 96; py += 16) {
@@ -205,7 +205,7 @@ TEST_F(ReliefCli, RealPhotoPairsFineTuneScoreAndPredict) {
   const nlohmann::json placed = nlohmann::json::parse(testing::ReadBytes(dir_->File("placements.json")));
   ASSERT_EQ(placed["panels"].size(), 1u);
   EXPECT_TRUE(std::isfinite(placed["panels"][0]["rms_mm"].get<double>()));
-  const PointCloud world = ReadPointCloud(dir_->File("world/100_7105.ply"));
+  const PointCloud world = io::ReadPointCloud(dir_->File("world/100_7105.ply"));
   ASSERT_EQ(world.size(), 128u * 96u);
   const Eigen::Vector3d corner = world.WorldPosition(0);
   EXPECT_NEAR(corner.x(), 652000.05, 5) << "the top-left pixel lands at the left edge of the facade";
@@ -220,7 +220,7 @@ TEST_F(ReliefCli, RealPhotoPairsFineTuneScoreAndPredict) {
   }
 
   // A depth map of the wrong size in a folder of pairs: exit 2 naming it.
-  WritePng(pairs + "/holdout/100_7109_depth.png", Image16(20, 10, 1, 300));
+  io::WritePng(pairs + "/holdout/100_7109_depth.png", Image16(20, 10, 1, 300));
   r = RunCandi("relief eval --pairs " + pairs + "/holdout");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("100_7109_depth.png"), std::string::npos) << r.output;
@@ -270,8 +270,8 @@ TEST(ReliefPlaceCli, PlacesPanelsWarnsAMisfitAndWritesWorldPoints) {
   testing::WriteBytes(dir.File("walls.csv"), PlaceCsv());
   PointCloud panel;
   panel.positions = {Eigen::Vector3d(1.35, 0.46, 0.1), Eigen::Vector3d(0, 0, 0)};
-  WritePointCloud(dir.File("panel_0000.ply"), panel);
-  WritePointCloud(dir.File("panel_0001.ply"), panel);
+  io::WritePointCloud(dir.File("panel_0000.ply"), panel);
+  io::WritePointCloud(dir.File("panel_0001.ply"), panel);
   const Result r = RunCandi("relief place " + dir.File("walls.csv") + " -o " + dir.File("placements.json") +
                             " --panels " + dir.path() + " --points-out " + dir.File("world"));
   ASSERT_EQ(r.code, 0) << "a misfit is a warning: " << r.output;
@@ -289,7 +289,7 @@ TEST(ReliefPlaceCli, PlacesPanelsWarnsAMisfitAndWritesWorldPoints) {
   EXPECT_EQ(j["panels"][1]["status"], "misfit");
   EXPECT_GT(j["panels"][1]["rms_mm"].get<double>(), 20.0);
   // The panel's points in world coordinates keep mm detail at 10^7 m (double, shifted).
-  const PointCloud world = ReadPointCloud(dir.File("world/panel_0000.ply"));
+  const PointCloud world = io::ReadPointCloud(dir.File("world/panel_0000.ply"));
   ASSERT_EQ(world.size(), 2u);
   EXPECT_FALSE(world.frame.IsIdentity());
   const Eigen::Vector3d expected(416012.3456 + 1.35, 9168001.2345 - 0.1, 240.5 + 0.46);

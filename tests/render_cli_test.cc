@@ -7,9 +7,9 @@
 #include <limits>
 #include <string>
 
-#include "core/png_io.h"
-#include "core/point_io.h"
 #include "core/rng.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
@@ -35,7 +35,7 @@ void WriteSquare(const std::string& path, size_t n, double z, Rgb8 color, uint64
     c.positions[i] = Eigen::Vector3d(rng.Uniform(0, 10), rng.Uniform(0, 10), z);
     c.colors[i] = color;
   }
-  WritePointCloud(path, c);
+  io::WritePointCloud(path, c);
 }
 
 // Two squares, red above blue; the view is a top-down orthographic one so every pixel sees both.
@@ -65,7 +65,7 @@ double MeanChannel(const Image8& image, int channel) {
 
 // True when the red pixels' mean row is above the blue pixels' (each colour drawn somewhere).
 bool RedAboveBlue(const std::string& png) {
-  const Image8 image = ReadPng(png).image8;
+  const Image8 image = io::ReadPng(png).image8;
   double red_rows = 0, blue_rows = 0, reds = 0, blues = 0;
   for (int y = 0; y < image.height(); ++y) {
     for (int x = 0; x < image.width(); ++x) {
@@ -92,7 +92,7 @@ TEST(RenderCli, UpPutsAColmapFrameFacadeUpright) {
     c.colors.push_back(top ? Rgb8{255, 0, 0} : Rgb8{0, 0, 255});
   }
   c.Resize(c.positions.size());
-  WritePointCloud(dir.File("facade.ply"), c);
+  io::WritePointCloud(dir.File("facade.ply"), c);
   const std::string out = dir.File("up.png");
   const Result r = RunCandi("render " + dir.File("facade.ply") + " -o " + out +
                             " --up 0,-1,0 --opaque --size 64x64 --point-size 3");
@@ -121,7 +121,7 @@ TEST(RenderCli, CamerasOrientTheDefaultView) {
     c.colors.push_back(top ? Rgb8{255, 0, 0} : Rgb8{0, 0, 255});
   }
   c.Resize(c.positions.size());
-  WritePointCloud(dir.File("facade.ply"), c);
+  io::WritePointCloud(dir.File("facade.ply"), c);
   const std::string model = dir.File("sparse");
   std::filesystem::create_directories(model);
   WriteBytes(model + "/cameras.txt", "1 PINHOLE 100 100 50 50 50 50\n");
@@ -150,13 +150,13 @@ TEST(RenderCli, ClipPlaneAndClipBoxKeepOnlyTheirSide) {
     const std::string below = s.dir.File("below.png"), box = s.dir.File("box.png");
     Result r = RunCandi("render " + in + " --view " + s.view + " -L 8 --clip-plane 0,0,92,0,0,-1 -o " + below);
     ASSERT_EQ(r.code, 0) << r.output;
-    const Image8 blue = ReadPng(below).image8;
+    const Image8 blue = io::ReadPng(below).image8;
     EXPECT_LT(MeanChannel(blue, 0), 1.0) << in;  // no red left
     EXPECT_GT(MeanChannel(blue, 2), 20.0) << in;
-    EXPECT_NE(ReadPng(below).text.at("candi:clip").find("92"), std::string::npos);
+    EXPECT_NE(io::ReadPng(below).text.at("candi:clip").find("92"), std::string::npos);
     r = RunCandi("render " + in + " --view " + s.view + " -L 8 --clip-box 500000,4500000,94,500010,4500010,96 -o " + box);
     ASSERT_EQ(r.code, 0) << r.output;
-    const Image8 red = ReadPng(box).image8;
+    const Image8 red = io::ReadPng(box).image8;
     EXPECT_LT(MeanChannel(red, 2), 1.0) << in;
     EXPECT_GT(MeanChannel(red, 0), 20.0) << in;
   }
@@ -175,7 +175,7 @@ TEST(RenderCli, MergesInputsAndRecordsSeedAndRepeatLevel) {
   const Result r = RunCandi("render " + s.Inputs() + " -o " + out + " --view " + s.view +
                             " -L 16 --seed 5 --brightness none --png16 " + s.dir.File("out16.png"));
   ASSERT_EQ(r.code, 0) << r.output;
-  const PngImage png = ReadPng(out);
+  const io::PngImage png = io::ReadPng(out);
   EXPECT_EQ(png.image8.width(), 40);
   EXPECT_EQ(png.text.at("candi:seed"), "5");
   EXPECT_EQ(png.text.at("candi:repeat_level"), "16");
@@ -185,7 +185,7 @@ TEST(RenderCli, MergesInputsAndRecordsSeedAndRepeatLevel) {
   const double red = 1 - std::pow(1 - 1 / 1600.0, 1600.0);
   EXPECT_NEAR(MeanChannel(png.image8, 0), 255 * red, 255 * 0.03);
   EXPECT_NEAR(MeanChannel(png.image8, 2), 255 * (1 - red) * red, 255 * 0.03);
-  const PngImage png16 = ReadPng(s.dir.File("out16.png"));
+  const io::PngImage png16 = io::ReadPng(s.dir.File("out16.png"));
   EXPECT_EQ(png16.bit_depth, 16);
   EXPECT_NEAR(png16.image16.at(20, 20, 0) / 257.0, png.image8.at(20, 20, 0), 0.5001);
 }
@@ -205,7 +205,7 @@ TEST(RenderCli, SameSeedSameBytesForOneAndTwoThreadsAndEitherMode) {
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("pass(es)"), std::string::npos);
   EXPECT_EQ(ReadBytes(s.dir.File("s1.png")), ReadBytes(s.dir.File("s2.png")));
-  EXPECT_EQ(ReadPng(s.dir.File("s1.png")).text.at("candi:mode"), "stream");
+  EXPECT_EQ(io::ReadPng(s.dir.File("s1.png")).text.at("candi:mode"), "stream");
 }
 
 TEST(RenderCli, SavedViewRepeatsTheRenderExactly) {
@@ -214,7 +214,7 @@ TEST(RenderCli, SavedViewRepeatsTheRenderExactly) {
   ASSERT_EQ(RunCandi(common + "-o " + s.dir.File("a.png") + " --save-view " + s.dir.File("v.json")).code, 0);
   const Result r = RunCandi(common + "-o " + s.dir.File("b.png") + " --view " + s.dir.File("v.json"));
   ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_EQ(ReadPng(s.dir.File("a.png")).image8.values(), ReadPng(s.dir.File("b.png")).image8.values());
+  EXPECT_EQ(io::ReadPng(s.dir.File("a.png")).image8.values(), io::ReadPng(s.dir.File("b.png")).image8.values());
 }
 
 TEST(RenderCli, BadViewFilesAreExitTwoNamingTheKeyAndPreviewRendersKEnsembles) {
@@ -235,7 +235,7 @@ TEST(RenderCli, BadViewFilesAreExitTwoNamingTheKeyAndPreviewRendersKEnsembles) {
   EXPECT_FALSE(FileExists(s.dir.File("x.png")));
   r = RunCandi("render " + s.Inputs() + " -o " + s.dir.File("p.png") + " --view " + s.view + " -L 50 --preview 3");
   ASSERT_EQ(r.code, 0) << r.output;
-  const PngImage png = ReadPng(s.dir.File("p.png"));
+  const io::PngImage png = io::ReadPng(s.dir.File("p.png"));
   EXPECT_EQ(png.text.at("candi:ensembles"), "3");
   EXPECT_EQ(png.text.at("candi:repeat_level"), "50");
 }
@@ -246,26 +246,26 @@ TEST(RenderCli, PerInputAlphaZeroHidesALayerAndOneMakesItOpaque) {
   // The red top layer at alpha 0 vanishes: pure blue.
   Result r = RunCandi(common + "-o " + s.dir.File("a.png") + " --alpha 1,0");
   ASSERT_EQ(r.code, 0) << r.output;
-  Image8 image = ReadPng(s.dir.File("a.png")).image8;
+  Image8 image = io::ReadPng(s.dir.File("a.png")).image8;
   EXPECT_EQ(MeanChannel(image, 0), 0.0);
   EXPECT_GT(MeanChannel(image, 2), 250);
   // Red at alpha 1 hides the blue layer completely.
   r = RunCandi(common + "-o " + s.dir.File("b.png") + " --alpha 0.5,1");
   ASSERT_EQ(r.code, 0) << r.output;
-  image = ReadPng(s.dir.File("b.png")).image8;
+  image = io::ReadPng(s.dir.File("b.png")).image8;
   EXPECT_GT(MeanChannel(image, 0), 250);
   EXPECT_LT(MeanChannel(image, 2), 1.0);
   // Red at 0.5 over opaque blue: about half and half.
   r = RunCandi(common + "-o " + s.dir.File("c.png") + " --alpha 1,0.5");
   ASSERT_EQ(r.code, 0) << r.output;
-  image = ReadPng(s.dir.File("c.png")).image8;
+  image = io::ReadPng(s.dir.File("c.png")).image8;
   EXPECT_NEAR(MeanChannel(image, 0) / 255, 0.5, 0.06);
   EXPECT_NEAR(MeanChannel(image, 2) / 255, 0.5, 0.06);
   // Everything at alpha 0: the background only, said plainly.
   r = RunCandi(common + "-o " + s.dir.File("d.png") + " --alpha 0 --background 10,20,30");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("background"), std::string::npos) << r.output;
-  image = ReadPng(s.dir.File("d.png")).image8;
+  image = io::ReadPng(s.dir.File("d.png")).image8;
   EXPECT_EQ(MeanChannel(image, 1), 20.0);
 }
 

@@ -12,8 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/point_io.h"
 #include "core/rng.h"
+#include "io/point_io.h"
 #include "mesh/dxf_import.h"
 #include "mesh/foundation.h"
 #include "mesh/profile.h"
@@ -45,9 +45,9 @@ double DistanceTo(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& 
 // The layer's profile as the foundation path builds it from the drawing (both sides joined, in
 // drawing coordinates): the curve its surface passes through at the drawing's plane.
 std::vector<Eigen::Vector2d> DrawingProfile(const std::string& layer) {
-  const FoundationOptions o;
-  const DxfDrawing drawing = ReadDxf(o.dxf, kDrawing);
-  const Profile p = BuildProfile(o.profile, LayerSection(o, drawing, layer), {kDrawing, layer});
+  const mesh::FoundationOptions o;
+  const mesh::DxfDrawing drawing = mesh::ReadDxf(o.dxf, kDrawing);
+  const mesh::Profile p = mesh::BuildProfile(o.profile, mesh::LayerSection(o, drawing, layer), {kDrawing, layer});
   std::vector<Eigen::Vector2d> out;
   for (auto it = p.left.rbegin(); it != p.left.rend(); ++it) out.push_back(*it + p.origin);
   for (size_t i = 1; i < p.right.size(); ++i) out.push_back(p.right[i] + p.origin);
@@ -61,7 +61,7 @@ struct Deviation {
 };
 
 // The section lines of `layer` in a DXF written by candi section, against `reference`.
-Deviation Compare(const DxfDrawing& section, const std::string& layer, const std::vector<Eigen::Vector2d>& reference) {
+Deviation Compare(const mesh::DxfDrawing& section, const std::string& layer, const std::vector<Eigen::Vector2d>& reference) {
   Deviation d;
   const auto it = section.layers.find(layer);
   if (it == section.layers.end()) return d;
@@ -105,7 +105,7 @@ TEST_F(FoundationSection, AtTheDrawingsPlaneMatchesTheDrawing) {
   for (const char* f : {"section.png", "section.dxf", "section.csv", "section.svg", "section.json"}) {
     EXPECT_TRUE(FileExists(out + "/" + f)) << f;
   }
-  const DxfDrawing section = ReadDxf(DxfReadOptions{}, out + "/section.dxf");
+  const mesh::DxfDrawing section = mesh::ReadDxf(mesh::DxfReadOptions{}, out + "/section.dxf");
   EXPECT_EQ(section.unit_name, "metre");
   for (const std::string layer : {"A", "B", "C", "D"}) {
     const std::vector<Eigen::Vector2d> reference = DrawingProfile(layer);
@@ -129,7 +129,7 @@ TEST_F(FoundationSection, ASweptLayerGivesTheSameProfileAtAnotherAngle) {
   const Result r = RunCandi("section " + dir_->File("foundation.ply") + " --plane " + plane +
                             " --thickness 0.1 --layers D -o " + out);
   ASSERT_EQ(r.code, 0) << r.output;
-  const DxfDrawing section = ReadDxf(DxfReadOptions{}, out + "/section.dxf");
+  const mesh::DxfDrawing section = mesh::ReadDxf(mesh::DxfReadOptions{}, out + "/section.dxf");
   EXPECT_EQ(section.layers.count("A"), 0u) << "--layers D";
   const std::vector<Eigen::Vector2d> reference = DrawingProfile("D");
   const Deviation d = Compare(section, "D", reference);
@@ -155,7 +155,7 @@ TEST_F(FoundationSection, FromAnArchiveReadsOnlyTheCrossedChunks) {
   EXPECT_GT(read, 0u);
   EXPECT_LT(read, chunks * 3 / 4);
   // The archive holds the layers as one (the file); its lines match the union of the profiles.
-  const DxfDrawing section = ReadDxf(DxfReadOptions{}, dir_->File("arc/section.dxf"));
+  const mesh::DxfDrawing section = mesh::ReadDxf(mesh::DxfReadOptions{}, dir_->File("arc/section.dxf"));
   ASSERT_EQ(section.layers.size(), 1u);
   std::vector<std::vector<Eigen::Vector2d>> profiles;
   for (const std::string layer : {"A", "B", "C", "D"}) profiles.push_back(DrawingProfile(layer));
@@ -185,11 +185,11 @@ TEST(SectionCli, SurveyCoordinatesKeepMillimetresInTheDxf) {
     const double t = rng.Uniform(0, 2 * M_PI), z = rng.Uniform(250, 254);
     c.positions.push_back(Eigen::Vector3d(centre.x() + 0.5 * std::cos(t), centre.y() + 0.5 * std::sin(t), z) - c.frame.origin);
   }
-  WritePointCloud(dir.File("column.ply"), c);
+  io::WritePointCloud(dir.File("column.ply"), c);
   const Result r = RunCandi("section " + dir.File("column.ply") + " --plane 712345,9162345,252,0,0,1 --thickness 0.05 -o " +
                             dir.File("plan"));
   ASSERT_EQ(r.code, 0) << r.output;
-  const DxfDrawing section = ReadDxf(DxfReadOptions{}, dir.File("plan/section.dxf"));
+  const mesh::DxfDrawing section = mesh::ReadDxf(mesh::DxfReadOptions{}, dir.File("plan/section.dxf"));
   ASSERT_EQ(section.layers.count("column"), 1u);
   const auto& lines = section.layers.at("column");
   ASSERT_EQ(lines.size(), 1u);
@@ -212,7 +212,7 @@ TEST(SectionCli, DegenerateInputIsAClearErrorOrAnEmptyLabelledOutput) {
   PointCloud flat;
   Rng rng(3);
   for (int i = 0; i < 20000; ++i) flat.positions.push_back({rng.Uniform(0, 10), rng.Uniform(0, 10), 5.0});
-  WritePointCloud(dir.File("floor.ply"), flat);
+  io::WritePointCloud(dir.File("floor.ply"), flat);
   const std::string floor = dir.File("floor.ply");
   // Thickness 0 or negative, a path of one distinct vertex: errors naming the option, nothing written.
   for (const std::string bad : {"--plane 0,0,5,0,0,1 --thickness 0", "--plane 0,0,5,0,0,1 --thickness -1",

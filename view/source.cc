@@ -10,7 +10,7 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
-#include "core/point_io.h"
+#include "io/point_io.h"
 #include "render/archive_pack.h"
 #include "render/view_json.h"
 

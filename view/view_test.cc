@@ -4,8 +4,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/png_io.h"
 #include "core/rng.h"
+#include "io/image/png_io.h"
 #include "render/archive_pack.h"
 #include "render/archive_render.h"
 #include "render/spbr.h"
@@ -368,7 +368,7 @@ TEST(FrameEncoding, PngIsLosslessAndJpegDecodes) {
   const std::string png = EncodePng(image);
   TempDir dir;
   candi::testing::WriteBytes(dir.File("a.png"), png);
-  const PngImage back = ReadPng(dir.File("a.png"));
+  const io::PngImage back = io::ReadPng(dir.File("a.png"));
   ASSERT_EQ(back.image8.width(), 37);
   EXPECT_TRUE(back.image8 == image);
   const std::string jpeg = EncodeJpeg(image, 85);

@@ -7,7 +7,7 @@
 
 #include "core/check.h"
 #include "core/rng.h"
-#include "reconstruction/photogrammetry/color_checker.h"
+#include "tests/util/color_checker.h"
 #include "tests/util/test_util.h"
 
 namespace candi::photogrammetry {
@@ -27,7 +27,7 @@ ColorMatrix Distortion() {
 std::vector<ColorPatch> SyntheticCard(double noise, uint64_t seed) {
   Rng rng(seed);
   std::vector<ColorPatch> patches;
-  for (const ReferencePatch& p : ColorChecker24()) {
+  for (const testing::ReferencePatch& p : testing::ColorChecker24()) {
     V measured = ApplyColorMatrix(Distortion(), p.Rgb());
     measured += noise * V(rng.Normal(), rng.Normal(), rng.Normal());
     patches.push_back({p.name, measured.cwiseMax(0.0).cwiseMin(255.0), p.Rgb(), 0});
@@ -106,7 +106,7 @@ Image8 CardImage(std::vector<PatchQuad>* quads) {
   Image8 image(260, 180, 3, 20);
   const double angle = 0.05;
   const Eigen::Matrix2d r = Eigen::Rotation2Dd(angle).toRotationMatrix();
-  const auto& refs = ColorChecker24();
+  const auto& refs = testing::ColorChecker24();
   for (int k = 0; k < 24; ++k) {
     const Eigen::Vector2d origin(20 + 38 * (k % 6), 15 + 38 * (k / 6));
     PatchQuad q;
@@ -136,7 +136,7 @@ TEST(SamplePatches, TakesTheMedianOfEachQuadsInnerHalf) {
   const std::vector<ColorPatch> patches = SamplePatches(image, quads, "corners.csv");
   ASSERT_EQ(patches.size(), 24u);
   for (int k = 0; k < 24; ++k) {
-    const V expected = ApplyColorMatrix(Distortion(), ColorChecker24()[k].Rgb());
+    const V expected = ApplyColorMatrix(Distortion(), testing::ColorChecker24()[k].Rgb());
     EXPECT_LT((patches[k].measured - expected).cwiseAbs().maxCoeff(), 1.01) << patches[k].name;
   }
   const ColorCorrection c = FitColorCorrection({}, patches);
@@ -159,7 +159,7 @@ TEST(ApplyColorMatrix, CorrectsImagesAndPointColours) {
   cloud.SetSchema([] { PointSchema s; s.colors = true; return s; }());
   cloud.Resize(24);
   for (int k = 0; k < 24; ++k) {
-    const V m = ApplyColorMatrix(Distortion(), ColorChecker24()[k].Rgb());
+    const V m = ApplyColorMatrix(Distortion(), testing::ColorChecker24()[k].Rgb());
     for (int ch = 0; ch < 3; ++ch) image.at(k, 0, ch) = static_cast<uint8_t>(std::lround(m[ch]));
     image.at(k, 0, 3) = static_cast<uint8_t>(k);
     cloud.colors[k] = Rgb8{image.at(k, 0, 0), image.at(k, 0, 1), image.at(k, 0, 2)};
@@ -167,7 +167,7 @@ TEST(ApplyColorMatrix, CorrectsImagesAndPointColours) {
   ApplyColorMatrix(c.matrix, &image);
   ApplyColorMatrix(c.matrix, &cloud);
   for (int k = 0; k < 24; ++k) {
-    const V ref = ColorChecker24()[k].Rgb();
+    const V ref = testing::ColorChecker24()[k].Rgb();
     for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(image.at(k, 0, ch), ref[ch], 2.0) << k;
     EXPECT_EQ(image.at(k, 0, 3), k);  // alpha kept
     EXPECT_EQ(cloud.colors[k], (Rgb8{image.at(k, 0, 0), image.at(k, 0, 1), image.at(k, 0, 2)}));

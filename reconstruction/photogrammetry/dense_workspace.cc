@@ -6,7 +6,7 @@
 #include <string>
 
 #include "core/check.h"
-#include "core/jpeg_io.h"
+#include "io/image/jpeg_io.h"
 
 namespace candi::photogrammetry {
 
@@ -26,7 +26,7 @@ StereoInput ReadDenseWorkspace(const std::string& workspace) {
     s.name = image.name;
     s.camera = ToPinholeCamera(camera->second, image, sparse);
     const std::string path = (fs::path(workspace) / "images" / image.name).string();
-    s.image = ReadImageRgb8(path);
+    s.image = io::ReadImageRgb8(path);
     if (s.image.width() != s.camera.width || s.image.height() != s.camera.height)
       throw InputError(path, "", "image is " + std::to_string(s.image.width()) + "x" +
                                      std::to_string(s.image.height()) + ", its camera " +

@@ -7,7 +7,7 @@
 
 #include "core/check.h"
 #include "tests/util/input_error.h"
-#include "reconstruction/photogrammetry/testing/surface_cloud.h"
+#include "tests/util/surface_cloud.h"
 
 namespace candi::photogrammetry {
 namespace {

@@ -13,8 +13,8 @@
 
 #include "core/check.h"
 #include "core/parallel.h"
-#include "core/png_io.h"
 #include "core/rng.h"
+#include "io/image/png_io.h"
 
 namespace candi::photogrammetry {
 
@@ -350,7 +350,7 @@ SyntheticDenseScore ScoreSyntheticDense(const std::vector<SyntheticView>& views,
 
 void WriteSyntheticImages(const std::vector<SyntheticView>& views, const std::string& dir) {
   std::filesystem::create_directories(dir);
-  for (const SyntheticView& v : views) WritePng((std::filesystem::path(dir) / v.name).string(), v.image);
+  for (const SyntheticView& v : views) io::WritePng((std::filesystem::path(dir) / v.name).string(), v.image);
 }
 
 }  // namespace candi::photogrammetry

@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "core/png_io.h"
+#include "io/image/png_io.h"
 #include "tests/util/test_util.h"
 
 namespace candi::photogrammetry {
@@ -98,7 +98,7 @@ TEST(SyntheticViews, WritesPngImages) {
   const auto views = RenderSyntheticViews(Small());
   const std::string folder = dir.path() + "/images";
   WriteSyntheticImages(views, folder);
-  const PngImage png = ReadPng(folder + "/view_001.png");
+  const io::PngImage png = io::ReadPng(folder + "/view_001.png");
   EXPECT_TRUE(png.image8 == views[1].image);
 }
 

@@ -52,11 +52,11 @@ TEST(ReliefOptions, DefaultsPass) {
 TEST(ReliefImage, PhotosOfEveryKindReadAsGreyAndDepthRoundTrips) {
   TempDir dir;
   Image16 grey16(4, 2, 1, 65535);
-  WritePng(dir.File("g16.png"), grey16);
+  io::WritePng(dir.File("g16.png"), grey16);
   EXPECT_FLOAT_EQ(ReadPhoto(dir.File("g16.png")).at(3, 1), 1.0f);
   Image8 rgb(4, 2, 3, 0);
   rgb.at(1, 1, 1) = 255;  // pure green: luminance 0.587
-  WritePng(dir.File("rgb.png"), rgb);
+  io::WritePng(dir.File("rgb.png"), rgb);
   const ImageF g = ReadPhoto(dir.File("rgb.png"));
   EXPECT_EQ(g.channels(), 1);
   EXPECT_NEAR(g.at(1, 1), 0.587, 1e-6);

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "core/check.h"
-#include "core/jpeg_io.h"
+#include "io/image/jpeg_io.h"
 
 namespace candi::relief {
 
@@ -86,28 +86,28 @@ void ResampleLine(const float* in, int n_in, int stride, float* out, int n_out, 
 
 }  // namespace
 
-ImageF GreyFromPng(const PngImage& png) {
+ImageF GreyFromPng(const io::PngImage& png) {
   return png.bit_depth == 16 ? GreyOf(png.image16, 65535.0) : GreyOf(png.image8, 255.0);
 }
 
-ImageF ReadPhoto(const std::string& path, PngText* text) {
+ImageF ReadPhoto(const std::string& path, io::PngText* text) {
   if (!IsPngFile(path)) {  // a JPEG (the camera's own file), or a clear error naming the format
     if (text != nullptr) text->clear();
-    return GreyOf(ReadImageRgb8(path), 255.0);
+    return GreyOf(io::ReadImageRgb8(path), 255.0);
   }
-  PngImage png = ReadPng(path);
+  io::PngImage png = io::ReadPng(path);
   if (text != nullptr) *text = png.text;
   const ImageF grey = GreyFromPng(png);
   if (grey.empty()) throw InputError(path, "", "photo has no pixels");
   return grey;
 }
 
-void WritePhoto(const std::string& path, const ImageF& grey, const PngText& text) {
-  WritePng(path, Quantized<uint8_t>(grey, 1, 255), text);
+void WritePhoto(const std::string& path, const ImageF& grey, const io::PngText& text) {
+  io::WritePng(path, Quantized<uint8_t>(grey, 1, 255), text);
 }
 
-ImageF ReadDepth(const std::string& path, PngText* text) {
-  PngImage png = ReadPng(path);
+ImageF ReadDepth(const std::string& path, io::PngText* text) {
+  io::PngImage png = io::ReadPng(path);
   if (text != nullptr) *text = png.text;
   const bool grey = png.bit_depth == 16 ? IsGrey(png.image16) : IsGrey(png.image8);
   if (!grey) throw InputError(path, "", "a depth map must be a grey PNG (this one has colour)");
@@ -117,12 +117,12 @@ ImageF ReadDepth(const std::string& path, PngText* text) {
   return levels;
 }
 
-void WriteDepth8(const std::string& path, const ImageF& levels, const PngText& text) {
-  WritePng(path, Quantized<uint8_t>(levels, kMaxLevel, 1), text);
+void WriteDepth8(const std::string& path, const ImageF& levels, const io::PngText& text) {
+  io::WritePng(path, Quantized<uint8_t>(levels, kMaxLevel, 1), text);
 }
 
-void WriteDepth16(const std::string& path, const ImageF& levels, const PngText& text) {
-  WritePng(path, Quantized<uint16_t>(levels, kMaxLevel, 256), text);
+void WriteDepth16(const std::string& path, const ImageF& levels, const io::PngText& text) {
+  io::WritePng(path, Quantized<uint16_t>(levels, kMaxLevel, 256), text);
 }
 
 ImageF Resample(const ImageF& image, int width, int height) {

@@ -17,7 +17,7 @@
 #include <string>
 
 #include "core/image.h"
-#include "core/png_io.h"
+#include "io/image/png_io.h"
 
 namespace candi::relief {
 
@@ -31,20 +31,20 @@ inline double HeightFromLevel(double level, double depth_m) {
 }
 
 // A one-channel float image of a PNG: 8-bit values / 255, 16-bit / 65535, colour as luminance.
-ImageF GreyFromPng(const PngImage& png);
+ImageF GreyFromPng(const io::PngImage& png);
 // Reads a photo (PNG, or JPEG as cameras write them) as grey [0, 1]. Throws InputError (path)
 // for unreadable files and other formats.
-ImageF ReadPhoto(const std::string& path, PngText* text = nullptr);
+ImageF ReadPhoto(const std::string& path, io::PngText* text = nullptr);
 // Writes grey [0, 1] as an 8-bit PNG (clamped, rounded; NaN becomes 0).
-void WritePhoto(const std::string& path, const ImageF& grey, const PngText& text = {});
+void WritePhoto(const std::string& path, const ImageF& grey, const io::PngText& text = {});
 
 // Reads a depth map as float levels (see the convention above). Throws InputError when the file
 // is not a one-channel (or grey RGB) PNG.
-ImageF ReadDepth(const std::string& path, PngText* text = nullptr);
+ImageF ReadDepth(const std::string& path, io::PngText* text = nullptr);
 // Writes levels as an 8-bit PNG (0..255, rounded, clamped; NaN becomes 0).
-void WriteDepth8(const std::string& path, const ImageF& levels, const PngText& text = {});
+void WriteDepth8(const std::string& path, const ImageF& levels, const io::PngText& text = {});
 // Writes levels as a 16-bit PNG (levels * 256).
-void WriteDepth16(const std::string& path, const ImageF& levels, const PngText& text = {});
+void WriteDepth16(const std::string& path, const ImageF& levels, const io::PngText& text = {});
 
 // Resamples a one-channel image to width x height: area averaging along an axis that shrinks,
 // bilinear (pixel centres aligned) along an axis that grows.

@@ -7,8 +7,8 @@
 #include <stdexcept>
 
 #include "core/check.h"
-#include "core/png_io.h"
 #include "core/text_format.h"
+#include "io/image/png_io.h"
 #include "reconstruction/relief/relief_dataset.h"
 #include "reconstruction/relief/relief_image.h"
 
@@ -22,7 +22,7 @@ std::string Stem(const std::string& image_name) {
   return std::filesystem::path(image_name).stem().string();
 }
 
-double TextNumber(const PngText& text, const char* key) {
+double TextNumber(const io::PngText& text, const char* key) {
   const auto it = text.find(key);
   if (it == text.end()) return 0;
   try {
@@ -143,11 +143,11 @@ void WritePhotoPair(const std::string& dir, const PhotoPair& pair) {
   std::filesystem::create_directories(dir, ec);
   if (ec) throw InputError(dir, "", "cannot create the folder: " + ec.message());
   const std::string base = dir + "/" + pair.name;
-  const PngText text = {{"candi_depth_near", FormatDouble(pair.near)},
+  const io::PngText text = {{"candi_depth_near", FormatDouble(pair.near)},
                         {"candi_depth_far", FormatDouble(pair.far)}};
   WritePhoto(base + "_photo.png", pair.photo);
   WriteDepth16(base + "_depth.png", pair.depth, text);
-  WritePng(base + "_mask.png", pair.mask);
+  io::WritePng(base + "_mask.png", pair.mask);
 }
 
 std::vector<PhotoPair> ReadPhotoPairs(const std::string& dir) {
@@ -157,7 +157,7 @@ std::vector<PhotoPair> ReadPhotoPairs(const std::string& dir) {
     PhotoPair p;
     p.name = std::filesystem::path(base).filename().string();
     p.photo = ReadPhoto(photo);
-    PngText text;
+    io::PngText text;
     p.depth = ReadDepth(base + "_depth.png", &text);
     p.near = TextNumber(text, "candi_depth_near");
     p.far = TextNumber(text, "candi_depth_far");
@@ -171,7 +171,7 @@ std::vector<PhotoPair> ReadPhotoPairs(const std::string& dir) {
     same_size(p.depth.width(), p.depth.height(), base + "_depth.png");
     std::error_code ec;
     if (std::filesystem::exists(base + "_mask.png", ec)) {
-      const PngImage mask = ReadPng(base + "_mask.png");
+      const io::PngImage mask = io::ReadPng(base + "_mask.png");
       if (mask.bit_depth != 8 || mask.image8.channels() != 1) {
         throw InputError(base + "_mask.png", "", "a mask must be an 8-bit grey PNG");
       }

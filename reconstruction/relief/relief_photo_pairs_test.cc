@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "core/check.h"
-#include "core/png_io.h"
-#include "core/point_io.h"
+#include "io/image/png_io.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/colmap_model.h"
 #include "reconstruction/relief/relief_eval.h"
 #include "reconstruction/relief/relief_image.h"
@@ -193,7 +193,7 @@ TEST(PhotoPairsReal, SceauxDepthAgreesWithTheDenseCloud) {
   CANDI_REQUIRE_SHARED_DATA(photos, "photos/sceaux_castle/100_7105.JPG");
   CANDI_REQUIRE_SHARED_DATA(dense, "dense/sceaux_openmvs_dense.ply");
   const photogrammetry::ColmapModel model = photogrammetry::ReadColmapModel(model_dir);
-  const PointCloud cloud = ReadPointCloud(dense);
+  const PointCloud cloud = io::ReadPointCloud(dense);
   std::vector<Eigen::Vector3d> points;
   for (size_t i = 0; i < cloud.size(); ++i) points.push_back(cloud.frame.ToWorld(cloud.positions[i]));
   const ColmapImage* image = nullptr;

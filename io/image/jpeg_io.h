@@ -1,0 +1,26 @@
+// JPEG reading and writing (libjpeg-turbo), 8-bit grey or RGB; and ReadImageRgb8, which reads a
+// photo in either PNG or JPEG (chosen by the file's signature, not its extension) as 8-bit RGB.
+//
+// candi reads photos through these rather than OpenCV's imgcodecs: that library pulls in ~120
+// shared libraries (GDAL, GDCM, HDF5, Poppler, ...) whose symbol binding cost every `candi`
+// call about 0.8 s of start-up. Writes are atomic (temporary file, then rename). Errors throw
+// InputError naming the path and libjpeg's message. Thread-safe (no shared state).
+#pragma once
+
+#include <string>
+
+#include "core/image.h"
+
+namespace candi::io {
+
+// Grey files give 1 channel, colour (YCbCr/RGB) files 3; CMYK/YCCK files are refused with a clear
+// error.
+Image8 ReadJpeg(const std::string& path);
+// quality in [1, 100]; 1- or 3-channel images (4 channels: the alpha is dropped).
+void WriteJpeg(const std::string& path, const Image8& image, int quality = 95);
+
+// A PNG or JPEG as 8-bit RGB: grey is replicated, alpha dropped, 16 bits scaled (v * 255 / 65535,
+// rounded). Other formats (TIFF, BMP, ...) fail with InputError naming the path and the format.
+Image8 ReadImageRgb8(const std::string& path);
+
+}  // namespace candi::io

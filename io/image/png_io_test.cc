@@ -1,0 +1,45 @@
+#include "io/image/png_io.h"
+
+#include <gtest/gtest.h>
+
+#include "tests/util/test_util.h"
+
+namespace candi::io {
+namespace {
+
+using testing::TempDir;
+
+TEST(Png, EightAndSixteenBitRoundTripWithText) {
+  TempDir dir;
+  Image8 rgb(5, 3, 3);
+  for (size_t i = 0; i < rgb.values().size(); ++i) rgb.values()[i] = static_cast<uint8_t>(17 * i);
+  WritePng(dir.File("a.png"), rgb, {{"Seed", "42"}, {"RepeatLevel", "100"}});
+  const PngImage a = ReadPng(dir.File("a.png"));
+  EXPECT_EQ(a.bit_depth, 8);
+  EXPECT_EQ(a.image8, rgb);
+  EXPECT_EQ(a.text.at("Seed"), "42");
+
+  Image16 grey(4, 4, 1);
+  for (size_t i = 0; i < grey.values().size(); ++i) grey.values()[i] = static_cast<uint16_t>(4099 * i);
+  WritePng(dir.File("b.png"), grey);
+  const PngImage b = ReadPng(dir.File("b.png"));
+  EXPECT_EQ(b.bit_depth, 16);
+  EXPECT_EQ(b.image16, grey);
+}
+
+TEST(Png, BadFilesAndPathsAreInputErrors) {
+  TempDir dir;
+  testing::WriteBytes(dir.File("x.png"), "not a png at all");
+  EXPECT_THROW(ReadPng(dir.File("x.png")), InputError);
+  EXPECT_THROW(ReadPng(dir.File("missing.png")), InputError);
+  EXPECT_THROW(WritePng(dir.File("no/dir/y.png"), Image8(2, 2, 3)), InputError);
+  EXPECT_FALSE(testing::FileExists(dir.File("no/dir/y.png")));
+  // A truncated PNG is refused, not half-read.
+  WritePng(dir.File("t.png"), Image8(64, 64, 3, 9));
+  std::string bytes = testing::ReadBytes(dir.File("t.png"));
+  testing::WriteBytes(dir.File("t.png"), bytes.substr(0, bytes.size() / 2));
+  EXPECT_THROW(ReadPng(dir.File("t.png")), InputError);
+}
+
+}  // namespace
+}  // namespace candi::io

@@ -1,0 +1,786 @@
+#include "io/las/las_io.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <ctime>
+#include <limits>
+#include <stdexcept>
+
+#include "core/atomic_file.h"
+#include "core/binary_file.h"
+#include "core/check.h"
+#include "core/log.h"
+#include "core/parallel.h"
+#include "io/crs.h"
+#include "io/las/las_columns.h"
+#include "io/las/las_crs.h"
+#include "io/las/las_header.h"
+#include "io/las/laz_chunks.h"
+#include "io/las/laz_format.h"
+
+namespace candi::io {
+
+namespace {
+
+// Records decoded or encoded at a time. Each attribute is converted in its own tight loop over
+// the block (a per-point switch is several times slower), and a block's bytes (~140 kB for
+// format 3) stay in L2 while the loops revisit them.
+constexpr size_t kBlockRecords = 4096;
+constexpr size_t kColorScanBytes = 8 << 20;
+constexpr const char* kGeneratingSoftware = "candi 0.1.0";
+
+// ---- Reader ----
+
+class LasReader : public PointReader {
+ public:
+  LasReader(const std::string& path, const PointReadOptions& options);
+  size_t Read(size_t max_points, PointCloud* chunk) override;
+  std::optional<PointRecordLayout> record_layout() const override;
+
+ private:
+  void TakeLaszipVlr(std::vector<LasVlr>* vlrs);
+  void CheckPointDataSize() const;
+  std::vector<LasExtraBytes> FillInfo(std::vector<LasVlr> vlrs);
+  void BuildSchema(const std::vector<LasExtraBytes>& extra);
+  void AddExtraColumns(const std::vector<LasExtraBytes>& extra);
+  bool HasWideColors();
+  bool HasWideColorsLaz();
+  void DecodeRecords(const uint8_t* records, size_t n, size_t first, PointCloud* chunk) const;
+  void DecodeBlock(const uint8_t* records, size_t n, size_t first, PointCloud* chunk) const;
+
+  BinaryFile file_;
+  bool scalar_fields_ = true;  // PointReadOptions::scalar_fields
+  LasHeader header_;
+  LasFormatLayout layout_;
+  std::vector<LasColumn> columns_;
+  int color_shift_ = 8;
+  std::vector<uint8_t> buffer_;
+  // LAZ: point-format bits 6-7 set; the laszip VLR and the decoded chunks.
+  bool compressed_ = false;
+  laz::Vlr laz_;
+  std::unique_ptr<LazPointData> laz_data_;
+};
+
+LasReader::LasReader(const std::string& path, const PointReadOptions& options)
+    : PointReader(path), file_(path), scalar_fields_(options.scalar_fields) {
+  header_ = ReadLasHeader(&file_);
+  compressed_ = (header_.point_format & 0xC0) != 0;
+  header_.point_format &= 0x3F;
+  layout_ = LasLayoutOf(header_.point_format);
+  std::vector<LasVlr> vlrs = ReadLasVlrs(&file_, header_);
+  TakeLaszipVlr(&vlrs);
+  info_.count = LasPointCount(header_);
+  if (compressed_) {
+    laz_data_ = std::make_unique<LazPointData>(
+        &file_, laz_,
+        ReadLazChunkTable(file_, laz_, header_.offset_to_point_data, info_.count,
+                          header_.record_length),
+        header_.record_length);
+  } else {
+    CheckPointDataSize();
+  }
+  for (LasVlr& evlr : ReadLasEvlrs(&file_, header_)) vlrs.push_back(std::move(evlr));
+  BuildSchema(FillInfo(std::move(vlrs)));
+  if (info_.schema.colors) {
+    info_.meta.las.color_16bit = HasWideColors();
+    color_shift_ = info_.meta.las.color_16bit ? 8 : 0;
+  }
+}
+
+// LASzip marks compressed files in the format byte and describes them in a VLR. The VLR leaves
+// the list (meta.las.vlrs): a LAS written from these points is not compressed.
+void LasReader::TakeLaszipVlr(std::vector<LasVlr>* vlrs) {
+  const auto it = std::find_if(vlrs->begin(), vlrs->end(), [](const LasVlr& vlr) {
+    return vlr.user_id == "laszip encoded" && vlr.record_id == 22204;
+  });
+  if (it == vlrs->end()) {
+    if (!compressed_) return;
+    throw InputError(path_, "byte 104",
+                     "the point format byte marks LAZ (compressed LAS) but the file has no "
+                     "\"laszip encoded\" VLR describing the compression");
+  }
+  const LasVlr vlr = *it;
+  vlrs->erase(it);
+  if (!compressed_) {
+    LogWarning(path_ + ": ignoring a \"laszip encoded\" VLR in an uncompressed LAS file");
+    return;
+  }
+  try {
+    laz_ = laz::ParseVlr(vlr.data);
+    laz::CheckSupported(laz_, header_.point_format, header_.record_length);
+  } catch (const laz::LazError& e) {
+    throw InputError(path_, "laszip VLR", std::string("LAZ: ") + e.what());
+  }
+}
+
+void LasReader::CheckPointDataSize() const {
+  const uint64_t available = file_.size() - header_.offset_to_point_data;
+  const uint64_t length = header_.record_length;
+  if (info_.count <= available / length) return;
+  const std::string needed = info_.count <= std::numeric_limits<uint64_t>::max() / length
+                                 ? std::to_string(info_.count * length)
+                                 : "more than 2^64";
+  throw InputError(path_, "byte " + std::to_string(file_.size()),
+                   "header promises " + std::to_string(info_.count) + " points (" + needed +
+                       " bytes from byte " + std::to_string(header_.offset_to_point_data) +
+                       ") but the file holds " + std::to_string(available) + " bytes");
+}
+
+std::vector<LasExtraBytes> LasReader::FillInfo(std::vector<LasVlr> vlrs) {
+  const int format = header_.point_format;
+  info_.format = PointFormat::kLas;
+  info_.description =
+      "LAS 1." + std::to_string(header_.version_minor) + " point format " + std::to_string(format);
+  if (compressed_) info_.description = "LAZ: " + info_.description + ", " + laz::Describe(laz_);
+  info_.header_bounds = header_.bounds;
+  LasMetadata& las = info_.meta.las;
+  las.present = true;
+  las.version_minor = header_.version_minor;
+  las.point_format = header_.point_format;
+  las.scale = header_.scale;
+  las.offset = header_.offset;
+  las.file_source_id = header_.file_source_id;
+  las.global_encoding = header_.global_encoding;
+  las.system_identifier = header_.system_identifier;
+  las.generating_software = header_.generating_software;
+  las.creation_day = header_.creation_day;
+  las.creation_year = header_.creation_year;
+  std::string crs_note;
+  info_.meta.crs = LasCrsOf(vlrs, &crs_note);
+  if (!crs_note.empty()) LogInfo(path_ + ": " + crs_note);
+  std::vector<LasExtraBytes> extra;
+  for (LasVlr& vlr : vlrs) {
+    if (!IsLasExtraBytesVlr(vlr)) {
+      las.vlrs.push_back(std::move(vlr));
+    } else if (extra.empty()) {
+      extra = ParseLasExtraBytes(vlr.data, layout_.record_size);
+    }
+  }
+  return extra;
+}
+
+void LasReader::BuildSchema(const std::vector<LasExtraBytes>& extra) {
+  PointSchema& schema = info_.schema;
+  schema.position_type = ScalarType::kFloat64;
+  schema.colors = layout_.color_offset >= 0;
+  for (const LasStandardColumn& s : LasStandardColumns(header_.point_format)) {
+    if (!scalar_fields_) break;
+    LasColumn c = ColumnOf(s);
+    c.scalar = static_cast<int>(schema.scalars.size());
+    schema.scalars.push_back(
+        {s.name, s.raw == LasRaw::kF64 ? ScalarType::kFloat64 : ScalarType::kFloat32});
+    FillLasByteTable(&c);
+    columns_.push_back(c);
+  }
+  AddExtraColumns(extra);
+}
+
+int NormalAxis(const std::string& name) {
+  return name == "nx" ? 0 : name == "ny" ? 1 : name == "nz" ? 2 : -1;
+}
+
+bool HasNormals(const std::vector<LasExtraBytes>& extra) {
+  int found = 0;
+  for (const LasExtraBytes& e : extra) {
+    if (e.data_type >= 1 && e.data_type <= 10 && NormalAxis(e.name) >= 0) {
+      found |= 1 << NormalAxis(e.name);
+    }
+  }
+  return found == 7;
+}
+
+void LasReader::AddExtraColumns(const std::vector<LasExtraBytes>& extra) {
+  PointSchema& schema = info_.schema;
+  schema.normals = HasNormals(extra);
+  std::string skipped;
+  for (const LasExtraBytes& e : extra) {
+    if (e.offset + e.size > header_.record_length) {
+      LogWarning(path_ + ": extra bytes '" + e.name + "' and after lie beyond the " +
+                 std::to_string(header_.record_length) + "-byte point record; ignored");
+      break;
+    }
+    if (e.data_type < 1 || e.data_type > 10) {
+      skipped += (skipped.empty() ? "'" : ", '") + e.name + "'";
+      continue;
+    }
+    LasColumn c;
+    c.raw = LasRawOfExtraBytesType(e.data_type);
+    c.offset = e.offset;
+    c.scale = e.scale;
+    c.add = e.add;
+    c.normal_axis = schema.normals ? NormalAxis(e.name) : -1;
+    if (c.normal_axis < 0 && !scalar_fields_) continue;
+    if (c.normal_axis < 0 && (e.name.empty() || schema.ScalarIndex(e.name) >= 0)) {
+      LogWarning(path_ + ": extra bytes field '" + e.name +
+                 "' is unnamed or repeats a name; skipped");
+      continue;
+    }
+    if (c.normal_axis < 0) {
+      c.scalar = static_cast<int>(schema.scalars.size());
+      schema.scalars.push_back({e.name, LasScalarTypeOf(e)});
+      if (!e.scaled) FillLasByteTable(&c);
+    }
+    columns_.push_back(c);
+  }
+  if (!skipped.empty()) {
+    LogInfo(path_ +
+            ": skipping extra bytes of unsupported types (undocumented or arrays): " + skipped);
+  }
+}
+
+// Many files store 8-bit colour in the 16-bit fields; only the data tells which. Scans the high
+// bytes of every colour in large reads and stops at the first one that is set.
+bool LasReader::HasWideColors() {
+  if (compressed_) return HasWideColorsLaz();
+  const size_t length = header_.record_length;
+  const size_t per_read = std::max<size_t>(1, kColorScanBytes / length);
+  std::vector<uint8_t> block;
+  for (uint64_t done = 0; done < info_.count;) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(per_read, info_.count - done));
+    block.resize(n * length);
+    file_.Seek(header_.offset_to_point_data + done * length);
+    file_.ReadExact(block.data(), block.size(), "point records");
+    const uint8_t* p = block.data() + layout_.color_offset + 1;
+    uint8_t high = 0;
+    for (size_t i = 0; i < n; ++i, p += length) high |= p[0] | p[2] | p[4];
+    if (high != 0) return true;
+    done += n;
+  }
+  return false;
+}
+
+// The same scan over decoded chunks, a run at a time.
+bool LasReader::HasWideColorsLaz() {
+  const size_t length = header_.record_length;
+  for (uint64_t done = 0; done < info_.count;) {
+    size_t n = 0;
+    const uint8_t* p = laz_data_->Records(done, info_.count, &n) + layout_.color_offset + 1;
+    uint8_t high = 0;
+    for (size_t i = 0; i < n; ++i, p += length) high |= p[0] | p[2] | p[4];
+    if (high != 0) return true;
+    done += n;
+  }
+  return false;
+}
+
+size_t LasReader::Read(size_t max_points, PointCloud* chunk) {
+  CANDI_CHECK(max_points > 0) << "Read needs max_points > 0";
+  PrepareChunk(chunk);
+  const size_t n = static_cast<size_t>(std::min<uint64_t>(max_points, info_.count - points_read_));
+  chunk->Resize(n);
+  if (n == 0) return 0;
+  if (compressed_) {
+    // Runs of decoded chunks; a run may end inside this read or reach beyond it.
+    for (size_t done = 0; done < n;) {
+      size_t available = 0;
+      const uint8_t* records =
+          laz_data_->Records(points_read_ + done, points_read_ + n, &available);
+      const size_t take = std::min(n - done, available);
+      DecodeRecords(records, take, done, chunk);
+      done += take;
+    }
+  } else {
+    const size_t length = header_.record_length;
+    buffer_.resize(n * length);
+    file_.Seek(header_.offset_to_point_data + points_read_ * length);
+    file_.ReadExact(buffer_.data(), buffer_.size(), "point records");
+    DecodeRecords(buffer_.data(), n, 0, chunk);
+  }
+  points_read_ += n;
+  return n;
+}
+
+// Blocks decode independently (each writes its own range of the chunk), so they run in
+// parallel; the result does not depend on the thread count.
+void LasReader::DecodeRecords(const uint8_t* records, size_t n, size_t first,
+                              PointCloud* chunk) const {
+  const size_t length = header_.record_length;
+  const size_t blocks = (n + kBlockRecords - 1) / kBlockRecords;
+  ParallelFor(size_t{0}, blocks, [&](size_t b) {
+    const size_t at = b * kBlockRecords;
+    DecodeBlock(records + at * length, std::min(kBlockRecords, n - at), first + at, chunk);
+  });
+}
+
+std::optional<PointRecordLayout> LasReader::record_layout() const {
+  if (compressed_) return std::nullopt;  // compressed records: Read() decodes them
+  PointRecordLayout l;
+  l.coordinates = PointRecordLayout::Coordinates::kLasInt32;
+  l.first_byte = header_.offset_to_point_data;
+  l.stride = header_.record_length;
+  l.xyz[0] = 0, l.xyz[1] = 4, l.xyz[2] = 8;
+  if (info_.schema.colors) {
+    for (int c = 0; c < 3; ++c) l.rgb[c] = layout_.color_offset + 2 * c;
+  }
+  l.color_bytes = 2;
+  l.color_shift = color_shift_;
+  l.scale = header_.scale;
+  l.offset = header_.offset;
+  l.count = info_.count;
+  return l;
+}
+
+void LasReader::DecodeBlock(const uint8_t* records, size_t n, size_t first,
+                            PointCloud* chunk) const {
+  const size_t length = header_.record_length;
+  DecodeLasPositions(records, length, n, header_.scale, header_.offset,
+                     chunk->positions.data() + first);
+  if (info_.schema.colors) {
+    DecodeLasColors(records + layout_.color_offset, length, n, color_shift_,
+                    chunk->colors.data() + first);
+  }
+  for (const LasColumn& c : columns_) DecodeLasColumn(c, records, length, n, first, chunk);
+}
+
+// ---- Choice of version and point format ----
+
+struct SchemaNeeds {
+  bool colors = false, gps = false, nir = false, channel = false;
+  bool huge = false;  // more points than the 32-bit count holds
+};
+
+SchemaNeeds NeedsOf(const PointWriteSpec& spec) {
+  SchemaNeeds needs;
+  needs.colors = spec.schema.colors;
+  needs.gps = spec.schema.ScalarIndex(las_field::kGpsTime) >= 0;
+  needs.nir = spec.schema.ScalarIndex(las_field::kNir) >= 0;
+  needs.channel = spec.schema.ScalarIndex(las_field::kScannerChannel) >= 0;
+  needs.huge = spec.count != kUnknownCount && spec.count > std::numeric_limits<uint32_t>::max();
+  return needs;
+}
+
+// The attribute of the points that `format` has no place for, or "".
+std::string MissingAttribute(int format, const SchemaNeeds& needs) {
+  const LasFormatLayout l = LasLayoutOf(format);
+  if (needs.colors && l.color_offset < 0) return "colours";
+  if (needs.gps && l.gps_offset < 0) return las_field::kGpsTime;
+  if (needs.nir && l.nir_offset < 0) return las_field::kNir;
+  if (needs.channel && !l.extended) return las_field::kScannerChannel;
+  return "";
+}
+
+// True when the format holds exactly the points' attributes: nothing lost, nothing invented.
+bool Fits(int version, int format, const SchemaNeeds& needs) {
+  const LasFormatLayout l = LasLayoutOf(format);
+  if (!l.supported || version < 2 || version > 4) return false;
+  if ((l.extended || needs.huge) && version < 4) return false;
+  return MissingAttribute(format, needs).empty() && (l.color_offset >= 0) == needs.colors &&
+         (l.gps_offset >= 0) == needs.gps && (l.nir_offset >= 0) == needs.nir;
+}
+
+int LegacyFormat(const SchemaNeeds& needs) { return (needs.colors ? 2 : 0) + (needs.gps ? 1 : 0); }
+
+struct LasFormatChoice {
+  int version_minor = 2;
+  int format = 0;
+};
+
+LasFormatChoice AutoChoice(const SchemaNeeds& needs) {
+  if (needs.nir || needs.channel || needs.huge) return {4, needs.nir ? 8 : needs.colors ? 7 : 6};
+  return {2, LegacyFormat(needs)};
+}
+
+LasFormatChoice ExplicitChoice(const LasMetadata& meta, const PointWriteOptions& options,
+                               const SchemaNeeds& needs) {
+  const int version = options.las_version_minor;
+  LasFormatChoice c;
+  if (options.las_point_format >= 0) {
+    c.format = options.las_point_format;
+  } else if (meta.present && Fits(version, meta.point_format, needs)) {
+    c.format = meta.point_format;
+  } else {
+    c.format = version < 4 ? LegacyFormat(needs) : AutoChoice(needs).format;
+  }
+  const bool meta_version = meta.present && meta.version_minor >= 2 && meta.version_minor <= 4;
+  c.version_minor = version >= 0                    ? version
+                    : (c.format >= 6 || needs.huge) ? 4
+                    : meta_version                  ? meta.version_minor
+                                                    : 2;
+  const std::string missing = MissingAttribute(c.format, needs);
+  if (!missing.empty()) {
+    throw std::invalid_argument(
+        (options.las_point_format >= 0
+             ? "PointWriteOptions::las_point_format = " + std::to_string(c.format)
+             : "PointWriteOptions::las_version_minor = " + std::to_string(version)) +
+        "; point format " + std::to_string(c.format) + " cannot hold the points' " + missing);
+  }
+  if ((c.format >= 6 || needs.huge) && c.version_minor < 4) {
+    throw std::invalid_argument(
+        "PointWriteOptions::las_version_minor = " + std::to_string(c.version_minor) + "; " +
+        (needs.huge ? "more than 2^32-1 points" : "point format " + std::to_string(c.format)) +
+        " needs LAS 1.4");
+  }
+  return c;
+}
+
+LasFormatChoice ChooseLasFormat(const PointWriteSpec& spec, const PointWriteOptions& options) {
+  const SchemaNeeds needs = NeedsOf(spec);
+  const LasMetadata& meta = spec.meta.las;
+  if (options.las_point_format >= 0 || options.las_version_minor >= 0) {
+    return ExplicitChoice(meta, options, needs);
+  }
+  if (meta.present && Fits(meta.version_minor, meta.point_format, needs)) {
+    return {meta.version_minor, meta.point_format};
+  }
+  return AutoChoice(needs);
+}
+
+// ---- Writer ----
+
+class LasWriter : public PointWriter {
+ public:
+  LasWriter(const std::string& path, const PointWriteSpec& spec, const PointWriteOptions& options);
+  void Write(const PointCloud& chunk) override;
+  void Close() override;
+
+ private:
+  void InitHeader(const LasFormatChoice& choice, const PointWriteOptions& options);
+  void BuildColumns();
+  void BindSource(const char* name, LasColumn* c, std::vector<bool>* used) const;
+  void AddExtraBytes(const std::string& name, ScalarType type, int scalar, int axis, int* offset);
+  void SplitVlrs();
+  void AddCrsVlr();
+  void WriteHeaderAndVlrs();
+  void EncodeBlock(const PointCloud& chunk, size_t first, size_t n, uint8_t* records);
+  void EncodePositions(const PointCloud& chunk, size_t first, size_t n, uint8_t* records);
+  [[noreturn]] void ThrowOutOfRange(const PointCloud& chunk, size_t i) const;
+  void CountReturns(const uint8_t* records, size_t n);
+  Box3d WrittenBounds() const;
+
+  std::string path_;
+  PointWriteSpec spec_;
+  LasHeader header_;
+  LasFormatLayout layout_;
+  bool offset_pending_ = false;  // chosen from the first chunk's bounds
+  uint16_t color_factor_ = 257;
+  std::vector<LasColumn> columns_;
+  std::vector<LasExtraBytes> extra_;
+  std::vector<LasVlr> vlrs_, evlrs_;
+  std::array<int32_t, 3> min_, max_;
+  std::array<uint64_t, 15> by_return_{};
+  std::vector<uint8_t> buffer_;
+  std::unique_ptr<AtomicFile> file_;  // created last: a rejected spec creates nothing
+  bool failed_ = false, closed_ = false;
+};
+
+LasWriter::LasWriter(const std::string& path, const PointWriteSpec& spec,
+                     const PointWriteOptions& options)
+    : path_(path), spec_(spec) {
+  min_.fill(std::numeric_limits<int32_t>::max());
+  max_.fill(std::numeric_limits<int32_t>::min());
+  InitHeader(ChooseLasFormat(spec, options), options);
+  BuildColumns();
+  SplitVlrs();
+  file_ = std::make_unique<AtomicFile>(path);
+  WriteHeaderAndVlrs();
+}
+
+void SetCreationDateToday(LasHeader* header) {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  header->creation_day = static_cast<uint16_t>(utc.tm_yday + 1);
+  header->creation_year = static_cast<uint16_t>(utc.tm_year + 1900);
+}
+
+void LasWriter::InitHeader(const LasFormatChoice& choice, const PointWriteOptions& options) {
+  const LasMetadata& meta = spec_.meta.las;
+  header_.version_minor = static_cast<uint8_t>(choice.version_minor);
+  header_.point_format = static_cast<uint8_t>(choice.format);
+  header_.header_size = LasHeaderSize(choice.version_minor);
+  layout_ = LasLayoutOf(choice.format);
+  header_.scale = options.las_scale ? *options.las_scale
+                  : meta.present    ? meta.scale
+                                    : Eigen::Vector3d::Constant(0.001);
+  if (options.las_offset) {
+    header_.offset = *options.las_offset;
+  } else if (meta.present) {
+    header_.offset = meta.offset;
+  } else {
+    header_.offset = spec_.frame.origin.array().round();
+    offset_pending_ = spec_.frame.IsIdentity();
+  }
+  if (!header_.offset.allFinite()) {
+    throw std::invalid_argument("PointWriteOptions::las_offset must be finite");
+  }
+  CANDI_CHECK(header_.scale.allFinite() && (header_.scale.array() != 0.0).all())
+      << "LAS scale " << header_.scale.transpose();
+  if (meta.present) {
+    header_.file_source_id = meta.file_source_id;
+    // Keep the GPS-time type and synthetic-returns bits, and the WKT bit where it exists (1.4);
+    // the waveform bits would promise data this writer does not write.
+    header_.global_encoding = meta.global_encoding & (choice.version_minor >= 4 ? 0x19 : 0x09);
+    header_.system_identifier = meta.system_identifier;
+    header_.generating_software = meta.generating_software;
+    header_.creation_day = meta.creation_day;
+    header_.creation_year = meta.creation_year;
+  }
+  if (header_.system_identifier.empty()) header_.system_identifier = "candi";
+  if (header_.generating_software.empty()) header_.generating_software = kGeneratingSoftware;
+  if (header_.creation_year == 0) SetCreationDateToday(&header_);
+  // LAS 1.4 asks for the WKT bit with formats 6-10; a preserved header keeps what it had.
+  if (!meta.present && layout_.extended) header_.global_encoding |= 0x10;
+  color_factor_ = meta.color_16bit ? 257 : 1;
+}
+
+// Standard attributes come from the scalar fields of their names; every other scalar field and
+// the normals become extra bytes (float or double).
+void LasWriter::BuildColumns() {
+  const PointSchema& schema = spec_.schema;
+  std::vector<bool> used(schema.scalars.size(), false);
+  for (const LasStandardColumn& s : LasStandardColumns(header_.point_format)) {
+    LasColumn c = ColumnOf(s);
+    BindSource(s.name, &c, &used);
+    columns_.push_back(c);
+  }
+  int offset = layout_.record_size;
+  for (size_t i = 0; i < schema.scalars.size(); ++i) {
+    if (!used[i]) {
+      AddExtraBytes(schema.scalars[i].name, schema.scalars[i].type, static_cast<int>(i), -1,
+                    &offset);
+    }
+  }
+  if (schema.normals) {
+    for (int axis = 0; axis < 3; ++axis) {
+      AddExtraBytes(axis == 0   ? "nx"
+                    : axis == 1 ? "ny"
+                                : "nz",
+                    ScalarType::kFloat32, -1, axis, &offset);
+    }
+  }
+  if (offset > 65535 || extra_.size() > 65535 / 192) {
+    throw std::invalid_argument("too many scalar fields for a LAS point record (" +
+                                std::to_string(extra_.size()) + " extra-bytes fields, " +
+                                std::to_string(offset) + " bytes per point)");
+  }
+  header_.record_length = static_cast<uint16_t>(offset);
+}
+
+void LasWriter::BindSource(const char* name, LasColumn* c, std::vector<bool>* used) const {
+  const PointSchema& schema = spec_.schema;
+  const std::string field = name;
+  int index = schema.ScalarIndex(field);
+  // Formats 0-5 store the scan angle in degrees, 6-10 in units of 0.006 degrees.
+  if (index < 0 && field == las_field::kScanAngleRank) {
+    index = schema.ScalarIndex(las_field::kScanAngle);
+    c->scale = 0.006;
+  } else if (index < 0 && field == las_field::kScanAngle) {
+    index = schema.ScalarIndex(las_field::kScanAngleRank);
+    c->scale = 1.0 / 0.006;
+  }
+  if (index >= 0) {
+    c->scalar = index;
+    (*used)[index] = true;
+  } else {
+    c->scale = 1.0;
+    const bool is_return =
+        field == las_field::kReturnNumber || field == las_field::kNumberOfReturns;
+    c->constant = is_return ? 1.0 : 0.0;  // a single return, unless told otherwise
+  }
+}
+
+void LasWriter::AddExtraBytes(const std::string& name, ScalarType type, int scalar, int axis,
+                              int* offset) {
+  if (name.size() > 32) {
+    LogWarning(path_ + ": scalar field '" + name +
+               "' is longer than the 32 bytes of a LAS extra-bytes name; truncated");
+  }
+  const bool is_double = type == ScalarType::kFloat64;
+  LasExtraBytes e;
+  e.name = name.substr(0, 32);
+  e.data_type = is_double ? 10 : 9;
+  e.size = is_double ? 8 : 4;
+  e.offset = *offset;
+  extra_.push_back(e);
+  LasColumn c;
+  c.raw = is_double ? LasRaw::kF64 : LasRaw::kF32;
+  c.offset = *offset;
+  c.scalar = scalar;
+  c.normal_axis = axis;
+  columns_.push_back(c);
+  *offset += e.size;
+}
+
+// EVLRs stay EVLRs in 1.4; before 1.4 they become VLRs when they fit in one.
+void LasWriter::SplitVlrs() {
+  const bool v14 = header_.version_minor >= 4;
+  for (const LasVlr& vlr : spec_.meta.las.vlrs) {
+    if (IsLasExtraBytesVlr(vlr)) continue;  // replaced by this file's own
+    LasVlr copy = vlr;
+    const bool fits = vlr.data.size() <= 65535;
+    copy.extended = v14 && (vlr.extended || !fits);
+    if (copy.extended) {
+      evlrs_.push_back(std::move(copy));
+    } else if (fits) {
+      vlrs_.push_back(std::move(copy));
+    } else {
+      LogWarning(path_ + ": dropping record '" + vlr.user_id + "' " +
+                 std::to_string(vlr.record_id) + " (" + std::to_string(vlr.data.size()) +
+                 " bytes): LAS 1." + std::to_string(header_.version_minor) +
+                 " VLRs hold at most 65535 bytes");
+    }
+  }
+  if (!extra_.empty()) {
+    vlrs_.push_back({"LASF_Spec", 4, "Extra Bytes", EncodeLasExtraBytes(extra_), false});
+  }
+  AddCrsVlr();
+}
+
+// Points from a file that stated its CRS elsewhere (E57's coordinateMetadata, a scene) carry it
+// into the LAS file as a WKT record; records kept from a LAS source already state it.
+void LasWriter::AddCrsVlr() {
+  const std::string& crs = spec_.meta.crs;
+  if (crs.empty() || HasLasCrsRecord(spec_.meta.las.vlrs)) return;
+  std::string wkt;
+  try {
+    wkt = CrsAsWkt1(crs, path_);
+  } catch (const InputError& e) {
+    LogWarning(std::string(e.what()) + "; the LAS file states no CRS");
+    return;
+  }
+  LasVlr vlr = LasWktVlr(wkt);
+  if (vlr.data.size() > 65535 && header_.version_minor < 4) {
+    LogWarning(path_ + ": the CRS's WKT (" + std::to_string(vlr.data.size()) +
+               " bytes) does not fit a LAS 1." + std::to_string(header_.version_minor) +
+               " VLR; the LAS file states no CRS");
+    return;
+  }
+  vlr.extended = vlr.data.size() > 65535;
+  (vlr.extended ? evlrs_ : vlrs_).push_back(std::move(vlr));
+  if (header_.version_minor >= 4) header_.global_encoding |= 0x10;  // WKT states the CRS
+}
+
+void LasWriter::WriteHeaderAndVlrs() {
+  std::string records;
+  for (const LasVlr& vlr : vlrs_) records += EncodeLasVlr(vlr);
+  const uint64_t point_offset = header_.header_size + records.size();
+  if (point_offset > std::numeric_limits<uint32_t>::max()) {
+    throw InputError(
+        path_, "", "VLRs too large for a LAS header (" + std::to_string(point_offset) + " bytes)");
+  }
+  header_.number_of_vlrs = static_cast<uint32_t>(vlrs_.size());
+  header_.offset_to_point_data = static_cast<uint32_t>(point_offset);
+  if (spec_.count != kUnknownCount) file_->Reserve(point_offset + spec_.count * header_.record_length);
+  file_->Write(EncodeLasHeader(header_));  // counts and bounds are patched by Close()
+  file_->Write(records);
+}
+
+void LasWriter::Write(const PointCloud& chunk) {
+  CANDI_CHECK(!closed_) << "LasWriter::Write after Close";
+  CANDI_CHECK(!failed_) << "LasWriter::Write after a failed Write";
+  CANDI_CHECK(chunk.schema == spec_.schema) << "chunk schema differs from the writer's spec";
+  chunk.CheckConsistent();
+  const size_t n = chunk.size();
+  if (n == 0) return;
+  if (offset_pending_) {
+    // No offset given and no frame: centre the first chunk, so survey coordinates fit int32.
+    header_.offset = LocalFrame::Auto(chunk.WorldBounds()).origin;
+    offset_pending_ = false;
+  }
+  const size_t length = header_.record_length;
+  // Block by block through one small buffer: it stays in cache, and no chunk-sized buffer is
+  // faulted in.
+  buffer_.resize(std::min(n, kBlockRecords) * length);
+  failed_ = true;  // until the chunk is complete: a throw leaves a partial chunk behind
+  for (size_t first = 0; first < n; first += kBlockRecords) {
+    const size_t block = std::min(kBlockRecords, n - first);
+    EncodeBlock(chunk, first, block, buffer_.data());
+    file_->Write(buffer_.data(), block * length);
+  }
+  failed_ = false;
+  points_written_ += n;
+}
+
+void LasWriter::EncodeBlock(const PointCloud& chunk, size_t first, size_t n, uint8_t* records) {
+  const size_t length = header_.record_length;
+  std::memset(records, 0, n * length);
+  EncodePositions(chunk, first, n, records);
+  if (spec_.schema.colors && layout_.color_offset >= 0) {
+    const uint16_t f = color_factor_;
+    const Rgb8* colors = chunk.colors.data() + first;
+    uint8_t* p = records + layout_.color_offset;
+    for (size_t i = 0; i < n; ++i, p += length) {
+      StoreLE<uint16_t>(p, static_cast<uint16_t>(colors[i].r * f));
+      StoreLE<uint16_t>(p + 2, static_cast<uint16_t>(colors[i].g * f));
+      StoreLE<uint16_t>(p + 4, static_cast<uint16_t>(colors[i].b * f));
+    }
+  }
+  for (const LasColumn& c : columns_) EncodeLasColumn(c, chunk, first, n, records, length);
+  CountReturns(records, n);
+}
+
+void LasWriter::EncodePositions(const PointCloud& chunk, size_t first, size_t n, uint8_t* records) {
+  const size_t bad = EncodeLasPositions(chunk.positions.data() + first, n, chunk.frame.origin,
+                                        header_.offset, header_.scale, records,
+                                        header_.record_length, min_.data(), max_.data());
+  if (bad < n) ThrowOutOfRange(chunk, first + bad);
+}
+
+void LasWriter::ThrowOutOfRange(const PointCloud& chunk, size_t i) const {
+  const Eigen::Vector3d w = chunk.WorldPosition(i);
+  auto text = [](const Eigen::Vector3d& v) {
+    return std::to_string(v.x()) + ", " + std::to_string(v.y()) + ", " + std::to_string(v.z());
+  };
+  throw InputError(path_, "point " + std::to_string(points_written_ + i),
+                   "coordinate (" + text(w) + ") does not fit LAS int32 with scale (" +
+                       text(header_.scale) + ") and offset (" + text(header_.offset) +
+                       "); choose a larger scale or a nearer offset");
+}
+
+void LasWriter::CountReturns(const uint8_t* records, size_t n) {
+  const size_t length = header_.record_length;
+  const uint8_t mask = layout_.extended ? 15 : 7;
+  uint64_t counts[16] = {};
+  for (size_t i = 0; i < n; ++i) ++counts[records[i * length + 14] & mask];
+  for (int r = 1; r <= 15; ++r) by_return_[r - 1] += counts[r];
+}
+
+Box3d LasWriter::WrittenBounds() const {
+  if (points_written_ == 0) return Box3d{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  Box3d box;
+  Eigen::Vector3d a, b;
+  for (int k = 0; k < 3; ++k) {
+    a[k] = min_[k] * header_.scale[k] + header_.offset[k];
+    b[k] = max_[k] * header_.scale[k] + header_.offset[k];
+  }
+  box.Extend(a);
+  box.Extend(b);
+  return box;
+}
+
+void LasWriter::Close() {
+  CANDI_CHECK(!closed_) << "LasWriter::Close twice";
+  CANDI_CHECK(!failed_) << "LasWriter::Close after a failed Write";
+  closed_ = true;
+  if (!SetLasCounts(points_written_, by_return_, &header_)) {
+    throw InputError(path_, "",
+                     std::to_string(points_written_) + " points do not fit the " +
+                         "32-bit point count of LAS 1." + std::to_string(header_.version_minor) +
+                         "; write LAS 1.4");
+  }
+  header_.bounds = WrittenBounds();
+  if (!evlrs_.empty()) {
+    header_.start_of_first_evlr = file_->Tell();
+    header_.number_of_evlrs = static_cast<uint32_t>(evlrs_.size());
+    for (const LasVlr& evlr : evlrs_) file_->Write(EncodeLasVlr(evlr));
+  }
+  const std::string header = EncodeLasHeader(header_);
+  file_->WriteAt(0, header.data(), header.size());
+  file_->Commit();
+}
+
+}  // namespace
+
+std::unique_ptr<PointReader> OpenLasReader(const std::string& path, const PointReadOptions& options) {
+  return std::make_unique<LasReader>(path, options);
+}
+
+std::unique_ptr<PointWriter> OpenLasWriter(const std::string& path, const PointWriteSpec& spec,
+                                           const PointWriteOptions& options) {
+  options.Check();
+  return std::make_unique<LasWriter>(path, spec, options);
+}
+
+}  // namespace candi::io

@@ -1,0 +1,310 @@
+// The entropy coder of LASzip-compressed LAS (LAZ): an adaptive arithmetic decoder with its bit
+// and symbol models, and the integer decompressor that codes a corrector against a prediction
+// (LASzip's "IntegerCompressor": k-bit class symbol, then the low bits raw).
+//
+// Pure byte-level decoding, no file access. The decoder reads only inside [begin, end): reading
+// past `end` yields zero bytes and sets overrun(), which the chunk decoders report as a corrupt
+// chunk (so truncated or bit-flipped input can never read out of bounds). Models and decoders
+// are not thread-safe; each chunk gets its own.
+#pragma once
+
+#include <cstddef>
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace candi::io::laz {
+
+// A corrupt or unsupported compressed stream. The LAZ reader adds the file and byte offset.
+struct LazError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Adaptive binary model (LASzip ArithmeticBitModel).
+class BitModel {
+ public:
+  BitModel();
+  void Reset();
+
+ private:
+  friend class ArithmeticDecoder;
+  void Update();
+  uint32_t update_cycle_ = 0, bits_until_update_ = 0;
+  uint32_t bit_0_prob_ = 0, bit_0_count_ = 0, bit_count_ = 0;
+};
+
+// Adaptive model of `symbols` (2..2048) symbols (LASzip ArithmeticModel); CANDI_CHECK on a bad
+// count.
+class SymbolModel {
+ public:
+  explicit SymbolModel(uint32_t symbols);
+  void Reset();
+  uint32_t symbols() const { return symbols_; }
+
+ private:
+  friend class ArithmeticDecoder;
+  void Update();
+  uint32_t symbols_, last_symbol_, table_size_, table_shift_;
+  uint32_t total_count_, update_cycle_, symbols_until_update_;
+  // distribution_ (symbols_), symbol_count_ (symbols_), decoder_table_ (table_size_ + 2 when
+  // symbols_ > 16, else empty).
+  std::vector<uint32_t> distribution_, symbol_count_, decoder_table_;
+};
+
+class ArithmeticDecoder {
+ public:
+  // Starts decoding [begin, end): reads the 4 initial bytes.
+  void Init(const uint8_t* begin, const uint8_t* end);
+  uint32_t DecodeBit(BitModel* model);
+  uint32_t DecodeSymbol(SymbolModel* model);
+  uint32_t ReadBits(uint32_t bits);  // 1..32 raw bits
+  uint8_t ReadByte();
+  uint16_t ReadShort();
+  uint32_t ReadInt();
+  uint64_t ReadInt64();
+  // True once the decoder needed bytes beyond `end`.
+  bool overrun() const { return overrun_; }
+  // Bytes of [begin, end) consumed so far.
+  size_t consumed() const { return static_cast<size_t>(next_ - begin_); }
+
+ private:
+  uint8_t NextByte();
+  void Renormalize();
+  const uint8_t *begin_ = nullptr, *next_ = nullptr, *end_ = nullptr;
+  uint32_t value_ = 0, length_ = 0;
+  bool overrun_ = false;
+};
+
+// Decompresses integers coded as corrections of a prediction (LASzip IntegerCompressor, decoder
+// side). bits: the integer's width (1..32); contexts: independent model sets; bits_high: the
+// class threshold above which low bits are coded raw; range: the value range (0: 2^bits).
+class IntegerDecompressor {
+ public:
+  IntegerDecompressor(uint32_t bits = 16, uint32_t contexts = 1, uint32_t bits_high = 8,
+                      uint32_t range = 0);
+  // (Re)creates the models; call before the first Decompress of a chunk.
+  void Init();
+  int32_t Decompress(ArithmeticDecoder* decoder, int32_t prediction, uint32_t context = 0);
+  // k (the corrector's class) of the last Decompress.
+  uint32_t k() const { return k_; }
+
+ private:
+  int32_t ReadCorrector(ArithmeticDecoder* decoder, SymbolModel* model);
+  uint32_t bits_, contexts_, bits_high_, range_;
+  uint32_t corr_bits_, corr_range_;
+  int32_t corr_min_, corr_max_;
+  uint32_t k_ = 0;
+  std::vector<SymbolModel> m_bits_;
+  BitModel m_corrector0_;                 // class 0 (LASzip shares it between contexts)
+  std::vector<SymbolModel> m_corrector_;  // classes 1..corr_bits_ (index k - 1)
+};
+
+// ---- Hot paths, inline (a chunk decodes millions of symbols). ----
+
+namespace arith_internal {
+constexpr uint32_t kMinLength = 0x01000000u;  // renormalise below this interval length
+constexpr uint32_t kBitLengthShift = 13;      // BitModel probabilities: 13 bits
+constexpr uint32_t kSymbolLengthShift = 15;   // SymbolModel distributions: 15 bits
+}  // namespace arith_internal
+
+inline uint8_t ArithmeticDecoder::NextByte() {
+  if (__builtin_expect(next_ < end_, 1)) return *next_++;
+  overrun_ = true;
+  return 0;
+}
+
+inline void ArithmeticDecoder::Renormalize() {
+  do {
+    value_ = (value_ << 8) | NextByte();
+  } while ((length_ <<= 8) < arith_internal::kMinLength);
+}
+
+inline uint32_t ArithmeticDecoder::DecodeBit(BitModel* m) {
+  const uint32_t x = m->bit_0_prob_ * (length_ >> arith_internal::kBitLengthShift);
+  const uint32_t bit = value_ >= x;
+  if (bit == 0) {
+    length_ = x;
+    ++m->bit_0_count_;
+  } else {
+    value_ -= x;
+    length_ -= x;
+  }
+  if (length_ < arith_internal::kMinLength) Renormalize();
+  if (__builtin_expect(--m->bits_until_update_ == 0, 0)) m->Update();
+  return bit;
+}
+
+inline uint32_t ArithmeticDecoder::DecodeSymbol(SymbolModel* m) {
+  const uint32_t* dist = m->distribution_.data();
+  uint32_t sym, x, y = length_;
+  if (!m->decoder_table_.empty()) {
+    length_ >>= arith_internal::kSymbolLengthShift;
+    const uint32_t dv = value_ / length_;
+    uint32_t t = dv >> m->table_shift_;
+    if (t > m->table_size_) t = m->table_size_;  // only a corrupt stream gets here
+    const uint32_t* table = m->decoder_table_.data();
+    sym = table[t];
+    uint32_t n = table[t + 1] + 1;
+    while (n > sym + 1) {  // bisection within the table's bracket
+      const uint32_t k = (sym + n) >> 1;
+      if (dist[k] > dv) {
+        n = k;
+      } else {
+        sym = k;
+      }
+    }
+    x = dist[sym] * length_;
+    if (sym != m->last_symbol_) y = dist[sym + 1] * length_;
+  } else {
+    x = sym = 0;
+    length_ >>= arith_internal::kSymbolLengthShift;
+    uint32_t n = m->symbols_;
+    uint32_t k = n >> 1;
+    do {
+      const uint32_t z = length_ * dist[k];
+      if (z > value_) {
+        n = k;
+        y = z;
+      } else {
+        sym = k;
+        x = z;
+      }
+    } while ((k = (sym + n) >> 1) != sym);
+  }
+  value_ -= x;
+  length_ = y - x;
+  if (length_ < arith_internal::kMinLength) Renormalize();
+  ++m->symbol_count_[sym];
+  if (__builtin_expect(--m->symbols_until_update_ == 0, 0)) m->Update();
+  return sym;
+}
+
+inline uint32_t ArithmeticDecoder::ReadBits(uint32_t bits) {
+  if (bits > 19) {
+    const uint32_t low = ReadShort();
+    const uint32_t high = ReadBits(bits - 16);
+    return (high << 16) | low;
+  }
+  const uint32_t sym = value_ / (length_ >>= bits);
+  value_ -= length_ * sym;
+  if (length_ < arith_internal::kMinLength) Renormalize();
+  return sym;
+}
+
+inline uint8_t ArithmeticDecoder::ReadByte() {
+  const uint32_t sym = value_ / (length_ >>= 8);
+  value_ -= length_ * sym;
+  if (length_ < arith_internal::kMinLength) Renormalize();
+  return static_cast<uint8_t>(sym);
+}
+
+inline uint16_t ArithmeticDecoder::ReadShort() {
+  const uint32_t sym = value_ / (length_ >>= 16);
+  value_ -= length_ * sym;
+  if (length_ < arith_internal::kMinLength) Renormalize();
+  return static_cast<uint16_t>(sym);
+}
+
+inline uint32_t ArithmeticDecoder::ReadInt() {
+  const uint32_t low = ReadShort();
+  const uint32_t high = ReadShort();
+  return (high << 16) | low;
+}
+
+inline uint64_t ArithmeticDecoder::ReadInt64() {
+  const uint64_t low = ReadInt();
+  const uint64_t high = ReadInt();
+  return (high << 32) | low;
+}
+
+inline int32_t IntegerDecompressor::ReadCorrector(ArithmeticDecoder* decoder, SymbolModel* model) {
+  k_ = decoder->DecodeSymbol(model);
+  if (k_ == 0) return static_cast<int32_t>(decoder->DecodeBit(&m_corrector0_));  // 0 or 1
+  if (k_ >= 32) return corr_min_;
+  uint32_t c = decoder->DecodeSymbol(&m_corrector_[k_ - 1]);
+  if (k_ > bits_high_) {  // the high bits were modelled, the low k - bits_high are raw
+    const uint32_t low_bits = k_ - bits_high_;
+    c = (c << low_bits) | decoder->ReadBits(low_bits);
+  }
+  // c in [0, 2^k): [0, 2^(k-1)) maps to [-(2^k - 1), -2^(k-1)], the rest to [2^(k-1) + 1, 2^k].
+  if (c >= (1u << (k_ - 1))) {
+    c += 1;
+  } else {
+    c -= (1u << k_) - 1;
+  }
+  return static_cast<int32_t>(c);
+}
+
+inline int32_t IntegerDecompressor::Decompress(ArithmeticDecoder* decoder, int32_t prediction,
+                                               uint32_t context) {
+  // Unsigned arithmetic: LASzip's int32 sums wrap, which is undefined for signed C++ integers.
+  uint32_t real = static_cast<uint32_t>(prediction) +
+                  static_cast<uint32_t>(ReadCorrector(decoder, &m_bits_[context]));
+  if (static_cast<int32_t>(real) < 0) {
+    real += corr_range_;
+  } else if (real >= corr_range_) {
+    real -= corr_range_;
+  }
+  return static_cast<int32_t>(real);
+}
+
+// Median of the last five values (LASzip StreamingMedian5): an insertion into a sorted window
+// that alternately drops the lowest and the highest value. Both compressors predict with it, and
+// its exact update order matters: the decoder must predict what the encoder predicted.
+class Median5 {
+ public:
+  int32_t Get() const { return v_[2]; }
+  void Add(int32_t v) {
+    if (high_) {
+      AddHigh(v);
+    } else {
+      AddLow(v);
+    }
+  }
+
+ private:
+  void AddHigh(int32_t v) {
+    if (v < v_[2]) {
+      v_[4] = v_[3], v_[3] = v_[2];
+      if (v < v_[0]) {
+        v_[2] = v_[1], v_[1] = v_[0], v_[0] = v;
+      } else if (v < v_[1]) {
+        v_[2] = v_[1], v_[1] = v;
+      } else {
+        v_[2] = v;
+      }
+    } else {
+      if (v < v_[3]) {
+        v_[4] = v_[3], v_[3] = v;
+      } else {
+        v_[4] = v;
+      }
+      high_ = false;
+    }
+  }
+  void AddLow(int32_t v) {
+    if (v_[2] < v) {
+      v_[0] = v_[1], v_[1] = v_[2];
+      if (v_[4] < v) {
+        v_[2] = v_[3], v_[3] = v_[4], v_[4] = v;
+      } else if (v_[3] < v) {
+        v_[2] = v_[3], v_[3] = v;
+      } else {
+        v_[2] = v;
+      }
+    } else {
+      if (v_[1] < v) {
+        v_[0] = v_[1], v_[1] = v;
+      } else {
+        v_[0] = v;
+      }
+      high_ = true;
+    }
+  }
+  std::array<int32_t, 5> v_{};
+  bool high_ = true;
+};
+
+}  // namespace candi::io::laz
