@@ -14,9 +14,7 @@ find_package(nlohmann_json 3 REQUIRED)
 find_package(Boost 1.74 REQUIRED)   # header-only: Beast and Asio (candi view)
 pkg_check_modules(PROJ REQUIRED IMPORTED_TARGET proj)          # CRSs (io/crs.cc)
 pkg_check_modules(PUGIXML REQUIRED IMPORTED_TARGET pugixml)    # E57's XML section (core/e57_*.cc)
-# SHA-256: the two Debian libraries bench/sha256_bench.cc compares for core/sha256.cc
-find_package(OpenSSL 3 REQUIRED COMPONENTS Crypto)
-pkg_check_modules(NETTLE REQUIRED IMPORTED_TARGET nettle)
+find_package(OpenSSL 3 REQUIRED COMPONENTS Crypto)               # libcrypto: SHA-256 (core/sha256.cc)
 # mesh
 find_package(CGAL REQUIRED)
 find_package(OpenMesh CONFIG REQUIRED)   # CONFIG: CGAL ships a FindOpenMesh that fails (trap 1)

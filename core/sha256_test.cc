@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "core/check.h"
+#include "core/rng.h"
 #include "tests/util/test_util.h"
 
 namespace candi {
@@ -29,6 +30,27 @@ TEST(Sha256, StreamingAndFilesAgreeWithOneShot) {
   testing::WriteBytes(dir.File("f.bin"), bytes);
   EXPECT_EQ(Sha256OfFile(dir.File("f.bin")), Sha256Hex(bytes));
   EXPECT_THROW(Sha256OfFile(dir.File("missing.bin")), InputError);
+}
+
+// coreutils' sha256sum as an independent reference, on a file of several 1 MiB reads whose size is
+// no multiple of the 64-byte block.
+TEST(Sha256, FileAgreesWithSha256sum) {
+  std::string bytes(5 * 1048576 + 37, '\0');
+  Rng rng(11);
+  for (char& c : bytes) c = static_cast<char>(rng.Next() >> 56);
+  testing::TempDir dir;
+  testing::WriteBytes(dir.File("big.bin"), bytes);
+  const testing::CommandResult sum = testing::RunCommand("sha256sum " + dir.File("big.bin"));
+  ASSERT_EQ(sum.code, 0) << sum.output;
+  EXPECT_EQ(Sha256OfFile(dir.File("big.bin")), sum.out.substr(0, 64));
+}
+
+TEST(Sha256, MovedObjectKeepsItsState) {
+  Sha256 a;
+  a.Update("ab", 2);
+  Sha256 b = std::move(a);
+  b.Update("c", 1);
+  EXPECT_EQ(b.HexDigest(), Sha256Hex("abc"));
 }
 
 }  // namespace

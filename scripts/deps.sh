@@ -10,8 +10,8 @@ packages=(
   g++ cmake ninja-build pkg-config make git ca-certificates
   # core
   libeigen3-dev libpng-dev libjpeg-dev libtbb-dev
-  # bench/sha256_bench.cc: the SHA-256 of libcrypto (libssl-dev) and of nettle against core/sha256.cc
-  libssl-dev nettle-dev
+  # SHA-256 (core/sha256.cc) is libcrypto's: 7x the portable C it replaced (bench/sha256_bench.cc)
+  libssl-dev
   # CRSs through PROJ (io/crs.cc; cs2cs checks candi's transforms in tests), E57's XML section
   libproj-dev proj-data proj-bin libpugixml-dev
   # mesh
