@@ -18,10 +18,11 @@
 #include "apps/bench_archives.h"
 #include "apps/commands.h"
 #include "core/progress.h"
+#include "io/image/jpeg_io.h"
+#include "io/image/png_io.h"
 #include "render/archive.h"
 #include "render/archive_pack.h"
 #include "render/synthetic_scene.h"
-#include "view/frame_encoding.h"
 #include "view/progressive.h"
 #include "view/source.h"
 
@@ -97,7 +98,7 @@ int RunBenchView(const BenchViewArgs& args) {
       image.Start(state);
       const int count = policy.Ensembles(image.ms_per_ensemble(), 0);
       image.Step(count);
-      const std::string jpeg = view::EncodeJpeg(image.Image(nullptr), 85);
+      const std::string jpeg = io::EncodeJpeg(image.Image(nullptr), 85);
       const double ms = Since(t);
       orbit_ms += ms;
       if (f > 0) latency.push_back(ms), ensembles.push_back(count);  // the first frame sets the rate
@@ -111,7 +112,7 @@ int RunBenchView(const BenchViewArgs& args) {
       while (!image.converged()) {
         image.Step(policy.Ensembles(image.ms_per_ensemble(), step++));
         const Image8 pixels = image.Image(nullptr);
-        if (image.converged()) view::EncodePng(pixels); else view::EncodeJpeg(pixels, 85);
+        if (image.converged()) io::EncodePng(pixels, {}, io::PngCompression::kFast); else io::EncodeJpeg(pixels, 85);
       }
       converge.push_back(Since(t) / 1000);
       steps.push_back(step);

@@ -18,7 +18,8 @@
 #include <thread>
 
 #include "core/check.h"
-#include "view/frame_encoding.h"
+#include "io/image/jpeg_io.h"
+#include "io/image/png_io.h"
 #include "view/web_assets.h"
 
 namespace candi::view {
@@ -598,7 +599,8 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
   h.gain = gain;
   h.render_ms = ms;
   auto frame = std::make_shared<const std::string>(
-      FrameMessage(h, h.png ? EncodePng(pixels) : EncodeJpeg(pixels, options.jpeg_quality)));
+      FrameMessage(h, h.png ? io::EncodePng(pixels, {}, io::PngCompression::kFast)
+                            : io::EncodeJpeg(pixels, options.jpeg_quality)));
   {
     std::lock_guard<std::mutex> lock(c->mutex);
     ++c->frames_outstanding;

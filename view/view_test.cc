@@ -4,8 +4,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/rng.h"
-#include "io/image/png_io.h"
 #include "render/archive_pack.h"
 #include "render/archive_render.h"
 #include "render/spbr.h"
@@ -13,7 +11,6 @@
 #include "render/synthetic_scene.h"
 #include "render/view_json.h"
 #include "tests/util/test_util.h"
-#include "view/frame_encoding.h"
 #include "view/progressive.h"
 #include "view/protocol.h"
 #include "view/server.h"
@@ -359,21 +356,6 @@ TEST(Progressive, FirstViewKeepsUpUpInSurveyAndColmapFrames) {
   // And it looks down on the data, as the survey view does: the eye is above the target.
   EXPECT_GT((c.eye - c.target).dot(colmap.up), 0);
   EXPECT_GT((z.eye - z.target).dot(Eigen::Vector3d::UnitZ()), 0);
-}
-
-TEST(FrameEncoding, PngIsLosslessAndJpegDecodes) {
-  Image8 image(37, 21, 3);
-  Rng rng(4);
-  for (uint8_t& v : image.values()) v = static_cast<uint8_t>(rng.Uniform(0, 256));
-  const std::string png = EncodePng(image);
-  TempDir dir;
-  candi::testing::WriteBytes(dir.File("a.png"), png);
-  const io::PngImage back = io::ReadPng(dir.File("a.png"));
-  ASSERT_EQ(back.image8.width(), 37);
-  EXPECT_TRUE(back.image8 == image);
-  const std::string jpeg = EncodeJpeg(image, 85);
-  EXPECT_EQ(static_cast<unsigned char>(jpeg[0]), 0xff);
-  EXPECT_EQ(static_cast<unsigned char>(jpeg[1]), 0xd8);
 }
 
 }  // namespace

@@ -138,9 +138,9 @@ Image8 DecodeJpeg(const std::string& path, const std::string& bytes) {
 
 Image8 ReadJpeg(const std::string& path) { return DecodeJpeg(path, ReadFileToString(path)); }
 
-void WriteJpeg(const std::string& path, const Image8& image, int quality) {
-  CANDI_CHECK(!image.empty()) << "WriteJpeg: empty image for " << path;
-  CANDI_CHECK(quality >= 1 && quality <= 100) << "WriteJpeg: quality " << quality;
+std::string EncodeJpeg(const Image8& image, int quality) {
+  CANDI_CHECK(!image.empty()) << "EncodeJpeg: empty image";
+  CANDI_CHECK(quality >= 1 && quality <= 100) << "EncodeJpeg: quality " << quality;
   const int channels = image.channels() == 1 ? 1 : 3;
   std::vector<unsigned char> packed;
   const unsigned char* rows = image.data();
@@ -160,8 +160,13 @@ void WriteJpeg(const std::string& path, const Image8& image, int quality) {
   std::string bytes;
   if (ok) bytes.assign(reinterpret_cast<const char*>(buffer), size);
   std::free(buffer);
-  if (!ok) throw InputError(path, "", std::string("JPEG write failed: ") + err.message);
-  WriteFileAtomic(path, bytes);
+  if (!ok) throw InputError(std::string("JPEG encoding failed: ") + err.message);
+  return bytes;
+}
+
+void WriteJpeg(const std::string& path, const Image8& image, int quality) {
+  CANDI_CHECK(!image.empty()) << "WriteJpeg: empty image for " << path;
+  WriteFileAtomic(path, EncodeJpeg(image, quality));
 }
 
 Image8 ReadImageRgb8(const std::string& path) {

@@ -4,7 +4,7 @@
 // candi reads photos through these rather than OpenCV's imgcodecs: that library pulls in ~120
 // shared libraries (GDAL, GDCM, HDF5, Poppler, ...) whose symbol binding cost every `candi`
 // call about 0.8 s of start-up. Writes are atomic (temporary file, then rename). Errors throw
-// InputError naming the path and libjpeg's message. Thread-safe (no shared state).
+// InputError with libjpeg's message, naming the path for files. Thread-safe (no shared state).
 #pragma once
 
 #include <string>
@@ -16,7 +16,10 @@ namespace candi::io {
 // Grey files give 1 channel, colour (YCbCr/RGB) files 3; CMYK/YCCK files are refused with a clear
 // error.
 Image8 ReadJpeg(const std::string& path);
-// quality in [1, 100]; 1- or 3-channel images (4 channels: the alpha is dropped).
+// A JPEG's bytes in memory (the viewer's frames). quality in [1, 100]; 1- or 3-channel images
+// (4 channels: the alpha is dropped). libjpeg's defaults otherwise (4:2:0 chroma, baseline).
+std::string EncodeJpeg(const Image8& image, int quality = 95);
+// EncodeJpeg's bytes, written atomically.
 void WriteJpeg(const std::string& path, const Image8& image, int quality = 95);
 
 // A PNG or JPEG as 8-bit RGB: grey is replicated, alpha dropped, 16 bits scaled (v * 255 / 65535,

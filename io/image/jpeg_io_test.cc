@@ -98,5 +98,16 @@ TEST(Jpeg, BadFilesAreInputErrorsNamingThePath) {
   EXPECT_FALSE(testing::FileExists(dir.File("no/dir/y.jpg")));
 }
 
+// The viewer's frames: EncodeJpeg's bytes are a JPEG, and exactly what WriteJpeg puts in the file.
+TEST(Jpeg, EncodedBytesAreTheFile) {
+  TempDir dir;
+  const std::string bytes = EncodeJpeg(Ramp(37, 21, 3), 85);
+  EXPECT_EQ(bytes.compare(0, 3, "\xff\xd8\xff"), 0);
+  WriteJpeg(dir.File("a.jpg"), Ramp(37, 21, 3), 85);
+  EXPECT_EQ(testing::ReadBytes(dir.File("a.jpg")), bytes);
+  EXPECT_EQ(ReadJpeg(dir.File("a.jpg")).channels(), 3);
+  EXPECT_THROW(EncodeJpeg(Ramp(4, 4, 1), 0), InternalError);
+}
+
 }  // namespace
 }  // namespace candi::io

@@ -14,18 +14,19 @@ namespace candi::io {
 
 namespace {
 
-struct PngWriteState {
-  AtomicFile* file;
+// The encoded bytes, and why appending to them failed (out of memory), if it did.
+struct PngSink {
+  std::string bytes;
   std::string error;
 };
 
-void WriteCallback(png_structp png, png_bytep data, png_size_t length) {
-  auto* state = static_cast<PngWriteState*>(png_get_io_ptr(png));
+void AppendCallback(png_structp png, png_bytep data, png_size_t length) {
+  auto* sink = static_cast<PngSink*>(png_get_io_ptr(png));
   bool ok = true;
   try {
-    state->file->Write(data, length);
+    sink->bytes.append(reinterpret_cast<const char*>(data), length);
   } catch (const std::exception& e) {
-    state->error = e.what();
+    sink->error = e.what();
     ok = false;
   }
   // png_error longjmps: call it outside the handler so the exception object is destroyed first.
@@ -50,13 +51,18 @@ int ColorType(int channels) {
 
 // The libpng calls, under setjmp. No local is modified after setjmp, so none can be clobbered.
 bool WriteWithLibpng(png_structp png, png_infop info, int width, int height, int bits,
-                     int color_type, std::vector<png_text>& chunks, png_bytepp rows,
-                     PngWriteState* state) {
+                     int color_type, PngCompression compression, std::vector<png_text>& chunks,
+                     png_bytepp rows, PngSink* sink) {
   if (setjmp(png_jmpbuf(png))) return false;
-  png_set_write_fn(png, state, WriteCallback, FlushCallback);
+  png_set_write_fn(png, sink, AppendCallback, FlushCallback);
   png_set_IHDR(png, info, width, height, bits, color_type, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  png_set_compression_level(png, 3);
+  if (compression == PngCompression::kFast) {
+    png_set_compression_level(png, 1);
+    png_set_filter(png, 0, PNG_FILTER_SUB);  // no per-row search among the five filters
+  } else {
+    png_set_compression_level(png, 3);
+  }
   if (!chunks.empty()) png_set_text(png, info, chunks.data(), static_cast<int>(chunks.size()));
   png_write_info(png, info);
   png_write_image(png, rows);
@@ -99,11 +105,10 @@ bool ReadWithLibpng(png_structp png, png_infop info, FILE* fp, PngReadResult* ou
 }
 
 template <typename T>
-void WritePngImpl(const std::string& path, const Image<T>& image, const PngText& text) {
-  CANDI_CHECK(!image.empty()) << "WritePng: empty image for " << path;
+std::string EncodePngImpl(const Image<T>& image, const PngText& text, PngCompression compression) {
+  CANDI_CHECK(!image.empty()) << "EncodePng: empty image";
   constexpr int kBits = sizeof(T) * 8;
-  AtomicFile file(path);
-  PngWriteState state{&file, {}};
+  PngSink sink;
   std::string error;
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, ErrorCallback,
                                             WarningCallback);
@@ -136,15 +141,27 @@ void WritePngImpl(const std::string& path, const Image<T>& image, const PngText&
     chunks.push_back(t);
   }
   const bool ok = WriteWithLibpng(png, info, image.width(), image.height(), kBits,
-                                  ColorType(image.channels()), chunks, rows.data(), &state);
+                                  ColorType(image.channels()), compression, chunks, rows.data(),
+                                  &sink);
   png_destroy_write_struct(&png, &info);
-  if (!ok) {
-    throw InputError(path, "", "PNG write failed: " + (state.error.empty() ? error : state.error));
-  }
-  file.Commit();
+  if (!ok) throw InputError("PNG encoding failed: " + (sink.error.empty() ? error : sink.error));
+  return std::move(sink.bytes);
+}
+
+template <typename T>
+void WritePngImpl(const std::string& path, const Image<T>& image, const PngText& text) {
+  CANDI_CHECK(!image.empty()) << "WritePng: empty image for " << path;
+  WriteFileAtomic(path, EncodePngImpl(image, text, PngCompression::kBalanced));
 }
 
 }  // namespace
+
+std::string EncodePng(const Image8& image, const PngText& text, PngCompression compression) {
+  return EncodePngImpl(image, text, compression);
+}
+std::string EncodePng(const Image16& image, const PngText& text, PngCompression compression) {
+  return EncodePngImpl(image, text, compression);
+}
 
 void WritePng(const std::string& path, const Image8& image, const PngText& text) {
   WritePngImpl(path, image, text);

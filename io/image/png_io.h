@@ -1,7 +1,8 @@
-// PNG reading and writing (libpng), 8 or 16 bits, grey, RGB or RGBA.
+// PNG encoding, reading and writing (libpng), 8 or 16 bits, grey, RGB or RGBA.
 //
-// Writes are atomic (temporary file, then rename). Text chunks carry provenance (seed, repeat
-// level). Errors throw InputError naming the path.
+// EncodePng gives a PNG's bytes in memory (the viewer's frames); WritePng encodes the same bytes
+// and writes them atomically (temporary file, then rename). Text chunks carry provenance (seed,
+// repeat level). Errors throw InputError, naming the path for files. Thread-safe (no shared state).
 #pragma once
 
 #include <map>
@@ -12,6 +13,15 @@
 namespace candi::io {
 
 using PngText = std::map<std::string, std::string>;  // tEXt key -> value (keys 1-79 Latin-1 chars)
+
+// How hard zlib works. kBalanced: level 3 with libpng's adaptive filter choice, for files.
+// kFast: level 1 with the Sub filter only, for frames that are sent once (candi view).
+enum class PngCompression { kBalanced, kFast };
+
+std::string EncodePng(const Image8& image, const PngText& text = {},
+                      PngCompression compression = PngCompression::kBalanced);
+std::string EncodePng(const Image16& image, const PngText& text = {},
+                      PngCompression compression = PngCompression::kBalanced);
 
 void WritePng(const std::string& path, const Image8& image, const PngText& text = {});
 void WritePng(const std::string& path, const Image16& image, const PngText& text = {});

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/rng.h"
 #include "tests/util/test_util.h"
 
 namespace candi::io {
@@ -39,6 +40,28 @@ TEST(Png, BadFilesAndPathsAreInputErrors) {
   std::string bytes = testing::ReadBytes(dir.File("t.png"));
   testing::WriteBytes(dir.File("t.png"), bytes.substr(0, bytes.size() / 2));
   EXPECT_THROW(ReadPng(dir.File("t.png")), InputError);
+}
+
+// The viewer's converged frames: fast compression is still lossless, the text chunks travel, and
+// the balanced encoding is exactly what WritePng puts in the file.
+TEST(Png, EncodedBytesDecodeAndMatchTheFile) {
+  Image8 rgb(37, 21, 3);
+  Rng rng(4);
+  for (uint8_t& v : rgb.values()) v = static_cast<uint8_t>(rng.Uniform(0, 256));
+  TempDir dir;
+  testing::WriteBytes(dir.File("fast.png"), EncodePng(rgb, {{"Seed", "4"}}, PngCompression::kFast));
+  const PngImage fast = ReadPng(dir.File("fast.png"));
+  EXPECT_EQ(fast.image8, rgb);
+  EXPECT_EQ(fast.text.at("Seed"), "4");
+  Image16 grey(6, 5, 1);
+  for (size_t i = 0; i < grey.values().size(); ++i) grey.values()[i] = static_cast<uint16_t>(2017 * i);
+  WritePng(dir.File("grey.png"), grey, {{"RepeatLevel", "3"}});
+  EXPECT_EQ(testing::ReadBytes(dir.File("grey.png")), EncodePng(grey, {{"RepeatLevel", "3"}}));
+  EXPECT_NE(EncodePng(rgb), EncodePng(rgb, {}, PngCompression::kFast));
+}
+
+TEST(Png, BadTextKeyIsAnInputError) {
+  EXPECT_THROW(EncodePng(Image8(2, 2, 3), {{"", "an empty key"}}), InputError);
 }
 
 }  // namespace
