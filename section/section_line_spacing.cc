@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/kd_tree_adaptor.h"
 #include "core/rng.h"
 
 namespace candi::section::lines_internal {
@@ -23,15 +24,7 @@ constexpr size_t kDensitySample = size_t{1} << 18;
 constexpr size_t kDensityQueries = 2048;
 constexpr uint64_t kSampleStream = 0x73656374696f6eULL;  // "section"
 
-struct SampleCloud {
-  std::vector<Eigen::Vector2d> points;
-  size_t kdtree_get_point_count() const { return points.size(); }
-  double kdtree_get_pt(uint32_t i, size_t dim) const { return points[i][static_cast<int>(dim)]; }
-  template <class Box>
-  bool kdtree_get_bbox(Box&) const {
-    return false;
-  }
-};
+using SampleCloud = KdTreeAdaptor<Eigen::Vector2d>;
 using SampleTree =
     nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, SampleCloud>,
                                         SampleCloud, 2, uint32_t>;
