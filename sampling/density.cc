@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "core/check.h"
+#include "core/kd_tree_adaptor.h"
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/rng.h"
@@ -38,16 +39,7 @@ std::string Fmt(double v) {
 
 // Positions as float offsets from the bounding-box centre: float keeps ~7 digits, spent on the
 // cloud's extent instead of on its distance from the origin (survey coordinates).
-struct FloatCloud {
-  std::vector<float> xyz;
-  size_t kdtree_get_point_count() const { return xyz.size() / 3; }
-  float kdtree_get_pt(uint32_t i, size_t dim) const { return xyz[3 * size_t{i} + dim]; }
-  template <class Box>
-  bool kdtree_get_bbox(Box&) const {
-    return false;
-  }
-};
-
+using FloatCloud = KdTreeAdaptor<Eigen::Vector3f>;
 using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, FloatCloud>,
                                                    FloatCloud, 3, uint32_t>;
 
@@ -125,10 +117,10 @@ void ForEachBlock(int threads, size_t n, const ProgressCallback& progress, const
 
 FloatCloud ToFloatCloud(const PointCloud& cloud, const Eigen::Vector3d& centre) {
   FloatCloud out;
-  out.xyz.resize(3 * cloud.size());
+  out.points.resize(cloud.size());
   for (size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3d p = cloud.positions[i] - centre;
-    for (int k = 0; k < 3; ++k) out.xyz[3 * i + k] = static_cast<float>(p[k]);
+    for (int k = 0; k < 3; ++k) out.points[i][k] = static_cast<float>(p[k]);
   }
   return out;
 }
@@ -150,7 +142,7 @@ double MedianKthDistance(const KdTree& tree, const FloatCloud& points, const Den
   std::vector<float> dist_sq(k);
   for (size_t j = 0; j < samples; ++j) {
     const size_t i = samples == n ? j : HashIndex(o.seed, j, kSampleStream) % n;
-    const size_t got = tree.knnSearch(&points.xyz[3 * i], k, found.data(), dist_sq.data());
+    const size_t got = tree.knnSearch(points.points[i].data(), k, found.data(), dist_sq.data());
     distances[j] = got > 0 ? std::sqrt(static_cast<double>(dist_sq[got - 1])) : 0.0;
   }
   return Median(std::move(distances));
@@ -184,7 +176,7 @@ void KdTreeDensity(const DensityOptions& o, const KdTree& tree, const FloatCloud
     for (size_t k = begin; k < end; ++k) {
       const uint32_t i = tree.vAcc[k];
       WeightSum sum(radius_sq, weights);
-      tree.findNeighbors(sum, &points.xyz[3 * size_t{i}], nanoflann::SearchParams());
+      tree.findNeighbors(sum, points.points[i].data(), nanoflann::SearchParams());
       const double self = weights.empty() ? 1.0 : std::min(weights[i], 1.0);
       result->density[i] = std::max(sum.sum() - self, 0.0) * inverse_area;
     }
