@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "core/check.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
 namespace candi::io {
@@ -87,6 +88,13 @@ TEST(ShiftSidecar, RoundTripAndStaleSidecarIgnored) {
   EXPECT_FALSE(ReadShiftSidecar(dir.File("p.xyz")).has_value());
   WriteBytes(dir.File("p.xyz.shift.json"), "{ nonsense }");
   EXPECT_THROW(ReadShiftSidecar(dir.File("p.xyz")), InputError);
+}
+
+TEST(PointWriteOptions, LasScaleMustBeFiniteAndPositive) {
+  PointWriteOptions o;
+  o.las_scale = Eigen::Vector3d(0.001, 0, 0.001);
+  EXPECT_EQ(testing::OptionCheckMessage(o),
+            "PointWriteOptions::las_scale = (0.001, 0, 0.001); must be finite and > 0");
 }
 
 TEST(PointWriteOptions, DefaultsPassAndBadValuesNameTheField) {
