@@ -1,4 +1,5 @@
 #include "io/point_io.h"
+#include "io/e57/e57_writer.h"
 #include "io/shift_sidecar.h"
 
 #include <gtest/gtest.h>
@@ -88,6 +89,12 @@ TEST(ShiftSidecar, RoundTripAndStaleSidecarIgnored) {
   EXPECT_FALSE(ReadShiftSidecar(dir.File("p.xyz")).has_value());
   WriteBytes(dir.File("p.xyz.shift.json"), "{ nonsense }");
   EXPECT_THROW(ReadShiftSidecar(dir.File("p.xyz")), InputError);
+}
+
+TEST(IoModuleOptions, DefaultsPassCheck) {
+  EXPECT_NO_THROW(PointReadOptions().Check());
+  EXPECT_NO_THROW(PointWriteOptions().Check());
+  EXPECT_NO_THROW(E57WriteOptions().Check());
 }
 
 TEST(PointWriteOptions, LasScaleMustBeFiniteAndPositive) {
