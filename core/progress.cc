@@ -1,5 +1,7 @@
 #include "core/progress.h"
 
+#include "core/check.h"
+
 #include <unistd.h>
 
 #include <atomic>
@@ -15,14 +17,8 @@ std::atomic<bool> g_enabled{true};
 void SetConsoleProgressEnabled(bool enabled) { g_enabled = enabled; }
 
 void ConsoleProgressOptions::Check() const {
-  if (!(min_interval_s >= 0.0)) {
-    throw std::invalid_argument("ConsoleProgressOptions::min_interval_s = " +
-                                std::to_string(min_interval_s) + "; must be >= 0");
-  }
-  if (!(line_interval_s >= 0.0)) {
-    throw std::invalid_argument("ConsoleProgressOptions::line_interval_s = " +
-                                std::to_string(line_interval_s) + "; must be >= 0");
-  }
+  CANDI_CHECK_OPTION_GE(min_interval_s, 0);
+  CANDI_CHECK_OPTION_GE(line_interval_s, 0);
 }
 
 ConsoleProgress::ConsoleProgress(std::string label, ConsoleProgressOptions options,

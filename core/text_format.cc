@@ -2,6 +2,8 @@
 
 #include <charconv>
 #include <cmath>
+#include <locale>
+#include <sstream>
 
 namespace candi {
 
@@ -29,6 +31,14 @@ std::string FormatDouble(double value) {
 std::string FormatFloat(float value) {
   char buf[48];
   return std::string(buf, AppendFloat(buf, value));
+}
+
+std::string FormatSignificant(double value, int digits) {
+  std::ostringstream text;
+  text.imbue(std::locale::classic());
+  text.precision(digits);
+  text << value;
+  return text.str();
 }
 
 }  // namespace candi

@@ -9,6 +9,10 @@ namespace candi {
 std::string FormatDouble(double value);
 std::string FormatFloat(float value);
 
+// At most `digits` (>= 1) significant digits, as printf's "%.<digits>g" (std::ostream's default
+// notation at that precision): for messages and logs, where the shortest exact text is too long.
+std::string FormatSignificant(double value, int digits);
+
 // Writes the shortest round-trip text of value into buf (at least 48 bytes); returns the end.
 // Fixed notation for magnitudes in [1e-4, 1e16) (floats: 1e7), scientific otherwise.
 char* AppendDouble(char* buf, double value);

@@ -48,6 +48,10 @@ struct PointReadOptions {
   // false: scalar fields are not decoded (LAS attributes and extra bytes, other PLY properties,
   // other XYZ columns); geometry, colours and normals only. Faster, for rendering and viewing.
   bool scalar_fields = true;
+  // Every value is valid here: `columns` is parsed, and a bad spec refused naming its entry, by
+  // the XYZ/PTS reader when it opens (other formats do not read it), as PointWriteOptions::columns
+  // is by the writer.
+  void Check() const {}
 };
 
 // How a file stores its points when they are fixed-size little-endian records of 32-bit

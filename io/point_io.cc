@@ -13,6 +13,7 @@ namespace candi::io {
 
 std::unique_ptr<PointReader> OpenPointReader(const std::string& path,
                                              const PointReadOptions& options) {
+  options.Check();
   switch (DetectPointFormat(path)) {
     case PointFormat::kPly: return OpenPlyReader(path, options);
     case PointFormat::kLas: return OpenLasReader(path, options);

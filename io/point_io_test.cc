@@ -1,9 +1,11 @@
 #include "io/point_io.h"
+#include "io/e57/e57_writer.h"
 #include "io/shift_sidecar.h"
 
 #include <gtest/gtest.h>
 
 #include "core/check.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
 namespace candi::io {
@@ -87,6 +89,19 @@ TEST(ShiftSidecar, RoundTripAndStaleSidecarIgnored) {
   EXPECT_FALSE(ReadShiftSidecar(dir.File("p.xyz")).has_value());
   WriteBytes(dir.File("p.xyz.shift.json"), "{ nonsense }");
   EXPECT_THROW(ReadShiftSidecar(dir.File("p.xyz")), InputError);
+}
+
+TEST(IoModuleOptions, DefaultsPassCheck) {
+  EXPECT_NO_THROW(PointReadOptions().Check());
+  EXPECT_NO_THROW(PointWriteOptions().Check());
+  EXPECT_NO_THROW(E57WriteOptions().Check());
+}
+
+TEST(PointWriteOptions, LasScaleMustBeFiniteAndPositive) {
+  PointWriteOptions o;
+  o.las_scale = Eigen::Vector3d(0.001, 0, 0.001);
+  EXPECT_EQ(testing::OptionCheckMessage(o),
+            "PointWriteOptions::las_scale = (0.001, 0, 0.001); must be finite and > 0");
 }
 
 TEST(PointWriteOptions, DefaultsPassAndBadValuesNameTheField) {

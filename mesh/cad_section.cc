@@ -166,14 +166,10 @@ void FailSection(const SectionSource& source, const std::string& message) {
 }
 
 void SectionOptions::Check() const {
-  if (!(join_tolerance > 0) || !std::isfinite(join_tolerance)) {
-    throw std::invalid_argument("SectionOptions::join_tolerance = " + FormatDouble(join_tolerance) +
-                                "; must be finite and > 0");
-  }
-  if (!(merge_tolerance >= 0) || !std::isfinite(merge_tolerance)) {
-    throw std::invalid_argument("SectionOptions::merge_tolerance = " +
-                                FormatDouble(merge_tolerance) + "; must be finite and >= 0");
-  }
+  CANDI_CHECK_OPTION(join_tolerance > 0 && std::isfinite(join_tolerance), join_tolerance,
+                     "finite and > 0");
+  CANDI_CHECK_OPTION(merge_tolerance >= 0 && std::isfinite(merge_tolerance), merge_tolerance,
+                     "finite and >= 0");
 }
 
 Polyline2 MergeCoincidentVertices(const Polyline2& line, double tolerance) {

@@ -243,17 +243,11 @@ Polyline2 ToMetres(const RawPiece& raw, double scale, double chord_tolerance,
 }  // namespace
 
 void DxfReadOptions::Check() const {
-  if (!(chord_tolerance > 0) || !std::isfinite(chord_tolerance)) {
-    throw std::invalid_argument("DxfReadOptions::chord_tolerance = " +
-                                FormatDouble(chord_tolerance) + "; must be finite and > 0");
-  }
-  if (!(unitless_scale > 0) || !std::isfinite(unitless_scale)) {
-    throw std::invalid_argument("DxfReadOptions::unitless_scale = " + FormatDouble(unitless_scale) +
-                                "; must be finite and > 0");
-  }
-  if (max_piece_vertices == 0) {
-    throw std::invalid_argument("DxfReadOptions::max_piece_vertices = 0; must be > 0");
-  }
+  CANDI_CHECK_OPTION(chord_tolerance > 0 && std::isfinite(chord_tolerance), chord_tolerance,
+                     "finite and > 0");
+  CANDI_CHECK_OPTION(unitless_scale > 0 && std::isfinite(unitless_scale), unitless_scale,
+                     "finite and > 0");
+  CANDI_CHECK_OPTION_GT(max_piece_vertices, 0);
 }
 
 std::vector<std::string> DxfDrawing::LayerNames() const {

@@ -14,6 +14,8 @@ void FoundationOptions::Check() const {
   section.Check();
   profile.Check();
   revolve.Check();
+  mesh.Check();
+  check_options.Check();
 }
 
 Polyline2 LayerSection(const FoundationOptions& options, const DxfDrawing& drawing,

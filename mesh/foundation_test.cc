@@ -20,6 +20,16 @@ DxfDrawing Drawing(const TempDir& dir, const DxfText& text) {
 
 TEST(FoundationOptions, DefaultsPass) { EXPECT_NO_THROW(FoundationOptions().Check()); }
 
+TEST(MeshModuleOptions, DefaultsPassCheck) {
+  EXPECT_NO_THROW(DxfReadOptions().Check());
+  EXPECT_NO_THROW(SectionOptions().Check());
+  EXPECT_NO_THROW(ProfileOptions().Check());
+  EXPECT_NO_THROW(RevolveOptions().Check());
+  EXPECT_NO_THROW(SurfaceMeshOptions().Check());  // flags only: every value is valid
+  EXPECT_NO_THROW(MeshCheckOptions().Check());    // flags only: every value is valid
+  EXPECT_NO_THROW(FoundationOptions().Check());
+}
+
 TEST(BuildLayerSurface, FromDxfLinesToACheckedMesh) {
   TempDir dir;
   DxfText text;

@@ -89,6 +89,7 @@ std::string MeshCheckReport::Summary() const {
 }
 
 MeshCheckReport CheckMesh(const MeshCheckOptions& options, const TriMesh& mesh) {
+  options.Check();
   MeshCheckReport report;
   report.vertices = mesh.vertices.size();
   report.faces = mesh.faces.size();

@@ -20,6 +20,7 @@ namespace candi::mesh {
 
 struct MeshCheckOptions {
   bool self_intersections = true;  // run CGAL's self-intersection test
+  void Check() const {}            // every value is valid (a flag)
 };
 
 struct MeshCheckReport {

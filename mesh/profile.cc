@@ -102,14 +102,8 @@ void SplitSides(const Polyline2& section, double tolerance, const SectionSource&
 }  // namespace
 
 void ProfileOptions::Check() const {
-  if (samples_per_side < 2) {
-    throw std::invalid_argument("ProfileOptions::samples_per_side = " +
-                                std::to_string(samples_per_side) + "; must be >= 2");
-  }
-  if (!(tie_tolerance >= 0 && tie_tolerance <= 1e-3)) {
-    throw std::invalid_argument("ProfileOptions::tie_tolerance = " + FormatDouble(tie_tolerance) +
-                                "; must be in [0, 1e-3]");
-  }
+  CANDI_CHECK_OPTION_GE(samples_per_side, 2);
+  CANDI_CHECK_OPTION_IN(tie_tolerance, 0, 1e-3);
 }
 
 Profile BuildProfile(const ProfileOptions& options, const Polyline2& section,

@@ -53,18 +53,9 @@ RevolveMode ParseRevolveMode(const std::string& name) {
 }
 
 void RevolveOptions::Check() const {
-  if (angular_steps < 2 || angular_steps > 1000000) {
-    throw std::invalid_argument("RevolveOptions::angular_steps = " + std::to_string(angular_steps) +
-                                "; must be in [2, 1000000]");
-  }
-  if (std::isinf(axis_x)) {
-    throw std::invalid_argument("RevolveOptions::axis_x = " + FormatDouble(axis_x) +
-                                "; must be finite (or NaN for the reference point)");
-  }
-  if (!(symmetry_tolerance >= 0 && symmetry_tolerance <= 1)) {
-    throw std::invalid_argument("RevolveOptions::symmetry_tolerance = " +
-                                FormatDouble(symmetry_tolerance) + "; must be in [0, 1]");
-  }
+  CANDI_CHECK_OPTION_IN(angular_steps, 2, 1000000);
+  CANDI_CHECK_OPTION(!std::isinf(axis_x), axis_x, "finite (or NaN for the reference point)");
+  CANDI_CHECK_OPTION_IN(symmetry_tolerance, 0, 1);
 }
 
 double ProfileAsymmetry(const Profile& profile, double axis_local_x) {

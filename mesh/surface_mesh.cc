@@ -5,6 +5,7 @@
 namespace candi::mesh {
 
 TriMesh BuildSurfaceMesh(const SurfaceMeshOptions& options, const SurfaceGrid& grid) {
+  options.Check();
   const int n = grid.rings, cols = grid.columns;
   CANDI_CHECK(n >= 2 && cols >= 3 &&
               grid.positions.size() == static_cast<size_t>(n) * static_cast<size_t>(cols))

@@ -20,6 +20,7 @@ namespace candi::mesh {
 
 struct SurfaceMeshOptions {
   bool close_base = false;  // close the bottom ring with a fan (a watertight solid for a dome)
+  void Check() const {}     // every value is valid (a flag)
 };
 
 TriMesh BuildSurfaceMesh(const SurfaceMeshOptions& options, const SurfaceGrid& grid);

@@ -30,25 +30,14 @@ namespace candi::render {
 namespace fs = std::filesystem;
 
 void PackOptions::Check() const {
-  if (chunk_points < 64 || chunk_points > (uint64_t{1} << 24)) {
-    throw std::invalid_argument("PackOptions::chunk_points = " + std::to_string(chunk_points) +
-                                "; must be in [64, 16777216]");
-  }
-  if (memory_points >= (uint64_t{1} << 32)) {  // a cell's points are indexed by 32 bits
-    throw std::invalid_argument("PackOptions::memory_points = " + std::to_string(memory_points) +
-                                "; must be < 2^32");
-  }
-  if (memory_points < chunk_points) {
-    throw std::invalid_argument("PackOptions::memory_points = " + std::to_string(memory_points) +
-                                "; must be >= chunk_points (" + std::to_string(chunk_points) + ")");
-  }
-  if (file_bytes < 8 * chunk_points) {
-    throw std::invalid_argument("PackOptions::file_bytes = " + std::to_string(file_bytes) +
-                                "; must hold at least one chunk");
-  }
-  if (threads < 0 || threads > 256) {
-    throw std::invalid_argument("PackOptions::threads = " + std::to_string(threads) + "; must be in [0, 256]");
-  }
+  CANDI_CHECK_OPTION_IN(chunk_points, 64, 16777216);  // 2^24
+  // A cell's points are indexed by 32 bits.
+  CANDI_CHECK_OPTION(memory_points < (uint64_t{1} << 32), memory_points, "< 2^32");
+  CANDI_CHECK_OPTION(memory_points >= chunk_points, memory_points,
+                     ">= chunk_points (" + std::to_string(chunk_points) + ")");
+  CANDI_CHECK_OPTION_MSG(file_bytes >= 8 * chunk_points, file_bytes,
+                         "must hold at least one chunk");
+  CANDI_CHECK_OPTION_IN(threads, 0, 256);
 }
 
 PackInput PackInputFromFile(const std::string& path, const std::string& columns) {

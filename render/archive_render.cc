@@ -19,29 +19,17 @@
 namespace candi::render {
 
 void ArchiveRenderOptions::Check() const {
-  if (repeat_level < 1) {
-    throw std::invalid_argument("ArchiveRenderOptions::repeat_level = " + std::to_string(repeat_level) +
-                                "; must be >= 1");
-  }
-  if (!(point_size >= 1.0 && point_size <= 64.0)) {
-    throw std::invalid_argument("ArchiveRenderOptions::point_size = " + std::to_string(point_size) +
-                                "; must be in [1, 64] pixels");
-  }
-  if (threads < 0 || threads > 256) {
-    throw std::invalid_argument("ArchiveRenderOptions::threads = " + std::to_string(threads) +
-                                "; must be in [0, 256]");
-  }
-  for (double f : layer_fraction) {
-    if (!(f >= 0 && f <= 16)) {
-      throw std::invalid_argument("ArchiveRenderOptions::layer_fraction " + std::to_string(f) + ": must be in [0, 16]");
-    }
-  }
+  CANDI_CHECK_OPTION_GE(repeat_level, 1);
+  CANDI_CHECK_OPTION(point_size >= 1.0 && point_size <= 64.0, point_size, "in [1, 64] pixels");
+  CANDI_CHECK_OPTION_IN(threads, 0, 256);
+  CANDI_CHECK_OPTION_EACH_IN(layer_fraction, 0, 16);
   clip.Check("ArchiveRenderOptions::clip");
   const int end = ensemble_end == 0 ? repeat_level : ensemble_end;
-  if (ensemble_begin < 0 || end > repeat_level || ensemble_begin > end) {
-    throw std::invalid_argument("ArchiveRenderOptions: ensembles [" + std::to_string(ensemble_begin) + ", " +
-                                std::to_string(end) + ") not within [0, " + std::to_string(repeat_level) + "]");
-  }
+  CANDI_CHECK_OPTION_PAIR(ensemble_begin >= 0 && end <= repeat_level && ensemble_begin <= end,
+                          ensemble_begin, ensemble_end,
+                          "ensembles [" + std::to_string(ensemble_begin) + ", " +
+                              std::to_string(end) + ") not within [0, " +
+                              std::to_string(repeat_level) + "]");
 }
 
 bool BoxMayBeVisible(const Camera::Projector& p, const Camera& camera, const Box3d& box, double margin_px) {

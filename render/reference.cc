@@ -11,12 +11,7 @@
 
 namespace candi::render {
 
-void ReferenceOptions::Check() const {
-  if (repeat_level < 1) {
-    throw std::invalid_argument("ReferenceOptions::repeat_level = " + std::to_string(repeat_level) +
-                                "; must be >= 1");
-  }
-}
+void ReferenceOptions::Check() const { CANDI_CHECK_OPTION_GE(repeat_level, 1); }
 
 namespace {
 

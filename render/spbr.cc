@@ -17,16 +17,9 @@
 namespace candi::render {
 
 void SpbrOptions::Check() const {
-  if (!(point_size >= 1.0 && point_size <= 64.0)) {
-    throw std::invalid_argument("SpbrOptions::point_size = " + std::to_string(point_size) +
-                                "; must be in [1, 64] pixels");
-  }
-  if (ensembles < 0) {
-    throw std::invalid_argument("SpbrOptions::ensembles = " + std::to_string(ensembles) + "; must be >= 0");
-  }
-  if (threads < 0 || threads > 256) {
-    throw std::invalid_argument("SpbrOptions::threads = " + std::to_string(threads) + "; must be in [0, 256]");
-  }
+  CANDI_CHECK_OPTION(point_size >= 1.0 && point_size <= 64.0, point_size, "in [1, 64] pixels");
+  CANDI_CHECK_OPTION_GE(ensembles, 0);
+  CANDI_CHECK_OPTION_IN(threads, 0, 256);
 }
 
 namespace {

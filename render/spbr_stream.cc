@@ -17,18 +17,9 @@
 namespace candi::render {
 
 void SpbrStreamOptions::Check() const {
-  if (repeat_level < 1) {
-    throw std::invalid_argument("SpbrStreamOptions::repeat_level = " + std::to_string(repeat_level) +
-                                "; must be >= 1");
-  }
-  if (!(point_size >= 1.0 && point_size <= 64.0)) {
-    throw std::invalid_argument("SpbrStreamOptions::point_size = " + std::to_string(point_size) +
-                                "; must be in [1, 64] pixels");
-  }
-  if (threads < 0 || threads > 256) {
-    throw std::invalid_argument("SpbrStreamOptions::threads = " + std::to_string(threads) +
-                                "; must be in [0, 256]");
-  }
+  CANDI_CHECK_OPTION_GE(repeat_level, 1);
+  CANDI_CHECK_OPTION(point_size >= 1.0 && point_size <= 64.0, point_size, "in [1, 64] pixels");
+  CANDI_CHECK_OPTION_IN(threads, 0, 256);
 }
 
 namespace {

@@ -6,9 +6,14 @@
 
 #include "core/check.h"
 #include "core/rng.h"
+#include "render/archive_clip.h"
+#include "render/archive_pack.h"
+#include "render/archive_render.h"
 #include "render/reference.h"
+#include "render/spbr_stream.h"
 #include "render/splat_cloud.h"
 #include "render/synthetic_scene.h"
+#include "tests/util/option_check.h"
 
 namespace candi::render {
 namespace {
@@ -52,6 +57,30 @@ double MeanRegion(const ImageF& image, int channel, int x0, int y0, int x1, int 
   double sum = 0;
   for (int y = y0; y < y1; ++y) for (int x = x0; x < x1; ++x) sum += image.at(x, y, channel);
   return sum / ((x1 - x0) * (y1 - y0));
+}
+
+TEST(RenderModuleOptions, DefaultsPassCheck) {
+  EXPECT_NO_THROW(SpbrOptions().Check());
+  EXPECT_NO_THROW(SpbrStreamOptions().Check());
+  EXPECT_NO_THROW(SplatCloudOptions().Check());
+  EXPECT_NO_THROW(ReferenceOptions().Check());
+  EXPECT_NO_THROW(PackOptions().Check());
+  EXPECT_NO_THROW(ArchiveRenderOptions().Check());
+  EXPECT_NO_THROW(ClippedReadOptions().Check());
+}
+
+TEST(ArchiveRenderOptions, LayerSharesAndEnsemblesNameTheirFields) {
+  ArchiveRenderOptions o;
+  o.layer_fraction = {1, 0.5, 17};
+  EXPECT_EQ(testing::OptionCheckMessage(o),
+            "ArchiveRenderOptions::layer_fraction[2] = 17; must be in [0, 16]");
+  o = {};
+  o.repeat_level = 10;
+  o.ensemble_begin = 5;
+  o.ensemble_end = 3;
+  EXPECT_EQ(testing::OptionCheckMessage(o),
+            "ArchiveRenderOptions::ensemble_begin = 5 and ensemble_end = 3; "
+            "ensembles [5, 3) not within [0, 10]");
 }
 
 TEST(SpbrOptions, DefaultsPassAndBadValuesNameTheField) {

@@ -14,14 +14,9 @@
 namespace candi::render {
 
 void SplatCloudOptions::Check() const {
-  if (repeat_level < 1) {
-    throw std::invalid_argument("SplatCloudOptions::repeat_level = " + std::to_string(repeat_level) +
-                                "; must be >= 1");
-  }
-  if (block_size != 0 && (block_size < 64 || block_size > 65536)) {
-    throw std::invalid_argument("SplatCloudOptions::block_size = " + std::to_string(block_size) +
-                                "; must be 0 (automatic) or in [64, 65536]");
-  }
+  CANDI_CHECK_OPTION_GE(repeat_level, 1);
+  CANDI_CHECK_OPTION(block_size == 0 || (block_size >= 64 && block_size <= 65536), block_size,
+                     "0 (automatic) or in [64, 65536]");
 }
 
 size_t SplatCloud::MemoryBytes() const {

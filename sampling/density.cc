@@ -11,7 +11,6 @@
 #include <limits>
 #include <memory>
 #include <nanoflann.hpp>
-#include <sstream>
 #include <stdexcept>
 
 #include "core/check.h"
@@ -19,6 +18,7 @@
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/rng.h"
+#include "core/text_format.h"
 #include "sampling/plane_in_cube.h"
 
 namespace candi::sampling {
@@ -29,13 +29,6 @@ constexpr uint64_t kSampleStream = 0x64656e73697479ULL;  // "density": the radiu
 constexpr size_t kBlock = 4096;                          // points per task and progress step
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kKeyBits = 21;  // voxel key bits per axis
-
-std::string Fmt(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v;
-  return s.str();
-}
 
 // Positions as float offsets from the bounding-box centre: float keeps ~7 digits, spent on the
 // cloud's extent instead of on its distance from the origin (survey coordinates).
@@ -90,7 +83,7 @@ std::vector<double> ReadWeights(const PointCloud& cloud, const std::string& fiel
     weights[i] = field->Get(i);
     if (!std::isfinite(weights[i]) || weights[i] < 0) {
       throw InputError("scalar field '" + field_name + "' of point " + std::to_string(i) + " = " +
-                       Fmt(weights[i]) + "; a weight must be finite and >= 0");
+                       FormatSignificant(weights[i], 10) + "; a weight must be finite and >= 0");
     }
   }
   return weights;
@@ -194,10 +187,11 @@ std::vector<CellEntry> SortedCells(const DensityOptions& o, const PointCloud& cl
                                    const Box3d& box, double h) {
   const Eigen::Vector3d cells = (box.Extent() / h).array().floor() + 1.0;
   if (cells.maxCoeff() > double{1 << kKeyBits}) {
-    throw std::invalid_argument("DensityOptions::radius = " + Fmt(h / std::sqrt(kPi)) +
-                                " makes a voxel grid of " + Fmt(cells.maxCoeff()) +
-                                " cells along an axis; must be <= 2^21 (use a larger radius or "
-                                "the kd-tree method)");
+    throw std::invalid_argument(
+        "DensityOptions::radius = " + FormatSignificant(h / std::sqrt(kPi), 10) +
+        " makes a voxel grid of " + FormatSignificant(cells.maxCoeff(), 10) +
+        " cells along an axis; must be <= 2^21 (use a larger radius or "
+        "the kd-tree method)");
   }
   std::vector<CellEntry> entries(cloud.size());
   ForEachBlock(o.threads, cloud.size(), nullptr, [&](size_t begin, size_t end) {
@@ -296,17 +290,11 @@ DensityMethod ParseDensityMethod(const std::string& name) {
 }
 
 void DensityOptions::Check() const {
-  auto fail = [](const std::string& field, const std::string& value, const std::string& rule) {
-    throw std::invalid_argument("DensityOptions::" + field + " = " + value + "; " + rule);
-  };
-  if (!(radius >= 0) || !std::isfinite(radius)) {
-    fail("radius", Fmt(radius), "must be finite and >= 0 (0 = automatic)");
-  }
-  if (target_neighbours < 1) {
-    fail("target_neighbours", std::to_string(target_neighbours), "must be >= 1");
-  }
-  if (sample_size < 1) fail("sample_size", std::to_string(sample_size), "must be >= 1");
-  if (threads < 0) fail("threads", std::to_string(threads), "must be >= 0 (0 = all available)");
+  CANDI_CHECK_OPTION(radius >= 0 && std::isfinite(radius), radius,
+                     "finite and >= 0 (0 = automatic)");
+  CANDI_CHECK_OPTION_GE(target_neighbours, 1);
+  CANDI_CHECK_OPTION_GE(sample_size, 1);
+  CANDI_CHECK_OPTION(threads >= 0, threads, ">= 0 (0 = all available)");
 }
 
 DensityResult EstimateSurfaceDensity(const DensityOptions& options, const PointCloud& cloud) {
@@ -330,8 +318,9 @@ DensityResult EstimateSurfaceDensity(const DensityOptions& options, const PointC
       result.automatic_radius ? AutomaticRadius(options, *tree, points, box) : options.radius;
   result.area = kPi * result.radius * result.radius;
   if (tree && result.radius < 1e-5 * box.Extent().maxCoeff()) {  // float offsets in the tree
-    LogWarning("density: radius " + Fmt(result.radius) + " m is below float resolution for an " +
-               "extent of " + Fmt(box.Extent().maxCoeff()) + " m; densities are approximate");
+    LogWarning("density: radius " + FormatSignificant(result.radius, 10) +
+               " m is below float resolution for an extent of " +
+               FormatSignificant(box.Extent().maxCoeff(), 10) + " m; densities are approximate");
   }
   result.density.assign(cloud.size(), 0.0);
   if (options.method == DensityMethod::kKdTree) {
@@ -341,8 +330,9 @@ DensityResult EstimateSurfaceDensity(const DensityOptions& options, const PointC
     VoxelDensity(options, cloud, box, weights, &result);
   }
   result.median_density = Median(result.density);
-  LogDebug("density: " + DensityMethodName(options.method) + ", radius " + Fmt(result.radius) +
-           " m, median " + Fmt(result.median_density) + " points/m^2");
+  LogDebug("density: " + DensityMethodName(options.method) + ", radius " +
+           FormatSignificant(result.radius, 10) + " m, median " +
+           FormatSignificant(result.median_density, 10) + " points/m^2");
   return result;
 }
 

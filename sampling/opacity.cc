@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 #include <vector>
 
 #include "core/check.h"
 #include "core/rng.h"
+#include "core/text_format.h"
 
 namespace candi::sampling {
 
@@ -18,13 +18,6 @@ constexpr uint64_t kCopyStream = 0x6f706163697479ULL;  // "opacity": the roundin
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kMaxRepeatLevel = 1 << 24;  // copy counts are stored exactly in float
-
-std::string Fmt(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v;
-  return s.str();
-}
 
 // Each point's input multiplicity w_i, or empty for "all 1".
 std::vector<double> InputMultiplicity(const PointCloud& cloud) {
@@ -99,9 +92,10 @@ void SetScales(const OpacityOptions& o, const PointCloud& cloud, const DensityRe
   s->area = density.area;
   if (point_area > kMaxPointAreaRatio * s->area) {
     s->area = point_area / kMaxPointAreaRatio;
-    AddNote(s, "pixels (" + Fmt(s->pixel_size) + " m) are coarse for the density radius " +
-                   Fmt(s->radius) + " m: S enlarged to " + Fmt(s->area) +
-                   " m^2 so that s/S = " + Fmt(kMaxPointAreaRatio));
+    AddNote(s, "pixels (" + FormatSignificant(s->pixel_size, 10) +
+                   " m) are coarse for the density radius " + FormatSignificant(s->radius, 10) +
+                   " m: S enlarged to " + FormatSignificant(s->area, 10) +
+                   " m^2 so that s/S = " + FormatSignificant(kMaxPointAreaRatio, 10));
   }
   s->point_area_ratio = point_area / s->area;
   s->median_density = density.median_density;
@@ -155,21 +149,14 @@ double SpbrPointsPerEnsemble(double alpha, double point_area_ratio) {
 }
 
 void OpacityOptions::Check() const {
-  auto fail = [](const std::string& what, const std::string& rule) {
-    throw std::invalid_argument("OpacityOptions::" + what + "; " + rule);
-  };
-  if (!(alpha >= 0 && alpha <= 1)) fail("alpha = " + Fmt(alpha), "must be in [0, 1]");
-  if (repeat_level < 1 || repeat_level > kMaxRepeatLevel) {
-    fail("repeat_level = " + std::to_string(repeat_level), "must be in [1, 2^24]");
-  }
-  if (!(pixel_size >= 0) || !std::isfinite(pixel_size)) {
-    fail("pixel_size = " + Fmt(pixel_size), "must be finite and >= 0 (0 = from image_size)");
-  }
-  if (image_size < 0) fail("image_size = " + std::to_string(image_size), "must be >= 0");
-  if ((pixel_size > 0) == (image_size > 0)) {
-    fail("pixel_size = " + Fmt(pixel_size) + " and image_size = " + std::to_string(image_size),
-         "exactly one must be > 0 (the other 0)");
-  }
+  CANDI_CHECK_OPTION_IN(alpha, 0, 1);
+  CANDI_CHECK_OPTION(repeat_level >= 1 && repeat_level <= kMaxRepeatLevel, repeat_level,
+                     "in [1, 2^24]");
+  CANDI_CHECK_OPTION(pixel_size >= 0 && std::isfinite(pixel_size), pixel_size,
+                     "finite and >= 0 (0 = from image_size)");
+  CANDI_CHECK_OPTION_GE(image_size, 0);
+  CANDI_CHECK_OPTION_PAIR((pixel_size > 0) != (image_size > 0), pixel_size, image_size,
+                          "exactly one must be > 0 (the other 0)");
   density.Check();
 }
 

@@ -9,6 +9,7 @@
 
 #include "core/check.h"
 #include "core/rng.h"
+#include "sampling/surface_sampling.h"
 
 namespace candi::sampling {
 namespace {
@@ -137,6 +138,16 @@ double ExpectedCopies(const OpacityOptions& o, const PointCloud& cloud) {
     sum += std::min(needed / (rho * area), 1.0 * o.repeat_level);
   }
   return sum;
+}
+
+TEST(SamplingModuleOptions, DefaultsPassCheck) {
+  EXPECT_NO_THROW(DensityOptions().Check());
+  EXPECT_NO_THROW(OpacityOptions().Check());
+  // SurfaceSampleOptions has no valid default: a count or a density must be given (its own test
+  // checks that the defaults throw).
+  SurfaceSampleOptions sample;
+  sample.count = 1;
+  EXPECT_NO_THROW(sample.Check());
 }
 
 TEST(OpacityOptions, DefaultsPassAndBadValuesNameTheField) {

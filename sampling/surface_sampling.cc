@@ -12,7 +12,6 @@
 #include "core/check.h"
 #include "core/parallel.h"
 #include "core/rng.h"
-#include "core/text_format.h"
 
 namespace candi::sampling {
 
@@ -152,20 +151,13 @@ PointCloud EmptyCloud(const SurfaceSampleOptions& o, const TriMesh& mesh, size_t
 }  // namespace
 
 void SurfaceSampleOptions::Check() const {
-  auto fail = [](const std::string& field, const std::string& value, const std::string& rule) {
-    throw std::invalid_argument("SurfaceSampleOptions::" + field + " = " + value + "; " + rule);
-  };
-  if (!(density >= 0) || !std::isfinite(density)) {
-    fail("density", FormatDouble(density), "must be finite and >= 0");
-  }
-  if (mode == SurfaceSamplingMode::kArea && (count > 0) == (density > 0)) {
-    fail("count", std::to_string(count), "exactly one of count and density must be > 0");
-  }
-  if (mode == SurfaceSamplingMode::kPerTriangle && per_triangle < 1) {
-    fail("per_triangle", std::to_string(per_triangle), "must be >= 1");
-  }
-  if (threads < 0) fail("threads", std::to_string(threads), "must be >= 0 (0 = all available)");
-  if (layer < -1 || layer > 65535) fail("layer", std::to_string(layer), "must be in [-1, 65535]");
+  CANDI_CHECK_OPTION(density >= 0 && std::isfinite(density), density, "finite and >= 0");
+  CANDI_CHECK_OPTION_MSG(mode != SurfaceSamplingMode::kArea || (count > 0) != (density > 0), count,
+                         "exactly one of count and density must be > 0");
+  CANDI_CHECK_OPTION(mode != SurfaceSamplingMode::kPerTriangle || per_triangle >= 1, per_triangle,
+                     ">= 1");
+  CANDI_CHECK_OPTION(threads >= 0, threads, ">= 0 (0 = all available)");
+  CANDI_CHECK_OPTION_IN(layer, -1, 65535);
 }
 
 double MeshArea(const TriMesh& mesh) {

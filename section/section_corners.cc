@@ -8,16 +8,15 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/check.h"
+
 namespace candi::section {
 
 void SectionCornerOptions::Check() const {
-  auto bad = [](const std::string& field, double v, const std::string& rule) {
-    throw std::invalid_argument("SectionCornerOptions::" + field + " = " + std::to_string(v) + "; must be " + rule);
-  };
-  if (!(min_turn_deg >= 0 && min_turn_deg <= 90)) bad("min_turn_deg", min_turn_deg, "in [0, 90]");
-  if (!(window >= 1 && window <= 20)) bad("window", window, "in [1, 20]");
-  if (!(gain > 0 && gain <= 1)) bad("gain", gain, "in (0, 1]");
-  if (min_side_points < 2) bad("min_side_points", static_cast<double>(min_side_points), ">= 2");
+  CANDI_CHECK_OPTION_IN(min_turn_deg, 0, 90);
+  CANDI_CHECK_OPTION_IN(window, 1, 20);
+  CANDI_CHECK_OPTION(gain > 0 && gain <= 1, gain, "in (0, 1]");
+  CANDI_CHECK_OPTION_GE(min_side_points, 2);
 }
 
 namespace {

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/rng.h"
+#include "section/section_dxf.h"
 #include "section/section_lines.h"
 
 namespace candi::section {
@@ -78,6 +79,12 @@ TEST(RefineSectionCorners, LeavesSmoothCurvesAlone) {
   EXPECT_EQ(s.corners, 0u);
   ASSERT_EQ(lines.lines.size(), before.size());
   EXPECT_EQ(lines.lines[0].points, before[0].points);
+}
+
+TEST(SectionModuleOptions, DefaultsPassCheck) {
+  EXPECT_NO_THROW(SectionCornerOptions().Check());
+  EXPECT_NO_THROW(SectionLineOptions().Check());
+  EXPECT_NO_THROW(DxfWriteOptions().Check());  // every value is valid
 }
 
 TEST(RefineSectionCorners, OptionsAreChecked) {

@@ -5,12 +5,12 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include "core/check.h"
 #include "core/log.h"
+#include "core/text_format.h"
 #include "section/section_lines_internal.h"
 
 namespace candi::section {
@@ -42,13 +42,6 @@ constexpr double kMinLengthPerSpacing = 2.0;
 constexpr double kWindowPerSpacing = 3.0;
 constexpr double kStartScalePerSpacing = 0.25;
 constexpr double kScaleFloorPerSpacing = 0.02;
-
-std::string Fmt(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v;
-  return s.str();
-}
 
 struct InputSummary {
   size_t finite = 0;
@@ -87,25 +80,23 @@ void ResolveScales(const SectionLineOptions& o, const std::vector<Eigen::Vector2
   ctx->scales.adaptive = true;
   const double cells = std::floor((in.max - in.min).maxCoeff() / ctx->scales.radius) + 1;
   if (cells > static_cast<double>(kMaxCells)) {
-    throw std::invalid_argument("SectionLineOptions::spacing = " + Fmt(ctx->spacing) +
-                                (o.spacing > 0 ? "" : " (automatic)") + " makes " + Fmt(cells) +
-                                " cells along an axis; must be <= 2^31 (pass a larger spacing)");
+    throw std::invalid_argument(
+        "SectionLineOptions::spacing = " + FormatSignificant(ctx->spacing, 10) +
+        (o.spacing > 0 ? "" : " (automatic)") + " makes " + FormatSignificant(cells, 10) +
+        " cells along an axis; must be <= 2^31 (pass a larger spacing)");
   }
 }
 
 }  // namespace
 
 void SectionLineOptions::Check() const {
-  auto check = [](const char* field, double value, bool positive) {
-    if (std::isfinite(value) && (positive ? value > 0 : value >= 0)) return;
-    throw std::invalid_argument(std::string("SectionLineOptions::") + field + " = " + Fmt(value) +
-                                "; must be finite and " +
-                                (positive ? "> 0" : ">= 0 (0 = automatic)"));
-  };
-  check("spacing", spacing, false);
-  check("max_gap", max_gap, false);
-  check("min_length", min_length, false);
-  check("min_spacing", min_spacing, true);
+  CANDI_CHECK_OPTION(spacing >= 0 && std::isfinite(spacing), spacing,
+                     "finite and >= 0 (0 = automatic)");
+  CANDI_CHECK_OPTION(max_gap >= 0 && std::isfinite(max_gap), max_gap,
+                     "finite and >= 0 (0 = automatic)");
+  CANDI_CHECK_OPTION(min_length >= 0 && std::isfinite(min_length), min_length,
+                     "finite and >= 0 (0 = automatic)");
+  CANDI_CHECK_OPTION(min_spacing > 0 && std::isfinite(min_spacing), min_spacing, "finite and > 0");
 }
 
 SectionLines ExtractSectionLines(const SectionLineOptions& options,
@@ -131,8 +122,9 @@ SectionLines ExtractSectionLines(const SectionLineOptions& options,
   result.lines = BuildLines(ctx, vertices, edges, forest, in.min);
   LogDebug("section lines: " + std::to_string(in.finite) + " points, " +
            std::to_string(vertices.size()) + " vertices, " + std::to_string(result.lines.size()) +
-           " lines, spacing " + Fmt(ctx.spacing) + " m, max gap " + Fmt(ctx.max_gap) +
-           " m, noise " + Fmt(ctx.noise) + " m");
+           " lines, spacing " + FormatSignificant(ctx.spacing, 10) + " m, max gap " +
+           FormatSignificant(ctx.max_gap, 10) + " m, noise " + FormatSignificant(ctx.noise, 10) +
+           " m");
   return result;
 }
 

@@ -107,8 +107,16 @@ std::vector<char> DrawnPoints(const render::ArchiveChunk& c, const PickOptions& 
 
 }  // namespace
 
+void PickOptions::Check() const {
+  CANDI_CHECK_OPTION(radius_px >= 0 && std::isfinite(radius_px), radius_px, "finite and >= 0");
+  CANDI_CHECK_OPTION_GE(repeat_level, 1);
+  CANDI_CHECK_OPTION_EACH_IN(layer_fraction, 0, 16);
+  clip.Check("PickOptions::clip");
+}
+
 PickResult PickPoint(const render::Archive& archive, const render::Camera& camera, double u, double v,
                      const PickOptions& o) {
+  o.Check();
   camera.Check();
   const render::Camera::Projector p = camera.MakeProjector();
   const render::ArchiveManifest& m = archive.manifest();

@@ -74,11 +74,12 @@ struct StepPolicy {
 // offers only the points its ensembles draw (render/archive.h EnsembleSlices at repeat level L
 // and seed), and points outside `clip` (the archive's frame) are skipped.
 struct PickOptions {
-  double radius_px = 3;
-  int repeat_level = 100;
-  uint64_t seed = 1;
-  std::vector<double> layer_fraction;  // empty: all 1
-  ClipRegion clip;                     // archive frame
+  double radius_px = 3;                // pixels, finite and >= 0
+  int repeat_level = 100;              // L, >= 1
+  uint64_t seed = 1;                   // the render seed
+  std::vector<double> layer_fraction;  // per archive layer, each in [0, 16]; empty: all 1
+  ClipRegion clip;                     // archive frame; finite planes with non-zero normals
+  void Check() const;                  // throws std::invalid_argument naming the field
 };
 struct PickHit {
   int layer = 0;

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <list>
@@ -639,16 +640,31 @@ void Server::Impl::RenderLoop() {
   }
 }
 
+void ServerOptions::Check() const {
+  CANDI_CHECK_OPTION_IN(port, 0, 65535);
+  const bool url_safe = std::all_of(token.begin(), token.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~';
+  });
+  CANDI_CHECK_OPTION(url_safe, token, "letters, digits, - . _ ~ (or empty: random)");
+  CANDI_CHECK_OPTION_IN(threads, 0, 256);
+  CANDI_CHECK_OPTION_GE(max_clients, 1);
+  CANDI_CHECK_OPTION(first_frame_ms > 0 && std::isfinite(first_frame_ms), first_frame_ms,
+                     "finite and > 0");
+  CANDI_CHECK_OPTION(step_ms >= first_frame_ms && std::isfinite(step_ms), step_ms,
+                     "finite and >= first_frame_ms");
+  CANDI_CHECK_OPTION_IN(jpeg_quality, 1, 100);
+}
+
 Server::Server(const ServerOptions& options, const ViewerSource& source, const render::Archive& archive,
                RangeRenderer renderer)
     : impl_(std::make_unique<Impl>(options, source, archive, std::move(renderer))) {
+  options.Check();
   Impl& s = *impl_;
   s.token = options.token.empty() ? RandomToken() : options.token;
   s.scene_json = source.ToJson(archive.manifest());
   boost::system::error_code ec;
   const net::ip::address address = net::ip::make_address(options.host == "localhost" ? "127.0.0.1" : options.host, ec);
   if (ec) throw std::runtime_error("--host '" + options.host + "': not an IP address");
-  if (options.port < 0 || options.port > 65535) throw std::runtime_error("--port " + std::to_string(options.port) + ": not a port");
   const tcp::endpoint endpoint(address, static_cast<unsigned short>(options.port));
   s.acceptor.open(endpoint.protocol(), ec);
   if (!ec) s.acceptor.set_option(net::socket_base::reuse_address(true), ec);

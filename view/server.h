@@ -28,19 +28,24 @@
 namespace candi::view {
 
 struct ServerOptions {
-  std::string host = "127.0.0.1";  // address to bind; "0.0.0.0" serves the network
-  int port = 0;                    // 0: a free port
-  std::string token;               // empty: 128 random bits, hex
-  int threads = 0;                 // render threads (0: as TBB allows)
-  int max_clients = 16;            // open pages at once
-  // The first frame after a camera change draws as many ensembles as fit this budget; then each
-  // further step doubles it up to step_ms.
+  // Address to bind (an IP address or "localhost"); "0.0.0.0" serves the network. One that is not
+  // an address, or cannot be bound, is std::runtime_error from the constructor, as a taken port is.
+  std::string host = "127.0.0.1";
+  int port = 0;  // [0, 65535]; 0: a free port
+  // The access token: letters, digits and - . _ ~ (safe in a URL and a cookie); empty: 128
+  // random bits, hex.
+  std::string token;
+  int threads = 0;       // render threads, [0, 256] (0: as TBB allows)
+  int max_clients = 16;  // open pages at once, >= 1
+  // The first frame after a camera change draws as many ensembles as fit this budget (ms, finite
+  // and > 0); then each further step doubles it up to step_ms (ms, finite and >= first_frame_ms).
   double first_frame_ms = 40, step_ms = 400;
-  int jpeg_quality = 85;
+  int jpeg_quality = 85;                        // JPEG frames' quality, [1, 100]
   std::function<void(const std::string&)> log;  // one line per event worth knowing (may be null)
   // Answers a section message (its seq, the slab, the page's last view: layers and clipping)
   // with the reply's JSON text; null: sections are refused. Runs on the render thread.
   std::function<std::string(uint64_t seq, const SectionRequest&, const ViewState&)> section;
+  void Check() const;  // throws std::invalid_argument naming the field
 };
 
 struct ServerStats {

@@ -1,6 +1,7 @@
 // The viewer's parts below the server: the message parser, the Host/Origin checks, progressive
 // accumulation (batches of ensembles give candi render's image, bit for bit), orthographic
 // archive renders, picking, the first view.
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -10,6 +11,7 @@
 #include "render/splat_cloud.h"
 #include "render/synthetic_scene.h"
 #include "render/view_json.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 #include "view/progressive.h"
 #include "view/protocol.h"
@@ -232,6 +234,69 @@ TEST(Progressive, OrthographicArchiveRenderAgreesWithTheInMemoryRenderer) {
   EXPECT_EQ(hits_a, hits_b);
   EXPECT_GT(covered, 500u);
   EXPECT_GE(same, covered * 95 / 100);
+}
+
+using testing::OptionCheckMessage;
+
+TEST(ViewModuleOptions, DefaultsPassCheck) {
+  EXPECT_NO_THROW(PickOptions().Check());
+  EXPECT_NO_THROW(ServerOptions().Check());
+}
+
+TEST(PickOptions, BadValuesNameTheField) {
+  PickOptions o;
+  o.radius_px = -1;
+  EXPECT_EQ(OptionCheckMessage(o), "PickOptions::radius_px = -1; must be finite and >= 0");
+  o = {};
+  o.radius_px = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(OptionCheckMessage(o), "PickOptions::radius_px = nan; must be finite and >= 0");
+  o = {};
+  o.repeat_level = 0;
+  EXPECT_EQ(OptionCheckMessage(o), "PickOptions::repeat_level = 0; must be >= 1");
+  o = {};
+  o.layer_fraction = {1, -0.5};
+  EXPECT_EQ(OptionCheckMessage(o), "PickOptions::layer_fraction[1] = -0.5; must be in [0, 16]");
+  o = {};
+  o.clip = ClipRegion{{{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}}};
+  EXPECT_EQ(OptionCheckMessage(o), "PickOptions::clip: plane 1 has a zero normal");
+}
+
+TEST(PickOptions, PickPointChecksThem) {
+  TempDir dir;
+  const render::Archive archive(MakeArchive(dir, 2000, 512));
+  render::Camera local = WorldView(archive, render::Projection::kPerspective);
+  local.eye -= archive.manifest().frame.origin, local.target -= archive.manifest().frame.origin;
+  PickOptions o;
+  o.repeat_level = 0;
+  EXPECT_THROW(PickPoint(archive, local, 48, 32, o), std::invalid_argument);
+}
+
+TEST(ServerOptions, BadValuesNameTheField) {
+  ServerOptions o;
+  o.port = 65536;
+  EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::port = 65536; must be in [0, 65535]");
+  o = {};
+  o.token = "a&b";
+  EXPECT_EQ(OptionCheckMessage(o),
+            "ServerOptions::token = a&b; must be letters, digits, - . _ ~ (or empty: random)");
+  o.token = "Ab-1._~";
+  EXPECT_EQ(OptionCheckMessage(o), "no throw");
+  o = {};
+  o.threads = -1;
+  EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::threads = -1; must be in [0, 256]");
+  o = {};
+  o.max_clients = 0;
+  EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::max_clients = 0; must be >= 1");
+  o = {};
+  o.first_frame_ms = 0;
+  EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::first_frame_ms = 0; must be finite and > 0");
+  o = {};
+  o.step_ms = 20;
+  EXPECT_EQ(OptionCheckMessage(o),
+            "ServerOptions::step_ms = 20; must be finite and >= first_frame_ms");
+  o = {};
+  o.jpeg_quality = 0;
+  EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::jpeg_quality = 0; must be in [1, 100]");
 }
 
 TEST(Progressive, PickFindsTheNearestPointUnderThePixel) {

@@ -13,13 +13,6 @@ namespace candi::photogrammetry {
 
 namespace {
 
-void Require(bool ok, const std::string& field, double value, const std::string& rule) {
-  if (!ok) {
-    throw std::invalid_argument("CleanOptions::" + field + " = " + FormatDouble(value) +
-                                "; must be " + rule);
-  }
-}
-
 // One occupied cell's candidate: its cell, its squared distance to the cell centre, its index.
 struct VoxelEntry {
   std::array<int64_t, 3> cell;
@@ -56,11 +49,10 @@ VoxelEntry MakeEntry(const Eigen::Vector3d& world, double leaf, size_t index) {
 }  // namespace
 
 void CleanOptions::Check() const {
-  Require(sor_neighbours >= 1 && sor_neighbours <= 10000, "sor_neighbours", sor_neighbours,
-          "in [1, 10000]");
-  Require(std::isfinite(sor_std_multiplier) && sor_std_multiplier > 0, "sor_std_multiplier",
-          sor_std_multiplier, "finite and > 0");
-  Require(std::isfinite(voxel) && voxel >= 0, "voxel", voxel, "finite and >= 0");
+  CANDI_CHECK_OPTION_IN(sor_neighbours, 1, 10000);
+  CANDI_CHECK_OPTION(std::isfinite(sor_std_multiplier) && sor_std_multiplier > 0,
+                     sor_std_multiplier, "finite and > 0");
+  CANDI_CHECK_OPTION(std::isfinite(voxel) && voxel >= 0, voxel, "finite and >= 0");
 }
 
 std::vector<size_t> VoxelThinIndices(const PointCloud& cloud, double leaf) {

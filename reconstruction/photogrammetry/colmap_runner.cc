@@ -137,20 +137,14 @@ std::string ArgvText(const std::vector<std::string>& argv) {
 }  // namespace
 
 void SfmOptions::Check() const {
-  auto fail = [](const std::string& field, const std::string& value, const std::string& rule) {
-    throw std::invalid_argument("SfmOptions::" + field + " = " + value + "; " + rule);
-  };
-  if (colmap.empty()) fail("colmap", "\"\"", "must name the COLMAP executable");
-  if (max_image_size < 64) fail("max_image_size", std::to_string(max_image_size), "must be >= 64");
-  if (max_features < 64) fail("max_features", std::to_string(max_features), "must be >= 64");
-  if (exhaustive_max_images < 2) {
-    fail("exhaustive_max_images", std::to_string(exhaustive_max_images), "must be >= 2");
-  }
-  if (sequential_overlap < 1) fail("sequential_overlap", std::to_string(sequential_overlap), "must be >= 1");
-  if (CameraModelId(camera_model) < 0) {
-    fail("camera_model", camera_model, "must be a COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
-  }
-  if (threads == 0 || threads < -1) fail("threads", std::to_string(threads), "must be -1 (all) or >= 1");
+  CANDI_CHECK_OPTION_MSG(!colmap.empty(), colmap, "must name the COLMAP executable");
+  CANDI_CHECK_OPTION_GE(max_image_size, 64);
+  CANDI_CHECK_OPTION_GE(max_features, 64);
+  CANDI_CHECK_OPTION_GE(exhaustive_max_images, 2);
+  CANDI_CHECK_OPTION_GE(sequential_overlap, 1);
+  CANDI_CHECK_OPTION(CameraModelId(camera_model) >= 0, camera_model,
+                     "a COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
+  CANDI_CHECK_OPTION(threads == -1 || threads >= 1, threads, "-1 (all) or >= 1");
 }
 
 ColmapVersion ParseColmapVersion(const std::string& help_output) {

@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 
 #include "core/check.h"
+#include "core/text_format.h"
 #include "reconstruction/photogrammetry/csv_table.h"
 
 namespace candi::photogrammetry {
@@ -18,13 +18,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kRankTolerance = 1e-6;  // smallest/largest singular value: rank-deficient below
 constexpr double kPoorTolerance = 1e-2;  // ... poorly conditioned below
-
-std::string Number(double v) {
-  std::ostringstream s;
-  s.precision(3);
-  s << v;
-  return s.str();
-}
 
 Eigen::Vector3d ReadRgb(const CsvTable& t, const CsvTable::Row& row, const std::string& prefix) {
   Eigen::Vector3d v;
@@ -245,18 +238,9 @@ std::vector<ColorPatch> SamplePatches(const Image8& image, const std::vector<Pat
 }
 
 void ColorCorrectionOptions::Check() const {
-  if (!(outlier_delta_e > 0)) {
-    throw std::invalid_argument("ColorCorrectionOptions::outlier_delta_e = " +
-                                Number(outlier_delta_e) + "; must be > 0");
-  }
-  if (!(outlier_k > 0)) {
-    throw std::invalid_argument("ColorCorrectionOptions::outlier_k = " + Number(outlier_k) +
-                                "; must be > 0");
-  }
-  if (max_outliers < 0) {
-    throw std::invalid_argument("ColorCorrectionOptions::max_outliers = " +
-                                std::to_string(max_outliers) + "; must be >= 0");
-  }
+  CANDI_CHECK_OPTION_GT(outlier_delta_e, 0);
+  CANDI_CHECK_OPTION_GT(outlier_k, 0);
+  CANDI_CHECK_OPTION_GE(max_outliers, 0);
 }
 
 ColorCorrection FitColorCorrection(const ColorCorrectionOptions& options,
@@ -270,13 +254,17 @@ ColorCorrection FitColorCorrection(const ColorCorrectionOptions& options,
   std::vector<bool> use(patches.size(), true);
   Solve(patches, use, &r.conditioning);
   if (r.conditioning < kRankTolerance) {
-    throw InputError("the colour patches do not span RGB (smallest/largest singular value of the "
-                     "design " + Number(r.conditioning) + "; all grey?): the 3x4 colour matrix "
-                     "is undetermined; use a card with coloured patches");
+    throw InputError(
+        "the colour patches do not span RGB (smallest/largest singular value of the "
+        "design " +
+        FormatSignificant(r.conditioning, 3) +
+        "; all grey?): the 3x4 colour matrix is undetermined; use a card with "
+        "coloured patches");
   }
   if (r.conditioning < kPoorTolerance) {
     r.warnings.push_back("the colour patches barely span RGB (conditioning " +
-                         Number(r.conditioning) + "): the matrix is poorly determined");
+                         FormatSignificant(r.conditioning, 3) +
+                         "): the matrix is poorly determined");
   }
   const size_t max_removed = std::min<size_t>(static_cast<size_t>(options.max_outliers),
                                               patches.size() > 5 ? patches.size() - 5 : 0);

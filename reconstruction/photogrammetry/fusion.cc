@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/check.h"
+
 namespace candi::photogrammetry {
 
 namespace {
@@ -31,16 +33,11 @@ Eigen::Vector3d PixelPoint(const DepthNormalMap& m, int x, int y) {
 }  // namespace
 
 void FusionOptions::Check() const {
-  auto fail = [](const std::string& field, double value, const std::string& rule) {
-    throw std::invalid_argument("FusionOptions::" + field + " = " + std::to_string(value) +
-                                "; must be " + rule);
-  };
-  if (min_views < 1) fail("min_views", min_views, ">= 1");
-  if (!(max_depth_error > 0)) fail("max_depth_error", max_depth_error, "> 0");
-  if (!(max_normal_error_deg > 0 && max_normal_error_deg <= 180))
-    fail("max_normal_error_deg", max_normal_error_deg, "in (0, 180]");
-  if (!(max_reprojection_error_px > 0))
-    fail("max_reprojection_error_px", max_reprojection_error_px, "> 0");
+  CANDI_CHECK_OPTION_GE(min_views, 1);
+  CANDI_CHECK_OPTION_GT(max_depth_error, 0);
+  CANDI_CHECK_OPTION(max_normal_error_deg > 0 && max_normal_error_deg <= 180, max_normal_error_deg,
+                     "in (0, 180]");
+  CANDI_CHECK_OPTION_GT(max_reprojection_error_px, 0);
 }
 
 PointCloud FuseDepthMaps(const FusionOptions& options, const std::vector<DepthNormalMap>& maps,

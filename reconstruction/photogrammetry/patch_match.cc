@@ -482,35 +482,28 @@ Image8 ResampleArea(const Image8& rgb, int width, int height) {
 }
 
 void PatchMatchOptions::Check() const {
-  auto fail = [](const std::string& field, double value, const std::string& rule) {
-    throw std::invalid_argument("PatchMatchOptions::" + field + " = " + std::to_string(value) +
-                                "; must be " + rule);
-  };
-  if (window_radius < 1 || window_radius > 15) fail("window_radius", window_radius, "in [1, 15]");
-  if (window_step < 1 || window_step > window_radius)
-    fail("window_step", window_step, "in [1, window_radius]");
-  if (iterations < 1 || iterations > 50) fail("iterations", iterations, "in [1, 50]");
-  if (num_source_views < 1 || num_source_views > 32)
-    fail("num_source_views", num_source_views, "in [1, 32]");
-  if (!(resolution_scale > 0 && resolution_scale <= 1))
-    fail("resolution_scale", resolution_scale, "in (0, 1]");
+  CANDI_CHECK_OPTION_IN(window_radius, 1, 15);
+  CANDI_CHECK_OPTION_IN(window_step, 1, window_radius);
+  CANDI_CHECK_OPTION_IN(iterations, 1, 50);
+  CANDI_CHECK_OPTION_IN(num_source_views, 1, 32);
+  CANDI_CHECK_OPTION(resolution_scale > 0 && resolution_scale <= 1, resolution_scale, "in (0, 1]");
+  // The rule names depth_min when the range is set and depth_min is not > 0, else depth_max.
   const bool range_set = depth_min != 0 || depth_max != 0;
-  if (!(std::isfinite(depth_min) && std::isfinite(depth_max)) ||
-      (range_set && !(depth_min > 0 && depth_max > depth_min)))
-    fail(range_set && !(depth_min > 0) ? "depth_min" : "depth_max", range_set && !(depth_min > 0) ? depth_min : depth_max,
-         "both 0 (from the data) or 0 < depth_min < depth_max");
-  if (!(min_triangulation_angle_deg >= 0 && min_triangulation_angle_deg < 60))
-    fail("min_triangulation_angle_deg", min_triangulation_angle_deg, "in [0, 60)");
-  if (!(bilateral_sigma_color >= 0)) fail("bilateral_sigma_color", bilateral_sigma_color, ">= 0");
-  if (!(bilateral_sigma_spatial >= 0)) fail("bilateral_sigma_spatial", bilateral_sigma_spatial, ">= 0");
-  if (!(min_texture >= 0)) fail("min_texture", min_texture, ">= 0");
-  if (!(max_cost > 0 && max_cost <= 2)) fail("max_cost", max_cost, "in (0, 2]");
-  if (!(max_reprojection_error_px > 0))
-    fail("max_reprojection_error_px", max_reprojection_error_px, "> 0");
-  if (!(max_depth_error > 0)) fail("max_depth_error", max_depth_error, "> 0");
-  if (min_consistent_views < 0 || min_consistent_views > 32)
-    fail("min_consistent_views", min_consistent_views, "in [0, 32]");
-  if (threads < 0) fail("threads", threads, ">= 0");
+  const bool range_ok = std::isfinite(depth_min) && std::isfinite(depth_max) &&
+                        (!range_set || (depth_min > 0 && depth_max > depth_min));
+  const char* range_rule = "both 0 (from the data) or 0 < depth_min < depth_max";
+  CANDI_CHECK_OPTION(range_ok || !(range_set && !(depth_min > 0)), depth_min, range_rule);
+  CANDI_CHECK_OPTION(range_ok, depth_max, range_rule);
+  CANDI_CHECK_OPTION(min_triangulation_angle_deg >= 0 && min_triangulation_angle_deg < 60,
+                     min_triangulation_angle_deg, "in [0, 60)");
+  CANDI_CHECK_OPTION_GE(bilateral_sigma_color, 0);
+  CANDI_CHECK_OPTION_GE(bilateral_sigma_spatial, 0);
+  CANDI_CHECK_OPTION_GE(min_texture, 0);
+  CANDI_CHECK_OPTION(max_cost > 0 && max_cost <= 2, max_cost, "in (0, 2]");
+  CANDI_CHECK_OPTION_GT(max_reprojection_error_px, 0);
+  CANDI_CHECK_OPTION_GT(max_depth_error, 0);
+  CANDI_CHECK_OPTION_IN(min_consistent_views, 0, 32);
+  CANDI_CHECK_OPTION_GE(threads, 0);
 }
 
 PatchMatchResult RunPatchMatch(const PatchMatchOptions& options, const StereoInput& input,

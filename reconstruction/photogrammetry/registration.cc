@@ -32,13 +32,6 @@ class CountingIcp : public Icp {
   const Eigen::Matrix4d& last_increment() const { return transformation_; }
 };
 
-void Require(bool ok, const std::string& field, double value, const std::string& rule) {
-  if (!ok) {
-    throw std::invalid_argument("RegistrationOptions::" + field + " = " + FormatDouble(value) +
-                                "; must be " + rule);
-  }
-}
-
 // World rigid transform -> the same motion in local coordinates x_local = x_world - origin.
 Eigen::Matrix4d ToLocal(const Rigid3& world, const Eigen::Vector3d& origin) {
   Eigen::Matrix4d m = world.ToMatrix();
@@ -180,21 +173,19 @@ std::string RegistrationStatusName(RegistrationStatus status) {
 }
 
 void RegistrationOptions::Check() const {
-  Require(std::isfinite(max_correspondence_distance) && max_correspondence_distance > 0,
-          "max_correspondence_distance", max_correspondence_distance, "finite and > 0");
-  Require(max_iterations >= 1 && max_iterations <= 100000, "max_iterations", max_iterations,
-          "in [1, 100000]");
-  Require(std::isfinite(translation_epsilon) && translation_epsilon >= 0, "translation_epsilon",
-          translation_epsilon, "finite and >= 0");
-  Require(std::isfinite(rotation_epsilon) && rotation_epsilon >= 0 && rotation_epsilon < 1,
-          "rotation_epsilon", rotation_epsilon, "in [0, 1) rad");
-  Require(std::isfinite(relative_mse_epsilon) && relative_mse_epsilon >= 0,
-          "relative_mse_epsilon", relative_mse_epsilon, "finite and >= 0");
-  Require(std::isfinite(voxel) && voxel >= 0, "voxel", voxel, "finite and >= 0");
-  Require(normal_neighbours >= 3 && normal_neighbours <= 1000, "normal_neighbours",
-          normal_neighbours, "in [3, 1000]");
-  Require(initial.translation.allFinite() && initial.rotation.coeffs().allFinite(),
-          "initial.translation", initial.translation.norm(), "finite");
+  CANDI_CHECK_OPTION(std::isfinite(max_correspondence_distance) && max_correspondence_distance > 0,
+                     max_correspondence_distance, "finite and > 0");
+  CANDI_CHECK_OPTION_IN(max_iterations, 1, 100000);
+  CANDI_CHECK_OPTION(std::isfinite(translation_epsilon) && translation_epsilon >= 0,
+                     translation_epsilon, "finite and >= 0");
+  CANDI_CHECK_OPTION(rotation_epsilon >= 0 && rotation_epsilon < 1, rotation_epsilon,
+                     "in [0, 1) rad");
+  CANDI_CHECK_OPTION(std::isfinite(relative_mse_epsilon) && relative_mse_epsilon >= 0,
+                     relative_mse_epsilon, "finite and >= 0");
+  CANDI_CHECK_OPTION(std::isfinite(voxel) && voxel >= 0, voxel, "finite and >= 0");
+  CANDI_CHECK_OPTION_IN(normal_neighbours, 3, 1000);
+  CANDI_CHECK_OPTION(initial.translation.allFinite(), initial.translation, "finite");
+  CANDI_CHECK_OPTION(initial.rotation.coeffs().allFinite(), initial.rotation.coeffs(), "finite");
 }
 
 RegistrationResult RegisterPointClouds(const RegistrationOptions& options,

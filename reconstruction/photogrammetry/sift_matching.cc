@@ -60,8 +60,15 @@ bool HasWhitespace(const std::string& s) {
 
 }  // namespace
 
+void SiftMatchOptions::Check() const {
+  // As COLMAP's SiftMatchingOptions::Check(). NaN fails: it would refuse every match.
+  CANDI_CHECK_OPTION_GT(max_ratio, 0);
+  CANDI_CHECK_OPTION_GT(max_distance, 0);
+}
+
 std::vector<std::pair<int, int>> MatchSiftBruteForce(const uint8_t* a, int64_t rows_a, const uint8_t* b,
                                                      int64_t rows_b, const SiftMatchOptions& options) {
+  options.Check();
   CANDI_CHECK(rows_a >= 0 && rows_b >= 0);
   CANDI_CHECK(rows_a < (int64_t{1} << 31) && rows_b < (int64_t{1} << 31));
   std::vector<std::pair<int, int>> matches;
@@ -129,6 +136,7 @@ MatchListSummary WriteMatchList(const std::vector<DatabaseImage>& images,
                                 const std::vector<std::pair<size_t, size_t>>& pairs,
                                 const SiftMatchOptions& options, int threads, const std::string& path,
                                 const std::function<void(size_t, size_t)>& progress) {
+  options.Check();
   for (const DatabaseImage& image : images) {
     if (image.name.empty() || HasWhitespace(image.name)) {
       throw InputError(image.name, "", "a photo name with whitespace (or none) cannot go into COLMAP's "

@@ -22,9 +22,10 @@ namespace candi::photogrammetry {
 
 // COLMAP's SiftMatchingOptions defaults.
 struct SiftMatchOptions {
-  float max_ratio = 0.8f;     // best angle < max_ratio x second-best angle
-  float max_distance = 0.7f;  // best angle (radians between the unit descriptors) <= this
+  float max_ratio = 0.8f;     // best angle < max_ratio x second-best angle, > 0
+  float max_distance = 0.7f;  // best angle (radians between the unit descriptors) <= this, > 0
   bool cross_check = true;    // keep a match only when it is mutual
+  void Check() const;         // throws std::invalid_argument naming the field
 };
 
 // Matches of descriptors a (rows_a x 128) to b (rows_b x 128): (index in a, index in b), by

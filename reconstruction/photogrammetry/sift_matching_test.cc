@@ -5,10 +5,21 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <random>
+#include <stdexcept>
 
 #include "core/check.h"
+#include "reconstruction/photogrammetry/cleaning.h"
 #include "reconstruction/photogrammetry/colmap_database.h"
+#include "reconstruction/photogrammetry/colmap_runner.h"
+#include "reconstruction/photogrammetry/color_correct.h"
+#include "reconstruction/photogrammetry/fusion.h"
+#include "reconstruction/photogrammetry/patch_match.h"
+#include "reconstruction/photogrammetry/registration.h"
+#include "reconstruction/photogrammetry/similarity_fit.h"
+#include "reconstruction/photogrammetry/synthetic_views.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
 namespace candi::photogrammetry {
@@ -102,6 +113,35 @@ TEST(MatchSiftBruteForce, EqualsColmapsCriterionExactly) {
   size_t identity = 0;
   for (const auto& [i, j] : got) identity += i == j;
   EXPECT_EQ(identity, got.size()) << "every match is a planted one";
+}
+
+TEST(PhotogrammetryModuleOptions, DefaultsPassCheck) {
+  EXPECT_NO_THROW(SiftMatchOptions().Check());
+  EXPECT_NO_THROW(SfmOptions().Check());
+  EXPECT_NO_THROW(PatchMatchOptions().Check());
+  EXPECT_NO_THROW(FusionOptions().Check());
+  EXPECT_NO_THROW(CleanOptions().Check());
+  EXPECT_NO_THROW(RegistrationOptions().Check());
+  EXPECT_NO_THROW(SimilarityFitOptions().Check());
+  EXPECT_NO_THROW(ColorCorrectionOptions().Check());
+  EXPECT_NO_THROW(SyntheticViewsOptions().Check());
+}
+
+TEST(SiftMatchOptions, BadValuesNameTheFieldAndTheMatchersCheckThem) {
+  SiftMatchOptions o;
+  o.max_ratio = 0;
+  EXPECT_EQ(testing::OptionCheckMessage(o), "SiftMatchOptions::max_ratio = 0; must be > 0");
+  o = {};
+  o.max_distance = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(testing::OptionCheckMessage(o), "SiftMatchOptions::max_distance = nan; must be > 0");
+  std::mt19937 rng(3);
+  const std::vector<uint8_t> a = RandomDescriptors(4, &rng);
+  EXPECT_THROW(MatchSiftBruteForce(a.data(), 4, a.data(), 4, o), std::invalid_argument);
+  TempDir dir;
+  DatabaseImage image;
+  image.name = "a.png";
+  EXPECT_THROW(WriteMatchList({image}, {}, o, 1, dir.File("m.txt")), std::invalid_argument);
+  EXPECT_FALSE(std::filesystem::exists(dir.File("m.txt")));
 }
 
 TEST(MatchSiftBruteForce, EmptyAndZeroDescriptors) {

@@ -7,8 +7,10 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
+
+#include "core/check.h"
+#include "core/text_format.h"
 
 namespace candi::photogrammetry {
 
@@ -132,13 +134,6 @@ double RobustSigma(const std::vector<Eigen::Vector3d>& r, const std::vector<bool
   return 1.4826 * Median(c);
 }
 
-std::string Number(double v) {
-  std::ostringstream s;
-  s.precision(3);
-  s << v;
-  return s.str();
-}
-
 void CheckInputs(const std::vector<Eigen::Vector3d>& source,
                  const std::vector<Eigen::Vector3d>& target, const std::vector<double>& accuracy) {
   if (source.size() != target.size() || (!accuracy.empty() && accuracy.size() != source.size())) {
@@ -157,7 +152,7 @@ void CheckInputs(const std::vector<Eigen::Vector3d>& source,
     }
     if (!accuracy.empty() && !(accuracy[i] > 0 && std::isfinite(accuracy[i]))) {
       throw std::invalid_argument("FitSimilarity: accuracy " + std::to_string(i) + " = " +
-                                  Number(accuracy[i]) + "; must be > 0");
+                                  FormatSignificant(accuracy[i], 3) + "; must be > 0");
     }
   }
 }
@@ -174,12 +169,13 @@ void ReportDegeneracy(const SimilarityFitOptions& o, const std::vector<Eigen::Ve
   r->collinear = r->collinearity < o.collinear_ratio;
   r->coplanar = !r->collinear && r->planarity < o.coplanar_ratio;
   if (r->collinear) {
-    r->warnings.push_back("targets nearly collinear (s2/s1 = " + Number(r->collinearity) + " < " +
-                          Number(o.collinear_ratio) +
-                          "): the rotation about their line is undetermined or weakly determined");
+    r->warnings.push_back(
+        "targets nearly collinear (s2/s1 = " + FormatSignificant(r->collinearity, 3) + " < " +
+        FormatSignificant(o.collinear_ratio, 3) +
+        "): the rotation about their line is undetermined or weakly determined");
   } else if (r->coplanar) {
-    r->warnings.push_back("targets nearly coplanar (s3/s1 = " + Number(r->planarity) + " < " +
-                          Number(o.coplanar_ratio) +
+    r->warnings.push_back("targets nearly coplanar (s3/s1 = " + FormatSignificant(r->planarity, 3) +
+                          " < " + FormatSignificant(o.coplanar_ratio, 3) +
                           "): the tilt out of their plane (the vertical) and the scale along it "
                           "are weakly determined; points far from the plane extrapolate");
   }
@@ -204,21 +200,13 @@ RobustLoss ParseRobustLoss(const std::string& name) {
 }
 
 void SimilarityFitOptions::Check() const {
-  auto fail = [](const std::string& field, double v, const std::string& rule) {
-    throw std::invalid_argument("SimilarityFitOptions::" + field + " = " + Number(v) + "; " + rule);
-  };
-  if (!(loss_scale > 0 && std::isfinite(loss_scale))) fail("loss_scale", loss_scale, "must be > 0");
-  if (!(outlier_k > 0 && std::isfinite(outlier_k))) fail("outlier_k", outlier_k, "must be > 0");
-  if (!(outlier_threshold >= 0 && std::isfinite(outlier_threshold))) {
-    fail("outlier_threshold", outlier_threshold, "must be >= 0");
-  }
-  if (!(collinear_ratio > 0 && collinear_ratio < 1)) {
-    fail("collinear_ratio", collinear_ratio, "must be in (0, 1)");
-  }
-  if (!(coplanar_ratio > 0 && coplanar_ratio < 1)) {
-    fail("coplanar_ratio", coplanar_ratio, "must be in (0, 1)");
-  }
-  if (max_iterations < 1) fail("max_iterations", max_iterations, "must be >= 1");
+  CANDI_CHECK_OPTION(loss_scale > 0 && std::isfinite(loss_scale), loss_scale, "> 0");
+  CANDI_CHECK_OPTION(outlier_k > 0 && std::isfinite(outlier_k), outlier_k, "> 0");
+  CANDI_CHECK_OPTION(outlier_threshold >= 0 && std::isfinite(outlier_threshold), outlier_threshold,
+                     ">= 0");
+  CANDI_CHECK_OPTION(collinear_ratio > 0 && collinear_ratio < 1, collinear_ratio, "in (0, 1)");
+  CANDI_CHECK_OPTION(coplanar_ratio > 0 && coplanar_ratio < 1, coplanar_ratio, "in (0, 1)");
+  CANDI_CHECK_OPTION_GE(max_iterations, 1);
 }
 
 Sim3 UmeyamaSimilarity(const std::vector<Eigen::Vector3d>& source,

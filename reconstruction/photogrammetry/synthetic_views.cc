@@ -181,21 +181,17 @@ bool SeenByAnother(const std::vector<SyntheticView>& views, size_t k, const Eige
 }  // namespace
 
 void SyntheticViewsOptions::Check() const {
-  auto fail = [](const std::string& field, double value, const std::string& rule) {
-    throw std::invalid_argument("SyntheticViewsOptions::" + field + " = " + std::to_string(value) +
-                                "; must be " + rule);
-  };
-  if (views < 1) fail("views", views, ">= 1");
-  if (width < 8) fail("width", width, ">= 8");
-  if (height < 8) fail("height", height, ">= 8");
-  if (!(arc_degrees >= 0 && arc_degrees < 360)) fail("arc_degrees", arc_degrees, "in [0, 360)");
-  if (!(elevation_degrees > 0 && elevation_degrees < 90))
-    fail("elevation_degrees", elevation_degrees, "in (0, 90)");
-  if (!(distance > 2)) fail("distance", distance, "> 2");
-  if (!(fov_degrees > 5 && fov_degrees < 150)) fail("fov_degrees", fov_degrees, "in (5, 150)");
-  if (!(texture_cell > 0)) fail("texture_cell", texture_cell, "> 0");
-  if (supersample < 1 || supersample > 8) fail("supersample", supersample, "in [1, 8]");
-  if (!(noise_sigma >= 0)) fail("noise_sigma", noise_sigma, ">= 0");
+  CANDI_CHECK_OPTION_GE(views, 1);
+  CANDI_CHECK_OPTION_GE(width, 8);
+  CANDI_CHECK_OPTION_GE(height, 8);
+  CANDI_CHECK_OPTION(arc_degrees >= 0 && arc_degrees < 360, arc_degrees, "in [0, 360)");
+  CANDI_CHECK_OPTION(elevation_degrees > 0 && elevation_degrees < 90, elevation_degrees,
+                     "in (0, 90)");
+  CANDI_CHECK_OPTION_GT(distance, 2);
+  CANDI_CHECK_OPTION(fov_degrees > 5 && fov_degrees < 150, fov_degrees, "in (5, 150)");
+  CANDI_CHECK_OPTION_GT(texture_cell, 0);
+  CANDI_CHECK_OPTION_IN(supersample, 1, 8);
+  CANDI_CHECK_OPTION_GE(noise_sigma, 0);
 }
 
 SyntheticSolid SyntheticBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3d& albedo) {

@@ -12,9 +12,14 @@
 #include "reconstruction/relief/relief_dataset.h"
 #include "reconstruction/relief/relief_image.h"
 #include "reconstruction/relief/relief_metrics.h"
+#include "reconstruction/relief/relief_net.h"
+#include "reconstruction/relief/relief_photo_pairs.h"
+#include "reconstruction/relief/relief_place.h"
 #include "reconstruction/relief/relief_points.h"
 #include "reconstruction/relief/relief_synth.h"
 #include "reconstruction/relief/relief_tiles.h"
+#include "reconstruction/relief/relief_train.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
 namespace candi::relief {
@@ -38,6 +43,12 @@ TEST(ReliefOptions, DefaultsPass) {
   EXPECT_NO_THROW(PatchOptions().Check());
   EXPECT_NO_THROW(AugmentOptions().Check());
   EXPECT_NO_THROW(ScanRasterOptions().Check());
+  EXPECT_NO_THROW(SurfaceMetricOptions().Check());
+  EXPECT_NO_THROW(NetOptions().Check());
+  EXPECT_NO_THROW(PredictOptions().Check());
+  EXPECT_NO_THROW(TrainOptions().Check());
+  EXPECT_NO_THROW(PhotoPairOptions().Check());
+  EXPECT_NO_THROW(PanelPlacementOptions().Check());
   SynthOptions s;
   s.width = 8;
   EXPECT_THROW(s.Check(), std::invalid_argument);
@@ -47,6 +58,48 @@ TEST(ReliefOptions, DefaultsPass) {
   TileOptions t;
   t.overlap = t.tile;
   EXPECT_THROW(t.Check(), std::invalid_argument);
+}
+
+// The messages of the rules that name two fields, an entry or a derived value.
+TEST(ReliefOptions, RulesNameTheirFields) {
+  using testing::OptionCheckMessage;
+  OldPhotoOptions photo;
+  photo.light_elevation_max_deg = 95;
+  EXPECT_EQ(OptionCheckMessage(photo),
+            "OldPhotoOptions::light_elevation_min_deg = 15 and "
+            "light_elevation_max_deg = 95; must satisfy 0 < min <= max < 90");
+  photo = {};
+  photo.light_azimuth_min_deg = 180;
+  EXPECT_EQ(OptionCheckMessage(photo),
+            "OldPhotoOptions::light_azimuth_min_deg = 180; must be <= light_azimuth_max_deg");
+  SynthOptions synth;
+  synth.height_m = 0.1;  // 30 pixels
+  EXPECT_EQ(OptionCheckMessage(synth),
+            "SynthOptions::height_m / width_m * width = 29.629629629629626; must "
+            "be >= 32 pixels (rounded)");
+  ScanRasterOptions scan;
+  scan.frame = "wall";
+  EXPECT_EQ(OptionCheckMessage(scan), "ScanRasterOptions::frame = wall; must be auto or panel");
+  NetOptions net;
+  net.blocks = {4, 6, 8};
+  EXPECT_EQ(OptionCheckMessage(net), "NetOptions::blocks = (4, 6, 8); must have 4 entries");
+  net.blocks = {4, 0, 8, 6};
+  EXPECT_EQ(OptionCheckMessage(net), "NetOptions::blocks[1] = 0; must be in [1, 64]");
+  PredictOptions predict;
+  predict.tiles.tile = 100;
+  EXPECT_EQ(OptionCheckMessage(predict),
+            "PredictOptions::tiles.tile = 100; must be a multiple of 32");
+  TrainOptions train;
+  train.resume = true;
+  EXPECT_EQ(OptionCheckMessage(train), "TrainOptions::resume = true; needs a checkpoint path");
+  train = {};
+  train.end_learning_rate = 1;
+  EXPECT_EQ(OptionCheckMessage(train),
+            "TrainOptions::end_learning_rate = 1; must be in [0, learning_rate]");
+  PhotoPairOptions pairs;
+  pairs.far_percentile = pairs.near_percentile;
+  EXPECT_EQ(OptionCheckMessage(pairs),
+            "PhotoPairOptions::far_percentile = 0.02; must be in (near_percentile, 1]");
 }
 
 TEST(ReliefImage, PhotosOfEveryKindReadAsGreyAndDepthRoundTrips) {

@@ -15,15 +15,6 @@ namespace candi::relief {
 
 namespace {
 
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
-
-void RequireProbability(double p, const char* name) {
-  Require(p >= 0 && p <= 1, std::string("AugmentOptions::") + name + " = " + std::to_string(p) +
-                                "; must be in [0, 1]");
-}
-
 // Rows of panel_from_cloud (x along the wall, y up, z out) and the mean.
 Eigen::Matrix3d PanelAxes(const ScanRasterOptions& o, const PointCloud& cloud, Eigen::Vector3d* mean) {
   *mean = Eigen::Vector3d::Zero();
@@ -100,33 +91,24 @@ float PercentileOf(std::vector<float> v, double q) {
 }
 
 void ScanRasterOptions::Check() const {
-  Require(pixels_per_m > 0 && std::isfinite(pixels_per_m),
-          "ScanRasterOptions::pixels_per_m = " + std::to_string(pixels_per_m) + "; must be > 0");
-  Require(frame == "auto" || frame == "panel",
-          "ScanRasterOptions::frame = '" + frame + "'; must be auto or panel");
-  Require(depth_m > 0 && std::isfinite(depth_m),
-          "ScanRasterOptions::depth_m = " + std::to_string(depth_m) + "; must be > 0");
-  Require(fill_holes >= 0 && fill_holes <= 64,
-          "ScanRasterOptions::fill_holes = " + std::to_string(fill_holes) + "; must be in [0, 64]");
+  CANDI_CHECK_OPTION(pixels_per_m > 0 && std::isfinite(pixels_per_m), pixels_per_m, "> 0");
+  CANDI_CHECK_OPTION(frame == "auto" || frame == "panel", frame, "auto or panel");
+  CANDI_CHECK_OPTION(depth_m > 0 && std::isfinite(depth_m), depth_m, "> 0");
+  CANDI_CHECK_OPTION_IN(fill_holes, 0, 64);
   photo.Check();
 }
 
 void PatchOptions::Check() const {
-  Require(patch >= 32 && patch % 32 == 0,
-          "PatchOptions::patch = " + std::to_string(patch) + "; must be a multiple of 32, >= 32");
-  Require(stride >= 1, "PatchOptions::stride = " + std::to_string(stride) + "; must be >= 1");
-  Require(min_valid_fraction >= 0 && min_valid_fraction <= 1,
-          "PatchOptions::min_valid_fraction = " + std::to_string(min_valid_fraction) +
-              "; must be in [0, 1]");
+  CANDI_CHECK_OPTION(patch >= 32 && patch % 32 == 0, patch, "a multiple of 32, >= 32");
+  CANDI_CHECK_OPTION_GE(stride, 1);
+  CANDI_CHECK_OPTION_IN(min_valid_fraction, 0, 1);
 }
 
 void AugmentOptions::Check() const {
-  RequireProbability(rotate_probability, "rotate_probability");
-  RequireProbability(flip_probability, "flip_probability");
-  RequireProbability(brightness_probability, "brightness_probability");
-  Require(max_rotation_deg >= 0 && max_rotation_deg <= 45,
-          "AugmentOptions::max_rotation_deg = " + std::to_string(max_rotation_deg) +
-              "; must be in [0, 45]");
+  CANDI_CHECK_OPTION_IN(rotate_probability, 0, 1);
+  CANDI_CHECK_OPTION_IN(flip_probability, 0, 1);
+  CANDI_CHECK_OPTION_IN(brightness_probability, 0, 1);
+  CANDI_CHECK_OPTION_IN(max_rotation_deg, 0, 45);
 }
 
 TrainingPair RasterizeScan(const ScanRasterOptions& o, const PointCloud& cloud,

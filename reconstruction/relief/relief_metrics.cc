@@ -4,7 +4,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -18,12 +17,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kBinDeg = 0.01;  // normal-angle histogram resolution: 18000 bins over [0, 180]
 constexpr int kBins = 18000;
-
-std::string Number(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 // One Add() call's maps as doubles: the prediction clamped (NaN = front, as in
 // DepthMetricsAccumulator) and the ground-truth validity, which also decides where the
@@ -198,20 +191,12 @@ DepthMetrics ComputeDepthMetrics(const ImageF& prediction, const ImageF& ground_
 }
 
 void SurfaceMetricOptions::Check() const {
-  const auto fail = [](const std::string& field, double v, const std::string& rule) {
-    throw std::invalid_argument("SurfaceMetricOptions::" + field + " = " + Number(v) + "; " + rule);
-  };
   // The upper bound keeps the cross products of normals far from overflow.
-  if (!(level_per_pixel > 0 && level_per_pixel <= 1e6)) {
-    fail("level_per_pixel", level_per_pixel, "must be in (0, 1e6]");
-  }
-  if (!(edge_jump_levels > 0 && std::isfinite(edge_jump_levels))) {
-    fail("edge_jump_levels", edge_jump_levels, "must be a finite number > 0");
-  }
-  if (normal_step < 1 || normal_step > 16) fail("normal_step", normal_step, "must be in [1, 16]");
-  if (edge_tolerance_px < 0 || edge_tolerance_px > 16) {
-    fail("edge_tolerance_px", edge_tolerance_px, "must be in [0, 16]");
-  }
+  CANDI_CHECK_OPTION(level_per_pixel > 0 && level_per_pixel <= 1e6, level_per_pixel, "in (0, 1e6]");
+  CANDI_CHECK_OPTION(edge_jump_levels > 0 && std::isfinite(edge_jump_levels), edge_jump_levels,
+                     "a finite number > 0");
+  CANDI_CHECK_OPTION_IN(normal_step, 1, 16);
+  CANDI_CHECK_OPTION_IN(edge_tolerance_px, 0, 16);
 }
 
 SurfaceMetricsAccumulator::SurfaceMetricsAccumulator(const SurfaceMetricOptions& options)

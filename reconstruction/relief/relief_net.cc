@@ -76,26 +76,21 @@ torch::Tensor Every(const torch::Tensor& x, int step) {
   return x.index({Slice(), Slice(), Slice(None, None, step), Slice(None, None, step)});
 }
 
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
-
 }  // namespace
 
 void NetOptions::Check() const {
-  Require(growth >= 2 && growth <= 64, "NetOptions::growth = " + std::to_string(growth) + "; must be in [2, 64]");
-  Require(blocks.size() == 4, "NetOptions::blocks has " + std::to_string(blocks.size()) + " entries; must have 4");
-  for (int b : blocks) Require(b >= 1 && b <= 64, "NetOptions::blocks entry " + std::to_string(b) + "; must be in [1, 64]");
-  Require(decoder_width >= 32 && decoder_width <= 1024 && decoder_width % 16 == 0,
-          "NetOptions::decoder_width = " + std::to_string(decoder_width) +
-              "; must be a multiple of 16 in [32, 1024]");
-  Require(max_depth > 0, "NetOptions::max_depth = " + std::to_string(max_depth) + "; must be > 0");
+  CANDI_CHECK_OPTION_IN(growth, 2, 64);
+  CANDI_CHECK_OPTION_MSG(blocks.size() == 4, blocks, "must have 4 entries");
+  CANDI_CHECK_OPTION_EACH_IN(blocks, 1, 64);
+  CANDI_CHECK_OPTION(decoder_width >= 32 && decoder_width <= 1024 && decoder_width % 16 == 0,
+                     decoder_width, "a multiple of 16 in [32, 1024]");
+  CANDI_CHECK_OPTION_GT(max_depth, 0);
 }
 
 void PredictOptions::Check() const {
   tiles.Check();
-  Require(tiles.tile % 32 == 0, "PredictOptions::tiles.tile = " + std::to_string(tiles.tile) + "; must be a multiple of 32");
-  Require(photo_pixels_per_m >= 0, "PredictOptions::photo_pixels_per_m = " + std::to_string(photo_pixels_per_m) + "; must be >= 0");
+  CANDI_CHECK_OPTION(tiles.tile % 32 == 0, tiles.tile, "a multiple of 32");
+  CANDI_CHECK_OPTION_GE(photo_pixels_per_m, 0);
 }
 
 void SetTorchThreads(int threads) {

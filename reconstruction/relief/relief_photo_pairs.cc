@@ -35,19 +35,12 @@ double TextNumber(const io::PngText& text, const char* key) {
 }  // namespace
 
 void PhotoPairOptions::Check() const {
-  if (max_side < 32 || max_side > 16384) throw std::invalid_argument("max_side must be in [32, 16384]");
-  if (occlusion_radius < 0 || occlusion_radius > 16) {
-    throw std::invalid_argument("occlusion_radius must be in [0, 16]");
-  }
-  if (!(occlusion_tolerance >= 0 && occlusion_tolerance <= 1)) {
-    throw std::invalid_argument("occlusion_tolerance must be in [0, 1]");
-  }
-  if (!(near_percentile >= 0 && near_percentile < 1)) {
-    throw std::invalid_argument("near_percentile must be in [0, 1)");
-  }
-  if (!(far_percentile > near_percentile && far_percentile <= 1)) {
-    throw std::invalid_argument("far_percentile must be in (near_percentile, 1]");
-  }
+  CANDI_CHECK_OPTION_IN(max_side, 32, 16384);
+  CANDI_CHECK_OPTION_IN(occlusion_radius, 0, 16);
+  CANDI_CHECK_OPTION_IN(occlusion_tolerance, 0, 1);
+  CANDI_CHECK_OPTION(near_percentile >= 0 && near_percentile < 1, near_percentile, "in [0, 1)");
+  CANDI_CHECK_OPTION(far_percentile > near_percentile && far_percentile <= 1, far_percentile,
+                     "in (near_percentile, 1]");
 }
 
 double LevelOfCameraDepth(double z, double near, double far) {

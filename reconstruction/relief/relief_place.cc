@@ -4,11 +4,11 @@
 #include <cmath>
 #include <map>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 
 #include "core/box.h"
 #include "core/check.h"
+#include "core/text_format.h"
 #include "reconstruction/photogrammetry/csv_table.h"
 
 namespace candi::relief {
@@ -16,13 +16,6 @@ namespace candi::relief {
 namespace {
 
 namespace pg = candi::photogrammetry;
-
-std::string Number(double v) {
-  std::ostringstream s;
-  s.precision(4);
-  s << v;
-  return s.str();
-}
 
 std::string Line(int line) { return line > 0 ? "line " + std::to_string(line) : ""; }
 
@@ -141,9 +134,10 @@ PanelPlacement PlaceOne(const PanelPlacementOptions& o, const std::vector<PanelC
   for (size_t i = 0; i < p.outlier.size(); ++i) {
     if (!p.outlier[i]) continue;
     ++flagged;
-    p.warnings.push_back("correspondence '" + p.correspondences[i].point + "' (" +
-                         (p.correspondences[i].line > 0 ? Line(p.correspondences[i].line) : "built in code") +
-                         ") is an outlier: residual " + Number(1000 * r.residuals[i].norm()) + " mm");
+    p.warnings.push_back(
+        "correspondence '" + p.correspondences[i].point + "' (" +
+        (p.correspondences[i].line > 0 ? Line(p.correspondences[i].line) : "built in code") +
+        ") is an outlier: residual " + FormatSignificant(1000 * r.residuals[i].norm(), 4) + " mm");
   }
   if (r.collinear) {
     p.status = "collinear";
@@ -154,13 +148,14 @@ PanelPlacement PlaceOne(const PanelPlacementOptions& o, const std::vector<PanelC
     // misread positions: the fit to the rest would hide the misfit.
     p.status = "misfit";
     p.warnings.push_back("does not fit: " + std::to_string(flagged) + " of " +
-                         std::to_string(p.outlier.size()) + " correspondences are outliers (more "
-                         "than " + Number(100 * o.max_outlier_fraction) + " %)");
+                         std::to_string(p.outlier.size()) +
+                         " correspondences are outliers (more than " +
+                         FormatSignificant(100 * o.max_outlier_fraction, 4) + " %)");
   } else if (p.rms_mm > o.tolerance_mm) {
     p.status = "misfit";
-    p.warnings.push_back("does not fit: RMS residual " + Number(p.rms_mm) + " mm > tolerance " +
-                         Number(o.tolerance_mm) + " mm (the documented positions do not match "
-                         "the panel's shape)");
+    p.warnings.push_back("does not fit: RMS residual " + FormatSignificant(p.rms_mm, 4) +
+                         " mm > tolerance " + FormatSignificant(o.tolerance_mm, 4) +
+                         " mm (the documented positions do not match the panel's shape)");
   } else {
     p.status = "ok";
   }
@@ -171,23 +166,14 @@ PanelPlacement PlaceOne(const PanelPlacementOptions& o, const std::vector<PanelC
 }  // namespace
 
 void PanelPlacementOptions::Check() const {
-  auto fail = [](const std::string& field, double v, const std::string& rule) {
-    throw std::invalid_argument("PanelPlacementOptions::" + field + " = " + Number(v) + "; " + rule);
-  };
-  if (!(loss_scale > 0 && std::isfinite(loss_scale))) fail("loss_scale", loss_scale, "must be > 0");
-  if (!(default_accuracy > 0 && std::isfinite(default_accuracy))) {
-    fail("default_accuracy", default_accuracy, "must be > 0");
-  }
-  if (!(outlier_k > 0 && std::isfinite(outlier_k))) fail("outlier_k", outlier_k, "must be > 0");
-  if (!(tolerance_mm > 0 && std::isfinite(tolerance_mm))) {
-    fail("tolerance_mm", tolerance_mm, "must be > 0");
-  }
-  if (!(max_outlier_fraction >= 0 && max_outlier_fraction < 1)) {
-    fail("max_outlier_fraction", max_outlier_fraction, "must be in [0, 1)");
-  }
-  if (!(collinear_ratio > 0 && collinear_ratio < 1)) {
-    fail("collinear_ratio", collinear_ratio, "must be in (0, 1)");
-  }
+  CANDI_CHECK_OPTION(loss_scale > 0 && std::isfinite(loss_scale), loss_scale, "> 0");
+  CANDI_CHECK_OPTION(default_accuracy > 0 && std::isfinite(default_accuracy), default_accuracy,
+                     "> 0");
+  CANDI_CHECK_OPTION(outlier_k > 0 && std::isfinite(outlier_k), outlier_k, "> 0");
+  CANDI_CHECK_OPTION(tolerance_mm > 0 && std::isfinite(tolerance_mm), tolerance_mm, "> 0");
+  CANDI_CHECK_OPTION(max_outlier_fraction >= 0 && max_outlier_fraction < 1, max_outlier_fraction,
+                     "in [0, 1)");
+  CANDI_CHECK_OPTION(collinear_ratio > 0 && collinear_ratio < 1, collinear_ratio, "in (0, 1)");
 }
 
 std::vector<PanelCorrespondence> ParsePanelCorrespondences(const std::string& path,

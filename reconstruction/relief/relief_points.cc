@@ -11,13 +11,9 @@
 namespace candi::relief {
 
 void ReliefPointsOptions::Check() const {
-  for (const auto& [name, value] :
-       {std::pair<const char*, double>{"width_m", width_m}, {"height_m", height_m}, {"depth_m", depth_m}}) {
-    if (!(value > 0) || !std::isfinite(value)) {
-      throw std::invalid_argument(std::string("ReliefPointsOptions::") + name + " = " +
-                                  std::to_string(value) + "; must be a finite number > 0");
-    }
-  }
+  CANDI_CHECK_OPTION(width_m > 0 && std::isfinite(width_m), width_m, "a finite number > 0");
+  CANDI_CHECK_OPTION(height_m > 0 && std::isfinite(height_m), height_m, "a finite number > 0");
+  CANDI_CHECK_OPTION(depth_m > 0 && std::isfinite(depth_m), depth_m, "a finite number > 0");
 }
 
 PointCloud DepthToPoints(const ReliefPointsOptions& o, const ImageF& photo, const ImageF& depth) {

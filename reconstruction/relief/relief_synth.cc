@@ -17,10 +17,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 
-void Require(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument(what);
-}
-
 // Value noise on an integer lattice (cell = 1), smooth (C1) interpolation, values in [-1, 1].
 double ValueNoise(uint64_t seed, double x, double y) {
   const double fx = std::floor(x), fy = std::floor(y);
@@ -248,24 +244,19 @@ void Develop(const OldPhotoOptions& o, Rng& rng, ImageF* photo) {
 }  // namespace
 
 void OldPhotoOptions::Check() const {
-  Require(light_elevation_min_deg > 0 && light_elevation_min_deg <= light_elevation_max_deg &&
-              light_elevation_max_deg < 90,
-          "OldPhotoOptions::light_elevation_min_deg/max_deg = " +
-              std::to_string(light_elevation_min_deg) + "/" + std::to_string(light_elevation_max_deg) +
-              "; must satisfy 0 < min <= max < 90");
-  Require(light_azimuth_min_deg <= light_azimuth_max_deg,
-          "OldPhotoOptions::light_azimuth_min_deg = " + std::to_string(light_azimuth_min_deg) +
-              "; must be <= light_azimuth_max_deg");
+  CANDI_CHECK_OPTION_PAIR(
+      light_elevation_min_deg > 0 && light_elevation_min_deg <= light_elevation_max_deg &&
+          light_elevation_max_deg < 90,
+      light_elevation_min_deg, light_elevation_max_deg, "must satisfy 0 < min <= max < 90");
+  CANDI_CHECK_OPTION_LE(light_azimuth_min_deg, light_azimuth_max_deg);
 }
 
 void SynthOptions::Check() const {
-  Require(width >= 32 && width <= 16384,
-          "SynthOptions::width = " + std::to_string(width) + "; must be in [32, 16384]");
-  Require(width_m > 0 && std::isfinite(width_m), "SynthOptions::width_m = " + std::to_string(width_m) + "; must be > 0");
-  Require(height_m > 0 && std::isfinite(height_m), "SynthOptions::height_m = " + std::to_string(height_m) + "; must be > 0");
-  Require(depth_m > 0 && std::isfinite(depth_m), "SynthOptions::depth_m = " + std::to_string(depth_m) + "; must be > 0");
-  Require(Height() >= 32, "SynthOptions::height_m / width_m * width = " + std::to_string(Height()) +
-                              " pixels; must be >= 32");
+  CANDI_CHECK_OPTION_IN(width, 32, 16384);
+  CANDI_CHECK_OPTION(width_m > 0 && std::isfinite(width_m), width_m, "> 0");
+  CANDI_CHECK_OPTION(height_m > 0 && std::isfinite(height_m), height_m, "> 0");
+  CANDI_CHECK_OPTION(depth_m > 0 && std::isfinite(depth_m), depth_m, "> 0");
+  CANDI_CHECK_OPTION(Height() >= 32, height_m / width_m * width, ">= 32 pixels (rounded)");
   photo.Check();
 }
 

@@ -52,11 +52,9 @@ ImageF Crop(const ImageF& image, int x0, int y0, int w, int h) {
 }  // namespace
 
 void TileOptions::Check() const {
-  if (tile < 8) throw std::invalid_argument("TileOptions::tile = " + std::to_string(tile) + "; must be >= 8");
-  if (overlap < 0 || overlap > tile / 2) {
-    throw std::invalid_argument("TileOptions::overlap = " + std::to_string(overlap) +
-                                "; must be in [0, tile / 2 = " + std::to_string(tile / 2) + "]");
-  }
+  CANDI_CHECK_OPTION_GE(tile, 8);
+  CANDI_CHECK_OPTION(overlap >= 0 && overlap <= tile / 2, overlap,
+                     "in [0, tile / 2 = " + std::to_string(tile / 2) + "]");
 }
 
 std::vector<int> TileStarts(int size, int tile, int overlap) {

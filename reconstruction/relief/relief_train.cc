@@ -18,10 +18,6 @@ namespace candi::relief {
 
 namespace {
 
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
-
 torch::Tensor DepthBatch(const std::vector<const ImageF*>& depths) {
   const int w = depths[0]->width(), h = depths[0]->height();
   torch::Tensor t = torch::empty({static_cast<int64_t>(depths.size()), 1, h, w});
@@ -126,17 +122,14 @@ DepthMetrics Validate(const DepthModel& model, const std::vector<TrainingPair>& 
 }  // namespace
 
 void TrainOptions::Check() const {
-  Require(epochs >= 1, "TrainOptions::epochs = " + std::to_string(epochs) + "; must be >= 1");
-  Require(batch >= 1, "TrainOptions::batch = " + std::to_string(batch) + "; must be >= 1");
-  Require(learning_rate > 0, "TrainOptions::learning_rate = " + std::to_string(learning_rate) + "; must be > 0");
-  Require(end_learning_rate >= 0 && end_learning_rate <= learning_rate,
-          "TrainOptions::end_learning_rate = " + std::to_string(end_learning_rate) +
-              "; must be in [0, learning_rate]");
-  Require(decay_power > 0, "TrainOptions::decay_power = " + std::to_string(decay_power) + "; must be > 0");
-  Require(max_seconds >= 0, "TrainOptions::max_seconds = " + std::to_string(max_seconds) + "; must be >= 0");
-  Require(!resume || !checkpoint.empty(), "TrainOptions::resume needs a checkpoint path");
-  Require(edge_weight >= 0 && std::isfinite(edge_weight),
-          "TrainOptions::edge_weight = " + std::to_string(edge_weight) + "; must be >= 0");
+  CANDI_CHECK_OPTION_GE(epochs, 1);
+  CANDI_CHECK_OPTION_GE(batch, 1);
+  CANDI_CHECK_OPTION_GT(learning_rate, 0);
+  CANDI_CHECK_OPTION_IN(end_learning_rate, 0, learning_rate);
+  CANDI_CHECK_OPTION_GT(decay_power, 0);
+  CANDI_CHECK_OPTION_GE(max_seconds, 0);
+  CANDI_CHECK_OPTION_MSG(!resume || !checkpoint.empty(), resume, "needs a checkpoint path");
+  CANDI_CHECK_OPTION(edge_weight >= 0 && std::isfinite(edge_weight), edge_weight, ">= 0");
   augment.Check();
 }
 
