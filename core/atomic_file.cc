@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -127,6 +128,19 @@ std::string ReadFileToString(const std::string& path) {
   ss << in.rdbuf();
   if (in.bad()) throw InputError(path, "", "read error");
   return ss.str();
+}
+
+void CheckOutputFolder(const std::string& output) {
+  std::filesystem::path folder = std::filesystem::path(output).parent_path();
+  if (folder.empty()) folder = ".";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(folder, ec)) {
+    throw InputError(output, "", "output folder '" + folder.string() + "' " +
+                                     (std::filesystem::exists(folder, ec) ? "is not a folder" : "does not exist"));
+  }
+  if (::access(folder.c_str(), W_OK) != 0) {
+    throw InputError(output, "", "output folder '" + folder.string() + "' is not writable");
+  }
 }
 
 }  // namespace candi

@@ -52,4 +52,8 @@ void WriteFileAtomic(const std::string& path, const std::string& contents);
 // Reads a whole file; throws InputError naming the path.
 std::string ReadFileToString(const std::string& path);
 
+// Throws InputError naming `output` when its folder does not exist or is not writable: an early
+// check, so that a long command fails before its work, not after it.
+void CheckOutputFolder(const std::string& output);
+
 }  // namespace candi

@@ -1,5 +1,6 @@
 #include "core/clip.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -84,6 +85,27 @@ size_t ClipCloud(const ClipRegion& world_region, PointCloud* cloud) {
   std::vector<uint8_t> keep(cloud->size());
   for (size_t i = 0; i < keep.size(); ++i) keep[i] = local.Contains(cloud->positions[i]) ? 1 : 0;
   return cloud->Keep(keep);
+}
+
+Box3d ClippedBounds(const Box3d& world, const ClipRegion& region) {
+  Box3d out = world;
+  for (const ClipPlane& p : region.planes) {
+    for (int a = 0; a < 3; ++a) {
+      const int b = (a + 1) % 3, c = (a + 2) % 3;
+      if (p.normal[b] != 0 || p.normal[c] != 0) continue;
+      if (p.normal[a] > 0) out.min[a] = std::max(out.min[a], p.point[a]);
+      if (p.normal[a] < 0) out.max[a] = std::min(out.max[a], p.point[a]);
+    }
+  }
+  return out.IsEmpty() ? world : out;
+}
+
+std::vector<std::array<double, 6>> ClipPlaneArrays(const ClipRegion& clip) {
+  std::vector<std::array<double, 6>> out;
+  for (const ClipPlane& p : clip.planes) {
+    out.push_back({p.point.x(), p.point.y(), p.point.z(), p.normal.x(), p.normal.y(), p.normal.z()});
+  }
+  return out;
 }
 
 }  // namespace candi

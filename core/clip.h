@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -61,5 +62,12 @@ struct ClipRegion {
 // Keeps the points of `cloud` inside `world_region` (world coordinates; the cloud's frame is
 // applied); returns how many were removed. No plane: nothing is removed.
 size_t ClipCloud(const ClipRegion& world_region, PointCloud* cloud);
+
+// The part of `world` the region's axis-aligned planes keep (the other planes are not applied):
+// what a default view frames. `world` itself when nothing would remain.
+Box3d ClippedBounds(const Box3d& world, const ClipRegion& region);
+
+// The region's planes as [px, py, pz, nx, ny, nz] each (a message's form; doubles print exactly).
+std::vector<std::array<double, 6>> ClipPlaneArrays(const ClipRegion& clip);
 
 }  // namespace candi

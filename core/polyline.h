@@ -12,4 +12,8 @@ struct Polyline2 {
   bool closed = false;                  // the last point joins the first
 };
 
+// The distance from `p` to the open polyline through `points` (its nearest segment; 1e300 for
+// fewer than two points). Thread-safe.
+double DistanceToPolyline(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& points);
+
 }  // namespace candi

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <locale>
 #include <sstream>
+#include <stdexcept>
 
 namespace candi {
 
@@ -39,6 +40,28 @@ std::string FormatSignificant(double value, int digits) {
   text.precision(digits);
   text << value;
   return text.str();
+}
+
+std::vector<double> ParseNumbers(const std::string& text, char separator, const std::string& what) {
+  std::vector<double> out;
+  const char* p = text.data();
+  const char* end = p + text.size();
+  while (p < end) {
+    double v = 0;
+    auto [next, ec] = std::from_chars(p, end, v);
+    if (ec != std::errc() || !std::isfinite(v)) {
+      throw std::invalid_argument(what + " '" + text + "': not a finite number");
+    }
+    out.push_back(v);
+    p = next;
+    if (p < end && *p == separator && p + 1 < end) {
+      ++p;
+    } else if (p < end) {
+      throw std::invalid_argument(what + " '" + text + "': unexpected '" + std::string(1, *p) + "'");
+    }
+  }
+  if (out.empty()) throw std::invalid_argument(what + " is empty");
+  return out;
 }
 
 }  // namespace candi

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace candi {
 
@@ -17,5 +18,9 @@ std::string FormatSignificant(double value, int digits);
 // Fixed notation for magnitudes in [1e-4, 1e16) (floats: 1e7), scientific otherwise.
 char* AppendDouble(char* buf, double value);
 char* AppendFloat(char* buf, float value);
+
+// Finite numbers separated by `separator` ("1,2,3", "1024x768"); throws
+// std::invalid_argument("<what> '<text>': ...") naming the option or field they came from.
+std::vector<double> ParseNumbers(const std::string& text, char separator, const std::string& what);
 
 }  // namespace candi

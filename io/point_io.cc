@@ -58,4 +58,16 @@ void WritePointCloud(const std::string& path, const PointCloud& cloud,
   writer->Close();
 }
 
+PointScan ScanPoints(PointReader& reader, const ProgressCallback& progress) {
+  PointScan scan;
+  const uint64_t total = reader.info().count == kUnknownCount ? 0 : reader.info().count;
+  PointCloud chunk;
+  while (reader.Read(1 << 20, &chunk) > 0) {
+    scan.world.Extend(chunk.WorldBounds());
+    scan.count += chunk.size();
+    if (progress) progress(scan.count, total);
+  }
+  return scan;
+}
+
 }  // namespace candi::io

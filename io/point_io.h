@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "core/progress.h"
 #include "io/point_file.h"
 
 namespace candi::io {
@@ -15,6 +16,13 @@ std::unique_ptr<PointReader> OpenPointReader(const std::string& path,
                                              const PointReadOptions& options = {});
 std::unique_ptr<PointWriter> OpenPointWriter(const std::string& path, const PointWriteSpec& spec,
                                              const PointWriteOptions& options = {});
+
+// The count and world bounds of a reader's points, from a pass over them (from where it is).
+struct PointScan {
+  uint64_t count = 0;
+  Box3d world;
+};
+PointScan ScanPoints(PointReader& reader, const ProgressCallback& progress = nullptr);
 
 // Whole-file conveniences.
 PointCloud ReadPointCloud(const std::string& path, const PointReadOptions& options = {});

@@ -605,4 +605,11 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   return summary;
 }
 
+PackSummary PackFiles(const PackOptions& options, const std::vector<std::string>& files, const std::string& columns,
+                      const std::string& output_dir, const ProgressCallback& progress) {
+  std::vector<PackInput> inputs;
+  for (const std::string& file : files) inputs.push_back(PackInputFromFile(file, columns));
+  return PackArchive(options, inputs, output_dir, progress);
+}
+
 }  // namespace candi::render

@@ -80,6 +80,10 @@ struct PackSummary {
 
 PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>& inputs,
                         const std::string& output_dir, const ProgressCallback& progress = nullptr);
+// Point files (one layer each, named by the file's stem; `columns` for XYZ/PTS) packed into
+// `output_dir`.
+PackSummary PackFiles(const PackOptions& options, const std::vector<std::string>& files, const std::string& columns,
+                      const std::string& output_dir, const ProgressCallback& progress = nullptr);
 
 // The hash of a file recorded in the manifest: xxHash64 over the xxHash64s of its 64 MiB blocks.
 uint64_t HashFile(const std::string& path, uint64_t* bytes);

@@ -309,4 +309,11 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   return result;
 }
 
+void EnsembleShare(int repeat_level, int rank, int size, int* begin, int* end) {
+  CANDI_CHECK(size >= 1 && rank >= 0 && rank < size) << "rank " << rank << " of " << size;
+  const int64_t L = repeat_level;
+  *begin = static_cast<int>(L * rank / size);
+  *end = static_cast<int>(L * (rank + 1) / size);
+}
+
 }  // namespace candi::render

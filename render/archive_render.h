@@ -70,4 +70,9 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
 // around the image.
 bool BoxMayBeVisible(const Camera::Projector& projector, const Camera& camera, const Box3d& box, double margin_px);
 
+// Ensembles [*begin, *end) of `rank` among `size` ranks: contiguous shares of L, sizes differing
+// by at most one (a rank may get none when size > L). The MPI split (render/mpi/) and the viewer's
+// batches use it.
+void EnsembleShare(int repeat_level, int rank, int size, int* begin, int* end);
+
 }  // namespace candi::render

@@ -5,6 +5,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "core/atomic_file.h"
 #include "core/check.h"
 
 namespace candi::render {
@@ -96,5 +97,9 @@ std::string ViewToJson(const Camera& c) {
   j["near"] = c.near;
   return j.dump(2);
 }
+
+Camera LoadView(const std::string& path) { return ParseView(ReadFileToString(path), path); }
+
+void SaveView(const std::string& path, const Camera& c) { WriteFileAtomic(path, ViewToJson(c) + "\n"); }
 
 }  // namespace candi::render

@@ -16,4 +16,8 @@ namespace candi::render {
 Camera ParseView(const std::string& text, const std::string& name);
 std::string ViewToJson(const Camera& world_camera);
 
+// A view file: read (InputError naming it), and written atomically (with a final newline).
+Camera LoadView(const std::string& path);
+void SaveView(const std::string& path, const Camera& world_camera);
+
 }  // namespace candi::render

@@ -4,22 +4,13 @@
 
 #include <cmath>
 
+#include "core/polyline.h"
 #include "core/rng.h"
 #include "section/section_dxf.h"
 #include "section/section_lines.h"
 
 namespace candi::section {
 namespace {
-
-double DistanceTo(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& line) {
-  double best = 1e300;
-  for (size_t i = 0; i + 1 < line.size(); ++i) {
-    const Eigen::Vector2d d = line[i + 1] - line[i];
-    const double t = std::clamp((p - line[i]).dot(d) / d.squaredNorm(), 0.0, 1.0);
-    best = std::min(best, (p - (line[i] + t * d)).norm());
-  }
-  return best;
-}
 
 // Points on a curve (given densely as a polyline), uniform along it at `per_metre`, seeded, 1 mm
 // noise across.
@@ -46,7 +37,7 @@ TEST(RefineSectionCorners, PutsAVertexOnARidge) {
   const std::vector<Eigen::Vector2d> points = Sample(ridge, 5, 7);
   SectionLines lines = ExtractSectionLines({}, points);
   ASSERT_EQ(lines.lines.size(), 1u);
-  auto apex_error = [&](const std::vector<Polyline2>& l) { return DistanceTo(Eigen::Vector2d(0, 0), l[0].points); };
+  auto apex_error = [&](const std::vector<Polyline2>& l) { return DistanceToPolyline(Eigen::Vector2d(0, 0), l[0].points); };
   const double before = apex_error(lines.lines);
   const SectionCornerSummary s = RefineSectionCorners({}, points, lines.spacing, &lines.lines);
   const double after = apex_error(lines.lines);
@@ -59,7 +50,7 @@ TEST(RefineSectionCorners, PutsAVertexOnARidge) {
   // apex keep the extraction's bias of a centimetre or two: see the README's limits).
   double worst = 0;
   for (const Eigen::Vector2d& v : lines.lines[0].points) {
-    if (v.norm() > 2) worst = std::max(worst, DistanceTo(v, ridge));
+    if (v.norm() > 2) worst = std::max(worst, DistanceToPolyline(v, ridge));
   }
   EXPECT_LT(worst, 0.005);
 }

@@ -1,13 +1,16 @@
 #include "section/section_dxf.h"
 
 #include <dl_dxf.h>
+#include <unistd.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <set>
@@ -291,8 +294,12 @@ uint32_t AciColourRgb(int aci) {
   return AciPalette()[aci];
 }
 
-void WriteSectionDxf(const DxfWriteOptions& options, const std::vector<DxfLayerLines>& layers,
-                     const std::string& path) {
+namespace {
+
+// Writes the drawing to `file`'s temporary (dxflib opens the file by name itself); `path` names it
+// in messages.
+void WriteDxfTo(const DxfWriteOptions& options, const std::vector<DxfLayerLines>& layers, const std::string& path,
+                const AtomicFile& file) {
   options.Check();
   size_t polylines = 0;
   Eigen::AlignedBox2d extent;
@@ -316,9 +323,6 @@ void WriteSectionDxf(const DxfWriteOptions& options, const std::vector<DxfLayerL
     }
   }
 
-  // dxflib opens the file by name itself: it writes AtomicFile's temporary, which AtomicFile
-  // renames over `path` once it is known to be complete (or removes on any exception).
-  AtomicFile file(path);
   {
     DL_Dxf dxf;
     std::unique_ptr<DL_WriterA> dw(dxf.out(file.temp_path().c_str(), DL_Codes::AC1015));
@@ -336,7 +340,29 @@ void WriteSectionDxf(const DxfWriteOptions& options, const std::vector<DxfLayerL
     dw->close();
   }
   CheckComplete(file.temp_path(), path);
+}
+
+}  // namespace
+
+void WriteSectionDxf(const DxfWriteOptions& options, const std::vector<DxfLayerLines>& layers,
+                     const std::string& path) {
+  // AtomicFile renames its temporary over `path` once the drawing is known to be complete (or
+  // removes it on any exception).
+  AtomicFile file(path);
+  WriteDxfTo(options, layers, path, file);
   file.Commit();
+}
+
+std::string SectionDxfText(const DxfWriteOptions& options, const std::vector<DxfLayerLines>& layers) {
+  // dxflib writes files only: the drawing goes to an AtomicFile's temporary (removed on an
+  // interrupt, and when `file` goes out of scope uncommitted), and is read back.
+  static std::atomic<uint64_t> serial{0};
+  const std::string name = (std::filesystem::temp_directory_path() /
+                            ("candi-section-" + std::to_string(getpid()) + "-" + std::to_string(serial++) + ".dxf"))
+                               .string();
+  const AtomicFile file(name);
+  WriteDxfTo(options, layers, "section.dxf", file);
+  return ReadFileToString(file.temp_path());
 }
 
 }  // namespace candi::section

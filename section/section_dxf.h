@@ -78,4 +78,8 @@ uint32_t AciColourRgb(int aci);
 void WriteSectionDxf(const DxfWriteOptions& options, const std::vector<DxfLayerLines>& layers,
                      const std::string& path);
 
+// The same drawing as text (for a reply rather than a file). Misuse as WriteSectionDxf; throws
+// InputError when the system's temporary folder cannot be written (dxflib writes files only).
+std::string SectionDxfText(const DxfWriteOptions& options, const std::vector<DxfLayerLines>& layers);
+
 }  // namespace candi::section

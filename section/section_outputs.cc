@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 
-#include "core/atomic_file.h"
 
 namespace candi::section {
 
@@ -115,13 +114,7 @@ double DrawScaleBar(const SectionWindow& w, Rgb8 background, Image8* image) {
   return metres;
 }
 
-void WriteTextFile(const std::string& path, const std::string& text) {
-  AtomicFile file(path);
-  file.Write(text);
-  file.Commit();
-}
-
-void WriteSectionCsv(const std::string& path, const std::vector<SectionLayerResult>& layers, const SectionPath& section) {
+std::string SectionCsv(const std::vector<SectionLayerResult>& layers, const SectionPath& section) {
   std::string out = "layer,line,vertex,closed,x,y,X,Y,Z\n";
   for (const SectionLayerResult& l : layers) {
     for (size_t k = 0; k < l.lines.size(); ++k) {
@@ -134,11 +127,11 @@ void WriteSectionCsv(const std::string& path, const std::vector<SectionLayerResu
       }
     }
   }
-  WriteTextFile(path, out);
+  return out;
 }
 
-void WriteSectionSvg(const std::string& path, const std::vector<SectionLayerResult>& layers, const SectionWindow& w,
-                     const std::string& image_href, const std::string& title, double bar_metres) {
+std::string SectionSvg(const std::vector<SectionLayerResult>& layers, const SectionWindow& w,
+                       const std::string& image_href, const std::string& title, double bar_metres) {
   const double width_m = w.width * w.metres_per_pixel, height_m = w.height * w.metres_per_pixel;
   // SVG y runs down: drawing y maps to -y, so the viewBox's top is -(y0 + height).
   std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
@@ -179,7 +172,7 @@ void WriteSectionSvg(const std::string& path, const std::vector<SectionLayerResu
   }
   out += "<text x=\"" + Num(left) + "\" y=\"" + Num(y) + "\" fill=\"gray\">" + Escape(title) + "</text>\n</g>\n";
   out += "</svg>\n";
-  WriteTextFile(path, out);
+  return out;
 }
 
 }  // namespace candi::section

@@ -1,6 +1,6 @@
-// What `candi section` writes besides the DXF: the section image's scale bar, the SVG drawing, the
-// CSV of the lines' vertices and the JSON summary. Files are written atomically (a temporary
-// file, then a rename). Not thread-safe.
+// What a section shows besides the DXF (section_dxf.h): the section image's scale bar, the SVG
+// drawing and the CSV of the lines' vertices, as text (pipeline/section.h writes them).
+// Thread-safe (pure functions).
 #pragma once
 
 #include <cstdint>
@@ -35,13 +35,11 @@ struct SectionWindow {
 // on dark ones. Returns the bar's length in metres.
 double DrawScaleBar(const SectionWindow& window, Rgb8 background, Image8* image);
 
-// Drawing coordinates per layer: layer, line, vertex, closed, x, y (drawing, m) and X, Y, Z (world).
-void WriteSectionCsv(const std::string& path, const std::vector<SectionLayerResult>& layers, const SectionPath& section);
+// CSV, per layer: layer, line, vertex, closed, x, y (drawing, m) and X, Y, Z (world).
+std::string SectionCsv(const std::vector<SectionLayerResult>& layers, const SectionPath& section);
 // An SVG in drawing coordinates (1 unit = 1 m, y up): the image underneath (`image_href`, relative),
 // one group per layer, a scale bar and a legend.
-void WriteSectionSvg(const std::string& path, const std::vector<SectionLayerResult>& layers, const SectionWindow& window,
-                     const std::string& image_href, const std::string& title, double bar_metres);
-// Writes `json` atomically.
-void WriteTextFile(const std::string& path, const std::string& text);
+std::string SectionSvg(const std::vector<SectionLayerResult>& layers, const SectionWindow& window,
+                       const std::string& image_href, const std::string& title, double bar_metres);
 
 }  // namespace candi::section

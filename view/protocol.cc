@@ -86,14 +86,6 @@ ViewSettings ParseSettings(const json& j) {
 
 }  // namespace
 
-std::vector<std::array<double, 6>> ClipPlaneArrays(const ClipRegion& clip) {
-  std::vector<std::array<double, 6>> out;
-  for (const ClipPlane& p : clip.planes) {
-    out.push_back({p.point.x(), p.point.y(), p.point.z(), p.normal.x(), p.normal.y(), p.normal.z()});
-  }
-  return out;
-}
-
 bool SameImage(const ViewState& a, const ViewState& b) {
   const render::Camera &x = a.camera, &y = b.camera;
   return a.settings == b.settings && x.projection == y.projection && x.width == y.width && x.height == y.height &&

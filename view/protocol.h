@@ -59,8 +59,6 @@ inline bool SameClip(const ClipRegion& a, const ClipRegion& b) {
   return true;
 }
 
-// The planes as the messages carry them: [px, py, pz, nx, ny, nz] each.
-std::vector<std::array<double, 6>> ClipPlaneArrays(const ClipRegion& clip);
 
 // What the page sets besides the camera.
 struct ViewSettings {

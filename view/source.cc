@@ -72,7 +72,7 @@ void SceneSettings(const json& provenance, ViewerSource* source) {
   if (s.contains("seed") && s["seed"].is_number_unsigned()) v.seed = s["seed"].get<uint64_t>();
 }
 
-ViewerSource FromBuild(const fs::path& dir, const Orientation& orientation) {
+ViewerSource FromBuild(const fs::path& dir, const render::Orientation& orientation) {
   ViewerSource source;
   source.kind = "build";
   source.archive_dir = (dir / "archive").string();
@@ -95,7 +95,7 @@ ViewerSource FromBuild(const fs::path& dir, const Orientation& orientation) {
   const render::Archive archive(source.archive_dir);
   const render::ArchiveManifest& m = archive.manifest();
   SceneSettings(p, &source);
-  source.first_view = FirstView(m.bounds.Translated(m.frame.origin), source.first_view.width,
+  source.first_view = render::FirstView(m.bounds.Translated(m.frame.origin), source.first_view.width,
                                 source.first_view.height, orientation);
   if (p.contains("views") && p["views"].is_array()) {
     for (const json& v : p["views"]) {
@@ -112,22 +112,6 @@ ViewerSource FromBuild(const fs::path& dir, const Orientation& orientation) {
 }
 
 }  // namespace
-
-render::Camera FirstView(const Box3d& world_bounds, int width, int height, const Orientation& o) {
-  if (!(o.up.norm() > 0) || !o.up.allFinite()) throw std::invalid_argument("the up direction is not a direction");
-  const Eigen::Vector3d up = o.up.normalized();
-  if (o.view_dir && !(o.view_dir->norm() > 0 && o.view_dir->normalized().cross(up).norm() > 1e-3)) {
-    throw std::invalid_argument("the viewing direction (--from) is zero or parallel to up (--up): the view would "
-                                "have no up");
-  }
-  // candi render's default (from above, oblique) turned from z-up to `up`.
-  const Eigen::Vector3d dir = o.view_dir ? *o.view_dir
-                                         : Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), up) *
-                                               Eigen::Vector3d(0.45, 0.7, -0.55);
-  render::Camera c = render::FrameBox(world_bounds, width, height, dir);
-  if (std::abs(dir.normalized().dot(up)) < 0.999) c.up = up;
-  return c;
-}
 
 std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
   // The archive's layers (what the page can show and hide), with what the build says of each.
@@ -167,7 +151,7 @@ std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
   return s.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
-ViewerSource OpenViewerSource(const std::string& path, const Orientation& orientation) {
+ViewerSource OpenViewerSource(const std::string& path, const render::Orientation& orientation) {
   std::error_code ec;
   const fs::path p(path);
   if (fs::is_regular_file(p / "archive.json", ec) && render::IsArchive((p / "archive").string())) {
@@ -184,12 +168,12 @@ ViewerSource OpenViewerSource(const std::string& path, const Orientation& orient
   if (source.title.empty()) source.title = fs::absolute(p).lexically_normal().parent_path().filename().string();
   const render::Archive archive(path);
   const render::ArchiveManifest& m = archive.manifest();
-  source.first_view = FirstView(m.bounds.Translated(m.frame.origin), 1024, 768, orientation);
+  source.first_view = render::FirstView(m.bounds.Translated(m.frame.origin), 1024, 768, orientation);
   return source;
 }
 
 ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,
-                              const Orientation& orientation, const ProgressCallback& progress) {
+                              const render::Orientation& orientation, const ProgressCallback& progress) {
   std::string tmpl = (fs::temp_directory_path() / "candi-view-XXXXXX").string();
   if (mkdtemp(tmpl.data()) == nullptr) throw InputError(tmpl, "", "cannot create a temporary directory");
   const std::string archive_dir = tmpl + "/archive";

@@ -14,6 +14,7 @@
 #include "core/progress.h"
 #include "render/archive.h"
 #include "render/camera.h"
+#include "render/first_view.h"
 #include "view/protocol.h"
 
 namespace candi::view {
@@ -31,12 +32,6 @@ struct SavedView {
   bool opaque = false;
 };
 
-// Where "up" is and which side the first view looks from.
-struct Orientation {
-  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();     // world up (survey data: z)
-  std::optional<Eigen::Vector3d> view_dir;           // eye -> target; default: from above, oblique
-};
-
 struct ViewerSource {
   std::string title;
   std::string archive_dir;
@@ -51,14 +46,10 @@ struct ViewerSource {
   std::string ToJson(const render::ArchiveManifest& manifest) const;
 };
 
-// A camera that frames the archive's bounds (world frame) for `orientation`. Throws
-// std::invalid_argument when up is not a direction or the viewing direction is parallel to it.
-render::Camera FirstView(const Box3d& world_bounds, int width, int height, const Orientation& orientation);
-
 // Opens a build directory or an archive (InputError naming the file for anything malformed).
-ViewerSource OpenViewerSource(const std::string& path, const Orientation& orientation);
+ViewerSource OpenViewerSource(const std::string& path, const render::Orientation& orientation);
 // Packs point files into a fresh temporary directory.
 ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,
-                              const Orientation& orientation, const ProgressCallback& progress);
+                              const render::Orientation& orientation, const ProgressCallback& progress);
 
 }  // namespace candi::view

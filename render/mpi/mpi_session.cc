@@ -18,13 +18,6 @@ bool LaunchedByMpi() {
   return false;
 }
 
-void EnsembleShare(int repeat_level, int rank, int size, int* begin, int* end) {
-  CANDI_CHECK(size >= 1 && rank >= 0 && rank < size) << "rank " << rank << " of " << size;
-  const int64_t L = repeat_level;
-  *begin = static_cast<int>(L * rank / size);
-  *end = static_cast<int>(L * (rank + 1) / size);
-}
-
 namespace {
 void Check(int code, const char* what) {
   if (code != MPI_SUCCESS) {

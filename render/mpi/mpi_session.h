@@ -15,10 +15,6 @@ namespace candi::render::mpi {
 // PMIX_RANK set), so a plain `candi render` never initializes MPI.
 bool LaunchedByMpi();
 
-// Ensembles [*begin, *end) of `rank` among `size` ranks: contiguous shares of L, sizes differing
-// by at most one (a rank may get none when size > L).
-void EnsembleShare(int repeat_level, int rank, int size, int* begin, int* end);
-
 // MPI_Init_thread on construction, MPI_Finalize on destruction. One per process. `serialized`:
 // MPI may be called from any one thread at a time (the viewer's render thread), not only from
 // the main one.

@@ -1,11 +1,11 @@
-#include "sampling/layer_clouds.h"
+#include "io/layer_clouds.h"
 
 #include <gtest/gtest.h>
 
 #include "core/check.h"
 #include "tests/util/test_util.h"
 
-namespace candi::sampling {
+namespace candi::io {
 namespace {
 
 using testing::FileExists;
@@ -53,4 +53,4 @@ TEST(WriteLayerClouds, EqualsTheAppendedCloudAndNamesTheLayers) {
 }
 
 }  // namespace
-}  // namespace candi::sampling
+}  // namespace candi::io
