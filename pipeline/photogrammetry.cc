@@ -1,0 +1,198 @@
+#include "pipeline/photogrammetry.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include "core/atomic_file.h"
+#include "core/check.h"
+#include "core/log.h"
+#include "core/progress.h"
+#include "core/timer.h"
+#include "io/crs.h"
+#include "reconstruction/photogrammetry/dense_workspace.h"
+
+namespace candi::pipeline {
+
+namespace {
+
+namespace pg = photogrammetry;
+using nlohmann::json;
+
+// COLMAP's stages on stderr, one line each (they take seconds to minutes).
+void PrintSfmProgress(const std::string& stage, int index, int count, double seconds, bool done) {
+  if (done) {
+    std::fprintf(stderr, "[sfm %d/%d] %s done in %.1f s\n", index, count, stage.c_str(), seconds);
+  } else if (seconds == 0) {
+    std::fprintf(stderr, "[sfm %d/%d] %s ...\n", index, count, stage.c_str());
+  } else {
+    std::fprintf(stderr, "[sfm %d/%d] %s running, %.0f s\n", index, count, stage.c_str(), seconds);
+  }
+}
+
+json SfmReport(const pg::SfmSummary& s, const pg::SfmOptions& o) {
+  json j;
+  j["colmap_version"] = s.colmap.version;
+  j["cuda"] = s.colmap.cuda;
+  j["images_total"] = s.images.size();
+  j["images_registered"] = s.registered.size();
+  j["registered"] = s.registered;
+  j["ignored_files"] = s.ignored;
+  j["images_without_exif"] = s.no_exif;
+  j["default_focal_px"] = s.default_focal_px;
+  j["points"] = s.points;
+  j["mean_reprojection_error_px"] = s.mean_reprojection_error;
+  j["mean_track_length"] = s.mean_track_length;
+  j["matcher"] = "candi exact brute force, " + s.matcher;
+  j["reproducibility"] = kSfmReproducibility;
+  j["max_image_size"] = o.max_image_size;
+  j["max_features"] = o.max_features;
+  j["model_dir"] = s.model_dir;
+  j["dense_dir"] = s.dense_dir;
+  json stages = json::object();
+  for (const auto& [stage, seconds] : s.stage_seconds) stages[stage] = seconds;
+  j["stage_seconds"] = stages;
+  return j;
+}
+
+json Vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+json RmseJson(const pg::Rmse& e) {
+  return {{"count", e.count}, {"x", e.x}, {"y", e.y}, {"z", e.z}, {"xy", e.xy}, {"3d", e.d3}};
+}
+
+std::string TargetStatus(const pg::GeorefResult& r, size_t i) {
+  if (!r.targets[i].unused_reason.empty()) return "unused: " + r.targets[i].unused_reason;
+  return r.outlier[i] ? "OUTLIER" : "ok";
+}
+
+// GNSS or national-grid targets into the survey CRS, with PROJ.
+void TransformTargets(const GeorefOptions& o, const std::string& targets_csv, std::vector<pg::SurveyTarget>* targets) {
+  if (o.crs.empty()) throw std::invalid_argument("--targets-crs needs --crs (the CRS to fit in)");
+  const io::CrsTransform transform(o.targets_crs, o.crs, targets_csv);
+  LogInfo("targets: " + io::CrsLabel(o.targets_crs) + " -> " + io::CrsLabel(o.crs) + " (" + transform.operation() +
+          ")");
+  for (pg::SurveyTarget& t : *targets) {
+    t.survey = transform.Apply(t.survey);
+    if (!t.survey.allFinite()) {
+      throw InputError(targets_csv, "line " + std::to_string(t.line),
+                       "target '" + t.name + "' lies outside " + io::CrsLabel(o.crs) +
+                           "'s domain (PROJ cannot transform it)");
+    }
+  }
+}
+
+}  // namespace
+
+pg::SfmSummary StructureFromMotion(const pg::SfmOptions& options, const std::string& images,
+                                   const std::string& workspace) {
+  const pg::SfmSummary s = pg::RunSfm(options, images, workspace, PrintSfmProgress);
+  if (!s.no_exif.empty()) {
+    LogWarning(std::to_string(s.no_exif.size()) + " photo(s) without an EXIF focal length (e.g. " + s.no_exif.front() +
+               "): COLMAP started from a guessed focal of " + std::to_string(static_cast<int>(s.default_focal_px)) +
+               " px (1.2 x the longest side)" + (options.single_camera ? ", refined as one shared camera" : ""));
+  }
+  if (s.registered.size() < s.images.size()) {
+    LogWarning(std::to_string(s.images.size() - s.registered.size()) + " photo(s) not registered");
+  }
+  const std::string report = (std::filesystem::path(workspace) / "sfm_report.json").string();
+  WriteFileAtomic(report, SfmReport(s, options).dump(2) + "\n");
+  return s;
+}
+
+void DenseOptions::Check() const {
+  stereo.Check();
+  fusion.Check();
+}
+
+DenseCloud DenseStereo(const DenseOptions& options, const std::string& workspace) {
+  options.Check();
+  Stopwatch watch;
+  const pg::StereoInput input = pg::ReadDenseWorkspace(workspace);
+  DenseCloud out;
+  out.images = input.images.size();
+  out.sparse_points = input.sparse_points.size();
+  pg::PatchMatchResult stereo;
+  {
+    ConsoleProgressOptions p;
+    p.unit = "pixel sweeps";
+    ConsoleProgress progress("dense: PatchMatch", p);
+    stereo = pg::RunPatchMatch(options.stereo, input, progress.Callback());
+  }
+  out.stereo_seconds = watch.Seconds();
+  out.valid_pixels = stereo.valid_pixels;
+  out.total_pixels = stereo.total_pixels;
+  if (options.write_maps) {
+    std::vector<std::string> names;
+    for (const pg::StereoImage& image : input.images) names.push_back(image.name);
+    pg::WriteDepthNormalMaps(stereo.maps, names, workspace);
+  }
+  {
+    ConsoleProgressOptions p;
+    p.unit = "pixels";
+    ConsoleProgress progress("dense: fusion", p);
+    out.cloud = pg::FuseDepthMaps(options.fusion, stereo.maps, progress.Callback());
+  }
+  out.cloud.meta.comments.push_back("candi dense " + workspace);
+  if (out.cloud.empty()) LogWarning("dense: no points (textureless images, no overlap, or too strict filters)");
+  return out;
+}
+
+void GeorefOptions::Check() const { fit.Check(); }
+
+pg::GeorefResult FitGeoref(const GeorefOptions& options, const std::string& targets_csv,
+                           const pg::ColmapGeorefInput* model, const std::string& picks_csv) {
+  options.Check();
+  std::vector<pg::SurveyTarget> targets = pg::ReadSurveyTargets(targets_csv);
+  if (!options.targets_crs.empty()) TransformTargets(options, targets_csv, &targets);
+  if (!picks_csv.empty()) {
+    if (model == nullptr) throw std::invalid_argument("--picks needs the cameras: --model SPARSE_DIR or a model as IN");
+    const int skipped = pg::TriangulateTargets(pg::ReadImagePicks(picks_csv), picks_csv, model->cameras, &targets);
+    if (skipped > 0) LogWarning(std::to_string(skipped) + " picks name images this model does not have; skipped");
+  }
+  return pg::Georeference(options.fit, targets, targets_csv);
+}
+
+void Georeference(const GeorefOptions& options, const pg::GeorefResult& result, PointCloud* cloud) {
+  pg::ApplySimilarity(result.survey_from_model, result.frame, cloud);
+  if (!options.crs.empty()) cloud->meta.crs = options.crs;
+}
+
+json GeorefReport(const GeorefOptions& o, const pg::GeorefResult& r) {
+  const Sim3& t = r.survey_from_model;
+  json j;
+  const Eigen::Matrix3d rot = t.rotation.toRotationMatrix();
+  j["survey_from_model"] = {{"scale", t.scale},
+                            {"rotation", {Vec(rot.row(0)), Vec(rot.row(1)), Vec(rot.row(2))}},
+                            {"quaternion_wxyz", {t.rotation.w(), t.rotation.x(), t.rotation.y(), t.rotation.z()}},
+                            {"translation", Vec(t.translation)}};
+  j["shift"] = Vec(r.frame.origin);
+  j["local_translation"] = Vec(t.translation - r.frame.origin);  // survey - shift = s R x + this
+  j["loss"] = pg::RobustLossName(o.fit.loss);
+  j["loss_scale"] = o.fit.loss_scale;
+  if (!o.crs.empty()) j["crs"] = o.crs;
+  if (!o.targets_crs.empty()) j["targets_crs"] = o.targets_crs;
+  j["outlier_threshold"] = r.fit.threshold;
+  j["converged"] = r.fit.converged;
+  j["solver"] = r.fit.solver_message;
+  j["collinearity"] = r.fit.collinearity;
+  j["planarity"] = r.fit.planarity;
+  j["warnings"] = r.fit.warnings;
+  j["targets"] = json::array();
+  for (size_t i = 0; i < r.targets.size(); ++i) {
+    const pg::SurveyTarget& s = r.targets[i];
+    const Eigen::Vector3d& d = r.residuals[i];
+    json row = {{"name", s.name}, {"role", pg::TargetRoleName(s.role)}, {"status", TargetStatus(r, i)}};
+    if (s.unused_reason.empty()) {
+      row.update({{"dx", d.x()}, {"dy", d.y()}, {"dz", d.z()}, {"dxy", d.head<2>().norm()},
+                  {"d3d", d.norm()}, {"outlier", static_cast<bool>(r.outlier[i])}});
+    }
+    if (std::isfinite(s.reprojection_px)) row.update({{"reprojection_px", s.reprojection_px}, {"views", s.views}});
+    j["targets"].push_back(row);
+  }
+  j["rmse"] = {{"control", RmseJson(r.control)}, {"check", RmseJson(r.check)}};
+  return j;
+}
+
+}  // namespace candi::pipeline

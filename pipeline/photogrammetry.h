@@ -1,0 +1,75 @@
+// The standing building from photographs: COLMAP structure from motion into a dense workspace,
+// candi's CPU PatchMatch stereo and fusion into coloured points, and georeferencing on surveyed
+// targets (reconstruction/photogrammetry). What `candi sfm`, `candi dense` and `candi georef` do,
+// and a build's photogrammetry layer, which passes the points between them in memory.
+// Units: metres, pixels; the model's frame until georeferenced, the survey frame (its integer
+// shift, GeorefResult::frame) after. Failures: std::invalid_argument for invalid options,
+// InputError naming the file (or COLMAP's exit code and log) otherwise; a fit that does not
+// converge is a result (GeorefResult::fit), not an error. Not thread-safe (runs processes).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/point_cloud.h"
+#include "reconstruction/photogrammetry/colmap_runner.h"
+#include "reconstruction/photogrammetry/fusion.h"
+#include "reconstruction/photogrammetry/georef.h"
+#include "reconstruction/photogrammetry/georef_colmap.h"
+#include "reconstruction/photogrammetry/patch_match.h"
+#include "reconstruction/photogrammetry/similarity_fit.h"
+
+namespace candi::pipeline {
+
+// How a photogrammetry layer's model is made reproducible (recorded in sfm_report.json and a
+// build's archive.json).
+inline constexpr const char* kSfmReproducibility =
+    "image ids by photo name; exact matching (same matches every run, any thread count); COLMAP matches_importer "
+    "and mapper on one thread, random_seed 0: the same photos and options give the same model bytes on this machine";
+
+// COLMAP structure from motion of the photos in `images` into `workspace` (colmap_runner.h);
+// each stage's progress on stderr, warnings for photos without EXIF or not registered, and
+// WORKSPACE/sfm_report.json (what ran, the model's figures, the stage times).
+photogrammetry::SfmSummary StructureFromMotion(const photogrammetry::SfmOptions& options, const std::string& images,
+                                               const std::string& workspace);
+
+struct DenseOptions {
+  photogrammetry::PatchMatchOptions stereo;
+  photogrammetry::FusionOptions fusion;
+  bool write_maps = true;  // depth and normal maps into WORKSPACE/stereo/ (for COLMAP's stereo_fusion)
+  void Check() const;
+};
+
+struct DenseCloud {
+  PointCloud cloud;        // fused points with colours and normals, the model's frame
+  size_t images = 0, sparse_points = 0;
+  uint64_t valid_pixels = 0, total_pixels = 0;
+  double stereo_seconds = 0;  // reading the workspace and PatchMatch
+};
+
+// PatchMatch stereo on a COLMAP dense workspace (images/ + sparse/, PINHOLE cameras) and fusion.
+DenseCloud DenseStereo(const DenseOptions& options, const std::string& workspace);
+
+struct GeorefOptions {
+  photogrammetry::SimilarityFitOptions fit;
+  std::string crs;          // the survey frame's CRS (stated in the outputs); "" none
+  std::string targets_crs;  // the targets' CRS, transformed into `crs` with PROJ first; "" = crs
+  void Check() const;
+};
+
+// The targets of `targets_csv` (transformed into options.crs when targets_crs is given),
+// triangulated from `picks_csv` (when given) in the cameras of `model` (a COLMAP model read by
+// photogrammetry::ReadColmapForGeoref; required with picks), and the robust similarity fit.
+photogrammetry::GeorefResult FitGeoref(const GeorefOptions& options, const std::string& targets_csv,
+                                       const photogrammetry::ColmapGeorefInput* model, const std::string& picks_csv);
+
+// `cloud` (the model's frame) moved into the survey frame (result.frame), stating options.crs.
+void Georeference(const GeorefOptions& options, const photogrammetry::GeorefResult& result, PointCloud* cloud);
+
+// The fit as JSON (OUT.georef.json): the transform, the shift, the loss, convergence, warnings,
+// per-target residuals and the RMSE of control and check targets.
+nlohmann::json GeorefReport(const GeorefOptions& options, const photogrammetry::GeorefResult& result);
+
+}  // namespace candi::pipeline

@@ -1,0 +1,328 @@
+#include "pipeline/render.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "core/check.h"
+#include "core/log.h"
+#include "core/text_format.h"
+#include "core/version.h"
+#include "io/point_io.h"
+#include "reconstruction/photogrammetry/colmap_model.h"
+#include "render/archive_render.h"
+#include "render/spbr_stream.h"
+#include "render/splat_cloud.h"
+#include "render/view_json.h"
+#include "sampling/opacity.h"
+
+namespace candi::pipeline {
+
+namespace {
+
+constexpr uint64_t kStreamThreshold = 50000000;  // points; above, RenderMode::kAuto streams
+
+int RepeatLevel(const RenderOptions& o) { return o.opaque ? 1 : o.repeat_level; }
+
+// The camera in world coordinates: the view given, or one that frames the data (clipped).
+render::Camera WorldCamera(const RenderOptions& o, const Box3d& world) {
+  if (o.view) {
+    render::Camera c = *o.view;
+    if (o.size_given) c.width = o.width, c.height = o.height;
+    return c;
+  }
+  return render::FirstView(ClippedBounds(world, o.clip), o.width, o.height, o.orientation);
+}
+
+render::Camera InFrame(render::Camera c, const LocalFrame& frame) {
+  c.eye -= frame.origin;
+  c.target -= frame.origin;
+  return c;
+}
+
+// Opacity control for cloud k (ALGORITHMS.md §1): the pixel footprint s is the camera's at its
+// target, so the law is met where the view is focused.
+void AdjustCloud(const RenderOptions& o, const render::Camera& world_camera, size_t k, const std::string& name,
+                 const std::string& density_key, DensityCache* cache, PointCloud* cloud) {
+  sampling::OpacityOptions opacity;
+  opacity.alpha = o.alpha.size() == 1 ? o.alpha[0] : o.alpha[k];
+  opacity.repeat_level = RepeatLevel(o);
+  opacity.image_size = 0;
+  opacity.pixel_size = world_camera.PixelFootprint((world_camera.target - world_camera.eye).norm());
+  opacity.seed = o.seed;
+  opacity.density.threads = o.threads;
+  sampling::OpacityResult r = sampling::AdjustOpacity(opacity, *cloud, cache->Get(density_key, opacity, *cloud));
+  LogInfo(name + ": opacity " + FormatDouble(opacity.alpha) + " at pixel " + FormatDouble(opacity.pixel_size) +
+          " m: " + std::to_string(r.summary.points_in) + " points -> " + std::to_string(r.summary.total_copies) +
+          " copies (predicted alpha " + FormatDouble(r.summary.predicted_alpha) + ")");
+  if (!r.summary.message.empty()) LogInfo(name + ": " + r.summary.message);
+  *cloud = std::move(r.cloud);
+}
+
+// Draws clouds that are the caller's to change (opacity control and clipping replace them).
+RenderedImage RenderOwnedClouds(const RenderOptions& o, std::vector<PointCloud>* clouds,
+                                const std::vector<std::string>& names, const std::vector<std::string>& density_keys,
+                                DensityCache* cache) {
+  uint64_t total = 0;
+  Box3d world;
+  for (const PointCloud& c : *clouds) {
+    total += c.size();
+    if (!c.empty()) world.Extend(c.WorldBounds());
+  }
+  if (total == 0) throw InputError("nothing to render: the inputs hold no points");
+  RenderedImage image;
+  image.mode = "memory";
+  image.world_camera = WorldCamera(o, world);
+  // Opacity control sees the whole cloud (its density does not depend on the clipping); the
+  // clipping then removes points, as the archive renderer skips them.
+  for (size_t k = 0; k < clouds->size() && !o.alpha.empty(); ++k) {
+    AdjustCloud(o, image.world_camera, k, names[k], density_keys[k], cache, &(*clouds)[k]);
+  }
+  for (PointCloud& c : *clouds) ClipCloud(o.clip, &c);
+  std::vector<const PointCloud*> pointers;
+  for (const PointCloud& c : *clouds) pointers.push_back(&c);
+  render::SplatCloudOptions build;
+  build.repeat_level = RepeatLevel(o);
+  build.seed = o.seed;
+  build.use_multiplicity = !o.opaque;
+  ConsoleProgress building("render: preparing " + std::to_string(total) + " points");
+  const render::SplatCloud splats = render::BuildSplatCloud(build, pointers, building.Callback());
+  building.Finish();
+  clouds->clear();
+  if (splats.copies() == 0) LogInfo("every point was removed (alpha 0): the image shows the background");
+  render::SpbrOptions spbr;
+  spbr.point_size = o.point_size;
+  spbr.ensembles = o.preview;
+  spbr.threads = o.threads;
+  ConsoleProgressOptions po;
+  po.unit = "ensembles";
+  ConsoleProgress progress("render: SPBR L=" + std::to_string(RepeatLevel(o)), po);
+  image.result = render::RenderSpbr(spbr, InFrame(image.world_camera, splats.frame), splats, progress.Callback());
+  progress.Finish();
+  return image;
+}
+
+RenderedImage RenderFilesInMemory(const RenderOptions& o, const std::vector<std::string>& files) {
+  std::vector<PointCloud> clouds;
+  io::PointReadOptions read;
+  read.columns = o.columns;
+  for (const std::string& in : files) clouds.push_back(io::ReadPointCloud(in, read));
+  const std::vector<std::string>& keys = files;  // a file given twice has one density
+  DensityCache cache;
+  return RenderOwnedClouds(o, &clouds, files, keys, &cache);
+}
+
+// Bounds from the headers when every input states them, else from a pass over the points.
+Box3d StreamBounds(const std::vector<std::string>& files, const io::PointReadOptions& read, uint64_t* total) {
+  Box3d world;
+  bool all_headers = true;
+  *total = 0;
+  for (const std::string& in : files) {
+    auto r = io::OpenPointReader(in, read);
+    if (r->info().header_bounds) world.Extend(*r->info().header_bounds); else all_headers = false;
+    if (r->info().count != io::kUnknownCount) *total += r->info().count;
+  }
+  if (all_headers) return world;
+  world = Box3d();
+  *total = 0;
+  ConsoleProgress progress("render: bounds");
+  for (const std::string& in : files) {
+    auto r = io::OpenPointReader(in, read);
+    const uint64_t before = *total;
+    const io::PointScan scan = io::ScanPoints(*r, [&](uint64_t done, uint64_t) { progress.Update(before + done, 0); });
+    world.Extend(scan.world);
+    *total += scan.count;
+  }
+  return world;
+}
+
+RenderedImage RenderFilesStreaming(const RenderOptions& o, const std::vector<std::string>& files) {
+  io::PointReadOptions read;
+  read.columns = o.columns;
+  read.scalar_fields = false;  // geometry and colour; multiplicities need RenderMode::kMemory
+  uint64_t total = 0;
+  const Box3d world = StreamBounds(files, read, &total);
+  if (total == 0 || world.IsEmpty()) throw InputError("nothing to render: the inputs hold no points");
+  const LocalFrame frame = render::RenderFrameFor(world);
+  RenderedImage image;
+  image.mode = "stream";
+  image.world_camera = WorldCamera(o, world);
+  if (image.world_camera.projection != render::Projection::kPerspective) {
+    throw std::invalid_argument("--mode stream draws perspective views; use --mode memory for orthographic views");
+  }
+  render::SpbrStreamOptions so;
+  so.repeat_level = RepeatLevel(o);
+  so.seed = o.seed;
+  so.point_size = o.point_size;
+  so.threads = o.threads;
+  so.memory_budget = o.memory_budget;
+  render::SpbrStreamRenderer renderer(so, InFrame(image.world_camera, frame), frame);
+  ConsoleProgress progress("render: SPBR L=" + std::to_string(RepeatLevel(o)) + " streaming, " +
+                           std::to_string(renderer.passes()) + " pass(es)");
+  uint64_t done = 0;
+  PointCloud chunk;
+  for (int pass = 0; pass < renderer.passes(); ++pass) {
+    renderer.BeginPass(pass);
+    for (const std::string& in : files) {
+      auto r = io::OpenPointReader(in, read);
+      while (r->Read(1 << 20, &chunk) > 0) {
+        done += chunk.size();
+        ClipCloud(o.clip, &chunk);
+        renderer.Add(chunk);
+        progress.Update(done, total * renderer.passes());
+      }
+    }
+    renderer.EndPass();
+  }
+  progress.Finish();
+  image.result = renderer.Finish();
+  return image;
+}
+
+bool Streams(const RenderOptions& o, const std::vector<std::string>& files) {
+  if (o.mode != RenderMode::kAuto) return o.mode == RenderMode::kStream;
+  if (!o.alpha.empty()) return false;
+  uint64_t stated = 0;
+  for (const std::string& in : files) {
+    io::PointReadOptions read;
+    read.columns = o.columns;
+    const uint64_t count = io::OpenPointReader(in, read)->info().count;
+    if (count != io::kUnknownCount) stated += count;
+  }
+  return stated > kStreamThreshold;
+}
+
+}  // namespace
+
+void RenderOptions::Check() const {
+  CANDI_CHECK_OPTION_IN(repeat_level, 1, 100000);
+  CANDI_CHECK_OPTION_IN(width, 1, 16384);
+  CANDI_CHECK_OPTION_IN(height, 1, 16384);
+  CANDI_CHECK_OPTION(brightness == -1 || (brightness > 0 && brightness <= 100), brightness,
+                     "-1 (automatic) or a gain in (0, 100]");
+  for (double a : alpha) CANDI_CHECK_OPTION(a >= 0 && a <= 1, alpha, "in [0, 1] (each)");
+  CANDI_CHECK_OPTION(!(opaque && !alpha.empty()), opaque, "false when alpha is given (they exclude each other)");
+  CANDI_CHECK_OPTION(!(mode == RenderMode::kStream && !alpha.empty()), alpha,
+                     "empty in stream mode (opacity control needs the whole cloud)");
+  CANDI_CHECK_OPTION_IN(threads, 0, 256);
+  CANDI_CHECK_OPTION(point_size >= 1 && point_size <= 64, point_size, "in [1, 64]");
+  CANDI_CHECK_OPTION_GE(preview, 0);
+  CANDI_CHECK_OPTION_GT(memory_budget, 0);
+  CANDI_CHECK_OPTION_GT(chunk_budget, 0);
+}
+
+render::Orientation OrientationOfCameras(const std::string& colmap_model) {
+  const photogrammetry::ColmapModel model = photogrammetry::ReadColmapModel(colmap_model);
+  Eigen::Vector3d down = Eigen::Vector3d::Zero(), forward = Eigen::Vector3d::Zero();
+  for (const auto& [id, image] : model.images) {
+    const Eigen::Matrix3d world_from_cam = image.cam_from_world_rotation.toRotationMatrix().transpose();
+    down += world_from_cam.col(1);
+    forward += world_from_cam.col(2);
+  }
+  if (model.images.empty() || !(down.norm() > 1e-6 * model.images.size())) {
+    throw InputError(colmap_model, "", "no registered images (or their up directions cancel out): cannot orient a view");
+  }
+  render::Orientation o;
+  o.up = -down.normalized();
+  // Looking the cameras' way, tilted to be square to up (an oblique mean would tilt the view).
+  const Eigen::Vector3d level = forward - forward.dot(o.up) * o.up;
+  if (level.norm() > 1e-6 * std::max(1.0, forward.norm())) o.view_dir = level.normalized();
+  LogInfo("view oriented by the " + std::to_string(model.images.size()) + " cameras of " + colmap_model);
+  return o;
+}
+
+const sampling::DensityResult& DensityCache::Get(const std::string& key, const sampling::OpacityOptions& options,
+                                                 const PointCloud& cloud) {
+  auto it = densities_.find(key);
+  if (it == densities_.end() || it->second.density.size() != cloud.size()) {
+    it = densities_.insert_or_assign(key, sampling::OpacityDensity(options, cloud)).first;
+  }
+  return it->second;
+}
+
+RenderedImage RenderPointFiles(const RenderOptions& o, const std::vector<std::string>& files) {
+  o.Check();
+  return Streams(o, files) ? RenderFilesStreaming(o, files) : RenderFilesInMemory(o, files);
+}
+
+RenderedImage RenderClouds(const RenderOptions& o, const std::vector<const PointCloud*>& clouds,
+                           const std::vector<std::string>& names, const std::vector<std::string>& density_keys,
+                           DensityCache* cache) {
+  o.Check();
+  CANDI_CHECK(names.size() == clouds.size() && density_keys.size() == clouds.size() && cache != nullptr);
+  std::vector<PointCloud> copies;
+  for (const PointCloud* c : clouds) copies.push_back(*c);
+  return RenderOwnedClouds(o, &copies, names, density_keys, cache);
+}
+
+RenderedImage RenderArchiveEnsembles(const RenderOptions& o, const render::Archive& archive, int rank, int ranks) {
+  o.Check();
+  if (!o.alpha.empty()) {
+    throw std::invalid_argument("--alpha needs point files: an archive holds one copy per point");
+  }
+  const render::ArchiveManifest& m = archive.manifest();
+  RenderedImage image;
+  image.mode = ranks > 1 ? "archive, MPI" : "archive";
+  image.world_camera = WorldCamera(o, m.bounds.Translated(m.frame.origin));
+  const int repeat_level = RepeatLevel(o);
+  const int drawn = o.preview > 0 ? std::min(o.preview, repeat_level) : repeat_level;
+  render::ArchiveRenderOptions ao;
+  ao.repeat_level = repeat_level;
+  ao.seed = o.seed;
+  ao.point_size = o.point_size;
+  ao.threads = o.threads;
+  ao.memory_budget = o.memory_budget;
+  ao.chunk_budget = o.chunk_budget;
+  ao.clip = o.clip.ToLocal(m.frame.origin);
+  render::EnsembleShare(drawn, rank, ranks, &ao.ensemble_begin, &ao.ensemble_end);
+  const bool none = ao.ensemble_begin == ao.ensemble_end;  // more ranks than ensembles
+  ConsoleProgress progress("render: SPBR L=" + std::to_string(repeat_level) + " from " + std::to_string(m.points) +
+                           " archived points" +
+                           (ranks > 1 ? ", ensembles " + std::to_string(ao.ensemble_begin) + "-" +
+                                            std::to_string(ao.ensemble_end - 1) + " on rank 0 of " +
+                                            std::to_string(ranks)
+                                      : ""));
+  render::ArchiveRenderStats stats;
+  if (none) {
+    image.result.sums = render::Accumulator(image.world_camera.width, image.world_camera.height);
+  } else {
+    image.result = render::RenderArchive(ao, InFrame(image.world_camera, m.frame), archive, progress.Callback(), &stats);
+  }
+  progress.Finish();
+  if (rank == 0) {
+    LogInfo("archive: " + std::to_string(stats.chunks_visible) + " of " + std::to_string(stats.chunks) +
+            " chunks in view (" + std::to_string(stats.points_visible) + " points" +
+            (o.clip.empty() ? "" : ", " + std::to_string(stats.chunks_clipped) + " cut by the clipping") + "), " +
+            std::to_string(stats.passes) + " pass(es)" + (ranks > 1 ? ", " + std::to_string(ranks) + " MPI ranks" : ""));
+  }
+  image.result.repeat_level = repeat_level;
+  image.result.ensembles = drawn;
+  image.result.seed = o.seed;
+  return image;
+}
+
+double WriteRender(const RenderOptions& o, const RenderedImage& image, const RenderOutputs& out) {
+  const render::SpbrResult& result = image.result;
+  const double gain =
+      o.brightness < 0 ? (result.ensembles > 1 ? render::AutoBrightnessGain(result) : 1.0) : o.brightness;
+  LogInfo("brightness gain " + std::to_string(gain) + (o.brightness < 0 ? " (auto)" : ""));
+  const ImageF average = render::AverageImage(result, o.background, gain);
+  std::string inputs;
+  for (const std::string& in : out.inputs) inputs += (inputs.empty() ? "" : " ") + in;
+  io::PngText text = {{"Software", std::string("candi ") + kVersion},
+                      {"candi:seed", std::to_string(result.seed)},
+                      {"candi:repeat_level", std::to_string(result.repeat_level)},
+                      {"candi:ensembles", std::to_string(result.ensembles)},
+                      {"candi:brightness_gain", std::to_string(gain)},
+                      {"candi:mode", image.mode},
+                      {"candi:inputs", inputs},
+                      {"candi:view", render::ViewToJson(image.world_camera)}};
+  if (!o.clip.empty()) text["candi:clip"] = o.clip.Describe();
+  io::WritePng(out.png, render::ToImage8(average), text);
+  if (!out.png16.empty()) io::WritePng(out.png16, render::ToImage16(average), text);
+  if (!out.save_view.empty()) render::SaveView(out.save_view, image.world_camera);
+  return gain;
+}
+
+}  // namespace candi::pipeline

@@ -1,0 +1,111 @@
+// Rendering point files, clouds in memory or one render archive see-through with SPBR, and
+// writing the image: what `candi render` does, and `candi build` for each of its views.
+//
+// Point files and clouds are drawn in memory (a SplatCloud, 10 bytes a point copy; opacity
+// control possible) or streamed in chunks (bounded memory); an archive is streamed from its
+// memory-mapped chunks, a share of its ensembles at a time (the MPI split of `candi render`:
+// apps/ owns the MPI session and adds the ranks' sums). The camera is the view given, or the
+// default view of the data (render/first_view.h) framed on the clipped bounds.
+// World (survey) coordinates throughout; the renderers work in the data's render frame.
+// Failures: std::invalid_argument for invalid options (the field named), InputError for bad or
+// empty inputs. Not thread-safe (one render at a time per DensityCache).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/clip.h"
+#include "core/point_cloud.h"
+#include "core/progress.h"
+#include "io/image/png_io.h"
+#include "render/archive.h"
+#include "render/camera.h"
+#include "render/first_view.h"
+#include "render/spbr.h"
+#include "sampling/density.h"
+#include "sampling/opacity.h"
+
+namespace candi::pipeline {
+
+enum class RenderMode { kAuto, kMemory, kStream };
+
+struct RenderOptions {
+  int repeat_level = 100;        // L, ensembles averaged, [1, 100000]
+  uint64_t seed = 1;             // seed of the ensemble assignment (and of opacity control)
+  int width = 1024, height = 768;  // pixels, [1, 16384]; a view's own size unless size_given
+  bool size_given = false;       // the size replaces a given view's
+  Rgb8 background{0, 0, 0};
+  double brightness = -1;        // -1: automatic (Uchida et al.), else a gain in (0, 100]
+  std::vector<double> alpha;     // opacity control per input (one value for all), each in [0, 1];
+                                 // empty: every point once (or as its spbr_multiplicity says)
+  bool opaque = false;           // L = 1, multiplicities ignored; excludes alpha
+  int threads = 0;               // 0: all
+  double point_size = 1.0;       // pixels, >= 1 (stochastic rounding)
+  int preview = 0;               // > 0: only the first k ensembles
+  RenderMode mode = RenderMode::kAuto;  // point files: auto streams above 5e7 points (alpha: memory)
+  uint64_t memory_budget = uint64_t{2048} << 20;  // bytes of z-buffers resident per pass (stream, archive)
+  uint64_t chunk_budget = uint64_t{256} << 20;    // bytes of archive chunks mapped at once
+  std::string columns;           // XYZ/PTS column spec of point files
+  ClipRegion clip;               // world coordinates: only points inside are drawn
+  std::optional<render::Camera> view;  // world coordinates; none: the default view of the data
+  render::Orientation orientation;     // the default view's up and side
+  void Check() const;
+};
+
+// What a render produced: the sums to average and the camera it was drawn from (world).
+struct RenderedImage {
+  render::SpbrResult result;
+  render::Camera world_camera;
+  std::string mode;              // "memory", "stream", "archive" (recorded in the PNG)
+};
+
+// The local density a point cloud's opacity control needs does not depend on the view: renders
+// of the same data (a build renders each layer from several views) estimate it once. Keyed by
+// the caller (a file's path, size and time; a build's layer).
+class DensityCache {
+ public:
+  const sampling::DensityResult& Get(const std::string& key, const sampling::OpacityOptions& options,
+                                     const PointCloud& cloud);
+
+ private:
+  std::map<std::string, sampling::DensityResult> densities_;
+};
+
+// The default view's orientation from a COLMAP model whose frame the points are in: up is the
+// mean of its cameras' image-up directions (-y of each camera), and the view looks the mean way
+// the cameras look, levelled. InputError for an unreadable model or one without registered images.
+render::Orientation OrientationOfCameras(const std::string& colmap_model);
+
+// Point files (PLY, LAS, LAZ, E57, XYZ, PTS) merged into one image, in memory or streamed
+// (options.mode). Throws InputError naming a file that cannot be read, or when none holds a point.
+RenderedImage RenderPointFiles(const RenderOptions& options, const std::vector<std::string>& files);
+
+// Clouds in memory, as RenderPointFiles draws files in memory mode; names[k] names clouds[k] in
+// messages, density_keys[k] its density in `cache`.
+RenderedImage RenderClouds(const RenderOptions& options, const std::vector<const PointCloud*>& clouds,
+                           const std::vector<std::string>& names, const std::vector<std::string>& density_keys,
+                           DensityCache* cache);
+
+// Ensembles [begin, end) of `archive` (this rank's share; the whole image for begin 0, end L):
+// the sums of those ensembles and the camera. options.alpha must be empty (an archive holds each
+// point once).
+RenderedImage RenderArchiveEnsembles(const RenderOptions& options, const render::Archive& archive, int rank,
+                                     int ranks);
+
+// Where a render goes: an 8-bit PNG, optionally a 16-bit one and the view as JSON; inputs name
+// the data in the PNG's text.
+struct RenderOutputs {
+  std::string png;
+  std::string png16;
+  std::string save_view;
+  std::vector<std::string> inputs;
+};
+
+// The average image (brightness applied) written as PNG with its provenance text; returns the
+// gain used.
+double WriteRender(const RenderOptions& options, const RenderedImage& image, const RenderOutputs& outputs);
+
+}  // namespace candi::pipeline
