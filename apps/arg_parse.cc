@@ -5,29 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace candi::app {
-
-std::vector<double> ParseNumbers(const std::string& text, char separator, const std::string& what) {
-  std::vector<double> out;
-  const char* p = text.data();
-  const char* end = p + text.size();
-  while (p < end) {
-    double v = 0;
-    auto [next, ec] = std::from_chars(p, end, v);
-    if (ec != std::errc() || !std::isfinite(v)) {
-      throw std::invalid_argument(what + " '" + text + "': not a finite number");
-    }
-    out.push_back(v);
-    p = next;
-    if (p < end && *p == separator && p + 1 < end) {
-      ++p;
-    } else if (p < end) {
-      throw std::invalid_argument(what + " '" + text + "': unexpected '" + std::string(1, *p) + "'");
-    }
-  }
-  if (out.empty()) throw std::invalid_argument(what + " is empty");
-  return out;
-}
+namespace candi::apps {
 
 Eigen::Vector3d ParseDirection(const std::string& text, const std::string& what) {
   const std::vector<double> v = ParseNumbers(text, ',', what);
@@ -35,6 +13,27 @@ Eigen::Vector3d ParseDirection(const std::string& text, const std::string& what)
   const Eigen::Vector3d d(v[0], v[1], v[2]);
   if (!(d.norm() > 0) || !d.allFinite()) throw std::invalid_argument(what + " '" + text + "': not a direction");
   return d;
+}
+
+void ParseSize(const std::string& text, const std::string& what, int* width, int* height) {
+  const std::vector<double> v = ParseNumbers(text, 'x', what);
+  if (v.size() != 2 || v[0] < 1 || v[1] < 1 || v[0] > 16384 || v[1] > 16384 || v[0] != std::floor(v[0]) ||
+      v[1] != std::floor(v[1])) {
+    throw std::invalid_argument(what + " '" + text + "': expected WxH, whole pixels in [1, 16384]");
+  }
+  *width = static_cast<int>(v[0]);
+  *height = static_cast<int>(v[1]);
+}
+
+Rgb8 ParseColour(const std::string& text, const std::string& what) {
+  const std::vector<double> v = ParseNumbers(text, ',', what);
+  for (double c : v) {
+    if (v.size() != 3 || c < 0 || c > 255 || c != std::floor(c)) {
+      throw std::invalid_argument(what + " '" + text + "': expected r,g,b, each 0..255");
+    }
+  }
+  if (v.size() != 3) throw std::invalid_argument(what + " '" + text + "': expected r,g,b");
+  return {static_cast<uint8_t>(v[0]), static_cast<uint8_t>(v[1]), static_cast<uint8_t>(v[2])};
 }
 
 ClipRegion ParseClip(const std::string& box, const std::vector<std::string>& planes) {
@@ -56,17 +55,4 @@ ClipRegion ParseClip(const std::string& box, const std::vector<std::string>& pla
   return region;
 }
 
-Box3d ClippedBounds(const Box3d& world, const ClipRegion& region) {
-  Box3d out = world;
-  for (const ClipPlane& p : region.planes) {
-    for (int a = 0; a < 3; ++a) {
-      const int b = (a + 1) % 3, c = (a + 2) % 3;
-      if (p.normal[b] != 0 || p.normal[c] != 0) continue;
-      if (p.normal[a] > 0) out.min[a] = std::max(out.min[a], p.point[a]);
-      if (p.normal[a] < 0) out.max[a] = std::min(out.max[a], p.point[a]);
-    }
-  }
-  return out.IsEmpty() ? world : out;
-}
-
-}  // namespace candi::app
+}  // namespace candi::apps

@@ -2,10 +2,10 @@
 
 #include <new>
 
-#include "apps/commands.h"
+#include "apps/cli.h"
 #include "core/check.h"
 
-namespace candi::app {
+namespace candi::apps {
 
 FailureReport DescribeFailure(std::exception_ptr failure) {
   try {
@@ -25,4 +25,4 @@ FailureReport DescribeFailure(std::exception_ptr failure) {
   }
 }
 
-}  // namespace candi::app
+}  // namespace candi::apps

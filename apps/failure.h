@@ -1,4 +1,4 @@
-// How `candi` reports a failure: the line it prints on stderr and the exit code (commands.h's
+// How `candi` reports a failure: the line it prints on stderr and the exit code (cli.h's
 // ExitCode). main() uses it for every exception that reaches it; the MPI render uses it to send
 // a failed rank's report to rank 0 before any process exits.
 #pragma once
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace candi::app {
+namespace candi::apps {
 
 struct FailureReport {
   int exit_code = 0;   // kUsage, kBadInput or kInternal
@@ -28,4 +28,4 @@ class ReportedFailure : public std::runtime_error {
   int exit_code_;
 };
 
-}  // namespace candi::app
+}  // namespace candi::apps

@@ -2,9 +2,10 @@
 // sibling executable before parsing, so these are never reached; they exist so that cli.cc, the
 // same in every executable, links). CANDI_STUB_RELIEF and CANDI_STUB_PCL choose the groups.
 #include "apps/commands.h"
+#include "apps/relief.h"
 #include "core/check.h"
 
-namespace candi::app {
+namespace candi::apps {
 
 namespace {
 [[noreturn]] void HandedOver(const char* command) {
@@ -13,18 +14,18 @@ namespace {
 }  // namespace
 
 #if CANDI_STUB_RELIEF
-bool ReliefInProcess() { return false; }
 int RunReliefSynth(const ReliefSynthArgs&) { HandedOver("relief synth"); }
 int RunReliefDataset(const ReliefDatasetArgs&) { HandedOver("relief dataset"); }
 int RunReliefTrain(const ReliefTrainArgs&) { HandedOver("relief train"); }
 int RunReliefPredict(const ReliefPredictArgs&) { HandedOver("relief predict"); }
 int RunReliefPoints(const ReliefPointsArgs&) { HandedOver("relief points"); }
 int RunReliefEval(const ReliefEvalArgs&) { HandedOver("relief eval"); }
-int RunBenchRelief(const BenchReliefArgs&) { HandedOver("bench relief"); }
+int RunBenchRelief(const bench::ReliefBenchOptions&) { HandedOver("bench relief"); }
+int RunDemo(const DemoArgs&) { HandedOver("demo"); }
 #endif
 #if CANDI_STUB_PCL
 int RunRegister(const RegisterArgs&) { HandedOver("register"); }
 int RunClean(const CleanArgs&) { HandedOver("clean"); }
 #endif
 
-}  // namespace candi::app
+}  // namespace candi::apps

@@ -5,7 +5,7 @@
 
 #include "core/log.h"
 
-namespace candi::app {
+namespace candi::apps {
 
 void SetupLogging(int verbosity) {
   auto logger = spdlog::stderr_color_mt("candi");
@@ -23,4 +23,4 @@ void SetupLogging(int verbosity) {
   });
 }
 
-}  // namespace candi::app
+}  // namespace candi::apps

@@ -9,14 +9,11 @@
 #include <stdexcept>
 #include <string>
 
-#include "apps/commands.h"
+#include "apps/cli.h"
 #include "apps/failure.h"
 #include "core/check.h"
 #include "core/interrupt.h"
 
-namespace candi::app {
-int RunCli(int argc, char** argv);
-}
 
 namespace {
 
@@ -85,13 +82,13 @@ int Exec(const char* name, char** argv) {
   execv(path.c_str(), argv);
   std::fprintf(stderr, "candi: internal error: this command is run by %s, which could not be started: %s\n",
                path.c_str(), std::strerror(errno));
-  return candi::app::kInternal;
+  return candi::apps::kInternal;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  using namespace candi::app;
+  using namespace candi::apps;
   const Group group = CommandGroup(argc, argv);
   if (!HasGroup(group)) return Exec(group == kPcl ? "candi-pcl" : "candi-relief", argv);
   // Before any thread starts: an interrupt removes unfinished outputs and stops child processes.

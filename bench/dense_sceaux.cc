@@ -17,7 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "apps/commands.h"
+#include "bench/bench.h"
+#include "core/timer.h"
 #include "core/check.h"
 #include "core/interrupt.h"
 #include "io/image/jpeg_io.h"
@@ -29,7 +30,7 @@
 #include "reconstruction/photogrammetry/patch_match.h"
 #include "reconstruction/photogrammetry/point_index.h"
 
-namespace candi::app {
+namespace candi::bench {
 
 namespace pg = candi::photogrammetry;
 namespace fs = std::filesystem;
@@ -38,10 +39,6 @@ namespace {
 
 constexpr double kOpenMvsSeconds = 375.0;  // DIR/README.md: OpenMVS 2.3, this machine class
 constexpr size_t kOpenMvsPoints = 402504;
-
-double Since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 double Quantile(std::vector<double> v, double q) {
   if (v.empty()) return std::nan("");
@@ -89,7 +86,7 @@ std::string PrepareWorkspace(const pg::ColmapModel& model, const std::string& ph
 
 }  // namespace
 
-int RunBenchDenseSceaux(const BenchArgs& args) {
+int RunDenseSceaux(const BenchOptions& args) {
   const std::string photos = args.data + "/photos/sceaux_castle";
   const std::string sparse = args.data + "/colmap/sceaux_1600_sparse";
   const std::string reference = args.data + "/dense/sceaux_openmvs_dense.ply";
@@ -108,9 +105,9 @@ int RunBenchDenseSceaux(const BenchArgs& args) {
     }
   } cleanup{temp, RegisterTempPath(temp)};
 
-  const auto t_prep = std::chrono::steady_clock::now();
+  Stopwatch watch;
   const std::string workspace = PrepareWorkspace(model, photos, sparse, temp);
-  const double prep_s = Since(t_prep);
+  const double prep_s = watch.Seconds();
 
   pg::PatchMatchOptions o;
   o.resolution_scale = args.scale;
@@ -118,11 +115,11 @@ int RunBenchDenseSceaux(const BenchArgs& args) {
   o.threads = args.threads;
   o.Check();
   const pg::StereoInput input = pg::ReadDenseWorkspace(workspace);
-  const auto t0 = std::chrono::steady_clock::now();
+  watch.Restart();
   const pg::PatchMatchResult stereo = pg::RunPatchMatch(o, input);
-  const double stereo_s = Since(t0);
+  const double stereo_s = watch.Seconds();
   const PointCloud ours = pg::FuseDepthMaps(pg::FusionOptions(), stereo.maps);
-  const double dense_s = Since(t0);
+  const double dense_s = watch.Seconds();
   const PointCloud openmvs = io::ReadPointCloud(reference);
 
   // Scale of the scene: median depth of the sparse points in the cameras that see them.
@@ -173,7 +170,7 @@ int RunBenchDenseSceaux(const BenchArgs& args) {
               stereo_s, dense_s - stereo_s,
               stereo.total_pixels ? 100.0 * stereo.valid_pixels / stereo.total_pixels : 0.0,
               within(ours_to_mvs, 0.005), within(ours_to_mvs, 0.01), within(mvs_to_ours, 0.01));
-  return kOk;
+  return 0;
 }
 
-}  // namespace candi::app
+}  // namespace candi::bench

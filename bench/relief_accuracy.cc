@@ -8,8 +8,9 @@
 #include <filesystem>
 #include <string>
 
-#include "apps/arg_parse.h"
-#include "apps/commands.h"
+#include "core/text_format.h"
+#include "bench/bench.h"
+#include "core/timer.h"
 #include "core/check.h"
 #include "core/text_format.h"
 #include "io/point_io.h"
@@ -19,13 +20,9 @@
 #include "reconstruction/relief/relief_points.h"
 #include "reconstruction/relief/relief_train.h"
 
-namespace candi::app {
+namespace candi::bench {
 
 namespace {
-
-double Seconds(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 std::vector<relief::TrainingPair> TrainingPatches(const relief::SynthOptions& synth, int panels) {
   relief::PatchOptions patches;
@@ -44,14 +41,13 @@ void TimeFullPhoto(const relief::DepthModel& model, const relief::SynthPanel& pa
                    double* points_s) {
   relief::PredictOptions o;
   o.photo_pixels_per_m = 1.0 / panel.pixel_m;
-  auto t0 = std::chrono::steady_clock::now();
+  Stopwatch watch;
   const ImageF depth = model.Predict(o, panel.photo.photo);
-  *predict_s = Seconds(t0);
-  t0 = std::chrono::steady_clock::now();
+  *predict_s = watch.Lap();
   const PointCloud cloud = relief::DepthToPoints({}, panel.photo.photo, depth);
   const std::string path = (std::filesystem::temp_directory_path() / "candi_bench_relief.ply").string();
   io::WritePointCloud(path, cloud);
-  *points_s = Seconds(t0);
+  *points_s = watch.Lap();
   std::filesystem::remove(path);
 }
 
@@ -59,7 +55,7 @@ void TimeFullPhoto(const relief::DepthModel& model, const relief::SynthPanel& pa
 
 // Real photos: the model as it is and fine-tuned for each budget (plain, and with the edge
 // term), scored on the held-out photo pairs beside the baselines.
-int BenchReliefPhotos(const BenchReliefArgs& a) {
+int BenchReliefPhotos(const ReliefBenchOptions& a) {
   const std::vector<double> budgets = ParseNumbers(a.finetune_seconds, ',', "--finetune-seconds");
   for (double b : budgets) {
     if (!(b > 0)) throw std::invalid_argument("--finetune-seconds: budgets must be > 0");
@@ -72,7 +68,7 @@ int BenchReliefPhotos(const BenchReliefArgs& a) {
   std::printf("Relief depth on real photos: %zu training patches of %s/train, %zu held-out photos of "
               "%s/holdout, %d thread(s), fine-tuning %s (lr %.3g, seed %llu)\n", train.size(),
               a.pairs.c_str(), panels.size(), a.pairs.c_str(), a.threads, a.model.c_str(),
-              a.learning_rate, a.seed);
+              a.learning_rate, static_cast<unsigned long long>(a.seed));
   std::printf("%-30s %9s %7s %8s %8s %8s %8s %7s %8s\n", "method", "tune s", "steps", "d<1.25",
               "RMSE", "RMSE_log", "normal", "<22.5", "edge F1");
   auto row = [](const std::string& name, double seconds, int64_t steps, const relief::MethodScore& s) {
@@ -111,10 +107,20 @@ int BenchReliefPhotos(const BenchReliefArgs& a) {
   std::printf("Levels 1..255 span each photo's 2nd..98th percentile of camera depth; normals with one "
               "level = one pixel width, differences over 4 px; * = oracle scale and offset. The poly decay runs over 1000 "
               "epochs, so a budget stops it early at a near-constant learning rate.\n");
-  return kOk;
+  return 0;
 }
 
-int RunBenchRelief(const BenchReliefArgs& a) {
+void ReliefBenchOptions::Check() const {
+  CANDI_CHECK_OPTION(seconds > 0, seconds, "> 0");
+  CANDI_CHECK_OPTION_IN(train_panels, 1, 10000);
+  CANDI_CHECK_OPTION_IN(eval_panels, 1, 10000);
+  CANDI_CHECK_OPTION_IN(threads, 1, 256);
+  CANDI_CHECK_OPTION_IN(edge_weight, 0.0, 1000.0);
+  CANDI_CHECK_OPTION(learning_rate > 0, learning_rate, "> 0");
+}
+
+int RunReliefBench(const ReliefBenchOptions& a) {
+  a.Check();
   relief::SetTorchThreads(a.threads);
   if (!a.pairs.empty()) return BenchReliefPhotos(a);
   if (!(a.seconds > 0)) throw std::invalid_argument("--seconds must be > 0");
@@ -129,7 +135,7 @@ int RunBenchRelief(const BenchReliefArgs& a) {
   const relief::SynthPanel photo = relief::SynthesizePanel(full, 0);
   std::printf("Relief depth: %zu training patches 128x128 from %d synthetic panels (seed %llu), %d "
               "held-out panels (seed %llu), %d thread(s), %.0f s of training per width\n",
-              train.size(), a.train_panels, a.seed, a.eval_panels, static_cast<unsigned long long>(held_out.seed), a.threads, a.seconds);
+              train.size(), a.train_panels, static_cast<unsigned long long>(a.seed), a.eval_panels, static_cast<unsigned long long>(held_out.seed), a.threads, a.seconds);
   std::printf("%s\n", relief::MetricsTableHeader().c_str());
   std::printf("%s\n", relief::MetricsTableRow("BTS DenseNet-161 (paper)", relief::PaperBtsMetrics()).c_str());
   relief::SurfaceMetricOptions surface;
@@ -169,7 +175,7 @@ int RunBenchRelief(const BenchReliefArgs& a) {
   }
   std::printf("Convention: levels 0..255 from the front plane (255 = wall), RMSE in levels; * = oracle "
               "scale and offset.\n");
-  return kOk;
+  return 0;
 }
 
-}  // namespace candi::app
+}  // namespace candi::bench

@@ -5,18 +5,34 @@
 #include <chrono>
 #include <cstdio>
 
-#include "apps/commands.h"
+#include "bench/bench.h"
+#include "core/check.h"
 #include "render/reference.h"
 #include "render/spbr.h"
 #include "render/splat_cloud.h"
 #include "render/synthetic_scene.h"
 #include "sampling/opacity.h"
 
-namespace candi::app {
+namespace candi::bench {
 
-int RunBench(const BenchArgs& args) {
-  if (args.what == "foundation") return RunBenchFoundation();
-  if (args.what == "dense") return args.data.empty() ? RunBenchDense(args) : RunBenchDenseSceaux(args);
+void BenchOptions::Check() const {
+  CANDI_CHECK_OPTION(what == "render" || what == "foundation" || what == "dense", what, "render, foundation or dense");
+  CANDI_CHECK_OPTION_GT(points, 0);
+  CANDI_CHECK_OPTION_IN(width, 16, 8192);
+  CANDI_CHECK_OPTION_IN(height, 16, 8192);
+  CANDI_CHECK_OPTION_IN(threads, 0, 256);
+  CANDI_CHECK_OPTION_IN(scale, 0.05, 1.0);
+  CANDI_CHECK_OPTION_IN(iterations, 1, 50);
+}
+
+int RunBench(const BenchOptions& args) {
+  args.Check();
+  if (args.what == "foundation") return RunFoundationAccuracy();
+  if (args.what == "dense") return args.data.empty() ? RunDenseAccuracy(args) : RunDenseSceaux(args);
+  return RunRenderAccuracy(args);
+}
+
+int RunRenderAccuracy(const BenchOptions& args) {
   const PointCloud scene = render::LayeredSheets(args.points, 4, 7);
   std::printf("SPBR accuracy vs time: %llu points (4 sheets, alpha 0.5 each), %dx%d, %d thread(s)\n",
               static_cast<unsigned long long>(args.points), args.width, args.height, args.threads);
@@ -46,7 +62,7 @@ int RunBench(const BenchArgs& args) {
     std::printf("%6d %12llu %12.1f %12.1f %12.1f %10.2f\n", L, static_cast<unsigned long long>(result.copies),
                 opacity_ms, build_ms, result.milliseconds, rmse);
   }
-  return kOk;
+  return 0;
 }
 
-}  // namespace candi::app
+}  // namespace candi::bench

@@ -7,7 +7,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -15,26 +15,29 @@
 
 #include <nlohmann/json.hpp>
 
-#include "apps/arg_parse.h"
-#include "apps/bench_archives.h"
-#include "apps/commands.h"
+#include "bench/archives.h"
+#include "bench/bench.h"
+#include "core/atomic_file.h"
+#include "core/check.h"
 #include "core/log.h"
+#include "core/polyline.h"
 #include "core/progress.h"
+#include "core/text_format.h"
+#include "core/timer.h"
+#include "io/layer_clouds.h"
 #include "mesh/dxf_import.h"
 #include "mesh/foundation.h"
+#include "pipeline/foundation.h"
+#include "pipeline/section.h"
 #include "render/archive.h"
 #include "render/archive_pack.h"
 #include "render/synthetic_scene.h"
 
-namespace candi::app {
+namespace candi::bench {
 
 namespace {
 
 namespace fs = std::filesystem;
-
-double Seconds(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
 
 double PeakMb() {
   struct rusage u {};
@@ -42,25 +45,15 @@ double PeakMb() {
   return u.ru_maxrss / 1024.0;
 }
 
-double DistanceTo(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& line) {
-  double best = 1e300;
-  for (size_t i = 0; i + 1 < line.size(); ++i) {
-    const Eigen::Vector2d d = line[i + 1] - line[i];
-    const double t = std::clamp((p - line[i]).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
-    best = std::min(best, (p - (line[i] + t * d)).norm());
-  }
-  return best;
-}
-
-void FoundationTable(const BenchSectionArgs& a, const std::string& dir) {
+void FoundationTable(const SectionBenchOptions& a, const std::string& dir) {
   const std::string drawing_path = a.drawing;
   const std::string ply = dir + "/foundation.ply";
-  FoundationArgs f;
-  f.input = drawing_path;
-  f.output = ply;
-  f.no_self_intersection = true;
-  f.threads = a.threads;
-  RunFoundation(f);
+  pipeline::FoundationPointsOptions f;
+  f.surface.check_options.self_intersections = false;
+  f.sample.density = pipeline::kDefaultFoundationDensity;
+  f.sample.threads = a.threads;
+  const pipeline::FoundationPoints points = pipeline::DigitizeFoundation(f, drawing_path);
+  io::WriteLayerClouds(ply, points.clouds, points.Names());
   const mesh::FoundationOptions o;
   const mesh::DxfDrawing drawing = mesh::ReadDxf(o.dxf, drawing_path);
   std::map<std::string, std::vector<Eigen::Vector2d>> profiles;
@@ -74,16 +67,15 @@ void FoundationTable(const BenchSectionArgs& a, const std::string& dir) {
               "profiles, per thickness (all layers)\n", drawing_path.c_str());
   std::printf("%12s %12s %10s %12s %12s %10s\n", "thickness m", "slab points", "vertices", "mean mm", "max mm", "s");
   for (double t : {0.02, 0.05, 0.1, 0.2, 0.5}) {
-    SectionArgs s;
-    s.inputs = {ply};
-    s.thickness = t;
+    pipeline::SectionOptions s;
     s.threads = a.threads;
-    s.output = dir + "/foundation-section";
-    const auto start = std::chrono::steady_clock::now();
-    const std::string summary = RunSectionInto(s, section::SectionPath::Plane({0, 0, 0}, {0, 1, 0}, t), ClipRegion{}, false);
-    const double seconds = Seconds(start);
-    const nlohmann::json j = nlohmann::json::parse(summary);
-    const mesh::DxfDrawing section = mesh::ReadDxf(mesh::DxfReadOptions{}, s.output + "/section.dxf");
+    const std::string output = dir + "/foundation-section";
+    const Stopwatch watch;
+    const section::SectionPath path = section::SectionPath::Plane({0, 0, 0}, {0, 1, 0}, t);
+    pipeline::WriteSection(pipeline::CutSection(s, {ply}, path, ClipRegion{}), path, output);
+    const double seconds = watch.Seconds();
+    const nlohmann::json j = nlohmann::json::parse(ReadFileToString(output + "/section.json"));
+    const mesh::DxfDrawing section = mesh::ReadDxf(mesh::DxfReadOptions{}, output + "/section.dxf");
     double sum = 0, worst = 0;
     size_t n = 0;
     for (const auto& [layer, lines] : section.layers) {
@@ -91,7 +83,7 @@ void FoundationTable(const BenchSectionArgs& a, const std::string& dir) {
       if (ref == profiles.end()) continue;
       for (const Polyline2& line : lines) {
         for (const Eigen::Vector2d& v : line.points) {
-          const double e = DistanceTo(v, ref->second);
+          const double e = DistanceToPolyline(v, ref->second);
           sum += e, worst = std::max(worst, e), ++n;
         }
       }
@@ -105,9 +97,14 @@ void FoundationTable(const BenchSectionArgs& a, const std::string& dir) {
 
 }  // namespace
 
-int RunBenchSection(const BenchSectionArgs& a) {
+void SectionBenchOptions::Check() const {
+  CANDI_CHECK_OPTION(thickness > 0 && std::isfinite(thickness), thickness, "> 0 m");
+  CANDI_CHECK_OPTION_IN(threads, 0, 256);
+}
+
+int RunSectionBench(const SectionBenchOptions& a) {
+  a.Check();
   const std::vector<uint64_t> sizes = ParseBenchSizes(a.sizes, a.billion);
-  if (!(a.thickness > 0)) throw std::invalid_argument("--thickness: must be > 0 m");
   const std::string dir = fs::absolute(a.work_dir).string();
   fs::create_directories(dir);
   std::printf("candi bench section: %d thread(s) (0: all)\n", a.threads);
@@ -124,16 +121,14 @@ int RunBenchSection(const BenchSectionArgs& a) {
       const render::Archive archive(archive_dir);
       centre = archive.manifest().bounds.Translated(archive.manifest().frame.origin).Center();
     }
-    SectionArgs s;
-    s.inputs = {archive_dir};
-    s.thickness = a.thickness;
+    pipeline::SectionOptions s;
     s.threads = a.threads;
-    s.output = dir + "/scene-section";
-    const auto start = std::chrono::steady_clock::now();
-    const std::string summary =
-        RunSectionInto(s, section::SectionPath::Plane(centre, {1, 0.3, 0}, a.thickness), ClipRegion{}, false);
-    const double seconds = Seconds(start);
-    const nlohmann::json j = nlohmann::json::parse(summary);
+    const Stopwatch watch;
+    const section::SectionPath path = section::SectionPath::Plane(centre, {1, 0.3, 0}, a.thickness);
+    const pipeline::SectionCut cut = pipeline::CutSection(s, {archive_dir}, path, ClipRegion{});
+    pipeline::WriteSection(cut, path, dir + "/scene-section");
+    const double seconds = watch.Seconds();
+    const nlohmann::json j = nlohmann::json::parse(cut.summary);
     char chunks[64];
     std::snprintf(chunks, sizeof(chunks), "%llu/%llu", static_cast<unsigned long long>(j.at("chunks_read").get<uint64_t>()),
                   static_cast<unsigned long long>(j.at("chunks").get<uint64_t>()));
@@ -145,7 +140,7 @@ int RunBenchSection(const BenchSectionArgs& a) {
     std::fflush(stdout);
     if (!a.keep) fs::remove_all(archive_dir);
   }
-  return kOk;
+  return 0;
 }
 
-}  // namespace candi::app
+}  // namespace candi::bench

@@ -14,8 +14,7 @@
 #include <set>
 #include <string>
 
-#include "apps/commands.h"
-#include "apps/output_folder.h"
+#include "apps/relief.h"
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/log.h"
@@ -24,7 +23,7 @@
 #include "reconstruction/photogrammetry/georef.h"
 #include "reconstruction/relief/relief_place.h"
 
-namespace candi::app {
+namespace candi::apps {
 
 namespace {
 
@@ -35,16 +34,6 @@ using relief::PanelPlacement;
 
 constexpr size_t kChunk = 1 << 20;
 
-relief::PanelPlacementOptions Options(const ReliefPlaceArgs& a) {
-  relief::PanelPlacementOptions o;
-  o.estimate_scale = a.sim3;
-  o.loss = pg::ParseRobustLoss(a.loss);
-  o.loss_scale = a.loss_scale;
-  o.default_accuracy = a.accuracy;
-  o.tolerance_mm = a.tolerance_mm;
-  o.Check();
-  return o;
-}
 
 bool IsPointFileName(const fs::path& p) {
   static const std::set<std::string> kExtensions = {".ply", ".las", ".xyz", ".pts", ".txt", ".asc"};
@@ -164,7 +153,8 @@ void TransformPanel(const std::string& in, const Sim3& world_from_panel, const L
 }  // namespace
 
 int RunReliefPlace(const ReliefPlaceArgs& args) {
-  const relief::PanelPlacementOptions options = Options(args);  // bad values: exit 1
+  const relief::PanelPlacementOptions& options = args.options;
+  options.Check();  // bad values: exit 1
   if (args.points_out.empty() != args.panels.empty()) {
     throw std::invalid_argument("--panels (the panels' point files) and --points-out (where they go "
                                 "in world coordinates) go together");
@@ -188,11 +178,11 @@ int RunReliefPlace(const ReliefPlaceArgs& args) {
     for (const std::string& w : p.warnings) LogWarning("panel '" + p.panel + "': " + w);
   }
   json j = {{"correspondences", args.correspondences},
-            {"fit", args.sim3 ? "sim3" : "rigid"},
-            {"loss", args.loss},
-            {"loss_scale_m", args.loss_scale},
-            {"default_accuracy_m", args.accuracy},
-            {"tolerance_mm", args.tolerance_mm},
+            {"fit", options.estimate_scale ? "sim3" : "rigid"},
+            {"loss", pg::RobustLossName(options.loss)},
+            {"loss_scale_m", options.loss_scale},
+            {"default_accuracy_m", options.default_accuracy},
+            {"tolerance_mm", options.tolerance_mm},
             {"shift", Vec(r.frame.origin)},
             {"panel_count", r.panels.size()},
             {"misfits", r.misfits},
@@ -226,4 +216,4 @@ int RunReliefPlace(const ReliefPlaceArgs& args) {
   return kOk;  // panels that do not fit are reported (table, JSON, warnings), not an error
 }
 
-}  // namespace candi::app
+}  // namespace candi::apps

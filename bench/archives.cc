@@ -1,15 +1,15 @@
-#include "apps/bench_archives.h"
+#include "bench/archives.h"
 
 #include <chrono>
 #include <stdexcept>
 
-#include "apps/arg_parse.h"
+#include "core/text_format.h"
 #include "core/progress.h"
 #include "render/archive.h"
 #include "render/archive_pack.h"
 #include "render/synthetic_scene.h"
 
-namespace candi::app {
+namespace candi::bench {
 
 std::vector<uint64_t> ParseBenchSizes(const std::string& text, bool billion) {
   std::vector<uint64_t> sizes;
@@ -43,4 +43,4 @@ std::string BenchArchive(const std::string& dir, uint64_t n, bool keep, const st
   return archive_dir;
 }
 
-}  // namespace candi::app
+}  // namespace candi::bench

@@ -1,7 +1,9 @@
-// candi register MOVING FIXED -o OUT: ICP refinement of MOVING onto FIXED
-// (reconstruction/photogrammetry/registration.h). Prints RMS and overlap before and after and the
-// 4x4 transform (world coordinates), writes MOVING moved, in its own format precision and shift,
-// and optionally the transform and figures as JSON.
+// candi register, candi clean (PCL, in candi-pcl only): ICP refinement of MOVING onto FIXED
+// (reconstruction/photogrammetry/registration.h), printing RMS and overlap before and after and the
+// 4x4 transform (world coordinates) and writing MOVING moved, in its own format, precision and
+// shift (and optionally the transform and figures as JSON); statistical outlier removal and voxel
+// thinning (cleaning.h), printing the counts removed per step, every attribute of the kept points,
+// the shift and the position precision kept.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -9,31 +11,21 @@
 #include <string>
 
 #include "apps/commands.h"
-#include "apps/output_folder.h"
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/progress.h"
 #include "core/transform.h"
 #include "io/point_io.h"
+#include "reconstruction/photogrammetry/cleaning.h"
 #include "reconstruction/photogrammetry/local_points.h"
 #include "reconstruction/photogrammetry/registration.h"
 
-namespace candi::app {
+namespace candi::apps {
 
 namespace {
 
 using photogrammetry::RegistrationOptions;
 using photogrammetry::RegistrationResult;
-
-RegistrationOptions Options(const RegisterArgs& a) {
-  RegistrationOptions o;
-  o.max_correspondence_distance = a.max_distance;
-  o.max_iterations = a.iterations;
-  o.method = photogrammetry::ParseIcpMethod(a.method);
-  o.voxel = a.voxel;
-  o.Check();
-  return o;
-}
 
 // The 4x4 of a transform JSON: {"fixed_from_moving": [[...] x4]} (as --transform-out writes) or
 // a bare [[...] x4]; must be rigid.
@@ -87,13 +79,13 @@ void PrintResult(const RegisterArgs& a, const RegistrationResult& r) {
               static_cast<unsigned long long>(r.fixed_solve_points),
               r.normals_estimated ? ", normals estimated" : "");
   std::printf("method %s-to-%s, max distance %g m, voxel %g m, local origin %.3f %.3f %.3f\n",
-              "point", photogrammetry::IcpMethodName(r.method).c_str(), a.max_distance, a.voxel,
+              "point", photogrammetry::IcpMethodName(r.method).c_str(), a.icp.max_correspondence_distance, a.icp.voxel,
               r.origin.x(), r.origin.y(), r.origin.z());
   std::printf("status %s: %s\n", photogrammetry::RegistrationStatusName(r.status).c_str(),
               r.message.c_str());
   std::printf("RMS before %.6f m, after %.6f m\n", r.rms_before, r.rms_after);
   std::printf("overlap before %.2f %%, after %.2f %% (moving points within %g m of the fixed "
-              "cloud)\n", 100 * r.overlap_before, 100 * r.overlap_after, a.max_distance);
+              "cloud)\n", 100 * r.overlap_before, 100 * r.overlap_after, a.icp.max_correspondence_distance);
   const Eigen::Matrix4d m = r.fixed_from_moving.ToMatrix();
   std::printf("fixed_from_moving (world coordinates):\n");
   for (int i = 0; i < 4; ++i) {
@@ -114,7 +106,7 @@ void WriteTransformJson(const RegisterArgs& a, const RegistrationResult& r) {
       {"message", r.message},
       {"method", photogrammetry::IcpMethodName(r.method)},
       {"iterations", r.iterations},
-      {"max_distance_m", a.max_distance},
+      {"max_distance_m", a.icp.max_correspondence_distance},
       {"rms_before_m", number(r.rms_before)},
       {"rms_after_m", number(r.rms_after)},
       {"overlap_before", r.overlap_before},
@@ -125,7 +117,8 @@ void WriteTransformJson(const RegisterArgs& a, const RegistrationResult& r) {
 }  // namespace
 
 int RunRegister(const RegisterArgs& args) {
-  RegistrationOptions options = Options(args);  // bad values: std::invalid_argument, exit 1
+  RegistrationOptions options = args.icp;
+  options.Check();  // bad values: std::invalid_argument, exit 1
   io::OutputPointFormat(args.output);                // a known extension, before the work
   CheckOutputFolder(args.output);
   if (!args.transform_out.empty()) CheckOutputFolder(args.transform_out);
@@ -156,4 +149,50 @@ int RunRegister(const RegisterArgs& args) {
   return kOk;
 }
 
-}  // namespace candi::app
+namespace {
+
+
+void PrintRow(const char* what, uint64_t count, uint64_t input) {
+  std::printf("%-28s %12llu  %6.2f %%\n", what, static_cast<unsigned long long>(count),
+              input ? 100.0 * static_cast<double>(count) / static_cast<double>(input) : 0.0);
+}
+
+}  // namespace
+
+int RunClean(const CleanArgs& args) {
+  const photogrammetry::CleanOptions& options = args.clean;
+  options.Check();  // std::invalid_argument, exit 1
+  io::OutputPointFormat(args.output);
+  CheckOutputFolder(args.output);
+  const auto start = std::chrono::steady_clock::now();
+  const PointCloud cloud = io::ReadPointCloud(args.input);
+  photogrammetry::CleanResult result;
+  {
+    ConsoleProgressOptions po;
+    po.unit = "steps";
+    ConsoleProgress progress("clean", po);
+    result = photogrammetry::CleanPointCloud(options, cloud, progress.Callback());
+  }
+  io::WritePointCloud(args.output, result.cloud);
+  const photogrammetry::CleanSummary& s = result.summary;
+  std::printf("input %s\n", args.input.c_str());
+  PrintRow("points in", s.input, s.input);
+  PrintRow("removed: not finite", s.non_finite, s.input);
+  if (options.sor) {
+    char label[64];
+    std::snprintf(label, sizeof(label), "removed: outliers (k %d, %gs)", options.sor_neighbours,
+                  options.sor_std_multiplier);
+    PrintRow(label, s.outliers, s.input);
+  }
+  if (options.voxel > 0) {
+    char label[64];
+    std::snprintf(label, sizeof(label), "removed: voxel %g m", options.voxel);
+    PrintRow(label, s.thinned, s.input);
+  }
+  PrintRow("points out", s.output, s.input);
+  std::printf("wrote %s, time %.2f s\n", args.output.c_str(),
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return kOk;
+}
+
+}  // namespace candi::apps

@@ -14,9 +14,11 @@
 #include <stdexcept>
 #include <vector>
 
-#include "apps/arg_parse.h"
-#include "apps/bench_archives.h"
-#include "apps/commands.h"
+#include "bench/archives.h"
+#include "bench/bench.h"
+#include "core/check.h"
+#include "core/text_format.h"
+#include "core/timer.h"
 #include "core/progress.h"
 #include "io/image/jpeg_io.h"
 #include "io/image/png_io.h"
@@ -26,15 +28,11 @@
 #include "view/progressive.h"
 #include "view/source.h"
 
-namespace candi::app {
+namespace candi::bench {
 
 namespace {
 
 namespace fs = std::filesystem;
-
-double Since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
 
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
@@ -51,7 +49,15 @@ double PeakMb() {
 
 }  // namespace
 
-int RunBenchView(const BenchViewArgs& args) {
+void ViewBenchOptions::Check() const {
+  CANDI_CHECK_OPTION_IN(repeat_level, 1, 100000);
+  CANDI_CHECK_OPTION_IN(threads, 0, 256);
+  CANDI_CHECK_OPTION_GE(orbit_frames, 1);
+  CANDI_CHECK_OPTION_IN(runs, 1, 100);
+}
+
+int RunViewBench(const ViewBenchOptions& args) {
+  args.Check();
   const std::vector<uint64_t> sizes = ParseBenchSizes(args.sizes, args.billion);
   int width = 0, height = 0;
   {
@@ -81,7 +87,7 @@ int RunBenchView(const BenchViewArgs& args) {
     const render::ArchiveManifest& m = archive.manifest();
     const Box3d world = m.bounds.Translated(m.frame.origin);
     view::ViewState state;
-    state.camera = view::FirstView(world, width, height, view::Orientation());
+    state.camera = render::FirstView(world, width, height, render::Orientation());
     state.settings.repeat_level = args.repeat_level;
     view::ProgressiveImage image(archive, view::LocalRangeRenderer(archive), args.threads);
 
@@ -94,19 +100,19 @@ int RunBenchView(const BenchViewArgs& args) {
       const Eigen::Vector3d turned(std::cos(angle) * arm.x() - std::sin(angle) * arm.y(),
                                    std::sin(angle) * arm.x() + std::cos(angle) * arm.y(), arm.z());
       state.camera.eye = target + turned;
-      const auto t = std::chrono::steady_clock::now();
+      const Stopwatch watch;
       image.Start(state);
       const int count = policy.Ensembles(image.ms_per_ensemble(), 0);
       image.Step(count);
       const std::string jpeg = io::EncodeJpeg(image.Image(nullptr), 85);
-      const double ms = Since(t);
+      const double ms = 1000 * watch.Seconds();
       orbit_ms += ms;
       if (f > 0) latency.push_back(ms), ensembles.push_back(count);  // the first frame sets the rate
     }
     // At rest: from a camera change to the converged PNG, every step's frame encoded.
     std::vector<double> converge, steps;
     for (int r = 0; r < args.runs; ++r) {
-      const auto t = std::chrono::steady_clock::now();
+      const Stopwatch watch;
       image.Start(state);
       int step = 0;
       while (!image.converged()) {
@@ -114,7 +120,7 @@ int RunBenchView(const BenchViewArgs& args) {
         const Image8 pixels = image.Image(nullptr);
         if (image.converged()) io::EncodePng(pixels, {}, io::PngCompression::kFast); else io::EncodeJpeg(pixels, 85);
       }
-      converge.push_back(Since(t) / 1000);
+      converge.push_back(watch.Seconds());
       steps.push_back(step);
     }
     std::printf("%12llu %8.1f %9.1f %9.1f %9.1f %8.0f %8.2f %11.0f %9.0f\n", static_cast<unsigned long long>(n),
@@ -127,7 +133,7 @@ int RunBenchView(const BenchViewArgs& args) {
   }
   std::error_code ignored;
   if (!args.keep) fs::remove_all(dir, ignored);
-  return kOk;
+  return 0;
 }
 
-}  // namespace candi::app
+}  // namespace candi::bench

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace candi::app {
+namespace candi::bench {
 
 // "1e7,1e8" (each in [1e3, 1e10]) and 1e9 when `billion`; std::invalid_argument naming --sizes.
 std::vector<uint64_t> ParseBenchSizes(const std::string& sizes, bool billion);
@@ -15,4 +15,4 @@ std::vector<uint64_t> ParseBenchSizes(const std::string& sizes, bool billion);
 // *pack_seconds is 0), else packed (with progress, named by `what`).
 std::string BenchArchive(const std::string& dir, uint64_t n, bool keep, const std::string& what, double* pack_seconds);
 
-}  // namespace candi::app
+}  // namespace candi::bench

@@ -5,12 +5,12 @@
 #include <cstdio>
 #include <vector>
 
-#include "apps/commands.h"
+#include "bench/bench.h"
 #include "reconstruction/photogrammetry/fusion.h"
 #include "reconstruction/photogrammetry/patch_match.h"
 #include "reconstruction/photogrammetry/synthetic_views.h"
 
-namespace candi::app {
+namespace candi::bench {
 
 namespace pg = candi::photogrammetry;
 
@@ -52,7 +52,7 @@ void PrintRow(const char* label, double scale, int iterations, const DenseRow& r
 
 }  // namespace
 
-int RunBenchDense(const BenchArgs& args) {
+int RunDenseAccuracy(const BenchOptions& args) {
   pg::SyntheticViewsOptions small;
   small.views = 6;
   small.width = 320;
@@ -73,7 +73,7 @@ int RunBenchDense(const BenchArgs& args) {
   char label[32];
   std::snprintf(label, sizeof(label), "8x%dx%d", args.width, args.height);
   PrintRow(label, 1.0, 3, RunOnce(large, 1.0, 3, args.threads));
-  return kOk;
+  return 0;
 }
 
-}  // namespace candi::app
+}  // namespace candi::bench

@@ -20,13 +20,13 @@
 #include <string>
 #include <vector>
 
-#include "apps/commands.h"
+#include "bench/bench.h"
 #include "mesh/foundation.h"
-#include "sampling/layer_clouds.h"
+#include "io/layer_clouds.h"
 #include "sampling/layer_colours.h"
 #include "sampling/surface_sampling.h"
 
-namespace candi::app {
+namespace candi::bench {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -139,7 +139,7 @@ Stages PaperScale(const std::string& path, bool check, int threads, const std::s
   }
   s.sample_ms = Ms(t);
   t = std::chrono::steady_clock::now();
-  sampling::WriteLayerClouds(output, clouds, names);
+  io::WriteLayerClouds(output, clouds, names);
   s.write_ms = Ms(t);
   return s;
 }
@@ -175,10 +175,10 @@ void PaperScaleTable(size_t runs) {
 
 }  // namespace
 
-int RunBenchFoundation() {
+int RunFoundationAccuracy() {
   AccuracyTable();
   PaperScaleTable(std::max<size_t>(1, EnvCount("CANDI_BENCH_RUNS", 3)));
   return 0;
 }
 
-}  // namespace candi::app
+}  // namespace candi::bench

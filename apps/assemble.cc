@@ -1,0 +1,103 @@
+// candi build, candi pack: the integrated archive of a scene file (pipeline/build.h), and point
+// files packed into a render archive (render/archive_pack.h).
+#include <cstdio>
+#include <stdexcept>
+
+#include "apps/commands.h"
+#include "core/progress.h"
+#include "pipeline/build.h"
+#include "pipeline/scene.h"
+#include "render/archive_pack.h"
+
+namespace candi::apps {
+
+namespace {
+
+struct BuildArgs {
+  std::string scene;  // scene JSON (pipeline/scene.h)
+  pipeline::BuildOptions options;
+};
+
+int RunBuild(const BuildArgs& a) {
+  const pipeline::Scene scene = pipeline::LoadScene(a.scene);
+  PrintBuildSummary(a.options.output, pipeline::Build(a.options, scene));
+  return kOk;
+}
+
+}  // namespace
+
+void PrintBuildSummary(const std::string& output, const pipeline::BuildSummary& s) {
+  std::printf("%-16s %-15s %12s %8s %-8s %s\n", "layer", "kind", "points", "opacity", "scanned", "seconds");
+  for (const pipeline::BuildLayerSummary& l : s.layers) {
+    std::printf("%-16s %-15s %12llu %8.3g %-8s %.1f\n", l.name.c_str(), pipeline::LayerKindName(l.kind).c_str(),
+                static_cast<unsigned long long>(l.points), l.opacity, l.scanned ? "yes" : "no", l.seconds);
+  }
+  std::printf("%s: %llu points in %zu layers, frame origin %s, %zu render(s), %.1f s\n", output.c_str(),
+              static_cast<unsigned long long>(s.points), s.layers.size(), s.frame.ToString().c_str(), s.views,
+              s.seconds);
+}
+
+namespace {
+
+void AddBuild(Command& root) {
+  BuildArgs& a = root.Keep<BuildArgs>();
+  Command c = root.Add("build", "Build the integrated archive of a scene file: every layer digitized, placed in one "
+                                "frame, written per layer, packed, rendered, with provenance (archive.json) and a "
+                                "MeshLab project");
+  c.Option("scene", a.scene, "Scene JSON (format: pipeline/scene.h, README)").Required();
+  c.Option("-o,--output", a.options.output, "Archive folder").Required();
+  c.Option("--threads", a.options.threads, "Threads (0: all)").Range(0, 256);
+  c.Flag("--resume", a.options.resume, "Reuse what an earlier build into the same folder finished (its digitized "
+         "layers, archive and renders) where their inputs are unchanged");
+  c.Run([&a] { return RunBuild(a); });
+  c.Footer("Example: candi build examples/borobudur/scene.json -o borobudur_archive");
+}
+
+struct PackArgs {
+  std::vector<std::string> inputs;
+  std::string output;        // archive directory
+  render::PackOptions options;
+  double memory_mb = 400;    // sort buffers (~100 bytes a point)
+  std::string columns;       // XYZ/PTS inputs
+};
+
+int RunPack(const PackArgs& a) {
+  if (!(a.memory_mb > 0)) throw std::invalid_argument("--memory must be > 0 MB");
+  render::PackOptions o = a.options;
+  o.memory_points = std::max<uint64_t>(o.chunk_points, static_cast<uint64_t>(a.memory_mb * 1048576.0 / 100));
+  ConsoleProgress progress("pack");
+  const render::PackSummary s = render::PackFiles(o, a.inputs, a.columns, a.output, progress.Callback());
+  progress.Finish();
+  std::printf("%s: %llu points in %llu chunks, %llu data file(s), %.2f bytes/point, %.1f s (%.1f M points/s: "
+              "bounds %.1f s, sort and write %.1f s; input hashes %.1f s during the bounds)%s, %zu-byte records; "
+              "largest quantization error %.3g, %.3g, %.3g mm\n",
+              a.output.c_str(), static_cast<unsigned long long>(s.points), static_cast<unsigned long long>(s.chunks),
+              static_cast<unsigned long long>(s.files), s.points ? static_cast<double>(s.bytes) / s.points : 0.0,
+              s.seconds, s.points / s.seconds / 1e6, s.bounds_seconds, s.sort_seconds, s.hash_seconds,
+              s.spilled_points ? ", sorted on disk" : "", s.record_bytes, 1e3 * s.max_error[0], 1e3 * s.max_error[1],
+              1e3 * s.max_error[2]);
+  return kOk;
+}
+
+void AddPack(Command& root) {
+  PackArgs& a = root.Keep<PackArgs>();
+  Command c = root.Add("pack", "Pack point files into a render archive: Morton-ordered chunks, 8 bytes a point, "
+                               "memory-mapped by `candi render ARCHIVE`");
+  c.Option("inputs", a.inputs, "Point files (.ply .las .xyz .pts)").Required();
+  c.Option("-o,--output", a.output, "Archive directory (replaced if it is an archive)").Required();
+  c.Option("--chunk-points", a.options.chunk_points, "Points per chunk at most").Range(64, 1 << 24);
+  c.Option("--memory", a.memory_mb, "MB for sorting (larger inputs are bucketed on disk)");
+  c.Option("--columns", a.columns, "XYZ/PTS column spec");
+  c.Option("--threads", a.options.threads, "Threads (0: all)").Range(0, 256);
+  c.Run([&a] { return RunPack(a); });
+  c.Footer("Example: candi pack site.las photos.ply -o site.archive && candi render site.archive -o site.png");
+}
+
+}  // namespace
+
+void AddAssembleCommands(Command& root) {
+  AddBuild(root);
+  AddPack(root);
+}
+
+}  // namespace candi::apps

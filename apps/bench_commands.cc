@@ -1,0 +1,108 @@
+// candi bench render|foundation|dense, bench scale, bench view, bench section, bench relief: the
+// benchmarks of bench/ (bench/bench.h). `bench relief` runs in candi-relief (relief_commands.cc).
+#include "apps/commands.h"
+#include "bench/bench.h"
+
+namespace candi::apps {
+
+namespace {
+
+void AddBench(Command& root) {
+  bench::BenchOptions& a = root.Keep<bench::BenchOptions>();
+  Command c = root.Add("bench", "Benchmarks: `candi bench render` prints SPBR accuracy vs time for L = 1 ... 1024");
+  c.Option("what", a.what, "What to measure: render (SPBR), foundation (sections to points), dense (PatchMatch on "
+           "the synthetic scene)").OneOf({"render", "foundation", "dense"});
+  c.Option("--points", a.points, "Points in the generated scene");
+  c.Option("--width", a.width, "Image width").Range(16, 8192);
+  c.Option("--height", a.height, "Image height").Range(16, 8192);
+  c.Option("--threads", a.threads, "Threads (0: all)").Range(0, 256);
+  c.Option("--data", a.data, "dense: the shared data folder; runs candi dense on its Sceaux photos against its "
+           "OpenMVS cloud instead of the synthetic table");
+  c.Option("--scale", a.scale, "dense --data: resolution scale").Range(0.05, 1.0);
+  c.Option("--iterations", a.iterations, "dense --data: PatchMatch rounds").Range(1, 50);
+  c.Run([&a] { return bench::RunBench(a); });
+  c.Footer("Example: candi bench render --points 1000000; candi bench dense --data ../shared/data --threads 2");
+}
+
+void AddScale(Command& bench) {
+  bench::ScaleBenchOptions& a = bench.Keep<bench::ScaleBenchOptions>();
+  Command c = bench.Add("scale", "Pack and render generated scenes of 1e7, 1e8 (1e9) points: points/s, s/frame, "
+                                 "peak RSS");
+  c.Option("--sizes", a.sizes, "Point counts, comma separated");
+  c.Flag("--billion", a.billion, "Also 1e9 points (~8 GB archive, ~28 GB temporary disk, minutes)");
+  c.Option("--work-dir", a.work_dir, "Folder for the generated data (deleted afterwards)");
+  c.Option("--size", a.size, "Image size WxH");
+  c.Option("-L,--repeat-level", a.repeat_level, "Ensembles");
+  c.Option("--ranks", a.ranks, "mpirun -np for the MPI runs (0: none)").Range(0, 64);
+  c.Flag("--keep", a.keep, "Keep the generated data");
+  c.Run([&a] { return bench::RunScaleBench(a); });
+  c.Footer("Example: candi bench scale --sizes 1e7");
+}
+
+void AddView(Command& bench) {
+  bench::ViewBenchOptions& a = bench.Keep<bench::ViewBenchOptions>();
+  Command c = bench.Add("view", "The viewer's renderer on generated archives: first-frame latency (p50/p95) and "
+                                "frames/s during an orbit, seconds to the converged image, peak memory");
+  c.Option("--sizes", a.sizes, "Point counts, comma separated (e.g. 1e7,1e8)");
+  c.Flag("--billion", a.billion, "Also 1e9 points (~8 GB archive on disk)");
+  c.Option("--work-dir", a.work_dir, "Folder for the generated archive (deleted afterwards)");
+  c.Option("--size", a.size, "Image size WxH");
+  c.Option("-L,--repeat-level", a.repeat_level, "Ensembles of the converged image");
+  c.Option("--threads", a.threads, "Render threads (0: all)").Range(0, 256);
+  c.Option("--orbit-frames", a.orbit_frames, "Camera changes in the orbit");
+  c.Option("--runs", a.runs, "Convergence runs (the median is printed)").Range(1, 100);
+  c.Flag("--keep", a.keep, "Keep the generated archives, and reuse those an earlier --keep run kept");
+  c.Run([&a] { return bench::RunViewBench(a); });
+  c.Footer("Example: candi bench view --sizes 1e7,1e8 --threads 2");
+}
+
+void AddSection(Command& bench) {
+  bench::SectionBenchOptions& a = bench.Keep<bench::SectionBenchOptions>();
+  Command c = bench.Add("section", "Sections: accuracy vs slab thickness on the bundled foundation, and seconds and "
+                                   "chunks read on generated archives");
+  c.Option("--sizes", a.sizes, "Point counts, comma separated (e.g. 1e7,1e8)");
+  c.Flag("--billion", a.billion, "Also 1e9 points (~8 GB archive on disk)");
+  c.Option("--work-dir", a.work_dir, "Folder for the generated data (shared with bench view)");
+  c.Option("--drawing", a.drawing, "The drawing of the accuracy table (\"\" skips it)");
+  c.Option("--thickness", a.thickness, "Slab thickness of the scale table, m");
+  c.Option("--threads", a.threads, "Threads (0: all)").Range(0, 256);
+  c.Flag("--keep", a.keep, "Keep the generated archives, and reuse those an earlier --keep run kept");
+  c.Run([&a] { return bench::RunSectionBench(a); });
+  c.Footer("Example: candi bench section --sizes 1e7,1e8 --keep");
+}
+
+void AddRelief(Command& bench) {
+  bench::ReliefBenchOptions& a = bench.Keep<bench::ReliefBenchOptions>();
+  Command c = bench.Add("relief", "Relief depth: network width x training time -> accuracy, training and prediction "
+                                  "seconds, 3200x1024 photo -> points");
+  c.Option("--widths", a.widths, "Decoder widths to train, e.g. 32,64,128");
+  c.Option("--seconds", a.seconds, "Training budget per width, s");
+  c.Option("--train-panels", a.train_panels, "Synthetic training panels").Range(1, 10000);
+  c.Option("--eval-panels", a.eval_panels, "Held-out panels").Range(1, 10000);
+  c.Option("--seed", a.seed, "Seed of the training series");
+  c.Option("--threads", a.threads, "libtorch threads").Range(1, 256);
+  c.Option("--pairs", a.pairs, "Real photos instead: a `relief dataset --colmap` folder; the model is fine-tuned on "
+           "train/ for each budget and scored on holdout/");
+  c.Option("--model", a.model, "Real photos: the model to fine-tune");
+  c.Option("--finetune-seconds", a.finetune_seconds, "Real photos: fine-tuning budgets, s");
+  c.Option("--edge-loss", a.edge_weight, "Weight of the edge term in the edge-guided rows (0: plain rows only)")
+      .Range(0.0, 1000.0);
+  c.Option("--lr", a.learning_rate, "Real photos: fine-tuning learning rate");
+  c.Run([&a] { return RunBenchRelief(a); });
+  c.Footer("Examples: candi bench relief --widths 32,64 --seconds 60\n"
+           "          candi bench relief --pairs pairs --model examples/relief/relief_model.pt "
+           "--finetune-seconds 60,240");
+}
+
+}  // namespace
+
+void AddBenchCommands(Command& root) {
+  AddBench(root);
+  Command bench = root.Find("bench");
+  AddScale(bench);
+  AddView(bench);
+  AddSection(bench);
+  AddRelief(bench);
+}
+
+}  // namespace candi::apps

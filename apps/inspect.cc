@@ -1,0 +1,224 @@
+// candi info, candi convert: a point file's count, bounds, fields, format, shift and CRS; a point
+// file in another format, shift or CRS (io/convert.h).
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "apps/arg_parse.h"
+#include "apps/commands.h"
+#include "core/progress.h"
+#include "core/text_format.h"
+#include "io/convert.h"
+#include "io/crs.h"
+#include "io/point_io.h"
+
+namespace candi::apps {
+
+namespace {
+
+struct InfoArgs {
+  std::string input;
+  io::PointReadOptions read;
+  bool json = false;     // machine-readable output
+  bool no_scan = false;  // header only: skip the pass over the points
+};
+
+std::string TypeName(ScalarType t) { return t == ScalarType::kFloat64 ? "double" : "float"; }
+
+std::vector<std::string> FieldList(const PointSchema& s) {
+  std::vector<std::string> fields = {"x y z (" + TypeName(s.position_type) + ")"};
+  if (s.colors) fields.push_back(s.alphas ? "rgba (8-bit)" : "rgb (8-bit)");
+  if (s.normals) fields.push_back("normals");
+  if (s.layers) fields.push_back("layer");
+  for (const ScalarFieldSpec& f : s.scalars) fields.push_back(f.name + " (" + TypeName(f.type) + ")");
+  return fields;
+}
+
+std::string Vec(const Eigen::Vector3d& v) {
+  return FormatDouble(v.x()) + " " + FormatDouble(v.y()) + " " + FormatDouble(v.z());
+}
+
+// Positions stored as float print as the float's shortest text (0.1f, not 0.100000001490116).
+std::string Coordinates(const Eigen::Vector3d& v, const io::PointFileInfo& info) {
+  if (info.schema.position_type != ScalarType::kFloat32 || !info.frame.IsIdentity()) return Vec(v);
+  return FormatFloat(static_cast<float>(v.x())) + " " + FormatFloat(static_cast<float>(v.y())) + " " +
+         FormatFloat(static_cast<float>(v.z()));
+}
+
+// A difference of coordinates, to nine significant digits (1177.46, not 1177.4599999999627).
+std::string Extent(const Eigen::Vector3d& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof(buf), "%.9g %.9g %.9g", v.x(), v.y(), v.z());
+  return buf;
+}
+
+nlohmann::json JsonVec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+nlohmann::json ToJson(const io::PointFileInfo& info, const io::PointScan* scan, const std::string& path) {
+  nlohmann::json j;
+  j["file"] = path;
+  j["format"] = info.description;
+  j["points"] = scan ? scan->count : info.count;
+  if (info.face_count > 0) j["faces"] = info.face_count;
+  j["fields"] = FieldList(info.schema);
+  j["shift"] = info.frame.IsIdentity() ? nlohmann::json(nullptr) : JsonVec(info.frame.origin);
+  j["crs"] = info.meta.crs.empty()
+                 ? nlohmann::json(nullptr)
+                 : nlohmann::json({{"label", io::CrsLabel(info.meta.crs)}, {"definition", info.meta.crs}});
+  if (scan && !scan->world.IsEmpty()) {
+    j["bounds"] = {{"min", JsonVec(scan->world.min)}, {"max", JsonVec(scan->world.max)}};
+  }
+  if (info.header_bounds) {
+    j["header_bounds"] = {{"min", JsonVec(info.header_bounds->min)}, {"max", JsonVec(info.header_bounds->max)}};
+  }
+  if (info.meta.las.present) {
+    const LasMetadata& las = info.meta.las;
+    j["las"] = {{"version", "1." + std::to_string(las.version_minor)},
+                {"point_format", las.point_format},
+                {"scale", JsonVec(las.scale)},
+                {"offset", JsonVec(las.offset)},
+                {"color_16bit", las.color_16bit},
+                {"vlrs", las.vlrs.size()}};
+  }
+  return j;
+}
+
+void PrintText(const io::PointFileInfo& info, const io::PointScan* scan, const std::string& path) {
+  std::printf("file      %s\n", path.c_str());
+  std::printf("format    %s\n", info.description.c_str());
+  const uint64_t count = scan ? scan->count : info.count;
+  if (count == io::kUnknownCount) std::printf("points    unknown (run without --no-scan)\n");
+  else std::printf("points    %llu\n", static_cast<unsigned long long>(count));
+  if (info.face_count > 0) std::printf("faces     %llu\n", static_cast<unsigned long long>(info.face_count));
+  std::string fields;
+  for (const std::string& f : FieldList(info.schema)) fields += (fields.empty() ? "" : ", ") + f;
+  std::printf("fields    %s\n", fields.c_str());
+  std::printf("shift     %s\n",
+              info.frame.IsIdentity() ? "none" : (Vec(info.frame.origin) + "  (world = local + shift)").c_str());
+  std::printf("crs       %s\n", info.meta.crs.empty() ? "none stated" : io::CrsLabel(info.meta.crs).c_str());
+  if (scan && !scan->world.IsEmpty()) {
+    std::printf("bounds    min %s\n          max %s\n", Coordinates(scan->world.min, info).c_str(),
+                Coordinates(scan->world.max, info).c_str());
+    std::printf("extent    %s\n", Extent(scan->world.Extent()).c_str());
+  }
+  if (info.header_bounds) {
+    std::printf("header    min %s\n          max %s\n", Vec(info.header_bounds->min).c_str(),
+                Vec(info.header_bounds->max).c_str());
+  }
+  if (info.meta.las.present) {
+    const LasMetadata& las = info.meta.las;
+    std::printf("las       scale %s, offset %s, %zu VLR/EVLR, colour %s\n", Vec(las.scale).c_str(),
+                Vec(las.offset).c_str(), las.vlrs.size(), las.color_16bit ? "16-bit" : "8-bit values");
+  }
+}
+
+int RunInfo(const InfoArgs& args) {
+  auto reader = io::OpenPointReader(args.input, args.read);
+  const io::PointFileInfo info = reader->info();
+  std::optional<io::PointScan> scan;
+  if (!args.no_scan) {
+    ConsoleProgress progress("info: reading " + reader->path());
+    scan = io::ScanPoints(*reader, progress.Callback());
+  }
+  // Header bounds that disagree with the points are worth a warning (a stale LAS header).
+  if (scan && info.header_bounds && !scan->world.IsEmpty()) {
+    const double tol = 1e-6 + 1e-9 * scan->world.max.cwiseAbs().maxCoeff();
+    const bool inside = (scan->world.min - info.header_bounds->min).minCoeff() >= -tol &&
+                        (info.header_bounds->max - scan->world.max).minCoeff() >= -tol;
+    if (!inside) std::fprintf(stderr, "[warning] %s: points lie outside the header's bounds\n", args.input.c_str());
+  }
+  const io::PointScan* scanned = scan ? &*scan : nullptr;
+  if (args.json) {
+    std::printf("%s\n", ToJson(info, scanned, args.input).dump(2).c_str());
+  } else {
+    PrintText(info, scanned, args.input);
+  }
+  return kOk;
+}
+
+void AddInfo(Command& root) {
+  InfoArgs& a = root.Keep<InfoArgs>();
+  Command c = root.Add("info", "Print a point file's count, bounds (world), fields, format (LAZ: its compressor), shift "
+                               "and CRS");
+  c.Option("file", a.input, "Point file (.ply .las .laz .e57 .xyz .txt .pts)").Required();
+  c.Option("--columns", a.read.columns, "XYZ/PTS column spec, e.g. x,y,z,r,g,b");
+  c.Flag("--json", a.json, "Print JSON instead of text");
+  c.Flag("--no-scan", a.no_scan, "Header only: do not read the points (bounds from the header)");
+  c.Run([&a] { return RunInfo(a); });
+  c.Footer("Example: candi info site.las");
+}
+
+struct ConvertArgs {
+  std::string input, output;
+  io::ConvertOptions options;
+  std::string shift;      // "" (keep the input's), "auto", "none" or "x,y,z"
+  std::string las_scale;  // "s" or "sx,sy,sz"
+};
+
+Eigen::Vector3d ParseScale(const std::string& text) {
+  const std::vector<double> v = ParseNumbers(text, ',', "--las-scale");
+  for (double s : v) {
+    if (!(s > 0)) throw std::invalid_argument("--las-scale '" + text + "': each scale must be > 0");
+  }
+  if (v.size() == 1) return Eigen::Vector3d::Constant(v[0]);
+  if (v.size() == 3) return Eigen::Vector3d(v[0], v[1], v[2]);
+  throw std::invalid_argument("--las-scale '" + text + "': expected s or sx,sy,sz");
+}
+
+int RunConvert(const ConvertArgs& args) {
+  io::ConvertOptions o = args.options;
+  if (!args.las_scale.empty()) o.write.las_scale = ParseScale(args.las_scale);
+  if (args.shift == "auto") {
+    o.shift = io::ShiftChoice::kAuto;
+  } else if (args.shift == "none") {
+    o.shift = io::ShiftChoice::kNone;
+  } else if (!args.shift.empty()) {
+    o.shift = io::ShiftChoice::kGiven;
+    o.given_shift = ParseShift(args.shift);
+  }
+  ConsoleProgress progress("convert " + args.input + " -> " + args.output);
+  io::ConvertPointFile(o, args.input, args.output, progress.Callback());
+  progress.Finish();
+  return kOk;
+}
+
+void AddConvert(Command& root) {
+  ConvertArgs& a = root.Keep<ConvertArgs>();
+  io::ConvertOptions& o = a.options;
+  Command c = root.Add("convert", "Convert between PLY, LAS, E57, XYZ and PTS (and read LAZ), streaming; reproject "
+                                  "with PROJ");
+  c.Option("input", a.input, "Input point file").Required();
+  c.Option("output", a.output, "Output point file; format from its extension").Required();
+  c.Option("--shift", a.shift,
+           "Output origin shift: auto (rounded centre when coordinates exceed 1e4 m), none, "
+           "or x,y,z; default: keep the input's");
+  c.Option("--columns", o.read.columns, "Input XYZ/PTS column spec, e.g. x,y,z,r,g,b");
+  c.Option("--out-columns", o.write.columns, "Output XYZ/PTS column spec");
+  c.Choice("--ply-encoding", o.write.ply_encoding,
+           {{"binary", io::PlyEncoding::kBinaryLittleEndian},
+            {"binary_be", io::PlyEncoding::kBinaryBigEndian},
+            {"ascii", io::PlyEncoding::kAscii}},
+           "PLY output: binary, binary_be or ascii");
+  c.Choice("--precision", o.write.precision,
+           {{"auto", io::PositionPrecision::kAuto},
+            {"float", io::PositionPrecision::kFloat32},
+            {"double", io::PositionPrecision::kFloat64}},
+           "PLY/XYZ positions: auto, float or double");
+  c.Option("--las-scale", a.las_scale, "LAS output scale, s or sx,sy,sz (default: keep, else 0.001)");
+  c.Option("--las-format", o.write.las_point_format, "LAS output point format: 0-3 or 6-8");
+  c.Option("--las-version", o.write.las_version_minor, "LAS output minor version: 2, 3 or 4");
+  c.Option("--crs", o.crs, "The input's CRS (e.g. EPSG:4979), for files that state none; carried into the output");
+  c.Option("--to-crs", o.to_crs, "Reproject into this CRS with PROJ (e.g. EPSG:32749)");
+  c.Run([&a] { return RunConvert(a); });
+  c.Footer("Examples: candi convert scan.las scan.ply --shift auto\n"
+           "          candi convert gnss_wgs84.laz site_utm.las --to-crs EPSG:32749");
+}
+
+}  // namespace
+
+void AddInspectCommands(Command& root) {
+  AddInfo(root);
+  AddConvert(root);
+}
+
+}  // namespace candi::apps

@@ -1,0 +1,94 @@
+// candi's benchmarks as a library (candi_bench; the relief one in candi_bench_relief, which links
+// libtorch): each prints a table on stdout, accuracy against time or throughput, and returns 0
+// (the scale benchmark returns 2 when one of its runs failed).
+// `candi bench ...` (apps/bench_commands.cc) runs them; so do the programs in bench/ that need no
+// command line. docs/benchmarks.md keeps their current tables.
+// Failures: std::invalid_argument for invalid options, InputError for unreadable data.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace candi::bench {
+
+// `candi bench render|foundation|dense`.
+struct BenchOptions {
+  std::string what = "render";        // render | foundation | dense
+  uint64_t points = 1000000;          // render: points in the generated scene
+  int width = 256, height = 256;      // render: image; dense: the larger synthetic set's images
+  int threads = 1;                    // [0, 256], 0 = all
+  std::string data;                   // dense: ../shared/data -> the Sceaux comparison with OpenMVS
+  double scale = 0.5;                 // dense --data: PatchMatch resolution scale, [0.05, 1]
+  int iterations = 3;                 // dense --data: PatchMatch rounds, [1, 50]
+  void Check() const;
+};
+int RunBench(const BenchOptions& options);
+// SPBR accuracy against time: RMSE against depth-sorted blending for L = 1 ... 1024.
+int RunRenderAccuracy(const BenchOptions& options);
+// Foundation from sections: accuracy against time of N and M, and the paper-scale run.
+int RunFoundationAccuracy();
+// PatchMatch on the synthetic scene: completeness and accuracy against resolution and rounds.
+int RunDenseAccuracy(const BenchOptions& options);
+// PatchMatch on the shared data's Sceaux photos against its OpenMVS cloud.
+int RunDenseSceaux(const BenchOptions& options);
+
+// `candi bench scale`: pack and render 10^7, 10^8 (10^9) generated points, one process and
+// `mpirun -np K` (child processes of this executable: each one's time and peak memory its own).
+struct ScaleBenchOptions {
+  std::string sizes = "1e7,1e8";       // point counts
+  bool billion = false;                // add 1e9 (~8 GB archive, ~28 GB temporary, minutes)
+  std::string work_dir = "candi-bench-scale";  // generated data (deleted afterwards)
+  std::string size = "1024x1024";      // image WxH
+  int repeat_level = 100;
+  int ranks = 2;                       // mpirun -np; 0 skips the MPI runs, [0, 64]
+  bool keep = false;                   // keep the generated data
+  void Check() const;
+};
+int RunScaleBench(const ScaleBenchOptions& options);
+
+// `candi bench view`: the viewer's frame latency, frame rate and convergence.
+struct ViewBenchOptions {
+  std::string sizes = "1e7";
+  bool billion = false;
+  std::string work_dir = "candi-bench-view";
+  std::string size = "1024x768";       // image WxH
+  int repeat_level = 100;
+  int threads = 0;                     // [0, 256]
+  int orbit_frames = 60;
+  int runs = 3;                        // convergence runs (the median is printed), [1, 100]
+  bool keep = false;                   // keep the archives, and reuse kept ones
+  void Check() const;
+};
+int RunViewBench(const ViewBenchOptions& options);
+
+// `candi bench section`: section accuracy against slab thickness, and time at scale.
+struct SectionBenchOptions {
+  std::string sizes = "1e7";
+  bool billion = false;
+  std::string work_dir = "candi-bench-view";  // shared with bench view: keep reuses its archives
+  std::string drawing = "examples/borobudur/foundation.dxf";  // the accuracy table ("" skips it)
+  double thickness = 0.1;              // m, > 0
+  int threads = 0;                     // [0, 256]
+  bool keep = false;
+  void Check() const;
+};
+int RunSectionBench(const SectionBenchOptions& options);
+
+// `candi bench relief` (candi_bench_relief): network width x training time -> accuracy, training
+// and prediction seconds; or, on real photos, fine-tuning seconds -> accuracy.
+struct ReliefBenchOptions {
+  std::string widths = "32,64,128";    // decoder widths (growth = width / 8)
+  double seconds = 60;                 // training budget per width
+  int train_panels = 12, eval_panels = 3;
+  uint64_t seed = 1;
+  int threads = 1;                     // libtorch threads, [1, 256]
+  std::string pairs;                   // real photos: a `relief dataset --colmap` folder
+  std::string model = "examples/relief/relief_model.pt";
+  std::string finetune_seconds = "60,240";
+  double edge_weight = 1;              // [0, 1000]
+  double learning_rate = 3e-4;
+  void Check() const;
+};
+int RunReliefBench(const ReliefBenchOptions& options);
+
+}  // namespace candi::bench
