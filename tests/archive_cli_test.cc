@@ -14,14 +14,10 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::FileExists;
-using testing::RunCandi;
-using testing::RunCommand;
-using testing::TempDir;
 
 // Stacked translucent squares at survey coordinates.
 void WriteScene(const std::string& path, size_t n) {
@@ -147,4 +143,4 @@ TEST_F(ArchiveCli, DamagedArchivesAndTooSmallBudgetsAreClearErrors) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -13,14 +13,11 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
 using nlohmann::json;
-using testing::FileExists;
-using testing::RunCandi;
-using testing::TempDir;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 
 // A 4 m x 2 m wall of points at survey coordinates, 1 cm grid, with millimetre offsets that float
 // would lose (E 416000.xxx).
@@ -291,4 +288,4 @@ TEST(BuildCli, SceneErrorsNameTheJsonPathOfTheCulprit) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -9,13 +9,10 @@
 #include "tests/util/surface_cloud.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
-using testing::FileExists;
-using testing::RunCandi;
-using testing::TempDir;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 
 // 6000 surface points at survey coordinates plus 30 points 1 m off the surface (id >= 1e6).
 void WriteNoisy(const std::string& path) {
@@ -88,4 +85,4 @@ TEST(CleanCli, UnwritableOutputFolderIsExitTwo) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -22,13 +22,11 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::RunCandi;
-using testing::TempDir;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 
 struct Row {
   const char* command;      // for messages
@@ -173,4 +171,4 @@ TEST(CliErrors, MissingInputUnwritableOutputAndBadOptionValueForEveryCommand) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

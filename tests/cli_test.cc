@@ -14,16 +14,10 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
-using testing::FileExists;
-using testing::ReadBytes;
-using testing::TempDir;
-using testing::WriteBytes;
-
-using Result = testing::CommandResult;
-using testing::RunCandi;
+using Result = CommandResult;
 
 PointCloud SurveyCloud(size_t n) {
   PointCloud c;
@@ -200,4 +194,4 @@ TEST(Cli, RealFilesReportTheirCounts) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -12,15 +12,10 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
-using testing::FileExists;
-using testing::ReadBytes;
-using testing::RunCandi;
-using testing::TempDir;
-using testing::WriteBytes;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 
 // Six ColorChecker patches (published sRGB) and greys: enough to span RGB.
 const int kPatches[][3] = {{115, 82, 68}, {98, 122, 157}, {214, 126, 44}, {80, 91, 166},
@@ -146,4 +141,4 @@ TEST(ColorCorrectCli, BadInputsAndOptionsGiveClearErrorsAndExitCodes) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -15,13 +15,10 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
 using nlohmann::json;
-using testing::RunCandi;
-using testing::RunCommand;
-using testing::TempDir;
 
 // Points around Borobudur (110.2038 E, 7.6079 S), lon/lat in degrees, ellipsoidal height.
 std::vector<Eigen::Vector3d> LonLatPoints() {
@@ -237,4 +234,4 @@ TEST(CrsCli, GeorefFitsGnssTargetsTransformedIntoTheSurveyCrs) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -18,12 +18,10 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
 using nlohmann::json;
-using testing::RunCandi;
-using testing::TempDir;
 
 // The demo's panel k on the south foot wall (y = -56.5): x from t to t + 2.7, z 0.8 to 1.72.
 struct PanelBox {
@@ -206,4 +204,4 @@ TEST(DemoCli, TwoQuickDemosGiveTheSameBytesOnTwoCoresAndOne) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

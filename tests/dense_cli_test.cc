@@ -7,12 +7,8 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
-
-using testing::FileExists;
-using testing::RunCandi;
-using testing::TempDir;
 
 TEST(DenseCli, MissingWorkspaceIsABadInputNamingIt) {
   TempDir dir;
@@ -32,4 +28,4 @@ TEST(DenseCli, BadOptionsAreUsageErrors) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -12,14 +12,10 @@
 #include "tests/docs/markdown.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::MarkdownLinks;
-using testing::ParseMarkdown;
-using testing::ReadBytes;
-using testing::RelativeLinkPath;
 
 // README.md and docs/**/*.md, relative to the repository.
 std::vector<fs::path> Documents(const fs::path& root) {
@@ -110,4 +106,4 @@ TEST(DocsLinks, ReportsMissingFilesAndLinksOutOfTheRepository) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

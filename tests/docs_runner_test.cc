@@ -9,13 +9,10 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::CommandResult;
-using testing::TempDir;
-using testing::WriteBytes;
 
 // A repository of one document, docs/<name>, and examples/hello.txt.
 class DocsRunner : public ::testing::Test {
@@ -162,4 +159,4 @@ TEST_F(DocsRunner, AnUnclosedBlockFails) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

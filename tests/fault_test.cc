@@ -32,14 +32,11 @@
 #include "io/point_io.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-using testing::ReadBytes;
-using testing::TempDir;
-using testing::WriteBytes;
 
 // candi started in the background, its stdout and stderr going to files.
 class Process {
@@ -334,4 +331,4 @@ TEST(Fault, AnInterruptedBuildLeavesFinishedFilesAndResumes) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -9,14 +9,10 @@
 #include "tests/util/dxf_text.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
-using testing::DxfText;
-using testing::FileExists;
-using testing::RunCandi;
-using testing::TempDir;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 using V = Eigen::Vector2d;
 
 const char kExample[] = "examples/borobudur/foundation.dxf";
@@ -138,4 +134,4 @@ TEST(FoundationCli, BadInputsAreExitTwoNamingFileAndLayer) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -12,15 +12,10 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
-using testing::FileExists;
-using testing::ReadBytes;
-using testing::RunCandi;
-using testing::TempDir;
-using testing::WriteBytes;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 using V = Eigen::Vector3d;
 
 const V kSite(416000.0, 9168000.0, 265.0);  // UTM 49S near Borobudur
@@ -170,4 +165,4 @@ TEST(GeorefCli, ReportsACollinearLayout) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -28,16 +28,12 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-using testing::FileExists;
-using testing::RunCandi;
-using testing::RunCommand;
-using testing::TempDir;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 
 bool HaveCommand(const std::string& name) { return RunCommand("command -v " + name + " >/dev/null").code == 0; }
 
@@ -256,4 +252,4 @@ TEST(Interop, CloudCompareKeepsScalarFieldsAndDoubleCoordinatesWithGlobalShiftAu
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

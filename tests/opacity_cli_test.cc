@@ -9,15 +9,10 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
-using testing::FileExists;
-using testing::ReadBytes;
-using testing::TempDir;
-
-using Result = testing::CommandResult;
-using testing::RunCandi;
+using Result = CommandResult;
 
 // 20k points, uniform on a 5 x 5 m square at survey coordinates (800 points/m^2), with colour.
 void WritePlane(const std::string& path) {
@@ -104,4 +99,4 @@ TEST(OpacityCli, BadValuesAreExitOneBeforeAnyReading) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -12,14 +12,10 @@
 #include "tests/util/surface_cloud.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
-using testing::FileExists;
-using testing::ReadBytes;
-using testing::RunCandi;
-using testing::TempDir;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 
 const Eigen::Vector3d kSite(416000.0, 9168000.0, 250.0);
 
@@ -130,4 +126,4 @@ TEST(RegisterCli, UnwritableOutputFolderAndNoOverlapAreExitTwo) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

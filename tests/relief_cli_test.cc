@@ -13,13 +13,10 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
-using testing::FileExists;
-using testing::RunCandi;
-using testing::TempDir;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 
 class ReliefCli : public ::testing::Test {
  protected:
@@ -322,4 +319,4 @@ TEST(ReliefPlaceCli, BadInputIsExitTwoNamingFileAndLineAndWritesNothing) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

@@ -13,15 +13,10 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
-using testing::FileExists;
-using testing::ReadBytes;
-using testing::RunCandi;
-using testing::TempDir;
-using testing::WriteBytes;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 
 // n points uniform on a 10 x 10 m square at survey coordinates, height z, one colour.
 void WriteSquare(const std::string& path, size_t n, double z, Rgb8 color, uint64_t seed) {
@@ -314,4 +309,4 @@ TEST(RenderCli, BadOptionValuesAreExitOneNamingTheOption) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

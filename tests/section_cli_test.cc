@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/rng.h"
+#include "core/polyline.h"
 #include "io/point_io.h"
 #include "mesh/dxf_import.h"
 #include "mesh/foundation.h"
@@ -20,28 +21,14 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
 
-using testing::FileExists;
-using testing::ReadBytes;
-using testing::RunCandi;
-using testing::TempDir;
-using Result = testing::CommandResult;
+using Result = CommandResult;
 
 const std::string kDrawing = "examples/borobudur/foundation.dxf";  // tests run in the source directory
 
 // Distance from p to the polyline through `line`.
-double DistanceTo(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& line) {
-  double best = 1e300;
-  for (size_t i = 0; i + 1 < line.size(); ++i) {
-    const Eigen::Vector2d d = line[i + 1] - line[i];
-    const double t = std::clamp((p - line[i]).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
-    best = std::min(best, (p - (line[i] + t * d)).norm());
-  }
-  return best;
-}
-
 // The layer's profile as the foundation path builds it from the drawing (both sides joined, in
 // drawing coordinates): the curve its surface passes through at the drawing's plane.
 std::vector<Eigen::Vector2d> DrawingProfile(const std::string& layer) {
@@ -67,7 +54,7 @@ Deviation Compare(const mesh::DxfDrawing& section, const std::string& layer, con
   if (it == section.layers.end()) return d;
   for (const Polyline2& line : it->second) {
     for (size_t i = 0; i < line.points.size(); ++i) {
-      const double e = DistanceTo(line.points[i], reference);
+      const double e = DistanceToPolyline(line.points[i], reference);
       d.mean += e;
       if (e > d.max) d.max = e, d.worst = line.points[i];
       ++d.vertices;
@@ -164,7 +151,7 @@ TEST_F(FoundationSection, FromAnArchiveReadsOnlyTheCrossedChunks) {
   for (const auto& line : section.layers.begin()->second) {
     for (const auto& v : line.points) {
       double best = 1e300;
-      for (const auto& p : profiles) best = std::min(best, DistanceTo(v, p));
+      for (const auto& p : profiles) best = std::min(best, DistanceToPolyline(v, p));
       mean += best, worst = std::max(worst, best), ++n;
     }
   }
@@ -253,4 +240,4 @@ TEST(SectionCli, DegenerateInputIsAClearErrorOrAnEmptyLabelledOutput) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing

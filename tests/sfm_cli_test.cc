@@ -7,12 +7,8 @@
 #include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
-namespace candi {
+namespace candi::testing {
 namespace {
-
-using testing::RunCandi;
-using testing::TempDir;
-using testing::WriteBytes;
 
 void Put(const std::string& path, const std::string& bytes) {
   std::filesystem::create_directories(std::filesystem::path(path).parent_path());
@@ -64,4 +60,4 @@ TEST(SfmCli, BadOptionsAreUsageErrors) {
 }
 
 }  // namespace
-}  // namespace candi
+}  // namespace candi::testing
