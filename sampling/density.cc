@@ -232,7 +232,7 @@ double CellSectionArea(const PointCloud& cloud, const Eigen::Vector3d& corner, d
   const Eigen::Vector3d& lambda = solver.eigenvalues();  // ascending
   if (!(lambda[1] > 1e-12 * lambda[2])) return h * h;    // collinear or coincident: no plane
   const Eigen::Vector3d normal = solver.eigenvectors().col(0);
-  const double area = CubeSectionArea(normal, normal.dot(mean));
+  const double area = PlaneInCubeArea(normal, normal.dot(mean));
   return area > 0 ? area * h * h : h * h;
 }
 

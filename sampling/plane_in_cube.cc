@@ -33,7 +33,7 @@ std::vector<Eigen::Vector3d> SectionVertices(const Eigen::Vector3d& n, double t)
 
 }  // namespace
 
-double CubeSectionArea(const Eigen::Vector3d& unit_normal, double offset) {
+double PlaneInCubeArea(const Eigen::Vector3d& unit_normal, double offset) {
   std::vector<Eigen::Vector3d> points = SectionVertices(unit_normal, offset);
   if (points.size() < 3) return 0.0;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
@@ -56,7 +56,7 @@ double CubeSectionArea(const Eigen::Vector3d& unit_normal, double offset) {
   return 0.5 * std::abs(twice_area);
 }
 
-double SizeBiasedCubeSection(const Eigen::Vector3d& normal) {
+double SizeBiasedPlaneInCubeArea(const Eigen::Vector3d& normal) {
   CANDI_CHECK(normal.allFinite() && normal.norm() > 0) << "normal = " << normal.transpose();
   const Eigen::Vector3d n = normal.normalized();
   std::array<double, 8> breaks;
@@ -71,7 +71,7 @@ double SizeBiasedCubeSection(const Eigen::Vector3d& normal) {
     if (!(half > 0)) continue;
     const double mid = 0.5 * (breaks[k + 1] + breaks[k]);
     for (int q = 0; q < 3; ++q) {
-      const double area = CubeSectionArea(n, mid + half * kNodes[q]);
+      const double area = PlaneInCubeArea(n, mid + half * kNodes[q]);
       integral += half * kWeights[q] * area * area;
     }
   }

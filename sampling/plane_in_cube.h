@@ -22,11 +22,11 @@
 namespace candi::sampling {
 
 // A(t): area of {x in [0,1]^3 : n·x = t} for a unit normal n (0 outside the cube's span).
-double CubeSectionArea(const Eigen::Vector3d& unit_normal, double offset);
+double PlaneInCubeArea(const Eigen::Vector3d& unit_normal, double offset);
 
 // G(n), exactly: A(t) is piecewise quadratic between the projections of the cube's
 // vertices, so 3-point Gauss-Legendre per piece integrates A^2 without error. `normal` need not
 // be unit length; it must be finite and non-zero (CANDI_CHECK).
-double SizeBiasedCubeSection(const Eigen::Vector3d& normal);
+double SizeBiasedPlaneInCubeArea(const Eigen::Vector3d& normal);
 
 }  // namespace candi::sampling
