@@ -3,8 +3,8 @@
 #include <chrono>
 #include <stdexcept>
 
-#include "core/text_format.h"
 #include "core/progress.h"
+#include "core/text_format.h"
 #include "render/archive.h"
 #include "render/archive_pack.h"
 #include "render/synthetic_scene.h"

@@ -18,9 +18,9 @@
 #include <vector>
 
 #include "bench/bench.h"
-#include "core/timer.h"
 #include "core/check.h"
 #include "core/interrupt.h"
+#include "core/timer.h"
 #include "io/image/jpeg_io.h"
 #include "io/point_io.h"
 #include "reconstruction/photogrammetry/colmap_model.h"

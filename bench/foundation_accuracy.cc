@@ -21,8 +21,8 @@
 #include <vector>
 
 #include "bench/bench.h"
-#include "mesh/foundation.h"
 #include "io/layer_clouds.h"
+#include "mesh/foundation.h"
 #include "sampling/layer_colours.h"
 #include "sampling/surface_sampling.h"
 

@@ -8,11 +8,10 @@
 #include <filesystem>
 #include <string>
 
-#include "core/text_format.h"
 #include "bench/bench.h"
-#include "core/timer.h"
 #include "core/check.h"
 #include "core/text_format.h"
+#include "core/timer.h"
 #include "io/point_io.h"
 #include "reconstruction/relief/relief_dataset.h"
 #include "reconstruction/relief/relief_eval.h"

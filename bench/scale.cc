@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "core/text_format.h"
+#include "bench/archives.h"
 #include "bench/bench.h"
 #include "core/check.h"
 #include "core/interrupt.h"
@@ -141,12 +141,7 @@ void ScaleBenchOptions::Check() const {
 
 int RunScaleBench(const ScaleBenchOptions& args) {
   args.Check();
-  std::vector<uint64_t> sizes;
-  for (double v : ParseNumbers(args.sizes, ',', "--sizes")) {
-    if (!(v >= 1000 && v <= 1e10)) throw std::invalid_argument("--sizes: each count in [1e3, 1e10]");
-    sizes.push_back(static_cast<uint64_t>(v));
-  }
-  if (args.billion) sizes.push_back(1000000000ULL);
+  const std::vector<uint64_t> sizes = ParseBenchSizes(args.sizes, args.billion);
   const std::string self = SelfPath();
   const std::string dir = fs::absolute(args.work_dir).string();
   fs::create_directories(dir);

@@ -12,8 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/rng.h"
 #include "core/polyline.h"
+#include "core/rng.h"
 #include "io/point_io.h"
 #include "mesh/dxf_import.h"
 #include "mesh/foundation.h"
