@@ -1,5 +1,6 @@
-// candi build, candi pack: the integrated archive of a scene file (pipeline/build.h), and point
-// files packed into a render archive (render/archive_pack.h).
+// candi build, candi pack, candi demo: the integrated archive of a scene file (pipeline/build.h),
+// point files packed into a render archive (render/archive_pack.h), and the bundled example's site
+// built (pipeline/demo_site.h; RunDemo in demo_command.cc, candi-relief only).
 #include <cstdio>
 #include <stdexcept>
 
@@ -94,6 +95,21 @@ void AddPack(Command& root) {
 }
 
 }  // namespace
+
+void AddDemo(Command& root) {
+  DemoArgs& a = root.Keep<DemoArgs>();
+  pipeline::DemoSiteOptions& o = a.site;
+  Command c = root.Add("demo", "Build and render the bundled example");
+  c.Option("-o,--output", a.output_dir, "Output folder");
+  c.Option("--width", o.width, "Image width in pixels").Range(16, 16384);
+  c.Option("--height", o.height, "Image height in pixels").Range(16, 16384);
+  c.Option("--seed", o.seed, "Random seed");
+  Arg quick = c.Flag("--quick", o.quick, "The reduced scene (fewer points, L = 32), as CI runs it");
+  c.Flag("--full", o.full, "Paper scale: all 160 relief panels through the network at the model's resolution "
+         "(default: the 156 hidden ones at their photos' own, 8x fewer tiles)").Excludes(quick);
+  c.Run([&a] { return RunDemo(a); });
+  c.Footer("Example: candi demo -o demo_out");
+}
 
 void AddAssembleCommands(Command& root) {
   AddBuild(root);

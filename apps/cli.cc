@@ -221,7 +221,9 @@ int RunCli(int argc, char** argv) {
   AddDigitizeCommands(root);
   AddAssembleCommands(root);
   AddLookCommands(root);
-  AddOtherCommands(root);
+  AddOpacity(root);
+  AddDemo(root);
+  AddBenchCommands(root);
   GroupCommands(app);
   AddGlobalFlags(app, verbose, quiet);
   try {

@@ -25,7 +25,9 @@ void AddDigitizeCommands(Command& root);  // sfm, dense, georef, register, clean
 void AddReliefCommands(Command& root);    // relief synth|dataset|train|predict|points|eval|place (relief.cc)
 void AddAssembleCommands(Command& root);  // build, pack (assemble.cc)
 void AddLookCommands(Command& root);      // render, view, section (look.cc)
-void AddOtherCommands(Command& root);     // opacity, demo, bench (other.cc, bench_commands.cc)
+// `candi --help` lists these three under "Other", after the groups above.
+void AddOpacity(Command& root);           // opacity (look.cc: SPBR opacity, by the renderer)
+void AddDemo(Command& root);              // demo (assemble.cc: it builds the bundled example)
 void AddBenchCommands(Command& root);     // bench and its subcommands (bench_commands.cc)
 
 // candi-pcl (pcl_commands.cc).
