@@ -2,6 +2,7 @@
 // file in another format, shift or CRS (io/convert.h).
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <stdexcept>
 
 #include "apps/arg_parse.h"
@@ -176,9 +177,14 @@ int RunConvert(const ConvertArgs& args) {
     o.shift = io::ShiftChoice::kGiven;
     o.given_shift = ParseShift(args.shift);
   }
-  ConsoleProgress progress("convert " + args.input + " -> " + args.output);
-  io::ConvertPointFile(o, args.input, args.output, progress.Callback());
-  progress.Finish();
+  // The bar starts when the output is open (the call's first report), so that a file that fails
+  // to open prints only its error.
+  std::optional<ConsoleProgress> progress;
+  io::ConvertPointFile(o, args.input, args.output, [&](uint64_t done, uint64_t total) {
+    if (!progress) progress.emplace("convert " + args.input + " -> " + args.output);
+    if (done > 0) progress->Update(done, total);
+  });
+  if (progress) progress->Finish();
   return kOk;
 }
 

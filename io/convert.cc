@@ -102,6 +102,7 @@ ConvertSummary ConvertPointFile(const ConvertOptions& options, const std::string
   }
   auto writer = OpenPointWriter(output, spec, write);
   const uint64_t total = spec.count == kUnknownCount ? 0 : spec.count;
+  if (progress) progress(0, total);
   ConvertSummary summary;
   summary.frame = spec.frame;
   while (got > 0) {

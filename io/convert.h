@@ -32,6 +32,8 @@ struct ConvertSummary {
   LocalFrame frame;               // the output's shift
 };
 
+// Streams `input` into `output`. `progress` is called with (0, total) once the output is open (an
+// input or output that fails before then reports nothing), then after each chunk written.
 ConvertSummary ConvertPointFile(const ConvertOptions& options, const std::string& input, const std::string& output,
                                 const ProgressCallback& progress = nullptr);
 

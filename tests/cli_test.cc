@@ -111,6 +111,8 @@ TEST(Cli, MissingInputIsExitTwoNamingTheFile) {
   r = RunCandi("convert " + dir.File("nope.ply") + " " + dir.File("out.ply"));
   EXPECT_EQ(r.code, 2);
   EXPECT_FALSE(FileExists(dir.File("out.ply")));
+  // Only the error: no progress line for a conversion that never began.
+  EXPECT_EQ(r.output.find(" -> "), std::string::npos) << r.output;
 }
 
 TEST(Cli, UnwritableOutputIsExitTwoAndCreatesNothing) {
