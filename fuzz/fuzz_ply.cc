@@ -6,13 +6,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = candi::fuzz::WriteScratchFile("input.ply", data, size);
-  try {
-    const std::unique_ptr<candi::io::PointReader> reader = candi::io::OpenPlyReader(path);
-    candi::PointCloud chunk;
-    while (reader->Read(4096, &chunk) > 0) {
-    }
-  } catch (const candi::InputError&) {
-  }
+  candi::fuzz::ReadToEnd(
+      [&](const auto& options) { return candi::io::OpenPlyReader(path, options); });
   try {
     candi::io::ReadPlyMesh(path);
   } catch (const candi::InputError&) {

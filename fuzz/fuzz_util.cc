@@ -8,7 +8,9 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "core/check.h"
 #include "core/log.h"
+#include "core/point_cloud.h"
 
 namespace candi::fuzz {
 
@@ -82,6 +84,21 @@ std::vector<std::string_view> SplitParts(const uint8_t* data, size_t size, size_
   }
   parts.push_back(rest);
   return parts;
+}
+
+void ReadToEnd(const ReaderOpener& open, bool also_without_scalar_fields) {
+  io::PointReadOptions options;
+  for (const bool scalar_fields : {true, false}) {
+    if (!scalar_fields && !also_without_scalar_fields) break;
+    options.scalar_fields = scalar_fields;
+    try {
+      const std::unique_ptr<io::PointReader> reader = open(options);
+      PointCloud chunk;
+      while (reader->Read(4096, &chunk) > 0) {
+      }
+    } catch (const InputError&) {
+    }
+  }
 }
 
 }  // namespace candi::fuzz

@@ -8,9 +8,13 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "io/point_file.h"
 
 namespace candi::fuzz {
 
@@ -28,6 +32,11 @@ std::string FreshScratchFolder(const std::string& name);
 // The input cut at kFuzzPartSeparator, at most max_parts parts (the last keeps any further
 // separators).
 std::vector<std::string_view> SplitParts(const uint8_t* data, size_t size, size_t max_parts);
+// Opens a reader with `open(options)` and reads it to the end of the file, with the default options
+// and then, when also_without_scalar_fields, with scalar_fields off. An InputError (the answer to
+// bad input) ends a read; any other exception escapes to the fuzzer.
+using ReaderOpener = std::function<std::unique_ptr<io::PointReader>(const io::PointReadOptions&)>;
+void ReadToEnd(const ReaderOpener& open, bool also_without_scalar_fields = false);
 
 }  // namespace candi::fuzz
 

@@ -6,21 +6,20 @@
 
 #include "core/check.h"
 #include "pipeline/scene.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
 namespace candi::pipeline {
 namespace {
 
+using testing::ExpectEachBreakRejected;
 using testing::TempDir;
 
 TEST(DemoSiteOptions, DefaultsPassAndQuickExcludesFull) {
-  EXPECT_NO_THROW(DemoSiteOptions().Check());
-  DemoSiteOptions o;
-  o.quick = o.full = true;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
-  o = DemoSiteOptions();
-  o.width = 8;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
+  ExpectEachBreakRejected<DemoSiteOptions>({}, {
+      [](DemoSiteOptions& o) { o.quick = o.full = true; },
+      [](DemoSiteOptions& o) { o.width = 8; },
+  });
 }
 
 // The quick site: every input written, and a scene file that loads with its four layers.

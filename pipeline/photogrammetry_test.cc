@@ -12,6 +12,7 @@
 #include "core/check.h"
 #include "reconstruction/photogrammetry/dense_workspace.h"
 #include "reconstruction/photogrammetry/synthetic_views.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
 namespace candi::pipeline {
@@ -19,6 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 namespace pg = photogrammetry;
+using testing::ExpectEachBreakRejected;
 using testing::TempDir;
 
 std::string Workspace(const TempDir& dir, std::vector<pg::SyntheticView>* views) {
@@ -32,13 +34,10 @@ std::string Workspace(const TempDir& dir, std::vector<pg::SyntheticView>* views)
 }
 
 TEST(DenseOptions, DefaultsPassAndTheirPartsAreChecked) {
-  EXPECT_NO_THROW(DenseOptions().Check());
-  DenseOptions o;
-  o.stereo.window_radius = 0;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
-  o = DenseOptions();
-  o.fusion.min_views = 0;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
+  ExpectEachBreakRejected<DenseOptions>({}, {
+      [](DenseOptions& o) { o.stereo.window_radius = 0; },
+      [](DenseOptions& o) { o.fusion.min_views = 0; },
+  });
 }
 
 TEST(DenseStereo, PointsOnTheSceneAndTheMapsOnlyWhenAsked) {

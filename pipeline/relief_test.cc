@@ -8,11 +8,13 @@
 #include "core/check.h"
 #include "io/image/png_io.h"
 #include "io/point_io.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
 namespace candi::pipeline {
 namespace {
 
+using testing::ExpectEachBreakRejected;
 using testing::TempDir;
 
 relief::SynthOptions Small() {
@@ -42,13 +44,10 @@ TEST(WriteSyntheticPanels, PhotoAndDepthWithTheirProvenanceTheSameForTheSameSeed
 }
 
 TEST(PanelDepthOptions, DefaultsPassAndRulesAreChecked) {
-  EXPECT_NO_THROW(PanelDepthOptions().Check());
-  PanelDepthOptions o;
-  o.width_m = -1;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
-  o = PanelDepthOptions();
-  o.predict.tiles.tile = 100;  // not a multiple of 32
-  EXPECT_THROW(o.Check(), std::invalid_argument);
+  ExpectEachBreakRejected<PanelDepthOptions>({}, {
+      [](PanelDepthOptions& o) { o.width_m = -1; },
+      [](PanelDepthOptions& o) { o.predict.tiles.tile = 100; },  // not a multiple of 32
+  });
 }
 
 TEST(PredictPanelDepth, ThePhotosSizeInLevelsAndItsPoints) {

@@ -7,11 +7,13 @@
 #include "render/archive_pack.h"
 #include "render/synthetic_scene.h"
 #include "render/view_json.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
 namespace candi::pipeline {
 namespace {
 
+using testing::ExpectEachBreakRejected;
 using testing::TempDir;
 
 // Two overlapping sheets in survey coordinates (a shift of 10^6 m), written as double PLYs.
@@ -45,24 +47,13 @@ RenderOptions Small() {
 }
 
 TEST(RenderOptions, DefaultsPassAndRulesAreChecked) {
-  EXPECT_NO_THROW(RenderOptions().Check());
-  RenderOptions o;
-  o.repeat_level = 0;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
-  o = RenderOptions();
-  o.alpha = {0.5};
-  o.opaque = true;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
-  o = RenderOptions();
-  o.alpha = {1.5};
-  EXPECT_THROW(o.Check(), std::invalid_argument);
-  o = RenderOptions();
-  o.alpha = {0.5};
-  o.mode = RenderMode::kStream;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
-  o = RenderOptions();
-  o.brightness = 0;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
+  ExpectEachBreakRejected<RenderOptions>({}, {
+      [](RenderOptions& o) { o.repeat_level = 0; },
+      [](RenderOptions& o) { o.alpha = {0.5}, o.opaque = true; },
+      [](RenderOptions& o) { o.alpha = {1.5}; },
+      [](RenderOptions& o) { o.alpha = {0.5}, o.mode = RenderMode::kStream; },
+      [](RenderOptions& o) { o.brightness = 0; },
+  });
 }
 
 // A build draws its layers from memory: the same image as from the files it wrote.

@@ -13,11 +13,13 @@
 #include "io/layer_clouds.h"
 #include "io/point_io.h"
 #include "render/archive_pack.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
 namespace candi::pipeline {
 namespace {
 
+using testing::ExpectEachBreakRejected;
 using testing::TempDir;
 
 // Two walls 5 m apart (x = 0: layer "west", x = 5: layer "east"), 10 m long and 3 m high, at
@@ -48,13 +50,10 @@ std::string WriteWalls(const TempDir& dir) {
 section::SectionPath PlanCut() { return section::SectionPath::Plane(kOrigin + Eigen::Vector3d(0, 0, 1.5), {0, 0, 1}, 0.1); }
 
 TEST(SectionOptions, DefaultsPassAndRulesAreChecked) {
-  EXPECT_NO_THROW(SectionOptions().Check());
-  SectionOptions o;
-  o.opacity = 0;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
-  o = SectionOptions();
-  o.width = 8;
-  EXPECT_THROW(o.Check(), std::invalid_argument);
+  ExpectEachBreakRejected<SectionOptions>({}, {
+      [](SectionOptions& o) { o.opacity = 0; },
+      [](SectionOptions& o) { o.width = 8; },
+  });
 }
 
 TEST(CutSection, ALineAlongEachWallInSurveyCoordinates) {

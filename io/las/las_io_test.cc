@@ -7,63 +7,31 @@
 #include <filesystem>
 #include <functional>
 
-#include "core/binary_file.h"
 #include "core/check.h"
 #include "io/las/las_header.h"
 #include "io/point_io.h"
+#include "tests/util/input_error.h"
+#include "tests/util/las_bytes.h"
+#include "tests/util/read_in_chunks.h"
 #include "tests/util/test_util.h"
 
 namespace candi::io {
 namespace {
 
 using ::candi::testing::FileExists;
+using ::candi::testing::GetLE;
+using ::candi::testing::InputErrorMessage;
+using ::candi::testing::LasPointRecords;
+using ::candi::testing::PutLE;
 using ::candi::testing::ReadBytes;
+using ::candi::testing::ReadInChunks;
 using ::candi::testing::TempDir;
 using ::candi::testing::WriteBytes;
 
 // ---- helpers ----
 
 PointCloud ReadAll(const std::string& path, size_t chunk_size) {
-  auto reader = OpenLasReader(path);
-  PointCloud cloud;
-  cloud.SetSchema(reader->info().schema);
-  cloud.meta = reader->info().meta;
-  PointCloud chunk;
-  while (reader->Read(chunk_size, &chunk) > 0) cloud.Append(chunk);
-  EXPECT_EQ(reader->points_read(), reader->info().count);
-  return cloud;
-}
-
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
-
-uint64_t U64At(const std::string& bytes, size_t at) {
-  return LoadLE<uint64_t>(reinterpret_cast<const uint8_t*>(bytes.data()) + at);
-}
-uint32_t U32At(const std::string& bytes, size_t at) {
-  return LoadLE<uint32_t>(reinterpret_cast<const uint8_t*>(bytes.data()) + at);
-}
-uint16_t U16At(const std::string& bytes, size_t at) {
-  return LoadLE<uint16_t>(reinterpret_cast<const uint8_t*>(bytes.data()) + at);
-}
-template <typename T>
-void Put(std::string* bytes, size_t at, T v) {
-  StoreLE<T>(reinterpret_cast<uint8_t*>(bytes->data()) + at, v);
-}
-
-// The point records of a LAS file, located from its own header.
-std::string PointBytes(const std::string& file) {
-  const uint32_t offset = U32At(file, 96);
-  const uint16_t length = U16At(file, 105);
-  uint64_t count = U32At(file, 107);
-  if (count == 0 && file[25] >= 4) count = U64At(file, 247);
-  return file.substr(offset, count * length);
+  return ReadInChunks(*OpenLasReader(path), chunk_size);
 }
 
 // Points around a survey origin with mm detail, every kind of attribute.
@@ -320,10 +288,10 @@ void ExpectRewriteIdentical(const std::string& source, bool compare_colour_bytes
   EXPECT_EQ(back.meta.las.global_encoding, cloud.meta.las.global_encoding);
   ExpectSameVlrs(back.meta.las.vlrs, cloud.meta.las.vlrs);
   ExpectSamePoints(back, cloud);
-  std::string a = PointBytes(ReadBytes(source)), b = PointBytes(ReadBytes(path));
+  std::string a = LasPointRecords(ReadBytes(source)), b = LasPointRecords(ReadBytes(path));
   ASSERT_EQ(a.size(), b.size());
   if (!compare_colour_bytes) {  // 16-bit colour keeps only its high byte
-    const size_t length = U16At(ReadBytes(source), 105);
+    const size_t length = GetLE<uint16_t>(ReadBytes(source), 105);
     for (size_t i = 0; i < a.size(); i += length) {  // formats 7 and 8: colour at byte 30
       a.replace(i + 30, 6, 6, '\0');
       b.replace(i + 30, 6, 6, '\0');
@@ -401,13 +369,14 @@ TEST(LasRoundTrip, EightBitColourInSixteenBitFieldsIsByteExact) {
   const std::string first = dir.File("a.las"), second = dir.File("b.las");
   WritePointCloud(first, cloud);
   const std::string bytes = ReadBytes(first);
-  const size_t offset = U32At(bytes, 96), length = U16At(bytes, 105);
-  EXPECT_EQ(U16At(bytes, offset + 5 * length + 28), 5);  // format 3 red of point 5: 5, not 5*257
+  const size_t offset = GetLE<uint32_t>(bytes, 96), length = GetLE<uint16_t>(bytes, 105);
+  // Format 3 red of point 5: 5, not 5*257.
+  EXPECT_EQ(GetLE<uint16_t>(bytes, offset + 5 * length + 28), 5);
   const PointCloud back = ReadAll(first, 64);
   EXPECT_FALSE(back.meta.las.color_16bit);
   for (size_t i = 0; i < cloud.size(); ++i) ASSERT_EQ(back.colors[i], cloud.colors[i]);
   WritePointCloud(second, back);
-  const std::string a = PointBytes(bytes), b = PointBytes(ReadBytes(second));
+  const std::string a = LasPointRecords(bytes), b = LasPointRecords(ReadBytes(second));
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); i += length) ASSERT_EQ(a.substr(i + 28, 6), b.substr(i + 28, 6));
 }
@@ -418,7 +387,8 @@ TEST(LasRoundTrip, SixteenBitColourIsScaledAndDetected) {
   const std::string path = dir.File("c.las");
   WritePointCloud(path, cloud);
   const std::string bytes = ReadBytes(path);
-  EXPECT_EQ(U16At(bytes, U32At(bytes, 96) + 5 * U16At(bytes, 105) + 28), 5 * 257);
+  const size_t offset = GetLE<uint32_t>(bytes, 96), length = GetLE<uint16_t>(bytes, 105);
+  EXPECT_EQ(GetLE<uint16_t>(bytes, offset + 5 * length + 28), 5 * 257);
   const PointCloud back = ReadAll(path, 1000);
   EXPECT_TRUE(back.meta.las.color_16bit);
   for (size_t i = 0; i < cloud.size(); ++i) ASSERT_EQ(back.colors[i], cloud.colors[i]);
@@ -436,14 +406,14 @@ TEST(LasRoundTrip, ExtraBytesOfIntegerTypeWithScaleAndUndocumentedBytes) {
   const size_t v = 227 + 54, w = v + 192;
   bytes[v + 2] = 6;     // long (int32)
   bytes[v + 3] = 0x18;  // scale and offset valid
-  Put<double>(&bytes, v + 112, 0.5);
-  Put<double>(&bytes, v + 136, 10.0);
+  PutLE<double>(&bytes, v + 112, 0.5);
+  PutLE<double>(&bytes, v + 136, 10.0);
   bytes[w + 2] = 0;  // undocumented extra bytes
   bytes[w + 3] = 4;  // of length 4
-  const size_t offset = U32At(bytes, 96), length = U16At(bytes, 105);
+  const size_t offset = GetLE<uint32_t>(bytes, 96), length = GetLE<uint16_t>(bytes, 105);
   ASSERT_EQ(length, 28u);
   for (size_t i = 0; i < 20; ++i)
-    Put<int32_t>(&bytes, offset + i * length + 20, 3 * int32_t(i) - 7);
+    PutLE<int32_t>(&bytes, offset + i * length + 20, 3 * int32_t(i) - 7);
   WriteBytes(path, bytes);
   const PointCloud back = ReadAll(path, 8);
   EXPECT_LT(back.schema.ScalarIndex("w"), 0);
@@ -498,9 +468,9 @@ TEST(LasWrite, ExplicitFormatsAreValidated) {
   options.las_version_minor = 4;
   EXPECT_EQ(WriteAndDescribe(dir, MakeSurveyCloud(5), options), "LAS 1.4 point format 3");
   const std::string bytes = ReadBytes(dir.File("choice.las"));
-  EXPECT_EQ(U32At(bytes, 107), 5u);  // legacy count kept for formats 0-5
-  EXPECT_EQ(U64At(bytes, 247), 5u);  // and the 64-bit count
-  EXPECT_EQ(U64At(bytes, 255), 5u);  // 5 first returns
+  EXPECT_EQ(GetLE<uint32_t>(bytes, 107), 5u);  // legacy count kept for formats 0-5
+  EXPECT_EQ(GetLE<uint64_t>(bytes, 247), 5u);  // and the 64-bit count
+  EXPECT_EQ(GetLE<uint64_t>(bytes, 255), 5u);  // 5 first returns
 }
 
 TEST(LasWrite, ScanAngleConvertsBetweenFormats) {
@@ -553,7 +523,7 @@ TEST(LasBadInput, TruncatedFileNamesTheBytePosition) {
   const std::string bytes = ValidSmallLas(dir);
   const std::string path = dir.File("truncated.las");
   WriteBytes(path, bytes.substr(0, bytes.size() - 40));
-  const std::string error = ErrorOf([&] { OpenLasReader(path); });
+  const std::string error = InputErrorMessage([&] { OpenLasReader(path); });
   EXPECT_NE(error.find("byte " + std::to_string(bytes.size() - 40)), std::string::npos) << error;
   EXPECT_NE(error.find("promises 10 points"), std::string::npos) << error;
 }
@@ -572,7 +542,7 @@ TEST(LasBadInput, HeaderClaimingTenToTheTwelvePointsIsRefusedAtOpen) {
   const uint64_t claimed = 1000000000000ull;
   bytes.replace(247, 8, reinterpret_cast<const char*>(&claimed), 8);  // LAS 1.4 64-bit count
   WriteBytes(path, bytes);
-  const std::string error = ErrorOf([&] { OpenLasReader(path); });
+  const std::string error = InputErrorMessage([&] { OpenLasReader(path); });
   EXPECT_NE(error.find(path), std::string::npos) << error;
   EXPECT_NE(error.find("promises 1000000000000 points"), std::string::npos) << error;
   EXPECT_NE(error.find("byte " + std::to_string(bytes.size())), std::string::npos) << error;
@@ -586,21 +556,21 @@ TEST(LasBadInput, HeaderDefectsAreReported) {
     std::string bytes = valid;
     patch(&bytes);
     WriteBytes(path, bytes);
-    return ErrorOf([&] { OpenLasReader(path); });
+    return InputErrorMessage([&] { OpenLasReader(path); });
   };
   EXPECT_NE(error_after([](std::string* b) { (*b)[0] = 'X'; }).find("LASF"), std::string::npos);
   const std::string format = error_after([](std::string* b) { (*b)[104] = 4; });
   EXPECT_NE(format.find("point format 4"), std::string::npos) << format;
   EXPECT_NE(error_after([](std::string* b) { (*b)[104] = 9; }).find("point format 9"),
             std::string::npos);
-  const std::string length = error_after([](std::string* b) { Put<uint16_t>(b, 105, 20); });
+  const std::string length = error_after([](std::string* b) { PutLE<uint16_t>(b, 105, 20); });
   EXPECT_NE(length.find("record length 20"), std::string::npos) << length;
-  const std::string scale = error_after([](std::string* b) { Put<double>(b, 139, 0.0); });
+  const std::string scale = error_after([](std::string* b) { PutLE<double>(b, 139, 0.0); });
   EXPECT_NE(scale.find("scale"), std::string::npos) << scale;
   EXPECT_NE(error_after([](std::string* b) { (*b)[104] |= 0x80; }).find("LAZ"), std::string::npos);
   EXPECT_NE(error_after([](std::string* b) { b->resize(100); }).find("header"), std::string::npos);
   EXPECT_NE(error_after([](std::string* b) { b->clear(); }).find("empty"), std::string::npos);
-  EXPECT_NE(error_after([](std::string* b) { Put<uint32_t>(b, 96, 1u << 30); }).find("offset"),
+  EXPECT_NE(error_after([](std::string* b) { PutLE<uint32_t>(b, 96, 1u << 30); }).find("offset"),
             std::string::npos);
 }
 
@@ -608,20 +578,20 @@ TEST(LasBadInput, OverrunningVlrIsReported) {
   TempDir dir;
   const std::string valid = ValidSmallLas(dir);
   std::string bytes = valid;
-  Put<uint32_t>(&bytes, 100, 1);  // one VLR, but the points start right after the header
+  PutLE<uint32_t>(&bytes, 100, 1);  // one VLR, but the points start right after the header
   const std::string path = dir.File("vlr.las");
   WriteBytes(path, bytes);
-  EXPECT_NE(ErrorOf([&] { OpenLasReader(path); }).find("VLR"), std::string::npos);
+  EXPECT_NE(InputErrorMessage([&] { OpenLasReader(path); }).find("VLR"), std::string::npos);
 }
 
 TEST(LasBadInput, EvlrBeyondTheFileIsReported) {
   CANDI_REQUIRE_SHARED_DATA(source, "las/1_4_w_evlr.las");
   TempDir dir;
   std::string bytes = ReadBytes(source);
-  Put<uint64_t>(&bytes, 235, bytes.size() + 100);  // start of the first EVLR
+  PutLE<uint64_t>(&bytes, 235, bytes.size() + 100);  // start of the first EVLR
   const std::string path = dir.File("evlr.las");
   WriteBytes(path, bytes);
-  const std::string error = ErrorOf([&] { OpenLasReader(path); });
+  const std::string error = InputErrorMessage([&] { OpenLasReader(path); });
   EXPECT_NE(error.find("byte " + std::to_string(bytes.size() + 100)), std::string::npos) << error;
 }
 
@@ -658,7 +628,7 @@ TEST(LasWrite, CoordinateOutsideInt32IsAnInputError) {
   options.las_scale = Eigen::Vector3d::Constant(0.001);
   options.las_offset = Eigen::Vector3d::Zero();
   const std::string path = dir.File("far.las");
-  const std::string error = ErrorOf([&] { WritePointCloud(path, cloud, options); });
+  const std::string error = InputErrorMessage([&] { WritePointCloud(path, cloud, options); });
   EXPECT_NE(error.find("point 2"), std::string::npos) << error;
   EXPECT_NE(error.find("does not fit LAS int32"), std::string::npos) << error;
   EXPECT_FALSE(FileExists(path));

@@ -13,34 +13,25 @@
 #include "io/las/laz_chunks.h"
 #include "io/las/laz_format.h"
 #include "io/point_io.h"
+#include "tests/util/input_error.h"
+#include "tests/util/las_bytes.h"
+#include "tests/util/read_in_chunks.h"
 #include "tests/util/test_util.h"
 
 namespace candi::io {
 namespace {
 
+using ::candi::testing::GetLE;
+using ::candi::testing::InputErrorMessage;
+using ::candi::testing::LasPointRecords;
+using ::candi::testing::PutLE;
 using ::candi::testing::ReadBytes;
+using ::candi::testing::ReadInChunks;
 using ::candi::testing::SourceDir;
 using ::candi::testing::TempDir;
 using ::candi::testing::WriteBytes;
 
 std::string DataPath(const std::string& name) { return SourceDir() + "/tests/data/laz/" + name; }
-
-template <typename T>
-void Put(std::string* bytes, size_t at, T v) {
-  StoreLE<T>(reinterpret_cast<uint8_t*>(bytes->data()) + at, v);
-}
-template <typename T>
-T Get(const std::string& bytes, size_t at) {
-  return LoadLE<T>(reinterpret_cast<const uint8_t*>(bytes.data()) + at);
-}
-
-// The point records of an uncompressed LAS file, located from its own header.
-std::string LasRecords(const std::string& path) {
-  const std::string file = ReadBytes(path);
-  uint64_t count = Get<uint32_t>(file, 107);
-  if (count == 0 && file[25] >= 4) count = Get<uint64_t>(file, 247);
-  return file.substr(Get<uint32_t>(file, 96), count * Get<uint16_t>(file, 105));
-}
 
 // The decoded records of a LAZ file, through the chunk table and chunk decoders.
 std::string LazRecords(const std::string& path) {
@@ -67,14 +58,7 @@ std::string LazRecords(const std::string& path) {
 }
 
 PointCloud ReadWith(const std::string& path, size_t read_size) {
-  auto reader = OpenPointReader(path);
-  PointCloud cloud;
-  cloud.SetSchema(reader->info().schema);
-  cloud.meta = reader->info().meta;
-  PointCloud chunk;
-  while (reader->Read(read_size, &chunk) > 0) cloud.Append(chunk);
-  EXPECT_EQ(reader->points_read(), reader->info().count);
-  return cloud;
+  return ReadInChunks(*OpenPointReader(path), read_size);
 }
 
 void ExpectSameClouds(const PointCloud& a, const PointCloud& b) {
@@ -100,7 +84,7 @@ void ExpectSameClouds(const PointCloud& a, const PointCloud& b) {
 
 // The LAZ file decodes to the LAS file's records, and reads to the same cloud and metadata.
 void ExpectLazMatchesLas(const std::string& laz, const std::string& las) {
-  const std::string expected = LasRecords(las);
+  const std::string expected = LasPointRecords(ReadBytes(las));
   const std::string decoded = LazRecords(laz);
   ASSERT_EQ(decoded.size(), expected.size());
   EXPECT_TRUE(decoded == expected) << "decoded records differ";
@@ -113,24 +97,10 @@ void ExpectLazMatchesLas(const std::string& laz, const std::string& las) {
   EXPECT_EQ(OpenPointReader(laz)->info().description.rfind("LAZ: ", 0), 0u);
 }
 
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
-
 // Opens and reads the whole file; "" when it reads, else the InputError (any other exception
 // fails the test).
 std::string ReadError(const std::string& path) {
-  try {
-    ReadWith(path, 1 << 16);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
+  return InputErrorMessage([&] { ReadWith(path, 1 << 16); });
 }
 
 // The byte offset of the laszip VLR's payload.
@@ -197,17 +167,17 @@ TEST(LazArith, SymbolModelChecksItsSize) {
 
 std::string VlrPayload(uint16_t compressor, std::vector<laz::Item> items, uint16_t coder = 0) {
   std::string p(34 + 6 * items.size(), '\0');
-  Put<uint16_t>(&p, 0, compressor);
-  Put<uint16_t>(&p, 2, coder);
+  PutLE<uint16_t>(&p, 0, compressor);
+  PutLE<uint16_t>(&p, 2, coder);
   p[4] = 2, p[5] = 2;
-  Put<uint32_t>(&p, 12, 50000);
-  Put<int64_t>(&p, 16, -1);
-  Put<int64_t>(&p, 24, -1);
-  Put<uint16_t>(&p, 32, static_cast<uint16_t>(items.size()));
+  PutLE<uint32_t>(&p, 12, 50000);
+  PutLE<int64_t>(&p, 16, -1);
+  PutLE<int64_t>(&p, 24, -1);
+  PutLE<uint16_t>(&p, 32, static_cast<uint16_t>(items.size()));
   for (size_t i = 0; i < items.size(); ++i) {
-    Put<uint16_t>(&p, 34 + 6 * i, items[i].type);
-    Put<uint16_t>(&p, 36 + 6 * i, items[i].size);
-    Put<uint16_t>(&p, 38 + 6 * i, items[i].version);
+    PutLE<uint16_t>(&p, 34 + 6 * i, items[i].type);
+    PutLE<uint16_t>(&p, 36 + 6 * i, items[i].size);
+    PutLE<uint16_t>(&p, 38 + 6 * i, items[i].version);
   }
   return p;
 }
@@ -331,8 +301,8 @@ TEST(LazRead, TruncatedFilesAreInputErrors) {
 
 TEST(LazRead, BitFlipsAreInputErrorsOrDecode) {
   const std::string bytes = ReadBytes(DataPath("1815.laz"));
-  const size_t point_data = Get<uint32_t>(bytes, 96);
-  const size_t table = static_cast<size_t>(Get<int64_t>(bytes, point_data));
+  const size_t point_data = GetLE<uint32_t>(bytes, 96);
+  const size_t table = static_cast<size_t>(GetLE<int64_t>(bytes, point_data));
   TempDir dir;
   const std::string path = dir.File("flip.laz");
   int errors = 0;
@@ -361,8 +331,8 @@ TEST(LazRead, BitFlipsAreInputErrorsOrDecode) {
 
 TEST(LazRead, AbsurdCountsAreInputErrors) {
   const std::string bytes = ReadBytes(DataPath("1815.laz"));
-  const size_t point_data = Get<uint32_t>(bytes, 96);
-  const size_t table = static_cast<size_t>(Get<int64_t>(bytes, point_data));
+  const size_t point_data = GetLE<uint32_t>(bytes, 96);
+  const size_t table = static_cast<size_t>(GetLE<int64_t>(bytes, point_data));
   TempDir dir;
   const std::string path = dir.File("bad.laz");
   auto error_after = [&](const std::function<void(std::string*)>& edit) {
@@ -375,21 +345,21 @@ TEST(LazRead, AbsurdCountsAreInputErrors) {
     return error.find(part) != std::string::npos;
   };
   // Header count: 2^32 - 1 in a LAS 1.2 file.
-  std::string e = error_after([](std::string* b) { Put<uint32_t>(b, 107, 0xFFFFFFFFu); });
+  std::string e = error_after([](std::string* b) { PutLE<uint32_t>(b, 107, 0xFFFFFFFFu); });
   EXPECT_TRUE(has(e, path) && has(e, "chunk table")) << e;
-  e = error_after([&](std::string* b) { Put<uint32_t>(b, table + 4, 0xFFFFFFFFu); });
+  e = error_after([&](std::string* b) { PutLE<uint32_t>(b, table + 4, 0xFFFFFFFFu); });
   EXPECT_TRUE(has(e, "lists 4294967295 chunks")) << e;
-  e = error_after([&](std::string* b) { Put<uint32_t>(b, table, 7); });
+  e = error_after([&](std::string* b) { PutLE<uint32_t>(b, table, 7); });
   EXPECT_TRUE(has(e, "version 7")) << e;
-  e = error_after([&](std::string* b) { Put<int64_t>(b, point_data, int64_t{1} << 50); });
+  e = error_after([&](std::string* b) { PutLE<int64_t>(b, point_data, int64_t{1} << 50); });
   EXPECT_TRUE(has(e, "chunk table offset")) << e;
-  e = error_after([&](std::string* b) { Put<int64_t>(b, point_data, -1); });
+  e = error_after([&](std::string* b) { PutLE<int64_t>(b, point_data, -1); });
   EXPECT_TRUE(has(e, "chunk table offset")) << e;  // the last 8 bytes are no offset here
   // The 64-bit count of a LAS 1.4 file: 2^40.
   const std::string v14 = ReadBytes(DataPath("point-time-1.4.las.laz"));
   std::string b = v14;
-  Put<uint32_t>(&b, 107, 0);
-  Put<uint64_t>(&b, 247, uint64_t{1} << 40);
+  PutLE<uint32_t>(&b, 107, 0);
+  PutLE<uint64_t>(&b, 247, uint64_t{1} << 40);
   WriteBytes(path, b);
   e = ReadError(path);
   EXPECT_TRUE(has(e, path) && has(e, "1099511627776")) << e;
@@ -404,14 +374,14 @@ TEST(LazRead, UnsupportedVlrsAreInputErrors) {
     std::string b = bytes;
     edit(&b);
     WriteBytes(path, b);
-    return ErrorOf([&] { OpenPointReader(path); });
+    return InputErrorMessage([&] { OpenPointReader(path); });
   };
-  std::string e = error_after([&](std::string* b) { Put<uint16_t>(b, payload, 1); });
+  std::string e = error_after([&](std::string* b) { PutLE<uint16_t>(b, payload, 1); });
   EXPECT_NE(e.find("compressor 1"), std::string::npos) << e;
   EXPECT_NE(e.find(path), std::string::npos) << e;
-  e = error_after([&](std::string* b) { Put<uint16_t>(b, payload + 34, 42); });
+  e = error_after([&](std::string* b) { PutLE<uint16_t>(b, payload + 34, 42); });
   EXPECT_NE(e.find("item type 42"), std::string::npos) << e;
-  e = error_after([&](std::string* b) { Put<uint16_t>(b, payload + 34 + 4, 1); });
+  e = error_after([&](std::string* b) { PutLE<uint16_t>(b, payload + 34 + 4, 1); });
   EXPECT_NE(e.find("version 1"), std::string::npos) << e;
   e = error_after([&](std::string* b) { (*b)[payload - 54 + 2] = 'X'; });  // no laszip VLR
   EXPECT_NE(e.find("laszip encoded"), std::string::npos) << e;

@@ -25,7 +25,6 @@
 namespace candi::photogrammetry {
 namespace {
 
-using candi::testing::FileExists;
 using candi::testing::ReadBytes;
 using candi::testing::RunCommand;
 using candi::testing::TempDir;

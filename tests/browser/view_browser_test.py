@@ -63,24 +63,35 @@ class Viewer:
         c.close()
         return r.status, data
 
+    def scene(self):
+        """The scene the viewer serves (GET /api/scene), parsed."""
+        status, data = self.request("GET", "/api/scene?token=" + self.token)
+        assert status == 200, (status, data[:300])
+        return json.loads(data)
+
     def close(self):
         self.process.terminate()
         self.process.wait(timeout=60)
         self.stderr = self.process.stderr.read()
 
 
+def foundation_archive(folder, count):
+    """The bundled foundation drawing as `count` points (`candi foundation --split`: one file per
+    layer) packed into folder/foundation.archive, an archive of four layers; its path."""
+    run("foundation", os.path.join(SOURCE, "examples", "borobudur", "foundation.dxf"), "-o",
+        os.path.join(folder, "foundation.ply"), "--count", str(count), "--no-self-intersection", "--split")
+    layers = sorted(f for f in os.listdir(folder) if f.startswith("foundation_") and f.endswith(".ply"))
+    assert len(layers) == 4, layers
+    archive = os.path.join(folder, "foundation.archive")
+    run("pack", *[os.path.join(folder, f) for f in layers], "-o", archive)
+    return archive
+
+
 class ViewInBrowser(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.dir = tempfile.mkdtemp(prefix="candi-view-test-")
-        ply = os.path.join(cls.dir, "foundation.ply")
-        run("foundation", os.path.join(SOURCE, "examples", "borobudur", "foundation.dxf"), "-o", ply,
-            "--count", "200000", "--no-self-intersection", "--split")
-        # One file per foundation layer: an archive of four layers.
-        layers = sorted(f for f in os.listdir(cls.dir) if f.startswith("foundation_") and f.endswith(".ply"))
-        assert len(layers) == 4, layers
-        cls.archive = os.path.join(cls.dir, "foundation.archive")
-        run("pack", *[os.path.join(cls.dir, f) for f in layers], "-o", cls.archive)
+        cls.archive = foundation_archive(cls.dir, 200000)
         cls.viewer = Viewer(cls.archive)
         cls.browser = devtools.Browser(640, 480)
         cls.browser.call("Page.enable")

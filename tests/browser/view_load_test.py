@@ -45,9 +45,7 @@ def main():
         archive = os.path.join(work, "a.archive")
         run("pack", ply, "-o", archive)
         viewer = Viewer(archive)
-        import urllib.request
-        scene = json.load(urllib.request.urlopen("http://127.0.0.1:%d/api/scene?token=%s" % (viewer.port, viewer.token)))
-        first = scene["first_view"]
+        first = viewer.scene()["first_view"]
         url = "ws://127.0.0.1:%d/ws?token=%s" % (viewer.port, viewer.token)
         thirds = 3
         frames = [[0] * thirds for _ in range(8)]

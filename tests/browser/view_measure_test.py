@@ -16,47 +16,28 @@ import json
 import math
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import devtools  # noqa: E402
+import view_browser_test  # noqa: E402
+from view_browser_test import HANG, Viewer, foundation_archive, run  # noqa: E402
 
-CANDI = SOURCE = None
-HANG = 600  # seconds: a hang, not a speed limit
 TOP = {"eye": [0.5, -0.5, 120.0], "target": [0.5, 0.5, 0.0], "up": [0, 1, 0], "projection": "perspective",
        "fov_y_deg": 40, "near": 0.01}
-
-
-def run(*args):
-    r = subprocess.run([CANDI, *args], capture_output=True, text=True)
-    if r.returncode != 0:
-        raise AssertionError("candi %s failed (%d):\n%s" % (" ".join(args), r.returncode, r.stderr[-3000:]))
-    return r
 
 
 class MeasureInBrowser(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.dir = tempfile.mkdtemp(prefix="candi-measure-test-")
-        ply = os.path.join(cls.dir, "foundation.ply")
-        run("foundation", os.path.join(SOURCE, "examples", "borobudur", "foundation.dxf"), "-o", ply,
-            "--count", "300000", "--no-self-intersection", "--split")
-        layers = sorted(f for f in os.listdir(cls.dir) if f.startswith("foundation_") and f.endswith(".ply"))
-        assert len(layers) == 4, layers
-        cls.archive = os.path.join(cls.dir, "foundation.archive")
-        run("pack", *[os.path.join(cls.dir, f) for f in layers], "-o", cls.archive)
-        cls.viewer = subprocess.Popen([CANDI, "view", cls.archive, "--port", "0"], stdout=subprocess.PIPE,
-                                      stderr=subprocess.PIPE, text=True)
-        line = cls.viewer.stdout.readline()
-        if not line.startswith("candi view: "):
-            cls.viewer.kill()
-            raise AssertionError("candi view printed %r:\n%s" % (line, cls.viewer.stderr.read()[-3000:]))
+        cls.archive = foundation_archive(cls.dir, 300000)
+        cls.viewer = Viewer(cls.archive)
         cls.browser = devtools.Browser(640, 480)
         cls.browser.call("Page.enable")
-        cls.browser.call("Page.navigate", url=line.split(": ", 1)[1].strip())
+        cls.browser.call("Page.navigate", url=cls.viewer.url)
         cls.browser.wait_for("window.candiViewer && candiViewer.stats.lastFrame !== null", HANG, "a first frame")
         cls.names = cls.browser.evaluate("candiViewer.settings().layers.map((_, i) => i)")
         cls.browser.evaluate("candiViewer.setCamera(%s)" % json.dumps(TOP))
@@ -64,8 +45,7 @@ class MeasureInBrowser(unittest.TestCase):
     @classmethod
     def tearDownClass(cls):
         cls.browser.close()
-        cls.viewer.terminate()
-        cls.viewer.wait(timeout=60)
+        cls.viewer.close()
         shutil.rmtree(cls.dir, ignore_errors=True)
 
     def converged(self):
@@ -190,7 +170,8 @@ class MeasureInBrowser(unittest.TestCase):
 if __name__ == "__main__":
     if len(sys.argv) < 3:
         sys.exit("usage: view_measure_test.py CANDI SOURCE_DIR")
-    CANDI, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+    view_browser_test.CANDI = os.path.abspath(sys.argv[1])
+    view_browser_test.SOURCE = os.path.abspath(sys.argv[2])
     if devtools.find_chromium() is None:
         print("SKIP: chromium is not installed (scripts/deps.sh installs it)")
         sys.exit(0)

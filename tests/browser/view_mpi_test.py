@@ -15,7 +15,7 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import devtools  # noqa: E402
 import view_browser_test  # noqa: E402
-from view_browser_test import Viewer, run  # noqa: E402
+from view_browser_test import Viewer, foundation_archive, run  # noqa: E402
 import websocket  # noqa: E402
 
 
@@ -41,18 +41,11 @@ def main():
         return 0
     work = tempfile.mkdtemp(prefix="candi-view-mpi-")
     try:
-        ply = os.path.join(work, "f.ply")
-        run("foundation", os.path.join(source, "examples", "borobudur", "foundation.dxf"), "-o", ply,
-            "--count", "100000", "--no-self-intersection", "--split")
-        layers = sorted(os.path.join(work, f) for f in os.listdir(work) if f.startswith("f_") and f.endswith(".ply"))
-        archive = os.path.join(work, "a.archive")
-        run("pack", *layers, "-o", archive)
+        archive = foundation_archive(work, 100000)
         launcher = ["mpirun", "--oversubscribe", "-np", "2"] + (["--allow-run-as-root"] if os.geteuid() == 0 else [])
         mpi = Viewer(archive, launcher=launcher)
         one = Viewer(archive)
-        import urllib.request
-        scene = json.load(urllib.request.urlopen("http://127.0.0.1:%d/api/scene?token=%s" % (one.port, one.token)))
-        view = dict(scene["first_view"], width=200, height=150)
+        view = dict(one.scene()["first_view"], width=200, height=150)
         settings = {"repeat_level": 20, "seed": 3, "background": [0, 0, 0], "brightness": "auto"}
         got = converged(mpi, view, settings)
         view_file = os.path.join(work, "view.json")
@@ -65,7 +58,7 @@ def main():
         failures = []
         if got != expected:
             failures.append("mpirun -np 2 candi view's converged frame differs from candi render's image")
-        hidden = dict(settings, layers=[1, 0, 1, 0.5][:len(layers)])
+        hidden = dict(settings, layers=[1, 0, 1, 0.5])
         a, b = converged(mpi, view, hidden), converged(one, view, hidden)
         if a != b:
             failures.append("with layer shares, the MPI viewer's frame differs from the one-process viewer's")

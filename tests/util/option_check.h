@@ -1,8 +1,12 @@
-// Test helper: the message of an options struct's Check().
+// Test helpers: the message of an options struct's Check(), and its rules checked one by one.
 #pragma once
 
+#include <gtest/gtest.h>
+
+#include <functional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace candi::testing {
 
@@ -15,6 +19,19 @@ std::string OptionCheckMessage(const Options& options) {
     return e.what();
   }
   return "no throw";
+}
+
+// Expects `valid` to pass Check(), and each of `breaks`, applied to its own copy of `valid`, to
+// make Check() throw std::invalid_argument (a failure names the break by its index).
+template <typename Options>
+void ExpectEachBreakRejected(const Options& valid,
+                             const std::vector<std::function<void(Options&)>>& breaks) {
+  EXPECT_EQ(OptionCheckMessage(valid), "no throw");
+  for (size_t i = 0; i < breaks.size(); ++i) {
+    Options o = valid;
+    breaks[i](o);
+    EXPECT_NE(OptionCheckMessage(o), "no throw") << "break " << i << " passed Check()";
+  }
 }
 
 }  // namespace candi::testing
