@@ -87,11 +87,35 @@ def foundation_archive(folder, count):
     return archive
 
 
-class ViewInBrowser(unittest.TestCase):
+def script_main(check, prefix):
+    """The main of a script test (view_load_test.py, view_mpi_test.py): CANDI and SOURCE from its
+    arguments, then check(work) in a temporary folder removed afterwards. check returns the list of
+    failures; the exit status is 1 when there are any (printed), else 0."""
+    if len(sys.argv) < 3:
+        sys.exit("usage: %s CANDI SOURCE_DIR" % os.path.basename(sys.argv[0]))
+    global CANDI, SOURCE
+    CANDI, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+    work = tempfile.mkdtemp(prefix=prefix)
+    try:
+        failures = check(work)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    if failures:
+        print("FAILED:\n" + "\n".join(failures))
+        return 1
+    print("OK")
+    return 0
+
+
+class ViewerPage(unittest.TestCase):
+    """A test class's page: `candi view` on the foundation archive of POINTS points, open in headless
+    chromium at 640x480, its first frame drawn. No tests of its own."""
+    POINTS = 200000
+
     @classmethod
     def setUpClass(cls):
         cls.dir = tempfile.mkdtemp(prefix="candi-view-test-")
-        cls.archive = foundation_archive(cls.dir, 200000)
+        cls.archive = foundation_archive(cls.dir, cls.POINTS)
         cls.viewer = Viewer(cls.archive)
         cls.browser = devtools.Browser(640, 480)
         cls.browser.call("Page.enable")
@@ -110,6 +134,9 @@ class ViewInBrowser(unittest.TestCase):
             "(() => { const f = candiViewer.stats.lastFrame; return f && f.converged && "
             "f.seq === candiViewer.stats.drawnSeq && f.seq === candiViewer.viewSeq() ? f : null; })()",
             HANG, "convergence")
+
+
+class ViewInBrowser(ViewerPage):
 
     def test_1_converged_frame_is_candi_render(self):
         frame = self.wait_converged()

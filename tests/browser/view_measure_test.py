@@ -15,47 +15,29 @@ import base64
 import json
 import math
 import os
-import shutil
 import sys
-import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import devtools  # noqa: E402
 import view_browser_test  # noqa: E402
-from view_browser_test import HANG, Viewer, foundation_archive, run  # noqa: E402
+from view_browser_test import HANG, ViewerPage, run  # noqa: E402
 
 TOP = {"eye": [0.5, -0.5, 120.0], "target": [0.5, 0.5, 0.0], "up": [0, 1, 0], "projection": "perspective",
        "fov_y_deg": 40, "near": 0.01}
 
 
-class MeasureInBrowser(unittest.TestCase):
+class MeasureInBrowser(ViewerPage):
+    POINTS = 300000
+
     @classmethod
     def setUpClass(cls):
-        cls.dir = tempfile.mkdtemp(prefix="candi-measure-test-")
-        cls.archive = foundation_archive(cls.dir, 300000)
-        cls.viewer = Viewer(cls.archive)
-        cls.browser = devtools.Browser(640, 480)
-        cls.browser.call("Page.enable")
-        cls.browser.call("Page.navigate", url=cls.viewer.url)
-        cls.browser.wait_for("window.candiViewer && candiViewer.stats.lastFrame !== null", HANG, "a first frame")
+        super().setUpClass()
         cls.names = cls.browser.evaluate("candiViewer.settings().layers.map((_, i) => i)")
         cls.browser.evaluate("candiViewer.setCamera(%s)" % json.dumps(TOP))
 
-    @classmethod
-    def tearDownClass(cls):
-        cls.browser.close()
-        cls.viewer.close()
-        shutil.rmtree(cls.dir, ignore_errors=True)
-
-    def converged(self):
-        return self.browser.wait_for(
-            "(() => { const f = candiViewer.stats.lastFrame; return f && f.converged && "
-            "f.seq === candiViewer.stats.drawnSeq && f.seq === candiViewer.viewSeq() ? f : null; })()",
-            HANG, "convergence")
-
     def pick_centre(self):
-        self.converged()
+        self.wait_converged()
         c = self.browser.evaluate("candiViewer.camera()")
         return self.browser.evaluate("candiViewer.pick(%f, %f)" % (c["width"] / 2, c["height"] / 2), await_promise=True)
 
@@ -97,7 +79,7 @@ class MeasureInBrowser(unittest.TestCase):
         self.assertNotIn(2, [h["layer"] for h in r["hits"]])
         for h in r["hits"]:
             self.assertLessEqual(h["point"][2], 10.0)
-        frame = self.converged()
+        frame = self.wait_converged()
         view = os.path.join(self.dir, "view.json")
         with open(view, "w") as f:
             f.write(b.evaluate("candiViewer.viewJson()"))
@@ -118,7 +100,7 @@ class MeasureInBrowser(unittest.TestCase):
     def test_3_measure_by_clicks(self):
         b = self.browser
         b.evaluate("candiViewer.setSettings({layers: [1, 1, 1, 1], clip: []})")
-        self.converged()
+        self.wait_converged()
         b.evaluate("document.getElementById('measure').checked = true")
         before = len(b.evaluate("candiViewer.measurements()"))
         for x, y in ((320, 240), (200, 300)):  # left of the panel
@@ -152,7 +134,7 @@ class MeasureInBrowser(unittest.TestCase):
     def test_4_section_export_holds_the_shown_layers(self):
         b = self.browser
         b.evaluate("candiViewer.setSettings({layers: [1, 1, 0, 1], clip: []})")  # C hidden
-        self.converged()
+        self.wait_converged()
         m = b.evaluate("candiViewer.exportSection({point: [0, 0, 0], normal: [0, 1, 0], thickness: 0.5})",
                        await_promise=True)
         self.assertEqual(m["type"], "section", m)

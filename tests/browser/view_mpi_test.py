@@ -10,12 +10,10 @@ import json
 import os
 import shutil
 import sys
-import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import devtools  # noqa: E402
-import view_browser_test  # noqa: E402
-from view_browser_test import Viewer, foundation_archive, run  # noqa: E402
+from view_browser_test import Viewer, foundation_archive, run, script_main  # noqa: E402
 import websocket  # noqa: E402
 
 
@@ -33,49 +31,37 @@ def converged(viewer, view, settings):
             return devtools.decode_png(data[4 + n:])
 
 
-def main():
-    candi, source = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
-    view_browser_test.CANDI, view_browser_test.SOURCE = candi, source
-    if shutil.which("mpirun") is None:
-        print("SKIP: mpirun is not installed (Debian: openmpi-bin)")
-        return 0
-    work = tempfile.mkdtemp(prefix="candi-view-mpi-")
-    try:
-        archive = foundation_archive(work, 100000)
-        launcher = ["mpirun", "--oversubscribe", "-np", "2"] + (["--allow-run-as-root"] if os.geteuid() == 0 else [])
-        mpi = Viewer(archive, launcher=launcher)
-        one = Viewer(archive)
-        view = dict(one.scene()["first_view"], width=200, height=150)
-        settings = {"repeat_level": 20, "seed": 3, "background": [0, 0, 0], "brightness": "auto"}
-        got = converged(mpi, view, settings)
-        view_file = os.path.join(work, "view.json")
-        with open(view_file, "w") as f:
-            json.dump(view, f)
-        reference = os.path.join(work, "ref.png")
-        run("render", archive, "--view", view_file, "-L", "20", "--seed", "3", "--background", "0,0,0", "-o", reference)
-        with open(reference, "rb") as f:
-            expected = devtools.decode_png(f.read())
-        failures = []
-        if got != expected:
-            failures.append("mpirun -np 2 candi view's converged frame differs from candi render's image")
-        hidden = dict(settings, layers=[1, 0, 1, 0.5])
-        a, b = converged(mpi, view, hidden), converged(one, view, hidden)
-        if a != b:
-            failures.append("with layer shares, the MPI viewer's frame differs from the one-process viewer's")
-        if a == got:
-            failures.append("hiding layers did not change the image")
-        mpi.close()
-        one.close()
-        if failures:
-            print("FAILED:\n" + "\n".join(failures) + "\n" + mpi.stderr[-3000:])
-            return 1
-        print("OK: the MPI viewer's frames equal candi render's and the one-process viewer's")
-        return 0
-    finally:
-        shutil.rmtree(work, ignore_errors=True)
+def check(work):
+    archive = foundation_archive(work, 100000)
+    launcher = ["mpirun", "--oversubscribe", "-np", "2"] + (["--allow-run-as-root"] if os.geteuid() == 0 else [])
+    mpi = Viewer(archive, launcher=launcher)
+    one = Viewer(archive)
+    view = dict(one.scene()["first_view"], width=200, height=150)
+    settings = {"repeat_level": 20, "seed": 3, "background": [0, 0, 0], "brightness": "auto"}
+    got = converged(mpi, view, settings)
+    view_file = os.path.join(work, "view.json")
+    with open(view_file, "w") as f:
+        json.dump(view, f)
+    reference = os.path.join(work, "ref.png")
+    run("render", archive, "--view", view_file, "-L", "20", "--seed", "3", "--background", "0,0,0", "-o", reference)
+    with open(reference, "rb") as f:
+        expected = devtools.decode_png(f.read())
+    failures = []
+    if got != expected:
+        failures.append("mpirun -np 2 candi view's converged frame differs from candi render's image")
+    hidden = dict(settings, layers=[1, 0, 1, 0.5])
+    a, b = converged(mpi, view, hidden), converged(one, view, hidden)
+    if a != b:
+        failures.append("with layer shares, the MPI viewer's frame differs from the one-process viewer's")
+    if a == got:
+        failures.append("hiding layers did not change the image")
+    mpi.close()
+    one.close()
+    return failures + ([mpi.stderr[-3000:]] if failures else [])
 
 
 if __name__ == "__main__":
-    if len(sys.argv) < 3:
-        sys.exit("usage: view_mpi_test.py CANDI SOURCE_DIR")
-    sys.exit(main())
+    if shutil.which("mpirun") is None:
+        print("SKIP: mpirun is not installed (Debian: openmpi-bin)")
+        sys.exit(0)
+    sys.exit(script_main(check, "candi-view-mpi-"))
