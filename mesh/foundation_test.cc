@@ -4,6 +4,7 @@
 
 #include "core/check.h"
 #include "tests/util/dxf_text.h"
+#include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
 namespace candi::mesh {
@@ -21,10 +22,7 @@ DxfDrawing Drawing(const TempDir& dir, const DxfText& text) {
 TEST(FoundationOptions, DefaultsPass) { EXPECT_NO_THROW(FoundationOptions().Check()); }
 
 TEST(MeshModuleOptions, DefaultsPassCheck) {
-  EXPECT_NO_THROW(DxfReadOptions().Check());
-  EXPECT_NO_THROW(SectionOptions().Check());
-  EXPECT_NO_THROW(ProfileOptions().Check());
-  EXPECT_NO_THROW(RevolveOptions().Check());
+  testing::ExpectDefaultsPass<DxfReadOptions, SectionOptions, ProfileOptions, RevolveOptions>();
   EXPECT_NO_THROW(SurfaceMeshOptions().Check());  // flags only: every value is valid
   EXPECT_NO_THROW(MeshCheckOptions().Check());    // flags only: every value is valid
   EXPECT_NO_THROW(FoundationOptions().Check());

@@ -60,13 +60,8 @@ double MeanRegion(const ImageF& image, int channel, int x0, int y0, int x1, int 
 }
 
 TEST(RenderModuleOptions, DefaultsPassCheck) {
-  EXPECT_NO_THROW(SpbrOptions().Check());
-  EXPECT_NO_THROW(SpbrStreamOptions().Check());
-  EXPECT_NO_THROW(SplatCloudOptions().Check());
-  EXPECT_NO_THROW(ReferenceOptions().Check());
-  EXPECT_NO_THROW(PackOptions().Check());
-  EXPECT_NO_THROW(ArchiveRenderOptions().Check());
-  EXPECT_NO_THROW(ClippedReadOptions().Check());
+  testing::ExpectDefaultsPass<SpbrOptions, SpbrStreamOptions, SplatCloudOptions, ReferenceOptions,
+                              PackOptions, ArchiveRenderOptions, ClippedReadOptions>();
 }
 
 TEST(ArchiveRenderOptions, LayerSharesAndEnsemblesNameTheirFields) {

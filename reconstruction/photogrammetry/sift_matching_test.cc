@@ -115,15 +115,9 @@ TEST(MatchSiftBruteForce, EqualsColmapsCriterionExactly) {
 }
 
 TEST(PhotogrammetryModuleOptions, DefaultsPassCheck) {
-  EXPECT_NO_THROW(SiftMatchOptions().Check());
-  EXPECT_NO_THROW(SfmOptions().Check());
-  EXPECT_NO_THROW(PatchMatchOptions().Check());
-  EXPECT_NO_THROW(FusionOptions().Check());
-  EXPECT_NO_THROW(CleanOptions().Check());
-  EXPECT_NO_THROW(RegistrationOptions().Check());
-  EXPECT_NO_THROW(SimilarityFitOptions().Check());
-  EXPECT_NO_THROW(ColorCorrectionOptions().Check());
-  EXPECT_NO_THROW(SyntheticViewsOptions().Check());
+  testing::ExpectDefaultsPass<SiftMatchOptions, SfmOptions, PatchMatchOptions, FusionOptions,
+                              CleanOptions, RegistrationOptions, SimilarityFitOptions,
+                              ColorCorrectionOptions, SyntheticViewsOptions>();
 }
 
 TEST(SiftMatchOptions, BadValuesNameTheFieldAndTheMatchersCheckThem) {

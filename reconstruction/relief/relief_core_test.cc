@@ -36,19 +36,10 @@ ImageF Ramp(int w, int h) {
 }
 
 TEST(ReliefOptions, DefaultsPass) {
-  EXPECT_NO_THROW(SynthOptions().Check());
-  EXPECT_NO_THROW(OldPhotoOptions().Check());
-  EXPECT_NO_THROW(ReliefPointsOptions().Check());
-  EXPECT_NO_THROW(TileOptions().Check());
-  EXPECT_NO_THROW(PatchOptions().Check());
-  EXPECT_NO_THROW(AugmentOptions().Check());
-  EXPECT_NO_THROW(ScanRasterOptions().Check());
-  EXPECT_NO_THROW(SurfaceMetricOptions().Check());
-  EXPECT_NO_THROW(NetOptions().Check());
-  EXPECT_NO_THROW(PredictOptions().Check());
-  EXPECT_NO_THROW(TrainOptions().Check());
-  EXPECT_NO_THROW(PhotoPairOptions().Check());
-  EXPECT_NO_THROW(PanelPlacementOptions().Check());
+  testing::ExpectDefaultsPass<SynthOptions, OldPhotoOptions, ReliefPointsOptions, TileOptions,
+                              PatchOptions, AugmentOptions, ScanRasterOptions, SurfaceMetricOptions,
+                              NetOptions, PredictOptions, TrainOptions, PhotoPairOptions,
+                              PanelPlacementOptions>();
   SynthOptions s;
   s.width = 8;
   EXPECT_THROW(s.Check(), std::invalid_argument);

@@ -21,6 +21,12 @@ std::string OptionCheckMessage(const Options& options) {
   return "no throw";
 }
 
+// Expects a default-constructed Options to pass Check(), for each of the types given.
+template <typename... Options>
+void ExpectDefaultsPass() {
+  for (const std::string& message : {OptionCheckMessage(Options())...}) EXPECT_EQ(message, "no throw");
+}
+
 // Expects `valid` to pass Check(), and each of `breaks`, applied to its own copy of `valid`, to
 // make Check() throw std::invalid_argument (a failure names the break by its index).
 template <typename Options>
