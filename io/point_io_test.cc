@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "core/check.h"
+#include "tests/util/input_error.h"
 #include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
@@ -15,12 +16,7 @@ using testing::TempDir;
 using testing::WriteBytes;
 
 std::string ErrorOf(const std::string& path) {
-  try {
-    DetectPointFormat(path);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
+  return testing::InputErrorMessage([&] { DetectPointFormat(path); });
 }
 
 TEST(DetectPointFormat, ExtensionConfirmedByContent) {

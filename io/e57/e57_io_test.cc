@@ -11,6 +11,7 @@
 #include "io/e57/e57_format.h"
 #include "io/e57/e57_writer.h"
 #include "io/point_io.h"
+#include "tests/util/input_error.h"
 #include "tests/util/test_util.h"
 
 namespace candi::io {
@@ -26,12 +27,7 @@ std::string DataFile(const std::string& name) {
 
 // The error message of reading `path` entirely, "" when it reads.
 std::string ReadError(const std::string& path) {
-  try {
-    ReadPointCloud(path);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
+  return testing::InputErrorMessage([&] { ReadPointCloud(path); });
 }
 
 E57Field Field(const std::string& name, E57FieldType type, std::vector<double> values,

@@ -19,6 +19,7 @@
 #include "reconstruction/photogrammetry/registration.h"
 #include "reconstruction/photogrammetry/similarity_fit.h"
 #include "reconstruction/photogrammetry/synthetic_views.h"
+#include "tests/util/input_error.h"
 #include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
@@ -229,12 +230,7 @@ TEST(ClearBorderDescriptors, ClearsTheOutermostPixelsOnly) {
 }
 
 std::string ErrorOf(const std::string& path) {
-  try {
-    ReadColmapDescriptors(path);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
+  return testing::InputErrorMessage([&] { ReadColmapDescriptors(path); });
 }
 
 TEST(ReadColmapDescriptors, MissingAndNonDatabaseFilesAreNamed) {
