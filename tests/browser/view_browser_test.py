@@ -8,6 +8,7 @@ render` of the same view, seed and L (bit for bit, as sent and as drawn on the c
 drag moves the camera and brings new frames; bad requests and messages are refused and the server
 keeps serving. Timeouts only catch hangs; no verdict depends on speed.
 """
+import atexit
 import base64
 import http.client
 import json
@@ -47,6 +48,7 @@ class Viewer:
         self.url = line.split(": ", 1)[1].strip()
         self.port = int(self.url.split(":")[2].split("/")[0])
         self.token = self.url.split("token=")[1]
+        atexit.register(self.stop)
 
     def request(self, method, path, headers=None, body=None):
         c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=HANG)
@@ -68,6 +70,16 @@ class Viewer:
         status, data = self.request("GET", "/api/scene?token=" + self.token)
         assert status == 200, (status, data[:300])
         return json.loads(data)
+
+    def stop(self):
+        """Ends the process if it still runs: at exit, after a failure that skipped close() (mpirun
+        passes SIGTERM on to its ranks, which SIGKILL would leave running)."""
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
 
     def close(self):
         self.process.terminate()
