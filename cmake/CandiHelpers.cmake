@@ -27,13 +27,18 @@ function(candi_library folder)
   endif()
 endfunction()
 
-# Test code is compiled for build speed: -O1 (the code under test is in the -O3 libraries) and a
-# precompiled header of what every test includes (GoogleTest and Eigen cost ~8 s of parsing per
-# translation unit on the 2-core machines this is built on).
+# Test code is compiled for build speed: -O1 (the code under test is in the -O3 libraries) and,
+# for a target of three or more sources, a precompiled header of what every test includes
+# (GoogleTest and Eigen cost ~8 s of parsing per translation unit on the 2-core machines this is
+# built on; the header itself costs about as much, so it pays only from the second source on).
 function(candi_test_compile_options target)
   target_compile_options(${target} PRIVATE -O1)
-  target_precompile_headers(${target} PRIVATE <gtest/gtest.h> <Eigen/Core> <algorithm> <cmath>
-                            <cstdint> <filesystem> <functional> <memory> <string> <vector>)
+  get_target_property(sources ${target} SOURCES)
+  list(LENGTH sources count)
+  if(count GREATER_EQUAL 3)
+    target_precompile_headers(${target} PRIVATE <gtest/gtest.h> <Eigen/Core> <algorithm> <cmath>
+                              <cstdint> <filesystem> <functional> <memory> <string> <vector>)
+  endif()
 endfunction()
 
 # candi_tests(<folder> [DEPS ...] [EXCLUDE regex...]): one test executable candi_<folder>_test from the unit tests
