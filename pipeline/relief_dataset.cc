@@ -104,12 +104,17 @@ std::set<uint32_t> HoldoutIds(const photogrammetry::ColmapModel& model, const st
 
 }  // namespace
 
+void ReliefDatasetOptions::Check() const {
+  CANDI_CHECK_OPTION_GT(raster.pixels_per_m, 0);
+  CANDI_CHECK_OPTION_GT(panel_width_m, 0);
+  CANDI_CHECK_OPTION_IN(val_fraction, 0, 0.9);
+  patches.Check();
+  photo_pairs.Check();
+}
+
 ReliefDatasetSummary BuildReliefDataset(const ReliefDatasetOptions& a, const std::vector<std::string>& inputs_given,
                                         const std::string& output_dir) {
-  if (!(a.raster.pixels_per_m > 0) || !(a.panel_width_m > 0)) {
-    throw std::invalid_argument("--pixels-per-m and --panel-width-m must be > 0");
-  }
-  a.patches.Check();
+  a.Check();
   const std::vector<std::string> inputs = ExpandInputs(inputs_given);
   const size_t n_val = inputs.size() > 1 ? static_cast<size_t>(std::ceil(a.val_fraction * inputs.size())) : 0;
   std::vector<TrainingPair> train, val;

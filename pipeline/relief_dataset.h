@@ -30,6 +30,7 @@ struct ReliefDatasetOptions {
   std::string colmap, images;
   std::vector<std::string> holdout;       // image names (or stems) kept out of training
   relief::PhotoPairOptions photo_pairs;   // pair size (max_side), occlusion, depth normalisation
+  void Check() const;
 };
 
 struct ReliefDatasetSummary {

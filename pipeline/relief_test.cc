@@ -4,10 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "io/image/png_io.h"
 #include "io/point_io.h"
+#include "pipeline/relief_dataset.h"
 #include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
@@ -48,6 +51,18 @@ TEST(PanelDepthOptions, DefaultsPassAndRulesAreChecked) {
       [](PanelDepthOptions& o) { o.width_m = -1; },
       [](PanelDepthOptions& o) { o.predict.tiles.tile = 100; },  // not a multiple of 32
   });
+}
+
+TEST(ReliefDatasetOptions, DefaultsPassAndRulesAreNamed) {
+  ExpectEachBreakRejected<ReliefDatasetOptions>({}, {
+      [](ReliefDatasetOptions& o) { o.raster.pixels_per_m = 0; },
+      [](ReliefDatasetOptions& o) { o.panel_width_m = std::nan(""); },
+      [](ReliefDatasetOptions& o) { o.val_fraction = 0.95; },
+      [](ReliefDatasetOptions& o) { o.patches.patch = 48; },  // not a multiple of 32
+  });
+  ReliefDatasetOptions o;
+  o.raster.pixels_per_m = 0;
+  EXPECT_EQ(testing::OptionCheckMessage(o), "ReliefDatasetOptions::raster.pixels_per_m = 0; must be > 0");
 }
 
 TEST(PredictPanelDepth, ThePhotosSizeInLevelsAndItsPoints) {
