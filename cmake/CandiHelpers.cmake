@@ -7,6 +7,19 @@ function(candi_warnings target)
   endif()
 endfunction()
 
+# candi_precompile(<target>): a precompiled header of the standard and Eigen headers most of
+# candi's sources include (Eigen/Core and Eigen/Geometry alone cost ~2.5 s of parsing per
+# translation unit). Each target builds its own (~6 s), with its own flags, so it pays from about
+# four sources on; smaller targets do without.
+function(candi_precompile target)
+  get_target_property(sources ${target} SOURCES)
+  list(LENGTH sources count)
+  if(count GREATER_EQUAL 5)
+    target_precompile_headers(${target} PRIVATE <Eigen/Core> <Eigen/Geometry> <algorithm> <cmath>
+                              <cstdint> <filesystem> <functional> <memory> <string> <vector>)
+  endif()
+endfunction()
+
 function(candi_library folder)
   cmake_parse_arguments(ARG "" "" "PUBLIC_DEPS;PRIVATE_DEPS;EXCLUDE" ${ARGN})
   file(GLOB_RECURSE sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cc)
@@ -20,6 +33,7 @@ function(candi_library folder)
     target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR})
     target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
     candi_warnings(${target})
+    candi_precompile(${target})
   else()
     add_library(${target} INTERFACE)
     target_include_directories(${target} INTERFACE ${PROJECT_SOURCE_DIR})
@@ -27,24 +41,32 @@ function(candi_library folder)
   endif()
 endfunction()
 
-# Test code is compiled for build speed: -O1 (the code under test is in the -O3 libraries) and,
-# for a target of three or more sources, a precompiled header of what every test includes
-# (GoogleTest and Eigen cost ~8 s of parsing per translation unit on the 2-core machines this is
-# built on; the header itself costs about as much, so it pays only from the second source on).
+# Test code is compiled for build speed: -O1 (the code under test is in the -O3 libraries) and a
+# precompiled header of what every test includes (GoogleTest and Eigen cost ~8 s of parsing per
+# translation unit on the 2-core machines this is built on). The header is built once, by
+# candi_test_pch (CMakeLists.txt), and shared by every test target whose flags match it; a target
+# whose dependencies add definitions that reach those headers (libtorch's -D_GLIBCXX_USE_CXX11_ABI)
+# says OWN_PCH and builds its own when it has three or more sources.
+set(CANDI_TEST_PCH_HEADERS <gtest/gtest.h> <Eigen/Core> <algorithm> <cmath> <cstdint> <filesystem>
+    <functional> <memory> <string> <vector>)
 function(candi_test_compile_options target)
+  cmake_parse_arguments(ARG "OWN_PCH" "" "" ${ARGN})
   target_compile_options(${target} PRIVATE -O1)
+  if(NOT ARG_OWN_PCH)
+    target_precompile_headers(${target} REUSE_FROM candi_test_pch)
+    return()
+  endif()
   get_target_property(sources ${target} SOURCES)
   list(LENGTH sources count)
   if(count GREATER_EQUAL 3)
-    target_precompile_headers(${target} PRIVATE <gtest/gtest.h> <Eigen/Core> <algorithm> <cmath>
-                              <cstdint> <filesystem> <functional> <memory> <string> <vector>)
+    target_precompile_headers(${target} PRIVATE ${CANDI_TEST_PCH_HEADERS})
   endif()
 endfunction()
 
 # candi_tests(<folder> [DEPS ...] [EXCLUDE regex...]): one test executable candi_<folder>_test from the unit tests
 # beside the sources (<folder>/**/*_test.cc), registered with ctest at test time.
 function(candi_tests folder)
-  cmake_parse_arguments(ARG "" "" "DEPS;EXCLUDE" ${ARGN})
+  cmake_parse_arguments(ARG "OWN_PCH" "" "DEPS;EXCLUDE" ${ARGN})
   if(NOT CANDI_BUILD_TESTS)
     return()
   endif()
@@ -59,7 +81,11 @@ function(candi_tests folder)
   add_executable(${target} ${tests})
   target_link_libraries(${target} PRIVATE candi_${folder} candi_test_util ${ARG_DEPS} GTest::gtest_main)
   candi_warnings(${target})
-  candi_test_compile_options(${target})
+  if(ARG_OWN_PCH)
+    candi_test_compile_options(${target} OWN_PCH)
+  else()
+    candi_test_compile_options(${target})
+  endif()
   include(GoogleTest)
   # Discovery runs the executable at test time; 600 s, not 60, so that a loaded machine (libtorch
   # alone takes seconds to load) cannot fail a run by timing (`make test-stress`).
