@@ -272,6 +272,7 @@ void OpenSource(const ViewArgs& a, const render::Orientation& orientation, Opene
 }
 
 int RunView(const ViewArgs& a) {
+  a.server.Check();  // before the source is opened (or packed)
   std::unique_ptr<render::mpi::Session> session;
   if (render::mpi::LaunchedByMpi()) session = std::make_unique<render::mpi::Session>(/*serialized=*/true);
   if (session && session->rank() != 0) {
@@ -309,8 +310,13 @@ int RunView(const ViewArgs& a) {
   view::ServerOptions options = a.server;
   options.log = [](const std::string& line) { LogInfo(line); };
   options.section = [&source, &archive, threads = a.server.threads](uint64_t seq, const view::SectionRequest& r,
-                                                                     const view::ViewState& state) {
-    return pipeline::ExportViewerSection(source.archive_dir, archive.manifest(), threads, seq, r, state);
+                                                                     const view::ViewState& state,
+                                                                     const view::SectionControl& control) {
+    pipeline::SectionOptions o;
+    o.threads = threads;
+    o.max_points = control.max_points;
+    o.checkpoint = control.checkpoint;
+    return pipeline::ExportViewerSection(source.archive_dir, archive.manifest(), o, seq, r, state);
   };
   if (a.server.host != "127.0.0.1" && a.server.host != "localhost" && a.server.host != "::1") {
     LogWarning("serving on " + a.server.host + ": anyone who can reach this machine and has the address with its "
@@ -350,6 +356,12 @@ void AddView(Command& root) {
            "the first view's up and side from its cameras");
   c.Option("--columns", a.columns, "XYZ/PTS column spec");
   c.Option("--threads", a.server.threads, "Render threads (0: all)").Range(0, 256);
+  c.Option("--max-pages", a.server.max_clients, "Pages open at once (default 16)");
+  c.Option("--max-pixels", a.server.max_pixels, "Image pixels of all open pages together (16 bytes each; default "
+           "33554432: 16 full-HD pages or two of 4096x4096)");
+  c.Option("--section-seconds", a.server.section_seconds, "A section export's time limit, s (default 120)");
+  c.Option("--section-max-points", a.server.section_max_points, "The most points an exported slab may hold "
+           "(default 20000000)");
   AddClip(c, a.clip);
   c.Run([&a] { return RunView(a); });
   c.Footer("Example: candi view borobudur_out/   (then open the printed http://127.0.0.1:8765/?token=... address)");

@@ -100,8 +100,13 @@ void ReadArchiveSlab(const SectionOptions& o, const std::string& dir, const Sect
   for (size_t k = 0; k < m.layers.size(); ++k) {
     if (read.layers.empty() || read.layers[k]) slab->Layer(m.layers[k].name);
   }
+  read.max_points = o.max_points;
   ConsoleProgress progress("section: reading the chunks the slab crosses");
-  const render::ClippedPoints got = render::ReadClipped(read, archive, regions, progress.Callback());
+  const ProgressCallback shown = progress.Callback();
+  const render::ClippedPoints got = render::ReadClipped(read, archive, regions, [&](uint64_t done, uint64_t total) {
+    if (o.checkpoint) o.checkpoint();
+    shown(done, total);
+  });
   progress.Finish();
   for (size_t i = 0; i < got.cloud.size(); ++i) {
     const Eigen::Vector3d world = got.cloud.WorldPosition(i);
@@ -156,6 +161,12 @@ void ReadFileSlab(const SectionOptions& o, const std::string& path, const Sectio
       }
     }
     slab->points_read += chunk.size();
+    uint64_t held = 0;
+    for (const auto& d : slab->drawing) held += d.size();
+    if (o.max_points > 0 && held > o.max_points) {
+      throw std::length_error("the slab holds more than " + std::to_string(o.max_points) + " points (the limit)");
+    }
+    if (o.checkpoint) o.checkpoint();
     progress.Update(reader->points_read(),
                     reader->info().count == io::kUnknownCount ? 0 : reader->info().count);
   }
@@ -195,6 +206,7 @@ std::vector<SectionLayerResult> ExtractLines(const SectionOptions& o, const Slab
   lo.max_gap = o.max_gap;
   lo.Check();
   for (size_t k = 0; k < slab.names.size(); ++k) {
+    if (o.checkpoint) o.checkpoint();
     SectionLayerResult r;
     r.name = slab.names[k];
     r.colour = sampling::DefaultLayerColour(r.name, k).rgb;
@@ -386,6 +398,7 @@ SectionCut CutSection(const SectionOptions& o, const std::vector<std::string>& i
   cut.layers = ExtractLines(o, slab, Eigen::Vector2d(std::round(cut.window.x0), std::round(cut.window.y0)));
   slab.lines_s = lap.Lap();
   if (cut.Points() == 0) LogWarning("section: no points within the slab (" + cut.describe + ")");
+  if (o.checkpoint) o.checkpoint();
   cut.image = RenderSlab(o, slab, cut.layers, cut.window, section.thickness());
   slab.image_s = lap.Lap();
   cut.scale_bar_m = section::DrawScaleBar(cut.window, o.background, &cut.image);
@@ -413,10 +426,11 @@ void WriteSection(const SectionCut& cut, const SectionPath& section, const std::
   WriteFileAtomic((out / "section.json").string(), cut.summary);
 }
 
-std::string ExportViewerSection(const std::string& archive_dir, const render::ArchiveManifest& m, int threads,
-                                uint64_t seq, const view::SectionRequest& r, const view::ViewState& state) {
-  SectionOptions o;
-  o.threads = threads;
+std::string ExportViewerSection(const std::string& archive_dir, const render::ArchiveManifest& m,
+                                const SectionOptions& base, uint64_t seq, const view::SectionRequest& r,
+                                const view::ViewState& state) {
+  SectionOptions o = base;
+  o.layers.clear();
   const std::vector<double>& f = state.settings.layer_fraction;
   for (size_t k = 0; k < f.size() && k < m.layers.size(); ++k) {
     if (f[k] > 0) o.layers.push_back(m.layers[k].name);
@@ -425,6 +439,7 @@ std::string ExportViewerSection(const std::string& archive_dir, const render::Ar
   if (o.layers.size() == m.layers.size()) o.layers.clear();
   const SectionPath path = SectionPath::Plane(r.point, r.normal, r.thickness);
   const SectionCut cut = CutSection(o, {archive_dir}, path, state.settings.clip);
+  if (o.checkpoint) o.checkpoint();
   return nlohmann::json{{"type", "section"},
                         {"seq", seq},
                         {"summary", nlohmann::json::parse(cut.summary)},

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,12 @@ struct SectionOptions {
   std::vector<std::string> layers;  // only these layers (empty: all)
   std::string columns;          // XYZ/PTS column spec of point files
   int threads = 0;              // 0: all
+  // The most slab points (0: no limit): more is std::length_error, raised while reading, before
+  // they are all held (the viewer's exports are bounded so).
+  uint64_t max_points = 0;
+  // Called between steps of the cut (chunk groups, layers, the image); an exception it throws
+  // aborts the cut and passes through (the viewer cancels an export so). May be null.
+  std::function<void()> checkpoint;
   void Check() const;
 };
 
@@ -66,9 +73,10 @@ void WriteSection(const SectionCut& cut, const section::SectionPath& path, const
 
 // The viewer's "export section": the slab of the page's request through the archive it shows,
 // with the page's clipping and only its shown layers (view/protocol.h), as the reply message the
-// page receives (JSON: type, seq, summary, dxf, svg, csv, png_base64).
+// page receives (JSON: type, seq, summary, dxf, svg, csv, png_base64). `base` gives the threads,
+// max_points and checkpoint; its layers are replaced by the page's shown ones.
 std::string ExportViewerSection(const std::string& archive_dir, const render::ArchiveManifest& manifest,
-                                int threads, uint64_t seq, const view::SectionRequest& request,
+                                const SectionOptions& base, uint64_t seq, const view::SectionRequest& request,
                                 const view::ViewState& state);
 
 }  // namespace candi::pipeline

@@ -107,6 +107,12 @@ TEST(WriteSection, TheFiveFiles) {
   EXPECT_EQ(io::ReadPng(dir.File("out/section.png")).text.at("candi:section"), cut.describe);
 }
 
+SectionOptions OneThread() {
+  SectionOptions o;
+  o.threads = 1;
+  return o;
+}
+
 // The viewer's export sends what `candi section` writes: the same DXF, SVG, CSV and PNG bytes.
 TEST(ExportViewerSection, TheBytesCandiSectionWrites) {
   TempDir dir;
@@ -121,7 +127,7 @@ TEST(ExportViewerSection, TheBytesCandiSectionWrites) {
   request.thickness = 0.1;
   view::ViewState state;
   const nlohmann::json reply =
-      nlohmann::json::parse(ExportViewerSection(dir.File("archive"), archive.manifest(), 1, 7, request, state));
+      nlohmann::json::parse(ExportViewerSection(dir.File("archive"), archive.manifest(), OneThread(), 7, request, state));
   EXPECT_EQ(reply.at("type"), "section");
   EXPECT_EQ(reply.at("seq"), 7);
 
@@ -137,10 +143,46 @@ TEST(ExportViewerSection, TheBytesCandiSectionWrites) {
   // The page's shown layers only; every layer hidden is refused.
   state.settings.layer_fraction = {0, 1};
   const nlohmann::json east =
-      nlohmann::json::parse(ExportViewerSection(dir.File("archive"), archive.manifest(), 1, 8, request, state));
+      nlohmann::json::parse(ExportViewerSection(dir.File("archive"), archive.manifest(), OneThread(), 8, request, state));
   EXPECT_EQ(east.at("summary").at("layers").size(), 1u);
   state.settings.layer_fraction = {0, 0};
-  EXPECT_THROW(ExportViewerSection(dir.File("archive"), archive.manifest(), 1, 9, request, state), std::invalid_argument);
+  EXPECT_THROW(ExportViewerSection(dir.File("archive"), archive.manifest(), OneThread(), 9, request, state), std::invalid_argument);
+}
+
+// The viewer's bounds on an export: a slab of more points than max_points is refused while it is
+// read (from an archive and from point files), and the checkpoint's exception aborts the cut.
+TEST(CutSection, MaxPointsAndCheckpointBoundTheWork) {
+  TempDir dir;
+  io::WritePointCloud(dir.File("west.ply"), Wall(0, 0, 1));
+  io::WritePointCloud(dir.File("east.ply"), Wall(5, 1, 2));
+  render::PackFiles(render::PackOptions(), {dir.File("west.ply"), dir.File("east.ply")}, "", dir.File("archive"));
+  // A horizontal slab 1 m thick holds a third of each wall: ~13,300 points.
+  const section::SectionPath path = section::SectionPath::Plane(kOrigin + Eigen::Vector3d(0, 0, 1.5),
+                                                                Eigen::Vector3d::UnitZ(), 1.0);
+  SectionOptions o = OneThread();
+  const uint64_t all = CutSection(o, {dir.File("archive")}, path, ClipRegion()).Points();
+  ASSERT_GT(all, 10000u);
+  o.max_points = all;  // exactly the slab: allowed
+  EXPECT_EQ(CutSection(o, {dir.File("archive")}, path, ClipRegion()).Points(), all);
+  o.max_points = all - 1;
+  for (const std::string& input : {dir.File("archive"), dir.File("west.ply")}) {
+    if (input != dir.File("archive")) o.max_points = all / 4;  // one wall holds about half
+    try {
+      CutSection(o, {input}, path, ClipRegion());
+      ADD_FAILURE() << input << ": no error";
+    } catch (const std::length_error& e) {
+      EXPECT_NE(std::string(e.what()).find("more than " + std::to_string(o.max_points) + " points"), std::string::npos)
+          << e.what();
+    }
+  }
+  struct Stop {};
+  int calls = 0;
+  o.max_points = 0;
+  o.checkpoint = [&] {
+    if (++calls == 2) throw Stop{};
+  };
+  EXPECT_THROW(CutSection(o, {dir.File("archive")}, path, ClipRegion()), Stop);
+  EXPECT_EQ(calls, 2);
 }
 
 }  // namespace

@@ -90,6 +90,11 @@ ClippedPoints ReadClipped(const ClippedReadOptions& options, const Archive& arch
       out.region.insert(out.region.end(), p.region.begin(), p.region.end());
       out.points_read += m.chunks[crossed[g + i]].count;
     }
+    if (options.max_points > 0 && out.cloud.size() > options.max_points) {
+      throw std::length_error("the clipped region holds more than " + std::to_string(options.max_points) +
+                              " points (the limit; " + std::to_string(out.cloud.size()) + " in the first " +
+                              std::to_string(g + n) + " of " + std::to_string(crossed.size()) + " chunks)");
+    }
     archive.Release(std::vector<size_t>(crossed.begin() + g, crossed.begin() + g + n));
     if (progress) progress(out.points_read, total);
   }

@@ -24,6 +24,8 @@ struct ClippedReadOptions {
   std::vector<char> layers;  // per archive layer: read it (empty: every layer)
   bool verify = true;        // check each read chunk's hash
   int threads = 0;           // 0: as TBB allows
+  // The most points kept (0: no limit): more is std::length_error, before they are all held.
+  uint64_t max_points = 0;
   void Check() const {}
 };
 

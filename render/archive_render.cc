@@ -24,6 +24,7 @@ void ArchiveRenderOptions::Check() const {
   CANDI_CHECK_OPTION_IN(threads, 0, 256);
   CANDI_CHECK_OPTION_EACH_IN(layer_fraction, 0, 16);
   clip.Check("ArchiveRenderOptions::clip");
+  CANDI_CHECK_OPTION(sample > 0 && sample <= 1, sample, "in (0, 1]");
   const int end = ensemble_end == 0 ? repeat_level : ensemble_end;
   CANDI_CHECK_OPTION_PAIR(ensemble_begin >= 0 && end <= repeat_level && ensemble_begin <= end,
                           ensemble_begin, ensemble_end,
@@ -197,8 +198,21 @@ uint64_t DrawShare(const ArchiveRenderOptions& o, const Archive& archive, const 
       selection.seed = o.seed;
       selection.base = share.base + e;
       selection.point_size = o.point_size;
-      for (const PointRun& run : runs) {
-        drawn += SplatQuantized(kernel.transform, kernel.projection, PointsOf(c, words, run, clip), selection, buffers);
+      for (PointRun run : runs) {
+        if (o.sample < 1) {
+          const double n = std::ceil(o.sample * static_cast<double>(run.end - run.begin));
+          run.end = run.begin + std::min(run.end - run.begin, static_cast<uint64_t>(n));
+        }
+        if (!o.cancel) {
+          drawn += SplatQuantized(kernel.transform, kernel.projection, PointsOf(c, words, run, clip), selection, buffers);
+          continue;
+        }
+        // Pieces of the run, in order (the same image), with a poll between them.
+        for (uint64_t b = run.begin; b < run.end; b += kCancelPoints) {
+          if (o.cancel()) throw RenderCancelled{};
+          const PointRun piece{b, std::min(run.end, b + kCancelPoints)};
+          drawn += SplatQuantized(kernel.transform, kernel.projection, PointsOf(c, words, piece, clip), selection, buffers);
+        }
       }
     }
   }
@@ -260,18 +274,26 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
     for (int pass = 0; pass < passes; ++pass) {
       const int first = e_begin + pass * per_pass, K = std::min(e_end, first + per_pass) - first;
       for (const auto& [g, g_end] : groups) {
-        ParallelFor(0, threads, [&, g = g, g_end = g_end](int t) {
-          // Sharer s of a replica draws the pass's ensembles [K s / S, K (s + 1) / S).
-          const int replica = t % replicas, sharer = t / replicas;
-          const int k0 = static_cast<int>(int64_t{K} * sharer / sharers);
-          const int k1 = static_cast<int>(int64_t{K} * (sharer + 1) / sharers);
-          EnsembleBuffers* mine = buffers[replica].get();
-          if (k1 > k0) mine->Prepare(k0, k1);
-          const Share share{first + k0, k1 - k0, k0};
-          copies[t] += DrawShare(options, archive, visible, g, g_end, replica, replicas, sharer, sharers, kernel, share,
-                                 cut, mine);
-        });
-        archive.Release(std::vector<size_t>(visible.begin() + g, visible.begin() + g_end));
+        const auto release = [&, g = g, g_end = g_end] {
+          archive.Release(std::vector<size_t>(visible.begin() + g, visible.begin() + g_end));
+        };
+        try {
+          ParallelFor(0, threads, [&, g = g, g_end = g_end](int t) {
+            // Sharer s of a replica draws the pass's ensembles [K s / S, K (s + 1) / S).
+            const int replica = t % replicas, sharer = t / replicas;
+            const int k0 = static_cast<int>(int64_t{K} * sharer / sharers);
+            const int k1 = static_cast<int>(int64_t{K} * (sharer + 1) / sharers);
+            EnsembleBuffers* mine = buffers[replica].get();
+            if (k1 > k0) mine->Prepare(k0, k1);
+            const Share share{first + k0, k1 - k0, k0};
+            copies[t] += DrawShare(options, archive, visible, g, g_end, replica, replicas, sharer, sharers, kernel, share,
+                                   cut, mine);
+          });
+        } catch (...) {  // cancelled, a corrupt chunk: the group's chunks are released all the same
+          release();
+          throw;
+        }
+        release();
         for (size_t j = g; j < g_end; ++j) done += m.chunks[visible[j]].count;
         if (progress) progress(done, total_work);
       }

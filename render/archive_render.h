@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/clip.h"
@@ -44,8 +45,20 @@ struct ArchiveRenderOptions {
   // Only points inside it are drawn (the archive's frame: ClipRegion::ToLocal of a world region);
   // chunks wholly outside are not read, chunks wholly inside are not tested point by point.
   ClipRegion clip;
+  // In (0, 1]: of each run an ensemble draws, only its first share (rounded up): a random subset,
+  // since a chunk's points are stored in random order. A preview of bounded cost (the viewer's,
+  // when one whole ensemble would take long); below 1 the image is not part of any full render.
+  double sample = 1.0;
+  // Polled by the drawing threads every kCancelPoints points (so also within a chunk of huge
+  // points); true aborts the render with RenderCancelled. Must be safe to call from any thread.
+  // May be null.
+  std::function<bool()> cancel;
   void Check() const;
 };
+
+// What RenderArchive throws when ArchiveRenderOptions::cancel says so.
+struct RenderCancelled {};
+inline constexpr uint64_t kCancelPoints = 4096;
 
 inline constexpr uint64_t kChunkBytesPerPoint = 8;
 

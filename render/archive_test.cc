@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -816,6 +817,38 @@ TEST_F(ArchiveRender, ThreadsPassesAndBudgetsGiveTheSameImage) {
       EXPECT_EQ(r.copies, ref.copies);
     }
   }
+}
+
+// The cancel poll: a render whose poll never fires is the same image (the runs are drawn in
+// pieces between polls); one that fires mid-chunk aborts with RenderCancelled, polled from within
+// the chunks (every kCancelPoints points), and the archive serves the next render unchanged.
+TEST_F(ArchiveRender, CancelPollsWithinChunksAndNeverChangesTheImage) {
+  const Camera camera = ObliqueView(archive_->manifest().bounds, 96, 72);
+  const SpbrResult ref = Reference(*archive_, camera, 1, 3, 2.0);
+  ArchiveRenderOptions o;
+  o.repeat_level = 1;  // one ensemble: every point of every chunk
+  o.seed = 3;
+  o.point_size = 2.0;
+  o.threads = 2;
+  std::atomic<uint64_t> polls{0};
+  o.cancel = [&] {
+    ++polls;
+    return false;
+  };
+  const SpbrResult r = RenderArchive(o, camera, *archive_);
+  EXPECT_TRUE(r.sums == ref.sums);
+  EXPECT_EQ(r.copies, ref.copies);
+  // At least one poll a piece of kCancelPoints points of each visible chunk.
+  EXPECT_GE(polls.load(), archive_->manifest().chunks.size());
+  // Fired at the third poll: aborted long before the last chunk (a progress callback would
+  // not be called at all: the chunks all fit one group).
+  polls = 0;
+  o.cancel = [&] { return ++polls >= 3; };
+  EXPECT_THROW(RenderArchive(o, camera, *archive_, [](uint64_t, uint64_t) { FAIL() << "reached a group's end"; }),
+               RenderCancelled);
+  EXPECT_LE(polls.load(), 3u + 2u);  // the other thread may poll once more each
+  o.cancel = nullptr;
+  EXPECT_TRUE(RenderArchive(o, camera, *archive_).sums == ref.sums);
 }
 
 TEST_F(ArchiveRender, FewerEnsemblesThanThreadsDrawMergedCopiesBitForBit) {

@@ -7,3 +7,7 @@ for b in "$build"/bench/*_bench; do
   echo "== $(basename "$b")"
   "$b"
 done
+# candi view under the audit's hostile scenarios: page A's worst camera-to-frame time and the
+# server's peak memory in each (the test view_hostile asserts the counts; this prints the times).
+echo "== view_hostile"
+/usr/bin/python3 "$(dirname "$0")/../tests/browser/view_hostile_test.py" "$build/apps/candi" "$(dirname "$0")/.." --bench

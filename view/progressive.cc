@@ -13,13 +13,13 @@ namespace candi::view {
 RangeRenderer LocalRangeRenderer(const render::Archive& archive) {
   return [&archive](const render::ArchiveRenderOptions& options, const render::Camera& camera,
                     const std::function<bool()>& cancel) {
-    ProgressCallback progress;
-    if (cancel) {
-      progress = [&cancel](uint64_t, uint64_t) {
-        if (cancel()) throw Cancelled{};
-      };
+    render::ArchiveRenderOptions o = options;
+    o.cancel = cancel;  // polled by the drawing threads, also within a chunk
+    try {
+      return render::RenderArchive(o, camera, archive);
+    } catch (const render::RenderCancelled&) {
+      throw Cancelled{};
     }
-    return render::RenderArchive(options, camera, archive, progress);
   };
 }
 
@@ -36,17 +36,20 @@ void ProgressiveImage::Start(const ViewState& state) {
   state_ = state;
   started_ = true;
   drawn_ = 0;
+  sample_ = 1;
   sums_ = render::SpbrResult();
   sums_.sums = render::Accumulator(state.camera.width, state.camera.height);
   sums_.repeat_level = repeat_level();
   sums_.seed = state.settings.seed;
 }
 
-double ProgressiveImage::Step(int count, const std::function<bool()>& cancel) {
+double ProgressiveImage::Step(int count, const std::function<bool()>& cancel, double sample) {
   CANDI_CHECK(started_) << "Start first";
+  CANDI_CHECK(sample > 0 && sample <= 1) << "sample " << sample;
   const int L = repeat_level();
   if (drawn_ == L) return 0;
-  count = std::clamp(count, 1, L - drawn_);
+  const bool preview = sample < 1 && drawn_ == 0;
+  count = preview ? 1 : std::clamp(count, 1, L - drawn_);
   const auto start = std::chrono::steady_clock::now();
   render::ArchiveRenderOptions o;
   o.repeat_level = L;
@@ -57,21 +60,41 @@ double ProgressiveImage::Step(int count, const std::function<bool()>& cancel) {
   o.ensemble_end = drawn_ + count;
   o.layer_fraction = state_.settings.layer_fraction;
   o.clip = state_.settings.clip.ToLocal(archive_.manifest().frame.origin);
+  o.sample = preview ? sample : 1.0;
   // Previews read only their slices of each chunk; the step that completes the image checks the
   // hashes of the chunks it draws (once per chunk: Archive remembers), as candi render does.
-  o.verify = drawn_ + count == L;
+  o.verify = drawn_ + count == L && !preview;
   render::Camera local = state_.camera;
   local.eye -= archive_.manifest().frame.origin;
   local.target -= archive_.manifest().frame.origin;
   const render::SpbrResult part = renderer_(o, local, cancel);
+  if (preview || sample_ < 1) {  // a preview replaces, and is replaced by, what follows it
+    sums_.sums = render::Accumulator(state_.camera.width, state_.camera.height);
+    sums_.first_ensemble_grey = {};
+    sums_.copies = 0;
+    sample_ = preview ? sample : 1.0;
+  }
   sums_.sums.Merge(part.sums);
   for (int i = 0; i < 256; ++i) sums_.first_ensemble_grey[i] += part.first_ensemble_grey[i];
   sums_.copies += part.copies;
-  drawn_ += count;
-  sums_.ensembles = drawn_;
+  if (!preview) drawn_ += count;
+  sums_.ensembles = preview ? 1 : drawn_;
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  ms_per_ensemble_ = ms / count;
+  ms_per_ensemble_ = preview ? ms / sample : ms / count;
   return ms;
+}
+
+double ProgressiveImage::EnsembleFootprint() const {
+  CANDI_CHECK(started_) << "Start first";
+  const render::ArchiveManifest& m = archive_.manifest();
+  const std::vector<double>& f = state_.settings.layer_fraction;
+  double points = 0;
+  for (size_t k = 0; k < m.layers.size(); ++k) {
+    points += static_cast<double>(m.layers[k].points) * (f.empty() ? 1.0 : f[k]);
+  }
+  const double size = state_.settings.point_size;
+  const double area = std::min(size * size, static_cast<double>(state_.camera.width) * state_.camera.height);
+  return points / repeat_level() * area;
 }
 
 Image8 ProgressiveImage::Image(double* gain) const {

@@ -34,15 +34,26 @@ class ProgressiveImage {
   // Begins the image of `state` (camera in world coordinates); the drawn ensembles are dropped.
   void Start(const ViewState& state);
   const ViewState& state() const { return state_; }
-  int ensembles() const { return drawn_; }
+  int ensembles() const { return drawn_; }  // 0 after a sampled preview
   int repeat_level() const { return state_.settings.EffectiveRepeatLevel(); }
   bool converged() const { return started_ && drawn_ == repeat_level(); }
 
   // Draws the next `count` ensembles (at least one, at most those left); returns milliseconds.
   // Throws Cancelled (nothing added) when `cancel` says so.
-  double Step(int count, const std::function<bool()>& cancel = nullptr);
-  // Milliseconds an ensemble took in the last step (0 before any).
+  //
+  // With `sample` < 1 (before any ensemble is drawn) it draws instead a preview: a random `sample`
+  // of the first ensemble's points (ArchiveRenderOptions::sample), shown by Image() but not
+  // counted; the next step starts the accumulation afresh. The viewer's bound on a first frame
+  // whose ensemble would take long (large point footprints: EnsembleFootprint).
+  double Step(int count, const std::function<bool()>& cancel = nullptr, double sample = 1.0);
+  bool sampled() const { return sample_ < 1; }
+  double sample() const { return sample_; }
+  // Milliseconds an ensemble took in the last step (0 before any; after a preview, its time
+  // scaled to the whole ensemble).
   double ms_per_ensemble() const { return ms_per_ensemble_; }
+  // The pixels one ensemble may write, an upper bound: the points it draws (every shown layer's
+  // share, frustum and clipping ignored) times a point's area (point_size², at most the image).
+  double EnsembleFootprint() const;
 
   // The image of the ensembles drawn so far and its brightness gain (candi render's rule: the
   // scene's gain, or automatic from the first ensemble when more than one is drawn).
@@ -57,6 +68,7 @@ class ProgressiveImage {
   int drawn_ = 0;
   render::SpbrResult sums_;
   double ms_per_ensemble_ = 0;
+  double sample_ = 1;  // < 1: sums_ hold a preview (not counted in drawn_)
 };
 
 // How many ensembles a step draws: after a camera change as many as fit first_frame_ms (the

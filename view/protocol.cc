@@ -175,7 +175,8 @@ std::string FrameMessage(const FrameHeader& h, const std::string& image) {
                                   {"height", h.height},
                                   {"gain", h.gain},
                                   {"render_ms", h.render_ms},
-                                  {"converged", h.ensembles == h.repeat_level}}
+                                  {"converged", h.ensembles == h.repeat_level},
+                                  {"sample", h.sample}}
                                  .dump();
   std::string out(4, '\0');
   const uint32_t n = static_cast<uint32_t>(header.size());

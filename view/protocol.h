@@ -23,8 +23,10 @@
 //                                              and clipping), as candi section writes them
 // Server -> page:
 //   binary frames: a 4-byte little-endian header length, the header (JSON: seq, ensembles,
-//   repeat_level, format "jpeg" | "png", width, height, gain, render_ms, converged), then the
-//   image file; the converged frame is PNG (lossless), the others JPEG.
+//   repeat_level, format "jpeg" | "png", width, height, gain, render_ms, converged, sample), then
+//   the image file; the converged frame is PNG (lossless), the others JPEG. sample < 1: a preview
+//   of that random share of the first ensemble's points (ensembles 0), when one whole ensemble
+//   would take long.
 //   {"type": "pick", "seq": 8, "hit": true, "point": [x, y, z] (world), "depth": d, "layer": i,
 //    "hits": [{"layer": i, "point": [...], "depth": d}, ...]}   the nearest point of each layer
 //                                              under the pixel, nearest first ("point": the first)
@@ -113,6 +115,7 @@ struct FrameHeader {
   bool png = false;
   int width = 0, height = 0;
   double gain = 1, render_ms = 0;
+  double sample = 1;  // < 1: a preview of a share of one ensemble's points (ensembles 0)
 };
 std::string FrameMessage(const FrameHeader& header, const std::string& image);
 

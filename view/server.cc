@@ -16,9 +16,11 @@
 #include <mutex>
 #include <optional>
 #include <random>
+#include <string_view>
 #include <thread>
 
 #include "core/check.h"
+#include "core/text_format.h"
 #include "io/image/jpeg_io.h"
 #include "io/image/png_io.h"
 #include "view/web_assets.h"
@@ -34,6 +36,12 @@ using tcp = net::ip::tcp;
 namespace {
 
 constexpr size_t kHeaderLimit = 8192, kTargetLimit = 2048, kBodyLimit = 1024;
+// A connection has kUnauthorisedSeconds to send a request with the token, then kIdleSeconds
+// between requests.
+constexpr int kUnauthorisedSeconds = 5, kIdleSeconds = 30;
+// Replies a page has not read: at most this many (or bytes), else the page is closed.
+constexpr size_t kMaxQueuedTexts = 16, kMaxQueuedTextBytes = size_t{64} << 20;
+constexpr std::chrono::milliseconds kAcceptPause(100);
 
 std::string RandomToken() {
   std::random_device device;  // /dev/urandom
@@ -131,6 +139,18 @@ struct Client {
   int steps = 0;                       // steps since the image started
   std::optional<ViewState> last_state;  // of the image drawn (picks, sections)
   std::atomic<uint64_t> generation{0};  // wanted_generation, for cancelling without the lock
+  // Export thread: bumped by each section request the render thread hands over (a running export
+  // of an older one is cancelled); `gone` when the page closed.
+  std::atomic<uint64_t> export_generation{0};
+  std::atomic<bool> gone{false};
+};
+
+// A section export waiting for the export thread.
+struct ExportJob {
+  std::shared_ptr<Client> client;
+  ClientMessage message;
+  ViewState state;
+  uint64_t generation = 0;
 };
 
 }  // namespace
@@ -146,14 +166,26 @@ struct Server::Impl {
   tcp::acceptor acceptor{io};
   int port = 0;
 
-  std::mutex mutex;                    // clients, cv
+  std::mutex mutex;                    // clients, cv, exports, export_cv
   std::condition_variable cv;
   std::list<std::shared_ptr<Client>> clients;
   bool stopping = false;
   std::thread render_thread;
+  std::deque<ExportJob> exports;
+  std::condition_variable export_cv;
+  std::thread export_thread;
+
+  // Caps: pages reserved from their accepted upgrade, accumulation pixels of the pages' last
+  // views, sockets open. Raised on the I/O thread; lowered wherever a session ends.
+  std::atomic<int> pages_reserved{0}, connections{0};
+  std::atomic<uint64_t> pixels_reserved{0};
+  std::atomic<uint64_t> view_messages{0};  // every page's camera messages: a refinement gives way
+  net::steady_timer accept_timer{io};
+  uint64_t accept_streak = 0, refuse_streak = 0;  // I/O thread: failed accepts, refused connections in a row
 
   std::atomic<uint64_t> requests{0}, refused{0}, pages{0}, open_pages{0}, frames_sent{0}, frames_dropped{0},
-      images_abandoned{0}, bad_messages{0};
+      images_abandoned{0}, bad_messages{0}, accept_errors{0}, connections_refused{0}, views_refused{0},
+      previews{0}, steps_preempted{0}, sections{0}, sections_cancelled{0}, pages_closed_unread{0};
 
   Impl(const ServerOptions& o, const ViewerSource& s, const render::Archive& a, RangeRenderer r)
       : options(o), source(s), archive(a), renderer(std::move(r)) {}
@@ -165,9 +197,21 @@ struct Server::Impl {
 
   void Accept();
   void RenderLoop();
+  void ExportLoop();
   bool StepClient(const std::shared_ptr<Client>& c);
   std::string Pick(const ClientMessage& pick, const ViewState& state);
-  std::string Section(const ClientMessage& m, const ViewState& state);
+  void QueueExport(const std::shared_ptr<Client>& c, const ClientMessage& m, const ViewState& state);
+  // The log's form of a request target: its path (the query, which may hold the token, dropped).
+  std::string LoggedPath(std::string_view target) const;
+};
+
+// A socket counted against max_connections while a session holds it.
+struct ConnectionSlot {
+  Server::Impl* server;
+  explicit ConnectionSlot(Server::Impl* s) : server(s) { ++server->connections; }
+  ~ConnectionSlot() { --server->connections; }
+  ConnectionSlot(const ConnectionSlot&) = delete;
+  ConnectionSlot& operator=(const ConnectionSlot&) = delete;
 };
 
 namespace {
@@ -175,7 +219,14 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
-  WsSession(tcp::socket&& socket, Server::Impl* server) : ws_(std::move(socket)), server_(server) {}
+  // Holds one of the server's page reservations (pages_reserved, taken by the HTTP session that
+  // accepted the upgrade) until it ends, whether or not the handshake completes.
+  WsSession(tcp::socket&& socket, Server::Impl* server, std::shared_ptr<ConnectionSlot> slot)
+      : ws_(std::move(socket)), server_(server), slot_(std::move(slot)) {}
+  ~WsSession() {
+    --server_->pages_reserved;
+    server_->pixels_reserved -= pixels_;
+  }
 
   void Start(http::request<http::string_body> request) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
@@ -193,13 +244,22 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     Write();
   }
   void QueueText(std::string text) {
+    if (closed_) return;
+    if (texts_.size() >= kMaxQueuedTexts || queued_bytes_ + text.size() > kMaxQueuedTextBytes) {
+      ++server_->pages_closed_unread;
+      server_->Log("view: closed a page that does not read its replies (" + std::to_string(texts_.size()) +
+                   " waiting, " + std::to_string(queued_bytes_ >> 20) + " MiB)");
+      Close();
+      return;
+    }
+    queued_bytes_ += text.size();
     texts_.push_back(std::move(text));
     Write();
   }
 
  private:
   void OnAccept(beast::error_code ec) {
-    if (ec) return;
+    if (ec) return;  // the reservation ends with this session
     client_ = std::make_shared<Client>();
     client_->session = weak_from_this();
     {
@@ -231,18 +291,48 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       Refuse(e.what());
       return;
     }
+    if (message.type == MessageType::kView && !ReservePixels(message.view)) {
+      Read();
+      return;
+    }
     {
       std::lock_guard<std::mutex> lock(client_->mutex);
       if (message.type == MessageType::kView) {
         client_->wanted = message.view;
         client_->wanted_seq = message.seq;
         client_->generation = ++client_->wanted_generation;
+        ++server_->view_messages;
       } else if (client_->picks.size() < 4) {
         client_->picks.push_back(message);
       }
     }
     server_->Wake();
     Read();
+  }
+
+  // The pixels of a page's view count against max_pixels (its previous view's are given back);
+  // over it, the view is refused with a message and the page keeps its last one.
+  bool ReservePixels(const ViewState& view) {
+    const uint64_t want = static_cast<uint64_t>(view.camera.width) * static_cast<uint64_t>(view.camera.height);
+    const uint64_t cap = server_->options.max_pixels;
+    uint64_t now = server_->pixels_reserved.load();
+    for (;;) {
+      const uint64_t others = now - pixels_;
+      if (others + want > cap) {
+        ++server_->views_refused;
+        const std::string why = "view of " + std::to_string(view.camera.width) + "x" + std::to_string(view.camera.height) +
+                                " pixels refused: the open pages hold " + std::to_string(others) + " of the " +
+                                std::to_string(cap) + " pixels this server accumulates (candi view --max-pixels); " +
+                                "use a smaller window or close another page";
+        if (!refusal_logged_) server_->Log("view: " + why + " (logged once a page)");
+        refusal_logged_ = true;
+        QueueText(ErrorReply(why));
+        return false;
+      }
+      if (server_->pixels_reserved.compare_exchange_weak(now, others + want)) break;
+    }
+    pixels_ = want;
+    return true;
   }
 
   // A malformed message: say why, then close with a policy error.
@@ -260,6 +350,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       writing_ = true;
       in_flight_text_ = std::move(texts_.front());
       texts_.pop_front();
+      queued_bytes_ -= std::min(queued_bytes_, in_flight_text_.size());
       ws_.text(true);
       ws_.async_write(net::buffer(in_flight_text_),
                       beast::bind_front_handler(&WsSession::OnWrite, shared_from_this(), false));
@@ -316,6 +407,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
         client_->closed = true;
         client_->generation = ~uint64_t{0};  // abandons an image being drawn
       }
+      client_->gone = true;                  // and an export running for it
       --server_->open_pages;
       server_->Wake();
     }
@@ -323,9 +415,13 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
 
   websocket::stream<beast::tcp_stream> ws_;
   Server::Impl* server_;
+  std::shared_ptr<ConnectionSlot> slot_;
   beast::flat_buffer buffer_;
   std::shared_ptr<Client> client_;
+  uint64_t pixels_ = 0;  // reserved for this page's last view
+  bool refusal_logged_ = false;
   std::deque<std::string> texts_;
+  size_t queued_bytes_ = 0;
   std::string in_flight_text_;
   std::shared_ptr<const std::string> frame_, in_flight_frame_;
   bool writing_ = false, closing_ = false, closed_ = false;
@@ -334,7 +430,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
 // ---------------------------------------------------------------------------------------------
 class HttpSession : public std::enable_shared_from_this<HttpSession> {
  public:
-  HttpSession(tcp::socket&& socket, Server::Impl* server) : stream_(std::move(socket)), server_(server) {}
+  HttpSession(tcp::socket&& socket, Server::Impl* server)
+      : stream_(std::move(socket)), server_(server), slot_(std::make_shared<ConnectionSlot>(server)) {}
   void Start() { Read(); }
 
  private:
@@ -344,7 +441,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     parser_.emplace();
     parser_->header_limit(kHeaderLimit);
     parser_->body_limit(kBodyLimit);
-    stream_.expires_after(std::chrono::seconds(30));
+    stream_.expires_after(std::chrono::seconds(authorised_ ? kIdleSeconds : kUnauthorisedSeconds));
     http::async_read(stream_, buffer_, *parser_, beast::bind_front_handler(&HttpSession::OnRead, shared_from_this()));
   }
 
@@ -379,8 +476,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     const unsigned version = request.version();
     const bool keep_alive = request.keep_alive();
     auto refuse = [&](http::status status, const std::string& why) {
-      server_->Log("view: refused " + std::string(request.method_string()) + " " +
-                   std::string(request.target().substr(0, 200)) + ": " + why);
+      server_->Log("view: refused " + std::string(request.method_string()).substr(0, 20) + " " +
+                   server_->LoggedPath(request.target()) + ": " + why);
       Send(Plain(status, version, false, why));
     };
     const std::string host(request[http::field::host]);
@@ -422,13 +519,19 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       return refuse(http::status::forbidden,
                     "missing or wrong access token: open the address `candi view` printed (with ?token=...)");
     }
+    authorised_ = true;
     if (path == "/ws") {
       if (!websocket::is_upgrade(request)) return refuse(http::status::bad_request, "expected a WebSocket upgrade");
-      if (server_->open_pages >= static_cast<uint64_t>(server_->options.max_clients)) {
-        return refuse(http::status::service_unavailable, "too many pages open");
+      // The page is counted from here (not from the finished handshake), so simultaneous upgrades
+      // cannot pass the cap; the session gives its place back however it ends.
+      const int max = server_->options.max_clients;
+      if (++server_->pages_reserved > max) {
+        --server_->pages_reserved;
+        return refuse(http::status::service_unavailable,
+                      "too many pages open (" + std::to_string(max) + ", the most this viewer serves at once)");
       }
       stream_.expires_never();
-      std::make_shared<WsSession>(stream_.release_socket(), server_)->Start(std::move(request));
+      std::make_shared<WsSession>(stream_.release_socket(), server_, slot_)->Start(std::move(request));
       return;
     }
     Response r{http::status::ok, version};
@@ -474,6 +577,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   beast::tcp_stream stream_;
   Server::Impl* server_;
+  std::shared_ptr<ConnectionSlot> slot_;  // passed on to the page when the connection upgrades
+  bool authorised_ = false;               // a request showed the token
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
 };
@@ -483,15 +588,49 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 void Server::Impl::Accept() {
   acceptor.async_accept(net::make_strand(io), [this](beast::error_code ec, tcp::socket socket) {
     if (!acceptor.is_open()) return;
-    if (!ec) {
+    if (ec) {
+      // Out of descriptors (EMFILE), or the like: the connection stays in the backlog; pause
+      // instead of retrying at once (which would spin the I/O thread).
+      ++accept_errors;
+      if (accept_streak++ == 0) {
+        Log("view: cannot accept a connection (" + ec.message() + "); retrying every " +
+            std::to_string(kAcceptPause.count()) + " ms");
+      }
+      accept_timer.expires_after(kAcceptPause);
+      accept_timer.async_wait([this](beast::error_code wait) {
+        if (!wait && acceptor.is_open()) Accept();
+      });
+      return;
+    }
+    if (accept_streak > 0) {
+      Log("view: accepting connections again after " + std::to_string(accept_streak) + " failed accepts");
+      accept_streak = 0;
+    }
+    boost::system::error_code ignored;
+    if (connections.load() >= options.max_connections) {
+      ++connections_refused;
+      if (refuse_streak++ == 0) {
+        Log("view: " + std::to_string(options.max_connections) + " connections open (the most); closing new ones");
+      }
+      socket.close(ignored);
+    } else {
+      refuse_streak = 0;
       // Frames are large writes whose last segment would otherwise wait for the page's delayed
       // ACK (Nagle): ~40 ms added to every frame.
-      boost::system::error_code ignored;
       socket.set_option(tcp::no_delay(true), ignored);
       std::make_shared<HttpSession>(std::move(socket), this)->Start();
     }
     Accept();
   });
+}
+
+std::string Server::Impl::LoggedPath(std::string_view target) const {
+  std::string path(target.substr(0, std::min(target.find('?'), size_t{200})));
+  // A token pasted into the path stays out of the log too.
+  for (size_t at = path.find(token); !token.empty() && at != std::string::npos; at = path.find(token)) {
+    path.replace(at, token.size(), "...");
+  }
+  return path;
 }
 
 std::string Server::Impl::Pick(const ClientMessage& pick, const ViewState& state) {
@@ -510,9 +649,76 @@ std::string Server::Impl::Pick(const ClientMessage& pick, const ViewState& state
   return PickReply(pick.seq, hits);
 }
 
-std::string Server::Impl::Section(const ClientMessage& m, const ViewState& state) {
-  if (!options.section) return ErrorReply("this viewer cannot export sections");
-  return options.section(m.seq, m.section, state);
+// Hands a section request to the export thread: at most one per page (a newer request cancels
+// the page's running export and replaces a waiting one).
+void Server::Impl::QueueExport(const std::shared_ptr<Client>& c, const ClientMessage& m, const ViewState& state) {
+  std::optional<uint64_t> replaced;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    const uint64_t generation = ++c->export_generation;
+    for (auto it = exports.begin(); it != exports.end(); ++it) {
+      if (it->client == c) {
+        replaced = it->message.seq;
+        exports.erase(it);
+        break;
+      }
+    }
+    exports.push_back({c, m, state, generation});
+  }
+  export_cv.notify_one();
+  if (replaced) {
+    ++sections_cancelled;
+    if (std::shared_ptr<WsSession> session = c->session.lock()) {
+      net::post(io, [session, seq = *replaced] {
+        session->QueueText(ErrorReply("section " + std::to_string(seq) + " cancelled: a newer one replaced it"));
+      });
+    }
+  }
+}
+
+void Server::Impl::ExportLoop() {
+  for (;;) {
+    ExportJob job;
+    {
+      std::unique_lock<std::mutex> lock(mutex);
+      export_cv.wait(lock, [&] { return stopping || !exports.empty(); });
+      if (stopping) return;
+      job = std::move(exports.front());
+      exports.pop_front();
+    }
+    const std::shared_ptr<Client>& c = job.client;
+    const auto start = std::chrono::steady_clock::now();
+    const double limit = options.section_seconds;
+    SectionControl control;
+    control.max_points = options.section_max_points;
+    control.checkpoint = [&] {
+      if (c->gone || c->export_generation.load() != job.generation) throw Cancelled{};
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (stopping) throw Cancelled{};
+      }
+      if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > limit) {
+        throw std::runtime_error("stopped after " + FormatSignificant(limit, 6) + " s" +
+                                 " (the viewer's limit): cut a thinner slab, clip it, or use candi section");
+      }
+    };
+    std::string reply;
+    try {
+      if (!options.section) throw std::runtime_error("this viewer cannot export sections");
+      control.checkpoint();
+      reply = options.section(job.message.seq, job.message.section, job.state, control);
+      ++sections;
+    } catch (const Cancelled&) {
+      ++sections_cancelled;
+      if (c->gone) continue;
+      reply = ErrorReply("section " + std::to_string(job.message.seq) + " cancelled: a newer one replaced it");
+    } catch (const std::exception& e) {  // a corrupt chunk, too many points, the time limit
+      reply = ErrorReply(std::string("section failed: ") + e.what());
+    }
+    if (std::shared_ptr<WsSession> session = c->session.lock()) {
+      net::post(io, [session, reply = std::move(reply)]() mutable { session->QueueText(std::move(reply)); });
+    }
+  }
 }
 
 // One step of one page: its picks, then (if its image is not converged and the page has room
@@ -542,12 +748,16 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
   }
   std::shared_ptr<WsSession> session = c->session.lock();
   if (!session) return false;
+  if (pick && pick->type == MessageType::kSection) {
+    QueueExport(c, *pick, *c->last_state);
+    return true;
+  }
   if (pick) {
     std::string reply;
     try {
-      reply = pick->type == MessageType::kSection ? Section(*pick, *c->last_state) : Pick(*pick, *c->last_state);
-    } catch (const std::exception& e) {  // a corrupt chunk, a failed export
-      reply = ErrorReply(std::string(pick->type == MessageType::kSection ? "section" : "pick") + " failed: " + e.what());
+      reply = Pick(*pick, *c->last_state);
+    } catch (const std::exception& e) {  // a corrupt chunk
+      reply = ErrorReply(std::string("pick failed: ") + e.what());
     }
     net::post(io, [session, reply] { session->QueueText(reply); });
     return true;
@@ -569,17 +779,35 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
     c->last_state = *restart;
   }
   ProgressiveImage& image = *c->image;
-  const int count = StepPolicy{options.first_frame_ms, options.step_ms}.Ensembles(image.ms_per_ensemble(), c->steps);
+  int count = StepPolicy{options.first_frame_ms, options.step_ms}.Ensembles(image.ms_per_ensemble(), c->steps);
   const uint64_t mine = c->image_generation;
   double ms = 0;
-  // The first step of an image (its preview) is never abandoned: a page that sends cameras faster
-  // than they can be drawn still gets a frame of a recent one each turn. Refinement steps are
-  // abandoned as soon as the camera moves.
+  // The first step of an image (its preview) is abandoned only when its page closes: a page that
+  // sends cameras faster than they can be drawn still gets a frame of a recent one each turn. Its
+  // cost is bounded instead: at most preview_pixels written, else a sampled preview.
+  // Refinement steps are abandoned as soon as the camera moves, and give way to another page's
+  // new camera once they have run step_ms (they are drawn again on this page's next turn).
   const bool first = c->steps == 0;
+  double sample = 1;
+  if (first) {
+    const double per = image.EnsembleFootprint(), budget = options.preview_pixels;
+    if (per * count > budget) count = std::max(1, static_cast<int>(budget / per));
+    if (per > budget) sample = std::max(budget / per, 1e-9);
+  }
+  const uint64_t views_before = view_messages.load();
+  const auto start = std::chrono::steady_clock::now();
+  // Polled by the drawing threads (every few thousand points): reads atomics and the clock only.
+  auto cancel = [&] {
+    const uint64_t now = c->generation.load();
+    if (first) return now == ~uint64_t{0};
+    if (now != mine) return true;
+    return view_messages.load() != views_before &&
+           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() > options.step_ms;
+  };
   try {
-    ms = image.Step(count, [&] { return !first && c->generation.load() != mine; });
+    ms = image.Step(count, cancel, sample);
   } catch (const Cancelled&) {
-    ++images_abandoned;
+    ++(!first && c->generation.load() == mine ? steps_preempted : images_abandoned);
     return true;
   } catch (const std::exception& e) {  // a corrupt chunk, out of memory
     Log(std::string("view: render failed: ") + e.what());
@@ -588,6 +816,7 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
     return true;
   }
   ++c->steps;
+  if (image.sampled()) ++previews;
   double gain = 1;
   const Image8 pixels = image.Image(&gain);
   FrameHeader h;
@@ -599,6 +828,7 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
   h.height = pixels.height();
   h.gain = gain;
   h.render_ms = ms;
+  h.sample = image.sample();
   auto frame = std::make_shared<const std::string>(
       FrameMessage(h, h.png ? io::EncodePng(pixels, {}, io::PngCompression::kFast)
                             : io::EncodeJpeg(pixels, options.jpeg_quality)));
@@ -648,6 +878,11 @@ void ServerOptions::Check() const {
   CANDI_CHECK_OPTION(url_safe, token, "letters, digits, - . _ ~ (or empty: random)");
   CANDI_CHECK_OPTION_IN(threads, 0, 256);
   CANDI_CHECK_OPTION_GE(max_clients, 1);
+  CANDI_CHECK_OPTION_GE(max_connections, max_clients);
+  CANDI_CHECK_OPTION(max_pixels >= 1, max_pixels, ">= 1");
+  CANDI_CHECK_OPTION(preview_pixels > 0 && std::isfinite(preview_pixels), preview_pixels, "finite and > 0");
+  CANDI_CHECK_OPTION(section_seconds > 0 && std::isfinite(section_seconds), section_seconds, "finite and > 0 s");
+  CANDI_CHECK_OPTION(section_max_points >= 1, section_max_points, ">= 1");
   CANDI_CHECK_OPTION(first_frame_ms > 0 && std::isfinite(first_frame_ms), first_frame_ms,
                      "finite and > 0");
   CANDI_CHECK_OPTION(step_ms >= first_frame_ms && std::isfinite(step_ms), step_ms,
@@ -676,11 +911,13 @@ Server::Server(const ServerOptions& options, const ViewerSource& source, const r
   s.port = s.acceptor.local_endpoint().port();
   s.Accept();
   s.render_thread = std::thread([this] { impl_->RenderLoop(); });
+  s.export_thread = std::thread([this] { impl_->ExportLoop(); });
 }
 
 Server::~Server() {
   Stop();
   if (impl_->render_thread.joinable()) impl_->render_thread.join();
+  if (impl_->export_thread.joinable()) impl_->export_thread.join();
 }
 
 int Server::port() const { return impl_->port; }
@@ -702,9 +939,11 @@ void Server::Stop() {
     for (auto& c : impl_->clients) c->generation = ~uint64_t{0};
   }
   impl_->cv.notify_all();
+  impl_->export_cv.notify_all();
   net::post(impl_->io, [this] {
     beast::error_code ignored;
     impl_->acceptor.close(ignored);
+    impl_->accept_timer.cancel();
     impl_->io.stop();
   });
 }
@@ -720,6 +959,14 @@ ServerStats Server::stats() const {
   out.frames_dropped = s.frames_dropped;
   out.images_abandoned = s.images_abandoned;
   out.bad_messages = s.bad_messages;
+  out.accept_errors = s.accept_errors;
+  out.connections_refused = s.connections_refused;
+  out.views_refused = s.views_refused;
+  out.previews = s.previews;
+  out.steps_preempted = s.steps_preempted;
+  out.sections = s.sections;
+  out.sections_cancelled = s.sections_cancelled;
+  out.pages_closed_unread = s.pages_closed_unread;
   return out;
 }
 

@@ -204,6 +204,58 @@ TEST(Progressive, BatchesOfEnsemblesGiveTheWholeRenderBitForBit) {
   }
 }
 
+// A sampled preview (the bound on a first frame): a random share of one ensemble's points,
+// drawn but not counted; the accumulation that follows starts afresh, so the converged image is
+// still candi render's, bit for bit, also at L = 1 (where the preview must not count as converged).
+TEST(Progressive, SampledPreviewLeavesNoTraceInTheConvergedImage) {
+  TempDir dir;
+  const render::Archive archive(MakeArchive(dir, 20000, 1024));
+  for (int L : {13, 1}) {
+    ViewState state;
+    state.camera = WorldView(archive, render::Projection::kPerspective);
+    state.settings.repeat_level = L;
+    state.settings.seed = 5;
+    state.settings.point_size = 3;
+    render::ArchiveRenderOptions o;
+    o.repeat_level = L;
+    o.seed = 5;
+    o.point_size = 3;
+    render::Camera local = state.camera;
+    local.eye -= archive.manifest().frame.origin;
+    local.target -= archive.manifest().frame.origin;
+    const render::SpbrResult whole = render::RenderArchive(o, local, archive);
+    const double gain = L > 1 ? render::AutoBrightnessGain(whole) : 1.0;
+    const Image8 expected = render::ToImage8(render::AverageImage(whole, state.settings.background, gain));
+    // The preview draws about the share asked for (runs round up), never the whole ensemble.
+    o.ensemble_end = 1;
+    const uint64_t one = render::RenderArchive(o, local, archive).copies;
+    o.sample = 0.25;
+    const uint64_t quarter = render::RenderArchive(o, local, archive).copies;
+    EXPECT_GT(quarter, one / 5);
+    EXPECT_LT(quarter, one / 3);
+
+    ProgressiveImage image(archive, LocalRangeRenderer(archive), 2);
+    image.Start(state);
+    EXPECT_DOUBLE_EQ(image.EnsembleFootprint(), 20000.0 / L * 9);
+    image.Step(5, nullptr, 0.25);
+    EXPECT_TRUE(image.sampled());
+    EXPECT_EQ(image.ensembles(), 0);
+    EXPECT_FALSE(image.converged());
+    double preview_gain = 0;
+    const Image8 preview = image.Image(&preview_gain);
+    EXPECT_EQ(preview_gain, 1.0);
+    EXPECT_FALSE(preview == expected);
+    for (int count : {1, 100}) {
+      if (!image.converged()) image.Step(count);
+    }
+    EXPECT_FALSE(image.sampled());
+    ASSERT_TRUE(image.converged());
+    double got_gain = 0;
+    EXPECT_TRUE(image.Image(&got_gain) == expected) << "L " << L;
+    EXPECT_EQ(got_gain, gain);
+  }
+}
+
 TEST(Progressive, OrthographicArchiveRenderAgreesWithTheInMemoryRenderer) {
   TempDir dir;
   const render::Archive archive(MakeArchive(dir, 20000, 2048));
@@ -297,6 +349,21 @@ TEST(ServerOptions, BadValuesNameTheField) {
   o = {};
   o.jpeg_quality = 0;
   EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::jpeg_quality = 0; must be in [1, 100]");
+  o = {};
+  o.max_connections = 15;
+  EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::max_connections = 15; must be >= max_clients");
+  o = {};
+  o.max_pixels = 0;
+  EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::max_pixels = 0; must be >= 1");
+  o = {};
+  o.preview_pixels = std::nan("");
+  EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::preview_pixels = nan; must be finite and > 0");
+  o = {};
+  o.section_seconds = 0;
+  EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::section_seconds = 0; must be finite and > 0 s");
+  o = {};
+  o.section_max_points = 0;
+  EXPECT_EQ(OptionCheckMessage(o), "ServerOptions::section_max_points = 0; must be >= 1");
 }
 
 TEST(Progressive, PickFindsTheNearestPointUnderThePixel) {

@@ -17,7 +17,8 @@ std::string EncodeArchiveRequest(const ArchiveRenderOptions& o, const Camera& lo
                             {"end", o.ensemble_end},
                             {"layers", o.layer_fraction},
                             {"clip", ClipPlaneArrays(o.clip)},  // doubles travel exactly (17 digits)
-                            {"verify", o.verify}};
+                            {"verify", o.verify},
+                            {"sample", o.sample}};
   return j.dump();
 }
 
@@ -38,6 +39,7 @@ SpbrResult RenderRequestShare(const Session& session, const Archive& archive, co
                                Eigen::Vector3d(p[3].get<double>(), p[4].get<double>(), p[5].get<double>())});
     }
     o.verify = j.at("verify").get<bool>();
+    o.sample = j.at("sample").get<double>();
     o.threads = threads;
     const int begin = j.at("begin").get<int>(), end = j.at("end").get<int>();
     int b = 0, e = 0;

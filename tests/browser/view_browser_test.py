@@ -17,6 +17,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import unittest
 
@@ -38,13 +39,19 @@ def run(*args):
 class Viewer:
     """`candi view` on a free port; the URL it prints."""
 
-    def __init__(self, *inputs, launcher=()):
-        self.process = subprocess.Popen([*launcher, CANDI, "view", *inputs, "--port", "0"], stdout=subprocess.PIPE,
-                                        stderr=subprocess.PIPE, text=True)
+    def __init__(self, *inputs, launcher=(), args=(), env=None, preexec_fn=None):
+        self.process = subprocess.Popen([*launcher, CANDI, "view", *inputs, "--port", "0", *args],
+                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                                        preexec_fn=preexec_fn)
         line = self.process.stdout.readline()
         if not line.startswith("candi view: "):
             self.process.kill()
             raise AssertionError("candi view printed %r; stderr:\n%s" % (line, self.process.stderr.read()[-3000:]))
+        # stderr is read as it comes (a server that logs much must never block on a full pipe).
+        self.stderr_lines = []
+        self.stderr_reader = threading.Thread(target=lambda: self.stderr_lines.extend(self.process.stderr),
+                                              daemon=True)
+        self.stderr_reader.start()
         self.url = line.split(": ", 1)[1].strip()
         self.port = int(self.url.split(":")[2].split("/")[0])
         self.token = self.url.split("token=")[1]
@@ -84,7 +91,8 @@ class Viewer:
     def close(self):
         self.process.terminate()
         self.process.wait(timeout=60)
-        self.stderr = self.process.stderr.read()
+        self.stderr_reader.join(timeout=60)
+        self.stderr = "".join(self.stderr_lines)
 
 
 def foundation_archive(folder, count):
@@ -326,6 +334,20 @@ class ViewInBrowser(ViewerPage):
         header = json.loads(data[4:4 + n])
         self.assertEqual((header["seq"], header["width"], header["height"]), (5, 64, 48))
         ws.close()
+
+    def test_5_token_leaves_the_address_bar_and_a_reload_works_by_the_cookie(self):
+        self.wait_converged()
+        self.assertNotIn("token", self.browser.evaluate("location.href"))
+        self.assertEqual(self.browser.evaluate("location.search"), "")
+        # The history entry was replaced, not added: no entry holds the token.
+        entries = self.browser.call("Page.getNavigationHistory")["entries"]
+        self.assertTrue(any(e["url"].endswith(":%d/" % self.viewer.port) for e in entries), entries)
+        self.assertFalse([e["url"] for e in entries if "token" in e["url"]])
+        # A reload (no token in the address) is authorised by the cookie and draws again.
+        self.browser.call("Page.reload")
+        self.browser.wait_for("window.candiViewer && candiViewer.stats.lastFrame !== null", HANG,
+                              "a frame after the reload")
+        self.assertNotIn("token", self.browser.evaluate("location.href"))
 
 
 if __name__ == "__main__":

@@ -3,7 +3,11 @@
 'use strict';
 (function () {
   const $ = (id) => document.getElementById(id);
+  // The token came in the address; the page's response set the cookie that authorises its later
+  // requests (HttpOnly: this script never sees it). The address bar and history keep no token:
+  // replaced at once (docs/guide/view.md: what the cookie shares).
   const token = new URLSearchParams(location.search).get('token') || '';
+  if (token) history.replaceState(null, '', location.pathname + location.hash);
   const canvas = $('view');
   const ctx = canvas.getContext('2d');
 
@@ -157,7 +161,7 @@
     const blob = new Blob([new Uint8Array(buffer, 4 + n)], { type: header.format === 'png' ? 'image/png' : 'image/jpeg' });
     stats.framesReceived += 1;
     const arrival = stats.framesReceived;
-    if (stats.sentAt[header.seq] !== undefined && header.ensembles > 0 && !stats.latencies[header.seq]) {
+    if (stats.sentAt[header.seq] !== undefined && (header.ensembles > 0 || header.sample < 1) && !stats.latencies[header.seq]) {
       stats.latencies[header.seq] = performance.now() - stats.sentAt[header.seq];
     }
     createImageBitmap(blob).then((bitmap) => {
@@ -173,6 +177,7 @@
       const k = header.ensembles, L = header.repeat_level;
       $('bar').style.width = (100 * k / L).toFixed(1) + '%';
       $('status').textContent = (header.converged ? 'converged: ' : 'converging: ') + k + ' / ' + L + ' ensembles · ' +
+        (header.sample < 1 ? 'preview of ' + (100 * header.sample).toPrecision(2) + ' % of one ensemble · ' : '') +
         header.render_ms.toFixed(0) + ' ms · gain ' + header.gain.toFixed(2);
     });
   }
