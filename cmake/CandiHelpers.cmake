@@ -10,7 +10,8 @@ endfunction()
 # candi_precompile(<target>): a precompiled header of the standard and Eigen headers most of
 # candi's sources include (Eigen/Core and Eigen/Geometry alone cost ~2.5 s of parsing per
 # translation unit). Each target builds its own (~6 s), with its own flags, so it pays from about
-# four sources on; smaller targets do without.
+# four sources on; smaller targets do without. Measured 2026-11-27 on the 2-core VM, the library
+# targets from scratch at -j2: 1,150 s of CPU without, 934 s with (588 s and 479 s wall).
 function(candi_precompile target)
   get_target_property(sources ${target} SOURCES)
   list(LENGTH sources count)

@@ -6,7 +6,8 @@ Usage: view_hostile_test.py CANDI SOURCE_DIR           the test (ctest view_host
        view_hostile_test.py CANDI SOURCE_DIR --bench   the benchmark: per scenario, page A's worst
                                                        camera-to-frame time and the server's peak
                                                        memory (scripts/bench.sh runs it; on 2 M points,
-                                                       CANDI_HOSTILE_POINTS to change)
+                                                       CANDI_HOSTILE_POINTS to change; see start_viewer
+                                                       for the other knobs)
 
 Scenarios: 200 simultaneous WebSocket upgrades; pages of 2048x2048 past the pixel cap; page B
 exports a section of the whole site while page A moves; page B sends an opaque view of 64-pixel
@@ -142,6 +143,12 @@ class Page:
 
 
 def start_viewer(inputs, *args, **kwargs):
+    # Benchmark knobs: CANDI_HOSTILE_THREADS (render threads); CANDI_HOSTILE_LEGACY=1 for a candi
+    # from before these bounds (its flags are left out; its verdicts fail, its times compare).
+    if os.environ.get("CANDI_HOSTILE_LEGACY"):
+        args = [a for a in args if not a.startswith("--max-pixels") and not a.isdigit()]
+    if os.environ.get("CANDI_HOSTILE_THREADS"):
+        args = list(args) + ["--threads", os.environ["CANDI_HOSTILE_THREADS"]]
     v = Viewer(*inputs, args=args, **kwargs)
     v.first_view = v.scene()["first_view"]
     return v
