@@ -63,7 +63,7 @@ struct ServerOptions {
   // The most pixels a first frame may write (EnsembleFootprint: points times their area), > 0:
   // beyond it the first frame is a preview of a random share of one ensemble's points, so that
   // no view (huge points, one opaque ensemble) holds the render thread for long before a frame.
-  double preview_pixels = 2e8;
+  double preview_pixels = 5e7;  // ~0.3 s of 64-pixel splats on the 2-core VM
   int jpeg_quality = 85;                        // JPEG frames' quality, [1, 100]
   std::function<void(const std::string&)> log;  // one line per event worth knowing (may be null)
   // Answers a section message (its seq, the slab, the page's last view: layers and clipping)
