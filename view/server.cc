@@ -162,6 +162,11 @@ struct Server::Impl {
   RangeRenderer renderer;
   std::string token;
   std::string scene_json;
+  // Caps: pages reserved from their accepted upgrade, accumulation pixels of the pages' last
+  // views, sockets open. Raised on the I/O thread; lowered wherever a session ends (also when
+  // `io` destroys the handlers still queued at the end: so declared before it).
+  std::atomic<int> pages_reserved{0}, connections{0};
+  std::atomic<uint64_t> pixels_reserved{0};
   net::io_context io{1};
   tcp::acceptor acceptor{io};
   int port = 0;
@@ -175,10 +180,6 @@ struct Server::Impl {
   std::condition_variable export_cv;
   std::thread export_thread;
 
-  // Caps: pages reserved from their accepted upgrade, accumulation pixels of the pages' last
-  // views, sockets open. Raised on the I/O thread; lowered wherever a session ends.
-  std::atomic<int> pages_reserved{0}, connections{0};
-  std::atomic<uint64_t> pixels_reserved{0};
   std::atomic<uint64_t> view_messages{0};  // every page's camera messages: a refinement gives way
   net::steady_timer accept_timer{io};
   uint64_t accept_streak = 0, refuse_streak = 0;  // I/O thread: failed accepts, refused connections in a row
