@@ -32,7 +32,7 @@ const std::vector<std::pair<std::string, std::vector<std::string>>>& CommandGrou
       {"Inspect and convert", {"info", "convert"}},
       {"Digitize", {"sfm", "dense", "georef", "register", "clean", "colorcorrect", "foundation", "relief"}},
       {"Assemble", {"build", "pack"}},
-      {"Look", {"render", "view", "section"}},
+      {"Look", {"render", "view", "publish", "section"}},
       {"Other", {"opacity", "demo", "bench"}},
   };
   return groups;

@@ -1,8 +1,9 @@
-// candi render, view, section, opacity: see-through images of point files or an archive
+// candi render, view, publish, section, opacity: see-through images of point files or an archive
 // (pipeline/render.h; an archive's ensembles split over the ranks under mpirun), the browser viewer
-// (view/), sections (pipeline/section.h), and SPBR opacity by point-number adjustment from file to
-// file (sampling/opacity.h; writes the kept points with the field spbr_multiplicity and records
-// the parameters as a comment "candi_opacity alpha=... repeat_level=... pixel_size=... seed=...").
+// (view/), the static web site (view/publish.h), sections (pipeline/section.h), and SPBR opacity
+// by point-number adjustment from file to file (sampling/opacity.h; writes the kept points with
+// the field spbr_multiplicity and records the parameters as a comment "candi_opacity alpha=...
+// repeat_level=... pixel_size=... seed=...").
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -28,6 +29,7 @@
 #include "render/mpi/mpi_session.h"
 #include "render/view_json.h"
 #include "sampling/opacity.h"
+#include "view/publish.h"
 #include "view/server.h"
 #include "view/source.h"
 
@@ -115,7 +117,11 @@ pipeline::RenderOptions RenderOptionsOf(const RenderArgs& a) {
   o.memory_budget = static_cast<uint64_t>(a.memory_mb * 1048576.0);
   o.Check();
   if (!a.view.empty()) {
-    o.view = render::LoadView(a.view);
+    // A page's saved or shared view also carries the layers' shares and the clipping.
+    render::SavedViewSettings saved;
+    o.view = render::LoadView(a.view, &saved);
+    for (size_t i = 0; i < saved.layer_names.size(); ++i) o.layer_shares.push_back({saved.layer_names[i], saved.layer_shares[i]});
+    o.clip = o.clip.And(saved.clip);
   } else {
     o.orientation = ParseOrientation(a.orientation);
   }
@@ -367,6 +373,59 @@ void AddView(Command& root) {
   c.Footer("Example: candi view borobudur_out/   (then open the printed http://127.0.0.1:8765/?token=... address)");
 }
 
+// ------------------------------------------------------------------------------------- publish
+
+struct PublishArgs {
+  std::string input;                // a build directory, a demo's output, or an archive
+  std::string output;               // the site's folder
+  view::PublishOptions options;
+  OrientationArgs orientation;
+};
+
+int RunPublish(const PublishArgs& a) {
+  a.options.Check();
+  ConsoleProgress progress("publish");
+  const view::PublishStats s = view::PublishSite(a.options, a.input, a.output, ParseOrientation(a.orientation),
+                                                 progress.Callback());
+  progress.Finish();
+  const double mb = 1e-6;
+  std::printf("%s: %llu points in %llu chunks, %llu groups x %d pages = %llu files\n", a.output.c_str(),
+              static_cast<unsigned long long>(s.points), static_cast<unsigned long long>(s.chunks),
+              static_cast<unsigned long long>(s.groups), s.repeat_level, static_cast<unsigned long long>(s.files));
+  std::printf("  data %.1f MB: %.2f bytes a point (the archive: 8; COPC: ~5)\n", s.data_bytes * mb, s.BytesPerPoint());
+  std::printf("  before the first image: %.2f MB (the page, site.json and every group's first page)\n",
+              s.first_image_bytes * mb);
+  std::printf("  site %.1f MB, written in %.2f s (%.1f M points/s)\n", s.site_bytes * mb, s.seconds,
+              s.seconds > 0 ? s.points / s.seconds * 1e-6 : 0.0);
+  std::printf("  serve it with any static web server, e.g.: python3 -m http.server -d %s 8000\n", a.output.c_str());
+  return kOk;
+}
+
+void AddPublish(Command& root) {
+  PublishArgs& a = root.Keep<PublishArgs>();
+  view::PublishOptions& o = a.options;
+  Command c = root.Add("publish", "Write the archive as a static web site that renders it see-through (SPBR) in "
+                                  "the visitor's browser with WebGL2: no server-side code, any static host");
+  c.Option("input", a.input, "A build directory (candi build), a demo's output, or a render archive (candi pack)")
+      .Required();
+  c.Option("-o,--output", a.output, "The site's folder (created; an earlier site there is replaced)").Required();
+  c.Option("-L,--repeat-level", o.repeat_level, "L of the data's pages and the page's default L (0: the scene's "
+           "render setting, else 100)");
+  c.Option("--group-points", o.group_points, "Points of consecutive chunks stored together (a file holds about "
+           "this / L points)");
+  c.Option("--memory-mb", o.memory_mb, "The page's default budget of points held, MB (16 bytes a point; the "
+           "visitor can change it)");
+  c.Option("--compression", o.compression, "gzip level, 1 (fast) to 9");
+  c.Option("--threads", o.threads, "Threads (0: all)");
+  c.Option("--up", a.orientation.up, "World up for the first view, x,y,z (default 0,0,1)");
+  c.Option("--from", a.orientation.from, "Direction the first view looks in, x,y,z (default: oblique, from above)");
+  c.Option("--cameras", a.orientation.cameras, "A COLMAP model whose frame the points are in: the first view's up "
+           "and side from its cameras");
+  c.Run([&a] { return RunPublish(a); });
+  c.Footer("Example: candi publish demo_out -o site && python3 -m http.server -d site 8000   (then open "
+           "http://127.0.0.1:8000/)");
+}
+
 // ------------------------------------------------------------------------------------- section
 
 struct SectionArgs {
@@ -555,6 +614,7 @@ void AddOpacity(Command& root) {
 void AddLookCommands(Command& root) {
   AddRender(root);
   AddView(root);
+  AddPublish(root);
   AddSection(root);
 }
 

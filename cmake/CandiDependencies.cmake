@@ -3,6 +3,7 @@
 find_package(PkgConfig REQUIRED)
 find_package(Threads REQUIRED)
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(ZLIB REQUIRED)  # candi publish: gzip page files
 find_package(PNG REQUIRED)
 find_package(JPEG REQUIRED)
 find_package(TBB REQUIRED)

@@ -143,4 +143,26 @@ void CheckOutputFolder(const std::string& output) {
   }
 }
 
+void ReplaceFolder(const std::string& temp, const std::string& output, bool (*replaceable)(const std::string&),
+                   const std::string& what) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(output, ec)) {
+    if (!replaceable(output)) throw InputError(output, "", "exists and is not " + what + "; not overwriting it");
+    const std::string old = output + ".candi-old-" + std::to_string(getpid());
+    fs::rename(output, old, ec);
+    if (ec) throw InputError(output, "", "cannot move the old " + what + " aside: " + ec.message());
+    fs::rename(temp, output, ec);
+    if (ec) {
+      std::error_code ignored;
+      fs::rename(old, output, ignored);
+      throw InputError(output, "", "cannot rename the new " + what + " into place: " + ec.message());
+    }
+    fs::remove_all(old, ec);
+    return;
+  }
+  fs::rename(temp, output, ec);
+  if (ec) throw InputError(output, "", "cannot rename the new " + what + " into place: " + ec.message());
+}
+
 }  // namespace candi

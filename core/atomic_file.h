@@ -56,4 +56,11 @@ std::string ReadFileToString(const std::string& path);
 // check, so that a long command fails before its work, not after it.
 void CheckOutputFolder(const std::string& output);
 
+// Renames the folder `temp` (built beside `output`) to `output`. Something already at `output`
+// is replaced only when `replaceable(output)` says it is what this command writes (moved aside,
+// the new one renamed in, the old one removed; put back if the rename fails); anything else is
+// refused with InputError "exists and is not <what>; not overwriting it".
+void ReplaceFolder(const std::string& temp, const std::string& output, bool (*replaceable)(const std::string&),
+                   const std::string& what);
+
 }  // namespace candi

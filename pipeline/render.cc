@@ -210,6 +210,12 @@ void RenderOptions::Check() const {
   CANDI_CHECK_OPTION_GE(preview, 0);
   CANDI_CHECK_OPTION_GT(memory_budget, 0);
   CANDI_CHECK_OPTION_GT(chunk_budget, 0);
+  for (const auto& [name, share] : layer_shares) {
+    if (!(share >= 0 && share <= 16)) {
+      throw std::invalid_argument("RenderOptions::layer_shares[" + name + "] = " + FormatDouble(share) +
+                                  "; must be in [0, 16]");
+    }
+  }
 }
 
 render::Orientation OrientationOfCameras(const std::string& colmap_model) {
@@ -275,6 +281,14 @@ RenderedImage RenderArchiveEnsembles(const RenderOptions& o, const render::Archi
   ao.memory_budget = o.memory_budget;
   ao.chunk_budget = o.chunk_budget;
   ao.clip = o.clip.ToLocal(m.frame.origin);
+  if (!o.layer_shares.empty()) {
+    ao.layer_fraction.assign(m.layers.size(), 1.0);
+    for (const auto& [name, share] : o.layer_shares) {
+      const auto it = std::find_if(m.layers.begin(), m.layers.end(), [&](const render::ArchiveLayer& l) { return l.name == name; });
+      if (it == m.layers.end()) throw std::invalid_argument("the view's layer '" + name + "' is not in the archive");
+      ao.layer_fraction[it - m.layers.begin()] = share;
+    }
+  }
   render::EnsembleShare(drawn, rank, ranks, &ao.ensemble_begin, &ao.ensemble_end);
   const bool none = ao.ensemble_begin == ao.ensemble_end;  // more ranks than ensembles
   ConsoleProgress progress("render: SPBR L=" + std::to_string(repeat_level) + " from " + std::to_string(m.points) +
@@ -319,6 +333,11 @@ double WriteRender(const RenderOptions& o, const RenderedImage& image, const Ren
                       {"candi:inputs", inputs},
                       {"candi:view", render::ViewToJson(image.world_camera)}};
   if (!o.clip.empty()) text["candi:clip"] = o.clip.Describe();
+  if (!o.layer_shares.empty()) {
+    std::string shares;
+    for (const auto& [name, share] : o.layer_shares) shares += (shares.empty() ? "" : " ") + name + "=" + FormatDouble(share);
+    text["candi:layer_shares"] = shares;
+  }
   io::WritePng(out.png, render::ToImage8(average), text);
   if (!out.png16.empty()) io::WritePng(out.png16, render::ToImage16(average), text);
   if (!out.save_view.empty()) render::SaveView(out.save_view, image.world_camera);

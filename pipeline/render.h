@@ -50,6 +50,9 @@ struct RenderOptions {
   uint64_t chunk_budget = uint64_t{256} << 20;    // bytes of archive chunks mapped at once
   std::string columns;           // XYZ/PTS column spec of point files
   ClipRegion clip;               // world coordinates: only points inside are drawn
+  // Archives: the share of a layer's points drawn, by the layer's name (as candi view's and a
+  // site's "points ×f"; the others 1), each in [0, 16]; a name the archive lacks is an error.
+  std::vector<std::pair<std::string, double>> layer_shares;
   std::optional<render::Camera> view;  // world coordinates; none: the default view of the data
   render::Orientation orientation;     // the default view's up and side
   void Check() const;

@@ -363,29 +363,6 @@ class Packer {
   double max_error_[3] = {0, 0, 0};
 };
 
-// Builds into `temp`, then renames over `output` (replacing an archive, refusing anything else).
-void Publish(const std::string& temp, const std::string& output) {
-  std::error_code ec;
-  if (fs::exists(output, ec)) {
-    if (!IsArchive(output)) {
-      throw InputError(output, "", "exists and is not a candi render archive; not overwriting it");
-    }
-    const std::string old = output + ".candi-old-" + std::to_string(getpid());
-    fs::rename(output, old, ec);
-    if (ec) throw InputError(output, "", "cannot move the old archive aside: " + ec.message());
-    fs::rename(temp, output, ec);
-    if (ec) {
-      std::error_code ignored;
-      fs::rename(old, output, ignored);
-      throw InputError(output, "", "cannot rename the new archive into place: " + ec.message());
-    }
-    fs::remove_all(old, ec);
-    return;
-  }
-  fs::rename(temp, output, ec);
-  if (ec) throw InputError(output, "", "cannot rename the new archive into place: " + ec.message());
-}
-
 }  // namespace
 
 PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>& inputs,
@@ -593,7 +570,7 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   }
   WriteFileAtomic(temp + "/" + kArchiveManifest, manifest.ToJson());
   CommitTempPath(cleanup.interrupt_id, [&] {
-    Publish(temp, out_path.string());
+    ReplaceFolder(temp, out_path.string(), IsArchive, "a candi render archive");
     cleanup.dir.clear();
   });
 

@@ -46,9 +46,60 @@ int Integer(const std::string& path, const json& j, const std::string& key) {
   return j.get<int>();
 }
 
+// A page's "settings" (see the header).
+void ParseSettings(const std::string& path, const json& j, SavedViewSettings* out) {
+  if (!j.is_object()) Bad(path, "/settings", "expected an object");
+  SavedViewSettings s;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& k = it.key();
+    const json& v = it.value();
+    const std::string where = "/settings/" + k;
+    if (k == "layers") {
+      if (!v.is_array()) Bad(path, where, "expected an array of shares");
+      for (size_t i = 0; i < v.size(); ++i) {
+        const double f = Number(path, v[i], "settings/layers/" + std::to_string(i));
+        if (f < 0 || f > 16) Bad(path, where + "/" + std::to_string(i), "a share must be in [0, 16]");
+        s.layer_shares.push_back(f);
+      }
+    } else if (k == "layer_names") {
+      if (!v.is_array()) Bad(path, where, "expected an array of names");
+      for (size_t i = 0; i < v.size(); ++i) {
+        if (!v[i].is_string()) Bad(path, where + "/" + std::to_string(i), "expected a string");
+        s.layer_names.push_back(v[i].get<std::string>());
+      }
+    } else if (k == "clip") {
+      if (!v.is_array()) Bad(path, where, "expected an array of [px, py, pz, nx, ny, nz]");
+      for (size_t i = 0; i < v.size(); ++i) {
+        const std::string at = "settings/clip/" + std::to_string(i);
+        if (!v[i].is_array() || v[i].size() != 6) Bad(path, "/" + at, "expected [px, py, pz, nx, ny, nz]");
+        ClipPlane plane;
+        for (int a = 0; a < 3; ++a) {
+          plane.point[a] = Number(path, v[i][a], at + "/" + std::to_string(a));
+          plane.normal[a] = Number(path, v[i][3 + a], at + "/" + std::to_string(3 + a));
+        }
+        s.clip.planes.push_back(plane);
+      }
+      try {
+        s.clip.Check(path + where);
+      } catch (const std::invalid_argument& e) {
+        Bad(path, where, e.what());
+      }
+    } else if (k != "repeat_level" && k != "seed" && k != "opaque" && k != "point_size" && k != "background" &&
+               k != "brightness") {
+      Bad(path, where, "unknown key (known: layers layer_names clip repeat_level seed opaque point_size background "
+                       "brightness)");
+    }
+  }
+  if (s.layer_shares.size() != s.layer_names.size()) {
+    Bad(path, "/settings/layers", "gives " + std::to_string(s.layer_shares.size()) + " shares for " +
+                                      std::to_string(s.layer_names.size()) + " layer_names");
+  }
+  if (out) *out = s;
+}
+
 }  // namespace
 
-Camera ParseView(const std::string& text, const std::string& path) {
+Camera ParseView(const std::string& text, const std::string& path, SavedViewSettings* settings) {
   json j;
   try {
     j = json::parse(text);
@@ -74,7 +125,9 @@ Camera ParseView(const std::string& text, const std::string& path) {
     else if (k == "fov_y_deg") c.fov_y_deg = Number(path, v, k);
     else if (k == "ortho_height") c.ortho_height = Number(path, v, k);
     else if (k == "near") c.near = Number(path, v, k);
-    else Bad(path, "/" + k, "unknown key (known: projection width height eye target up fov_y_deg ortho_height near)");
+    else if (k == "settings") ParseSettings(path, v, settings);
+    else Bad(path, "/" + k, "unknown key (known: projection width height eye target up fov_y_deg ortho_height near "
+                            "settings)");
   }
   try {
     c.Check();
@@ -98,7 +151,9 @@ std::string ViewToJson(const Camera& c) {
   return j.dump(2);
 }
 
-Camera LoadView(const std::string& path) { return ParseView(ReadFileToString(path), path); }
+Camera LoadView(const std::string& path, SavedViewSettings* settings) {
+  return ParseView(ReadFileToString(path), path, settings);
+}
 
 void SaveView(const std::string& path, const Camera& c) { WriteFileAtomic(path, ViewToJson(c) + "\n"); }
 

@@ -9,7 +9,7 @@ packages=(
   # toolchain
   g++ cmake ninja-build pkg-config make git ca-certificates
   # core
-  libeigen3-dev libpng-dev libjpeg-dev libtbb-dev
+  libeigen3-dev zlib1g-dev libpng-dev libjpeg-dev libtbb-dev
   # SHA-256 (core/sha256.cc) is libcrypto's: 7x the portable C it replaced (bench/sha256_bench.cc)
   libssl-dev
   # CRSs through PROJ (io/crs.cc; cs2cs checks candi's transforms in tests), E57's XML section

@@ -72,6 +72,41 @@ void SceneSettings(const json& provenance, ViewerSource* source) {
   if (s.contains("seed") && s["seed"].is_number_unsigned()) v.seed = s["seed"].get<uint64_t>();
 }
 
+// What a visitor needs to tell measured from reconstructed: per layer its kind, method and
+// sources (file names and SHA-256, not the build machine's paths), the CRS, the scene's licence
+// and annotations. Fields of the wrong type are left out (the page shows what there is).
+json Provenance(const json& p) {
+  json out = json::object();
+  if (p.contains("crs") && p["crs"].is_object()) out["crs"] = p["crs"];
+  if (p.contains("licence") && p["licence"].is_string()) out["licence"] = p["licence"];
+  if (p.contains("annotations") && p["annotations"].is_array()) out["annotations"] = p["annotations"];
+  json layers = json::array();
+  if (p.contains("layers") && p["layers"].is_array()) {
+    for (const json& l : p["layers"]) {
+      if (!l.is_object()) continue;
+      json e = json::object();
+      for (const char* key : {"name", "kind", "method"}) {
+        if (l.contains(key) && l[key].is_string()) e[key] = l[key];
+      }
+      if (l.contains("scanned") && l["scanned"].is_boolean()) e["scanned"] = l["scanned"];
+      if (l.contains("crs") && l["crs"].is_object()) e["crs"] = l["crs"];
+      json sources = json::array();
+      if (l.contains("sources") && l["sources"].is_array()) {
+        for (const json& src : l["sources"]) {
+          if (!src.is_object() || !src.contains("path") || !src["path"].is_string()) continue;
+          json s = {{"file", fs::path(src["path"].get<std::string>()).filename().string()}};
+          if (src.contains("sha256") && src["sha256"].is_string()) s["sha256"] = src["sha256"];
+          sources.push_back(s);
+        }
+      }
+      e["sources"] = sources;
+      layers.push_back(e);
+    }
+  }
+  out["layers"] = layers;
+  return out;
+}
+
 ViewerSource FromBuild(const fs::path& dir, const render::Orientation& orientation) {
   ViewerSource source;
   source.kind = "build";
@@ -92,6 +127,7 @@ ViewerSource FromBuild(const fs::path& dir, const render::Orientation& orientati
       source.layers.push_back(layer);
     }
   }
+  source.provenance_json = Provenance(p).dump();
   const render::Archive archive(source.archive_dir);
   const render::ArchiveManifest& m = archive.manifest();
   SceneSettings(p, &source);
@@ -148,18 +184,22 @@ std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
               {"opaque", settings.opaque},
               {"seed", settings.seed},
               {"clip", ClipPlaneArrays(settings.clip)}}}};
+  if (!provenance_json.empty()) s["provenance"] = json::parse(provenance_json);
   return s.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
 ViewerSource OpenViewerSource(const std::string& path, const render::Orientation& orientation) {
   std::error_code ec;
   const fs::path p(path);
-  if (fs::is_regular_file(p / "archive.json", ec) && render::IsArchive((p / "archive").string())) {
-    return FromBuild(p, orientation);
+  // A build directory, or a demo's output holding one in archive/ (what candi section opens).
+  for (const fs::path& build : {p, p / "archive"}) {
+    if (fs::is_regular_file(build / "archive.json", ec) && render::IsArchive((build / "archive").string())) {
+      return FromBuild(build, orientation);
+    }
   }
   if (!render::IsArchive(path)) {
-    throw InputError(path, "", "neither a build directory (archive.json and archive/) nor a render archive "
-                               "(manifest.json)");
+    throw InputError(path, "", "neither a build directory (archive.json and archive/), a demo's output holding one in "
+                               "archive/, nor a render archive (manifest.json)");
   }
   ViewerSource source;
   source.kind = "archive";

@@ -41,8 +41,12 @@ struct ViewerSource {
   ViewSettings settings;            // the scene's render settings, or the defaults
   render::Camera first_view;        // world frame
   std::string temporary_dir;        // points: the packed archive's directory (removed by the caller)
+  // A build's provenance for the page (JSON object, from archive.json): the CRS, the licence and
+  // annotations the scene gives, and per layer its kind, whether it was measured (scanned) or
+  // reconstructed, its method and its sources. Empty for an archive or point files.
+  std::string provenance_json;
   // The page's scene description (JSON): title, kind, layers, views, settings, first view,
-  // bounds (world), origin, points.
+  // bounds (world), origin, points, provenance (when known).
   std::string ToJson(const render::ArchiveManifest& manifest) const;
 };
 

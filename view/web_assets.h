@@ -16,5 +16,8 @@ struct WebAsset {
 
 // nullptr when `path` is not an asset.
 const WebAsset* FindWebAsset(const std::string& path);
+// Every asset (candi publish copies them into the site).
+size_t WebAssetCount();
+const WebAsset& WebAssetAt(size_t i);
 
 }  // namespace candi::view

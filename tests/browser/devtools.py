@@ -25,9 +25,13 @@ def find_chromium():
 class Browser:
     """Starts chromium headless with a fresh profile; `page` is a DevTools session on its tab."""
 
-    def __init__(self, width, height):
+    # Chromium's software WebGL2 (SwiftShader through ANGLE): no GPU needed.
+    WEBGL_ARGS = ("--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist")
+
+    def __init__(self, width, height, webgl=False):
         self.profile = tempfile.mkdtemp(prefix="candi-chromium-")
-        args = [find_chromium(), "--headless=new", "--no-sandbox", "--disable-gpu", "--no-first-run",
+        args = [find_chromium(), "--headless=new", "--no-sandbox"] + \
+            (list(self.WEBGL_ARGS) if webgl else ["--disable-gpu"]) + ["--no-first-run",
                 "--no-default-browser-check", "--disable-extensions", "--disable-background-networking",
                 "--disable-dev-shm-usage", "--remote-debugging-port=0", "--user-data-dir=" + self.profile,
                 "--window-size=%d,%d" % (width, height), "--force-device-scale-factor=1",

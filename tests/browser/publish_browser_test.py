@@ -1,0 +1,237 @@
+#!/usr/bin/python3
+"""candi publish in a real browser: Debian's chromium, headless, with its software WebGL2
+(SwiftShader), the site served by `python3 -m http.server` (no HTTP Range support).
+
+- WebGL2 must be there: a page without it is a failure, not a skip.
+- The converged image equals candi render's of the same archive, view, seed and L (the figures
+  are printed; the bound is >= 99 % of pixels within 1 level and at most 0.01 % beyond 8).
+- Layer shares and a clip box set on the page: candi render --view of the page's saved view
+  (which carries both) gives the same image, so the shares follow candi's point-number law.
+- The first image is drawn after the first ensemble's bytes (page 0 of every group), not after
+  the whole data.
+- A damaged, a missing and a truncated data file: the page names each and draws the rest.
+- candi publish on bad input exits 2 naming the path and leaves nothing behind.
+Usage: publish_browser_test.py CANDI SOURCE_DIR"""
+import base64
+import json
+import os
+import shutil
+import socket
+import stat
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import view_browser_test as vb  # noqa: E402
+from devtools import Browser, decode_png, find_chromium  # noqa: E402
+
+L = 16
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Served:
+    """`python3 -m http.server` on 127.0.0.1 over `folder`."""
+
+    def __init__(self, folder):
+        self.port = free_port()
+        self.process = subprocess.Popen([sys.executable, "-m", "http.server", "-b", "127.0.0.1", "-d", folder,
+                                         str(self.port)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        end = time.time() + 30
+        while time.time() < end:
+            try:
+                socket.create_connection(("127.0.0.1", self.port), timeout=1).close()
+                return
+            except OSError:
+                time.sleep(0.1)
+        raise AssertionError("http.server did not listen")
+
+    def url(self, query=""):
+        return "http://127.0.0.1:%d/%s" % (self.port, query)
+
+    def close(self):
+        self.process.terminate()
+        self.process.wait(timeout=30)
+
+
+def converged(browser, what):
+    time.sleep(0.3)
+    browser.wait_for("window.candiViewer && window.candiViewer.progress && !window.candiViewer.dirty() && "
+                     "window.candiViewer.progress().converged", 300, what)
+
+
+def compare(browser, work, archive, name, failures):
+    """The page's converged image against candi render --view of the page's saved view."""
+    view = os.path.join(work, name + ".view.json")
+    with open(view, "w") as f:
+        f.write(browser.evaluate("window.candiViewer.viewJson()"))
+    settings = browser.evaluate("window.candiViewer.settings()")
+    web = base64.b64decode(browser.evaluate("window.candiViewer.imageRgb()"))
+    png = os.path.join(work, name + ".png")
+    brightness = "none" if settings["brightness"] == "none" else "auto"
+    vb.run("render", archive, "--view", view, "-L", str(settings["repeat_level"]), "--seed", str(settings["seed"]),
+           "--brightness", brightness, "-o", png)
+    with open(png, "rb") as f:
+        w, h, channels, ref = decode_png(f.read())
+    if channels != 3 or len(web) != len(ref):
+        failures.append("%s: the page's image is %d bytes, candi render's %dx%dx%d" % (name, len(web), w, h, channels))
+        return None
+    worst = [max(abs(ref[3 * i + k] - web[3 * i + k]) for k in range(3)) for i in range(w * h)]
+    within1 = sum(1 for d in worst if d <= 1) / len(worst)
+    beyond8 = sum(1 for d in worst if d > 8)
+    covered = sum(1 for i in range(w * h) if any(ref[3 * i:3 * i + 3]))
+    print("%s: %dx%d, %d pixels drawn; %.4f %% within 1 level, %d beyond 8, %d identical, largest difference %d"
+          % (name, w, h, covered, 100 * within1, beyond8, sum(1 for d in worst if d == 0), max(worst)))
+    if covered < 0.02 * w * h:
+        failures.append("%s: candi render drew only %d pixels: the view shows nothing to compare" % (name, covered))
+    # The GPU projects in float from the chunk's quantized steps (candi from the dequantized
+    # double), so a point near a depth tie may win on one and lose on the other: a few pixels.
+    if within1 < 0.99 or beyond8 > 1e-4 * w * h:
+        failures.append("%s: %.4f %% of pixels within 1 level (>= 99 %% wanted), %d beyond 8 (<= 0.01 %% wanted)"
+                        % (name, 100 * within1, beyond8))
+    return web
+
+
+def check(work):
+    failures = []
+    archive = vb.foundation_archive(work, 120000)
+    site = os.path.join(work, "site")
+    out = vb.run("publish", archive, "-o", site, "-L", str(L), "--group-points", "40000")
+    print(out.stdout.strip())
+    with open(os.path.join(site, "site.json")) as f:
+        index = json.load(f)
+    groups = index["data"]["groups"]
+    page0 = sum(g["pages"][0][0] for g in groups)
+    total = sum(p[0] for g in groups for p in g["pages"])
+    largest = max(p[0] for g in groups for p in g["pages"])
+    if len(groups) < 3:
+        failures.append("the site has %d groups; the test wants several" % len(groups))
+
+    served = Served(site)
+    browser = Browser(640, 480, webgl=True)
+    try:
+        browser.call("Page.navigate", url=served.url())
+        browser.wait_for("window.candiViewer && 'webgl2' in window.candiViewer", 120, "the page")
+        if not browser.evaluate("window.candiViewer.webgl2"):
+            return ["chromium gave no WebGL2 (flags %s): the site cannot be tested" % " ".join(Browser.WEBGL_ARGS)]
+        converged(browser, "the first converged image")
+        progress = browser.evaluate("window.candiViewer.progress()")
+        print("first image after %d bytes of data (page 0 of every group: %d; all: %d); converged after %d"
+              % (progress["firstImageBytes"], page0, total, progress["bytesReceived"]))
+        # Requests run four at a time in ensemble order: at most three later pages may land first.
+        if not page0 <= progress["firstImageBytes"] <= page0 + 3 * largest or progress["firstImageBytes"] > total / 2:
+            failures.append("the first image came after %d bytes; page 0 of every group is %d, all %d"
+                            % (progress["firstImageBytes"], page0, total))
+        if browser.evaluate("window.candiViewer.errors().length"):
+            failures.append("errors on an intact site: %s" % browser.evaluate("window.candiViewer.errors()"))
+
+        # 1. Converged, brightness none, then automatic.
+        browser.evaluate("window.candiViewer.setSettings({brightness: 'none'})")
+        converged(browser, "brightness none")
+        plain = compare(browser, work, archive, "plain", failures)
+        browser.evaluate("window.candiViewer.setSettings({brightness: 'auto'})")
+        converged(browser, "brightness auto")
+        compare(browser, work, archive, "auto", failures)
+
+        # 2. Layer shares (one hidden, one doubled) and a clip box: candi render of the saved view.
+        b = index["scene"]["bounds"]
+        mid = [(b["min"][k] + b["max"][k]) / 2 for k in range(3)]
+        clip = [[b["min"][0], b["min"][1], b["min"][2], 1, 0, 0], [mid[0] + 5, mid[1], mid[2], -1, 0, 0]]
+        browser.evaluate("window.candiViewer.setSettings({brightness: 'none', layers: [0.5, 1, 0, 2], clip: %s})"
+                         % json.dumps(clip))
+        converged(browser, "shares and clipping")
+        shared = compare(browser, work, archive, "shares", failures)
+        if plain is not None and shared is not None and plain == shared:
+            failures.append("layer shares and clipping left the image unchanged")
+        address = browser.evaluate("window.candiViewer.address()")
+        if "#view=" not in address:
+            failures.append("the shared address has no view: %s" % address)
+        # The shared address reopens the same image.
+        browser.call("Page.navigate", url="about:blank")
+        time.sleep(1)
+        browser.call("Page.navigate", url=address)
+        time.sleep(1)
+        browser.wait_for("window.candiViewer && typeof window.candiViewer.progress === 'function'", 120, "the shared address")
+        converged(browser, "the shared address")
+        again = base64.b64decode(browser.evaluate("window.candiViewer.imageRgb()"))
+        if shared is not None and again != shared:
+            failures.append("the shared address did not reopen the same image")
+
+        # 3. Damaged, missing and truncated files.
+        broken = os.path.join(work, "broken")
+        shutil.copytree(site, broken)
+        damaged, missing, truncated = "data/0/1.bin", "data/1/2.bin", "data/2/3.bin"
+        with open(os.path.join(broken, damaged), "r+b") as f:
+            data = bytearray(f.read())
+            for i in range(len(data) // 2, min(len(data), len(data) // 2 + 16)):
+                data[i] ^= 0x5A
+            f.seek(0)
+            f.write(data)
+        os.remove(os.path.join(broken, missing))
+        path = os.path.join(broken, truncated)
+        os.truncate(path, os.path.getsize(path) // 2)
+        served2 = Served(broken)
+        try:
+            browser.call("Page.navigate", url=served2.url())
+            browser.wait_for("window.candiViewer && window.candiViewer.progress && "
+                             "window.candiViewer.progress().pagesFailed >= 3", 300, "three failed pages")
+            converged(browser, "the damaged site's image")
+            errors = browser.evaluate("window.candiViewer.errors()")
+            shown = browser.evaluate("document.getElementById('errors').textContent")
+            print("damaged site: " + " | ".join(errors))
+            for name in (damaged, missing, truncated):
+                if not any(name in e for e in errors) or name not in shown:
+                    failures.append("the page does not name %s: %s" % (name, errors))
+            image = base64.b64decode(browser.evaluate("window.candiViewer.imageRgb()"))
+            if not any(image):
+                failures.append("the damaged site drew nothing")
+        finally:
+            served2.close()
+    finally:
+        browser.close()
+        served.close()
+
+    # 4. Bad input: exit 2, the path named, nothing left behind.
+    def publish(*args):
+        return subprocess.run([vb.CANDI, "publish", *args], capture_output=True, text=True)
+    r = publish(work, "-o", os.path.join(work, "nosite"))
+    if r.returncode != 2 or work not in r.stderr or os.path.exists(os.path.join(work, "nosite")):
+        failures.append("publish of a folder that is no archive: exit %d, %s" % (r.returncode, r.stderr.strip()))
+    other = os.path.join(work, "other")
+    os.mkdir(other)
+    with open(os.path.join(other, "keep.txt"), "w") as f:
+        f.write("mine")
+    r = publish(archive, "-o", other)
+    if r.returncode != 2 or other not in r.stderr or os.listdir(other) != ["keep.txt"]:
+        failures.append("publish onto a folder that is not a site: exit %d, %s" % (r.returncode, r.stderr.strip()))
+    locked = os.path.join(work, "locked")
+    os.mkdir(locked)
+    os.chmod(locked, stat.S_IRUSR | stat.S_IXUSR)
+    try:
+        r = publish(archive, "-o", os.path.join(locked, "site"))
+        if os.geteuid() != 0 and (r.returncode != 2 or locked not in r.stderr or os.listdir(locked)):
+            failures.append("publish into a read-only folder: exit %d, %s" % (r.returncode, r.stderr.strip()))
+    finally:
+        os.chmod(locked, stat.S_IRWXU)
+    # Publishing again replaces a site, byte for byte the same.
+    again = os.path.join(work, "again")
+    vb.run("publish", archive, "-o", again, "-L", str(L), "--group-points", "40000", "--threads", "1")
+    for root, _, files in os.walk(site):
+        for name in files:
+            rel = os.path.relpath(os.path.join(root, name), site)
+            with open(os.path.join(site, rel), "rb") as a, open(os.path.join(again, rel), "rb") as b:
+                if a.read() != b.read():
+                    failures.append("publish on 1 thread and on all wrote different bytes in %s" % rel)
+    return failures
+
+
+if __name__ == "__main__":
+    if find_chromium() is None:
+        print("SKIP: chromium is not installed (scripts/deps.sh installs it)")
+        sys.exit(0)
+    vb.script_main(check, "candi-publish-")

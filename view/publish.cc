@@ -1,0 +1,277 @@
+#include "view/publish.h"
+
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <mutex>
+#include <stdexcept>
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/check.h"
+#include "core/interrupt.h"
+#include "core/parallel.h"
+#include "core/timer.h"
+#include "render/archive.h"
+#include "view/source.h"
+#include "view/web_assets.h"
+
+namespace candi::view {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr const char* kSiteFormat = "candi site";
+constexpr int kPointBytes = 8;
+
+// The 8 byte planes of `words`, gzip-compressed (RFC 1952: DecompressionStream("gzip") reads it).
+std::string GzipPlanes(const std::vector<uint64_t>& words, int level, const std::string& name) {
+  const size_t n = words.size();
+  std::string planes(n * kPointBytes, '\0');
+  for (int j = 0; j < kPointBytes; ++j) {
+    char* out = planes.data() + j * n;
+    for (size_t i = 0; i < n; ++i) out[i] = static_cast<char>((words[i] >> (8 * j)) & 0xff);
+  }
+  z_stream z;
+  std::memset(&z, 0, sizeof(z));
+  // windowBits 15 + 16: a gzip header and trailer (CRC-32 and length) around the deflate stream.
+  if (deflateInit2(&z, level, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
+    throw std::runtime_error(name + ": zlib's deflateInit2 failed");
+  }
+  std::string out(deflateBound(&z, planes.size()), '\0');
+  z.next_in = reinterpret_cast<Bytef*>(planes.data());
+  z.avail_in = static_cast<uInt>(planes.size());
+  z.next_out = reinterpret_cast<Bytef*>(out.data());
+  z.avail_out = static_cast<uInt>(out.size());
+  const int rc = deflate(&z, Z_FINISH);
+  const size_t written = z.total_out;
+  deflateEnd(&z);
+  if (rc != Z_STREAM_END) throw std::runtime_error(name + ": zlib's deflate failed");
+  out.resize(written);
+  return out;
+}
+
+void WriteFile(const std::string& path, const void* data, size_t bytes) {
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (f == nullptr) throw InputError(path, "", std::string("cannot write: ") + std::strerror(errno));
+  const bool ok = std::fwrite(data, 1, bytes, f) == bytes;
+  const int err = errno;
+  if (std::fclose(f) != 0 || !ok) {
+    throw InputError(path, "", std::string("cannot write: ") + std::strerror(ok ? errno : err));
+  }
+}
+
+// A build directory, a demo's output holding one, or an archive.
+std::string ArchiveOf(const std::string& input) {
+  for (const fs::path& p : {fs::path(input) / "archive", fs::path(input) / "archive" / "archive", fs::path(input)}) {
+    if (render::IsArchive(p.string())) return p.string();
+  }
+  return "";
+}
+
+std::string PageName(size_t group, int page) {
+  char name[64];
+  std::snprintf(name, sizeof(name), "data/%zu/%d.bin", group, page);
+  return name;
+}
+
+}  // namespace
+
+void PublishOptions::Check() const {
+  CANDI_CHECK_OPTION_IN(repeat_level, 0, 1000);
+  CANDI_CHECK_OPTION(group_points >= 1 && group_points <= (uint64_t{1} << 28), group_points, "in [1, 2^28]");
+  CANDI_CHECK_OPTION_IN(memory_mb, 16, 65536);
+  CANDI_CHECK_OPTION_IN(compression, 1, 9);
+  CANDI_CHECK_OPTION_IN(threads, 0, 256);
+}
+
+bool IsSite(const std::string& path) {
+  std::error_code ec;
+  const fs::path index = fs::path(path) / kSiteIndex;
+  if (!fs::is_regular_file(index, ec)) return false;
+  try {
+    const json j = json::parse(ReadFileToString(index.string()));
+    return j.is_object() && j.value("format", "") == kSiteFormat;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+PublishStats PublishSite(const PublishOptions& options, const std::string& input, const std::string& site_dir,
+                         const render::Orientation& orientation, const ProgressCallback& progress) {
+  options.Check();
+  Stopwatch watch;
+  const std::string archive_dir = ArchiveOf(input);
+  if (archive_dir.empty()) {
+    throw InputError(input, "", "neither a build directory (archive.json and archive/), a demo's output holding one "
+                                "in archive/, nor a render archive (manifest.json)");
+  }
+  const ViewerSource source = OpenViewerSource(input, orientation);
+  const render::Archive archive(source.archive_dir);
+  const render::ArchiveManifest& m = archive.manifest();
+  const int L = options.repeat_level > 0 ? options.repeat_level : std::clamp(source.settings.repeat_level, 1, 1000);
+  const uint64_t seed = source.settings.seed;
+
+  // Refuse early what the rename would refuse late.
+  const fs::path out = fs::absolute(site_dir).lexically_normal();
+  std::error_code ec;
+  if (fs::exists(out, ec) && !IsSite(out.string())) {
+    throw InputError(site_dir, "", "exists and is not a candi site; not overwriting it");
+  }
+  CheckOutputFolder(out.string());
+
+  // Groups: runs of consecutive chunks of at most group_points points (a chunk larger than that
+  // is a group of its own).
+  std::vector<std::pair<size_t, size_t>> groups;
+  for (size_t c = 0; c < m.chunks.size();) {
+    size_t end = c + 1;
+    uint64_t points = m.chunks[c].count;
+    while (end < m.chunks.size() && points + m.chunks[end].count <= options.group_points) points += m.chunks[end++].count;
+    groups.push_back({c, end});
+    c = end;
+  }
+
+  const std::string temp = out.string() + ".candi-tmp-" + std::to_string(getpid());
+  fs::remove_all(temp, ec);
+  if (!fs::create_directories(fs::path(temp) / "data", ec) || ec) {
+    throw InputError(temp, "", "cannot create the site's build folder: " + ec.message());
+  }
+  struct Cleanup {
+    std::string dir;
+    int interrupt_id;
+    ~Cleanup() {
+      std::error_code ignored;
+      if (!dir.empty()) fs::remove_all(dir, ignored);
+      UnregisterTempPath(interrupt_id);
+    }
+  } cleanup{temp, RegisterTempPath(temp)};
+
+  // Page files, group by group in parallel: the same bytes for any thread count.
+  std::vector<std::vector<std::pair<uint64_t, uint64_t>>> pages(groups.size());  // (bytes, points)
+  std::atomic<uint64_t> done{0};
+  std::mutex progress_mutex;
+  auto body = [&](size_t g) {
+    fs::create_directories(fs::path(temp) / "data" / std::to_string(g));
+    pages[g].resize(L);
+    std::vector<uint64_t> words;
+    std::vector<render::PointRun> runs;
+    for (int k = 0; k < L; ++k) {
+      words.clear();
+      for (size_t c = groups[g].first; c < groups[g].second; ++c) {
+        const render::ArchiveChunk& chunk = m.chunks[c];
+        const uint64_t* data = archive.ChunkWords(c, /*verify=*/true);
+        runs.clear();
+        render::EnsembleSlices(chunk.count, chunk.first, L, seed, k, 1.0, &runs);
+        for (const render::PointRun& r : runs) words.insert(words.end(), data + r.begin, data + r.end);
+      }
+      const std::string name = PageName(g, k);
+      const std::string bytes = GzipPlanes(words, options.compression, name);
+      WriteFile(temp + "/" + name, bytes.data(), bytes.size());
+      pages[g][k] = {bytes.size(), words.size()};
+    }
+    std::vector<size_t> released;
+    for (size_t c = groups[g].first; c < groups[g].second; ++c) released.push_back(c);
+    archive.Release(released);
+    uint64_t points = 0;
+    for (size_t c = groups[g].first; c < groups[g].second; ++c) points += m.chunks[c].count;
+    const uint64_t now = done += points;
+    if (progress) {
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      progress(now, m.points);
+    }
+  };
+  if (options.threads == 1) {
+    for (size_t g = 0; g < groups.size(); ++g) body(g);
+  } else {
+    ParallelFor(size_t{0}, groups.size(), body);
+  }
+
+  PublishStats stats;
+  stats.points = m.points;
+  stats.chunks = m.chunks.size();
+  stats.groups = groups.size();
+  stats.repeat_level = L;
+
+  // The index: compact arrays, one per chunk and one per group.
+  json chunks = json::array();
+  for (size_t g = 0; g < groups.size(); ++g) {
+    for (size_t c = groups[g].first; c < groups[g].second; ++c) {
+      const render::ArchiveChunk& k = m.chunks[c];
+      const render::ChunkQuantizer& q = k.quantizer;
+      chunks.push_back({k.layer, k.count, k.first, g, q.box.min.x(), q.box.min.y(), q.box.min.z(), q.box.max.x(),
+                        q.box.max.y(), q.box.max.z(), q.step[0], q.step[1], q.step[2], q.bits[0], q.bits[1], q.bits[2]});
+    }
+  }
+  json groups_json = json::array();
+  for (size_t g = 0; g < groups.size(); ++g) {
+    json files = json::array();
+    for (int k = 0; k < L; ++k) {
+      files.push_back({pages[g][k].first, pages[g][k].second});
+      stats.data_bytes += pages[g][k].first;
+      if (k == 0) stats.first_image_bytes += pages[g][k].first;
+      ++stats.files;
+    }
+    groups_json.push_back({{"chunks", {groups[g].first, groups[g].second}}, {"pages", files}});
+  }
+  json site = {
+      {"format", kSiteFormat},
+      {"version", kSiteVersion},
+      {"scene", json::parse(source.ToJson(m))},
+      {"data",
+       {{"repeat_level", L},
+        {"seed", seed},
+        {"memory_mb", options.memory_mb},
+        {"point_bytes", kPointBytes},
+        {"pages", "data/<group>/<page>.bin: page k of a group holds, chunk by chunk, the slice ensemble k draws "
+                  "at this repeat_level and seed (EnsembleSlices of the render archive)"},
+        {"encoding", "the render archive's 8-byte points (bits 0-23 colour 0xRRGGBB, then bx, by, bz bits of x, y, "
+                     "z quantized on the chunk's box: min + q * step) as 8 byte planes, gzip"},
+        {"chunk_fields", {"layer", "count", "first", "group", "min_x", "min_y", "min_z", "max_x", "max_y", "max_z",
+                          "step_x", "step_y", "step_z", "bits_x", "bits_y", "bits_z"}},
+        {"chunks", chunks},
+        {"group_fields", "chunks: [first, end) of the chunks; pages: per page [bytes, points]"},
+        {"groups", groups_json}}}};
+  const std::string index = site.dump(-1, ' ', false, json::error_handler_t::replace) + "\n";
+  WriteFile(temp + "/" + kSiteIndex, index.data(), index.size());
+  stats.first_image_bytes += index.size();
+
+  // The page: the viewer's files, its index.html loading the WebGL2 renderer instead of the
+  // server's protocol.
+  for (size_t i = 0; i < WebAssetCount(); ++i) {
+    const WebAsset& a = WebAssetAt(i);
+    const std::string name = std::string(a.path).substr(1);
+    if (name == "viewer.js") continue;
+    std::string content(reinterpret_cast<const char*>(a.data), a.size);
+    if (name == "index.html") {
+      const std::string from = "<script src=\"viewer.js\"></script>";
+      const size_t at = content.find(from);
+      CANDI_CHECK(at != std::string::npos) << "index.html has no " << from;
+      content.replace(at, from.size(), "<script src=\"site.js\"></script>");
+      const std::string body = "<body>";
+      const size_t b = content.find(body);
+      CANDI_CHECK(b != std::string::npos) << "index.html has no <body>";
+      content.replace(b, body.size(), "<body class=\"site\">");
+    }
+    WriteFile(temp + "/" + name, content.data(), content.size());
+    stats.first_image_bytes += content.size();
+  }
+  for (const fs::directory_entry& e : fs::recursive_directory_iterator(temp)) {
+    if (e.is_regular_file()) stats.site_bytes += e.file_size();
+  }
+
+  CommitTempPath(cleanup.interrupt_id, [&] {
+    ReplaceFolder(temp, out.string(), IsSite, "a candi site");
+    cleanup.dir.clear();
+  });
+  stats.seconds = watch.Seconds();
+  return stats;
+}
+
+}  // namespace candi::view
