@@ -287,7 +287,7 @@ json LayersJson(const Scene& scene, FileHashes& hashes, const Layers& layers, js
 
 json Provenance(const Scene& scene, const LocalFrame& frame, const std::string& scene_crs, uint64_t total,
                 const json& layers, bool pack_resumed, const json& views) {
-  return {{"candi_version", kVersion}, {"scene", {{"path", scene.path}, {"sha256", Sha256Hex(scene.text)}}},
+  json p = {{"candi_version", kVersion}, {"scene", {{"path", scene.path}, {"sha256", Sha256Hex(scene.text)}}},
           {"name", scene.name}, {"seed", scene.seed},
           {"frame", {{"origin", {frame.origin.x(), frame.origin.y(), frame.origin.z()}}}},
           {"crs", scene_crs.empty() ? json() : json({{"definition", scene_crs}, {"label", io::CrsLabel(scene_crs)}})},
@@ -305,6 +305,20 @@ json Provenance(const Scene& scene, const LocalFrame& frame, const std::string& 
             {"across_machines", "not guaranteed: another CPU or C library can round floating point differently "
                                 "(COLMAP's SIFT, Ceres, libm), and one differing bit can change what COLMAP's "
                                 "mapper registers (README, Reproducibility)"}}}};
+  // What a published page shows besides the layers (only when the scene gives them, so that
+  // earlier scenes' archive.json keep their bytes).
+  if (!scene.licence.empty()) p["licence"] = scene.licence;
+  if (!scene.annotations.empty()) {
+    json list = json::array();
+    for (const SceneAnnotation& a : scene.annotations) {
+      json e = {{"title", a.title}, {"text", a.text}, {"position", {a.position.x(), a.position.y(), a.position.z()}}};
+      if (!a.view.empty()) e["view"] = a.view;
+      if (!a.camera_json.empty()) e["view"] = json::parse(a.camera_json);
+      list.push_back(e);
+    }
+    p["annotations"] = list;
+  }
+  return p;
 }
 
 }  // namespace

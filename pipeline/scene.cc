@@ -11,6 +11,7 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "io/crs.h"
+#include "render/view_json.h"
 
 namespace candi::pipeline {
 
@@ -373,7 +374,8 @@ Scene LoadScene(const std::string& path) {
     throw InputError(path, "", std::string("not valid JSON: ") + e.what());
   }
   const Node root(scene.path, j, "");
-  root.ExpectObject({"candi_scene", "name", "origin", "seed", "crs", "render", "views", "layers"});
+  root.ExpectObject({"candi_scene", "name", "origin", "seed", "crs", "render", "views", "layers", "licence",
+                     "annotations"});
   if (!root.Has("candi_scene")) root.Fail("missing key \"candi_scene\" (the format version, 1)");
   if (root["candi_scene"].Integer(1, 1000) != 1) root["candi_scene"].Fail("this candi reads scene version 1");
   scene.name = root.Has("name") ? root["name"].String() : fs::path(path).stem().string();
@@ -428,6 +430,40 @@ Scene LoadScene(const std::string& path) {
       scene.views.push_back(ParseSceneView(views[i], names));
       if (!view_names.insert(scene.views.back().name).second)
         views[i]["name"].Fail("view name \"" + scene.views.back().name + "\" repeats");
+    }
+  }
+  if (root.Has("licence")) scene.licence = root["licence"].String();
+  if (root.Has("annotations")) {
+    const Node list = root["annotations"];
+    for (size_t i = 0; i < list.ArraySize(); ++i) {
+      const Node n = list[i];
+      n.ExpectObject({"title", "text", "position", "view"});
+      SceneAnnotation a;
+      if (!n.Has("title")) n.Fail("missing key \"title\"");
+      a.title = n["title"].String();
+      if (a.title.empty() || a.title.size() > 200) n["title"].Fail("a title is 1-200 characters");
+      if (n.Has("text")) a.text = n["text"].String();
+      if (!n.Has("position")) n.Fail("missing key \"position\" ([E, N, H], world)");
+      a.position = n["position"].Vec3();
+      if (n.Has("view")) {
+        const Node v = n["view"];
+        if (v.raw().is_string()) {
+          a.view = v.String();
+          const bool known = std::any_of(scene.views.begin(), scene.views.end(),
+                                         [&](const SceneView& sv) { return sv.name == a.view; });
+          if (!known) v.Fail("no view named \"" + a.view + "\"");
+        } else if (v.raw().is_object()) {
+          try {
+            render::ParseView(v.raw().dump(), scene.path);
+          } catch (const InputError& e) {
+            v.Fail(std::string("not a camera: ") + e.what());
+          }
+          a.camera_json = v.raw().dump();
+        } else {
+          v.Fail("expected a view's name or an inline camera object");
+        }
+      }
+      scene.annotations.push_back(a);
     }
   }
   return scene;

@@ -133,6 +133,16 @@ struct SceneView {
   double point_size = 1.0;          // pixels (candi render --point-size)
 };
 
+// A labelled point of the site: shown as a marker by candi view and a published site, which
+// fly to its view (a scene view's name, or an inline camera) or, without one, to the point.
+struct SceneAnnotation {
+  std::string title;                 // 1-200 characters
+  std::string text;                  // may be empty
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world (the scene's CRS), m
+  std::string view;                  // a scene view's name, or ""
+  std::string camera_json;           // an inline camera (view.json's format), or ""
+};
+
 struct Scene {
   std::string path;   // the scene file
   std::string name;
@@ -144,6 +154,8 @@ struct Scene {
   std::string brightness = "auto";
   std::vector<SceneView> views;
   std::vector<SceneLayer> layers;
+  std::string licence;                        // the archive's licence text, shown by published pages
+  std::vector<SceneAnnotation> annotations;
   std::string text;   // the file's bytes (hashed for provenance)
 };
 

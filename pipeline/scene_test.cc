@@ -172,6 +172,47 @@ TEST_F(SceneFile, EveryLayerKindAndItsDefaults) {
   EXPECT_EQ(s.views[1].point_size, 3.0);
 }
 
+// The licence and labelled points a published page shows (survey coordinates: mm at 10^6 m).
+TEST_F(SceneFile, LicenceAndAnnotations) {
+  json j = Minimal();
+  j["views"] = json::array({{{"name", "front"}}});
+  j["licence"] = "CC BY 4.0, Balai Konservasi Borobudur";
+  j["annotations"] = json::array({{{"title", "Panel 1"}, {"text", "hidden foot"}, {"position", {416000.001, 9168000.002, 265.5}},
+                                   {"view", "front"}},
+                                  {{"title", "Stair"}, {"position", {1, 2, 3}}, {"view", {{"eye", {0, -5, 1}}, {"target", {0, 0, 0}}}}},
+                                  {{"title", "Bare"}, {"position", {0, 0, 0}}}});
+  const Scene s = Load(j);
+  EXPECT_EQ(s.licence, "CC BY 4.0, Balai Konservasi Borobudur");
+  ASSERT_EQ(s.annotations.size(), 3u);
+  EXPECT_EQ(s.annotations[0].position, Eigen::Vector3d(416000.001, 9168000.002, 265.5));
+  EXPECT_EQ(s.annotations[0].view, "front");
+  EXPECT_EQ(s.annotations[0].text, "hidden foot");
+  EXPECT_NE(s.annotations[1].camera_json.find("eye"), std::string::npos);
+  EXPECT_TRUE(s.annotations[2].view.empty() && s.annotations[2].camera_json.empty());
+
+  json bad = j;
+  bad["annotations"][0].erase("title");
+  ExpectError(bad, "/annotations/0", "missing key \"title\"");
+  bad = j;
+  bad["annotations"][0]["title"] = "";
+  ExpectError(bad, "/annotations/0/title", "1-200 characters");
+  bad = j;
+  bad["annotations"][0]["view"] = "back";
+  ExpectError(bad, "/annotations/0/view", "no view named \"back\"");
+  bad = j;
+  bad["annotations"][1]["view"] = {{"eye", {0, 0, 0}}, {"fov", 3}};
+  ExpectError(bad, "/annotations/1/view", "not a camera");
+  bad = j;
+  bad["annotations"][2]["position"] = {1, 2};
+  ExpectError(bad, "/annotations/2/position", "three numbers");
+  bad = j;
+  bad["annotations"][2]["colour"] = 1;
+  ExpectError(bad, "/annotations/2/colour", "unknown key");
+  bad = j;
+  bad["licence"] = 4;
+  ExpectError(bad, "/licence", "expected a string");
+}
+
 TEST_F(SceneFile, DefaultsOfAMinimalScene) {
   const Scene s = Load(Minimal(), "my_site.json");
   EXPECT_EQ(s.name, "my_site");  // the file's stem

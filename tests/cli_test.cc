@@ -60,7 +60,7 @@ TEST(Cli, HelpGroupsTheCommandsAlongTheUsersPath) {
       {"Digitize",
        {"sfm", "dense", "georef", "register", "clean", "colorcorrect", "foundation", "relief"}},
       {"Assemble", {"build", "pack"}},
-      {"Look", {"render", "view", "section"}},
+      {"Look", {"render", "view", "publish", "section"}},
       {"Other", {"opacity", "demo", "bench"}},
   };
   const Result r = RunCandi("--help");

@@ -1,10 +1,15 @@
 // The viewer's parts below the server: the message parser, the Host/Origin checks, progressive
 // accumulation (batches of ensembles give candi render's image, bit for bit), orthographic
 // archive renders, picking, the first view.
+#include <zlib.h>
+
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <nlohmann/json.hpp>
 
+#include "core/atomic_file.h"
 #include "render/archive_pack.h"
 #include "render/archive_render.h"
 #include "render/spbr.h"
@@ -15,6 +20,7 @@
 #include "tests/util/test_util.h"
 #include "view/progressive.h"
 #include "view/protocol.h"
+#include "view/publish.h"
 #include "view/server.h"
 #include "view/source.h"
 
@@ -146,6 +152,119 @@ std::string MakeArchive(const TempDir& dir, uint64_t n, uint64_t chunk_points) {
   render::PackArchive(o, {render::PackInputFromGenerator("solid", n, n, [&](uint64_t, uint64_t) { return cloud; })},
                       path);
   return path;
+}
+
+// A demo's output: the build in demo/archive (archive.json and the render archive in archive/).
+std::string MakeDemoOutput(const TempDir& dir) {
+  namespace fs = std::filesystem;
+  const std::string build = dir.File("demo/archive");
+  fs::create_directories(build);
+  fs::rename(MakeArchive(dir, 3000, 512), build + "/archive");
+  WriteFileAtomic(build + "/archive.json", R"({"name": "site", "licence": "CC0", "crs": {"label": "UTM 49S"},
+    "annotations": [{"title": "stair", "text": "", "position": [500000, 9100000, 201]}],
+    "layers": [{"name": "solid", "kind": "points", "scanned": true, "method": "measured: a scan",
+                "sources": [{"path": "/home/someone/scans/solid.ply", "sha256": "ab12", "bytes": 9}]}]})");
+  return dir.File("demo");
+}
+
+// What candi section opens, candi view and candi publish open: a demo's output too.
+TEST(ViewerSource, OpensADemosOutputWithItsProvenance) {
+  TempDir dir;
+  const std::string demo = MakeDemoOutput(dir);
+  const ViewerSource s = OpenViewerSource(demo, render::Orientation());
+  EXPECT_EQ(s.kind, "build");
+  EXPECT_EQ(s.title, "site");
+  const render::Archive archive(s.archive_dir);
+  const nlohmann::json page = nlohmann::json::parse(s.ToJson(archive.manifest()));
+  const nlohmann::json& p = page.at("provenance");
+  EXPECT_EQ(p.at("licence"), "CC0");
+  EXPECT_EQ(p.at("annotations").size(), 1u);
+  EXPECT_EQ(p.at("layers")[0].at("scanned"), true);
+  // The source's file name and hash, not the build machine's path.
+  EXPECT_EQ(p.at("layers")[0].at("sources")[0].at("file"), "solid.ply");
+  EXPECT_EQ(page.dump().find("/home/someone"), std::string::npos);
+  // A folder that is none of them is named.
+  try {
+    OpenViewerSource(dir.File("demo/archive/archive/.."), render::Orientation());
+  } catch (const InputError& e) {
+    ADD_FAILURE() << "a build folder is refused: " << e.what();
+  }
+  EXPECT_THROW(OpenViewerSource(dir.path(), render::Orientation()), InputError);
+}
+
+std::string Gunzip(const std::string& bytes) {
+  z_stream z{};
+  EXPECT_EQ(inflateInit2(&z, 15 + 16), Z_OK);
+  std::string out(1 << 20, '\0'), all;
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
+  z.avail_in = static_cast<uInt>(bytes.size());
+  int rc = Z_OK;
+  while (rc == Z_OK) {
+    z.next_out = reinterpret_cast<Bytef*>(out.data());
+    z.avail_out = static_cast<uInt>(out.size());
+    rc = inflate(&z, Z_NO_FLUSH);
+    all.append(out.data(), out.size() - z.avail_out);
+  }
+  EXPECT_EQ(rc, Z_STREAM_END);
+  inflateEnd(&z);
+  return all;
+}
+
+// A site's page k of a group is, chunk by chunk, the slice ensemble k draws: every point of the
+// archive once, in byte planes, gzip; the same bytes on 1 thread and 2.
+TEST(Publish, PagesHoldEachEnsemblesSlicesAndEveryPointOnce) {
+  TempDir dir;
+  const std::string demo = MakeDemoOutput(dir);
+  PublishOptions o;
+  o.repeat_level = 7;
+  o.group_points = 1200;
+  o.threads = 1;
+  const PublishStats stats = PublishSite(o, demo, dir.File("site"), render::Orientation());
+  o.threads = 2;
+  PublishSite(o, demo, dir.File("site2"), render::Orientation());
+  EXPECT_TRUE(IsSite(dir.File("site")));
+  const render::Archive archive(demo + "/archive/archive");
+  const render::ArchiveManifest& m = archive.manifest();
+  const nlohmann::json site = nlohmann::json::parse(ReadFileToString(dir.File("site/site.json")));
+  const nlohmann::json& groups = site.at("data").at("groups");
+  EXPECT_GT(groups.size(), 1u);
+  EXPECT_EQ(stats.files, groups.size() * 7);
+  EXPECT_EQ(site.at("scene").at("provenance").at("licence"), "CC0");
+  uint64_t points = 0;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    for (int k = 0; k < 7; ++k) {
+      const std::string name = "data/" + std::to_string(g) + "/" + std::to_string(k) + ".bin";
+      const std::string bytes = ReadFileToString(dir.File("site/" + name));
+      EXPECT_EQ(bytes, ReadFileToString(dir.File("site2/" + name))) << name;
+      EXPECT_EQ(bytes.size(), groups[g].at("pages")[k][0].get<uint64_t>());
+      const std::string planes = Gunzip(bytes);
+      const size_t n = planes.size() / 8;
+      ASSERT_EQ(n, groups[g].at("pages")[k][1].get<uint64_t>()) << name;
+      size_t at = 0;
+      for (size_t c = groups[g].at("chunks")[0]; c < groups[g].at("chunks")[1].get<size_t>(); ++c) {
+        std::vector<render::PointRun> runs;
+        render::EnsembleSlices(m.chunks[c].count, m.chunks[c].first, 7, 1, k, 1.0, &runs);
+        const uint64_t* words = archive.ChunkWords(c, true);
+        for (const render::PointRun& r : runs) {
+          for (uint64_t i = r.begin; i < r.end; ++i, ++at) {
+            uint64_t w = 0;
+            for (int j = 0; j < 8; ++j) w |= uint64_t{static_cast<uint8_t>(planes[j * n + at])} << (8 * j);
+            ASSERT_EQ(w, words[i]) << name << " point " << at;
+          }
+        }
+      }
+      EXPECT_EQ(at, n);
+      points += n;
+    }
+  }
+  EXPECT_EQ(points, m.points);
+  // An existing folder that is not a site is refused and left alone.
+  std::filesystem::create_directories(dir.File("mine"));
+  WriteFileAtomic(dir.File("mine/keep.txt"), "x");
+  EXPECT_THROW(PublishSite(o, demo, dir.File("mine"), render::Orientation()), InputError);
+  EXPECT_EQ(ReadFileToString(dir.File("mine/keep.txt")), "x");
+  EXPECT_THROW(PublishSite(o, dir.path(), dir.File("site3"), render::Orientation()), InputError);
+  EXPECT_FALSE(std::filesystem::exists(dir.File("site3")));
 }
 
 render::Camera WorldView(const render::Archive& archive, render::Projection projection) {

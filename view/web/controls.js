@@ -626,11 +626,11 @@ window.CandiPage = function (backend) {
     const a = annotations[i];
     if (!a) return;
     $('annotation-text').textContent = a.title + (a.text ? ': ' + a.text : '');
-    if (a.view && typeof a.view === 'object') {
-      if (typeof a.view.name === 'string' && !a.view.eye) {
-        const v = scene.views.find((x) => x.name === a.view.name);
-        if (v) { resetView(v.camera); return; }
-      }
+    if (typeof a.view === 'string') {  // a scene view's name
+      const v = scene.views.find((x) => x.name === a.view);
+      if (v) { resetView(v.camera); return; }
+      flyTo(a.position);
+    } else if (a.view && typeof a.view === 'object') {  // an inline camera
       applyShared({ camera: a.view });
       fitCanvas(true);
       syncControls();

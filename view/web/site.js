@@ -174,8 +174,8 @@
   const waiting = new Map();
   let nextId = 0;
   worker.onmessage = (e) => { const w = waiting.get(e.data.id); waiting.delete(e.data.id); w(e.data); };
-  function decode(name, buffer, points) {
-    return new Promise((resolve) => { const id = nextId++; waiting.set(id, resolve); worker.postMessage({ id, name, buffer, points }, [buffer]); });
+  function decode(name, buffer, points, bytes) {
+    return new Promise((resolve) => { const id = nextId++; waiting.set(id, resolve); worker.postMessage({ id, name, buffer, points, bytes }, [buffer]); });
   }
   const pageName = (g, k) => 'data/' + g + '/' + k + '.bin';
   // Page k of group g: chunk-relative runs, one per chunk, in the file's order.
@@ -201,7 +201,7 @@
       return r.arrayBuffer();
     }).then((buffer) => {
       bytesReceived += buffer.byteLength;
-      return decode(name, buffer, page.points);
+      return decode(name, buffer, page.points, page.bytes);
     }).then((m) => {
       landed();
       if (m.error) throw new Error(m.error);
