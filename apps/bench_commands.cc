@@ -1,4 +1,4 @@
-// candi bench render|foundation|dense, bench scale, bench view, bench section, bench relief: the
+// candi bench render|foundation|dense, bench scale, view, section, publish and relief: the
 // benchmarks of bench/ (bench/bench.h). `bench relief` runs in candi-relief (relief_commands.cc).
 #include "apps/commands.h"
 #include "bench/bench.h"
@@ -71,6 +71,22 @@ void AddSection(Command& bench) {
   c.Footer("Example: candi bench section --sizes 1e7,1e8 --keep");
 }
 
+void AddPublish(Command& bench) {
+  bench::PublishBenchOptions& a = bench.Keep<bench::PublishBenchOptions>();
+  Command c = bench.Add("publish", "candi publish on generated archives: points/s by threads, bytes a point, bytes "
+                                   "before the first image, points an ensemble draws");
+  c.Option("--sizes", a.sizes, "Point counts, comma separated (e.g. 1e7,1e8)");
+  c.Flag("--billion", a.billion, "Also 1e9 points (~8 GB archive on disk)");
+  c.Option("--work-dir", a.work_dir, "Folder for the generated data (shared with bench view and section)");
+  c.Option("-L,--repeat-level", a.repeat_level, "L of the site's pages");
+  c.Option("--threads", a.threads, "Thread counts, comma separated");
+  c.Option("--runs", a.runs, "Runs of each setting (the median is printed)");
+  c.Flag("--keep", a.keep, "Keep the generated archives and sites, and reuse archives an earlier --keep run kept");
+  c.Run([&a] { return bench::RunPublishBench(a); });
+  c.Footer("Example: candi bench publish --sizes 1e7,1e8 --keep   (then bench/publish_browser_bench.py for the "
+           "browser's side)");
+}
+
 void AddRelief(Command& bench) {
   bench::ReliefBenchOptions& a = bench.Keep<bench::ReliefBenchOptions>();
   Command c = bench.Add("relief", "Relief depth: network width x training time -> accuracy, training and prediction "
@@ -102,6 +118,7 @@ void AddBenchCommands(Command& root) {
   AddScale(bench);
   AddView(bench);
   AddSection(bench);
+  AddPublish(bench);
   AddRelief(bench);
 }
 

@@ -187,9 +187,13 @@ int RenderArchive(const RenderArgs& a, pipeline::RenderOptions o) {
 int RunRender(const RenderArgs& a) {
   const pipeline::RenderOptions o = RenderOptionsOf(a);
   for (const std::string& in : a.inputs) {
-    if (!render::IsArchive(in)) continue;
+    // An archive, a build directory or a demo's output: what a page (candi view, a site) shows.
+    const std::string archive = render::FindArchive(in);
+    if (archive.empty()) continue;
     if (a.inputs.size() > 1) throw std::invalid_argument(in + " is an archive: render it alone");
-    return RenderArchive(a, o);
+    RenderArgs one = a;
+    one.inputs = {archive};
+    return RenderArchive(one, o);
   }
   if (render::mpi::LaunchedByMpi()) {
     throw std::invalid_argument("under mpirun, candi render splits an archive (candi pack) over the ranks; "
@@ -207,14 +211,15 @@ void AddRender(Command& root) {
   pipeline::RenderOptions& o = a.options;
   Command c = root.Add("render", "Render point files see-through with SPBR (stochastic point-based rendering), "
                                  "merged into one image");
-  c.Option("inputs", a.inputs, "Point files (.ply .las .xyz .pts), or one archive (candi pack); under mpirun the "
-           "ranks share the ensembles").Required();
+  c.Option("inputs", a.inputs, "Point files (.ply .las .xyz .pts), or one archive (candi pack, a build directory "
+           "or a demo's output); under mpirun the ranks share the ensembles").Required();
   c.Option("-o,--output", a.outputs.png, "Output PNG (8-bit)").Required();
   c.Option("--png16", a.outputs.png16, "Also write a 16-bit PNG (for analysis)");
   c.Option("-L,--repeat-level", o.repeat_level, "Ensembles averaged (more: less noise, slower)");
   c.Option("--seed", o.seed, "Seed of the ensemble assignment");
   c.Option("--size", a.size, "Image size WxH").OnGiven([&o] { o.size_given = true; });
-  c.Option("--view", a.view, "View JSON (world coordinates) to render from");
+  c.Option("--view", a.view, "View JSON (world coordinates) to render from; a page's saved view also sets the "
+           "layers' shares and the clipping");
   c.Option("--save-view", a.outputs.save_view, "Write the view used as JSON (to repeat the render)");
   c.Option("--background", a.background, "Background colour r,g,b");
   c.Option("--brightness", a.brightness, "auto, none, or a gain (transparent images get dark)");
@@ -415,7 +420,6 @@ void AddPublish(Command& root) {
            "this / L points)");
   c.Option("--memory-mb", o.memory_mb, "The page's default budget of points held, MB (16 bytes a point; the "
            "visitor can change it)");
-  c.Option("--compression", o.compression, "gzip level, 1 (fast) to 9");
   c.Option("--threads", o.threads, "Threads (0: all)");
   c.Option("--up", a.orientation.up, "World up for the first view, x,y,z (default 0,0,1)");
   c.Option("--from", a.orientation.from, "Direction the first view looks in, x,y,z (default: oblique, from above)");

@@ -74,6 +74,23 @@ struct SectionBenchOptions {
 };
 int RunSectionBench(const SectionBenchOptions& options);
 
+// `candi bench publish`: candi publish on generated archives: seconds and points/s on 1 and 2
+// threads, bytes a point, bytes before the first image, points an ensemble
+// draws (what a GPU's GL_POINTS rate turns into a frame time). The browser's side (time to the
+// first image and to convergence, throttled and not; the longest main-thread task) is
+// bench/publish_browser_bench.py.
+struct PublishBenchOptions {
+  std::string sizes = "1e7";
+  bool billion = false;
+  std::string work_dir = "candi-bench-view";  // shared with bench view and section: keep reuses
+  int repeat_level = 100;              // L of the pages, [1, 1000]
+  std::string threads = "1,2";         // thread counts, each [1, 256]
+  int runs = 3;                        // the median of runs is printed, [1, 100]
+  bool keep = false;                   // keep the archives and the last site
+  void Check() const;
+};
+int RunPublishBench(const PublishBenchOptions& options);
+
 // `candi bench relief` (candi_bench_relief): network width x training time -> accuracy, training
 // and prediction seconds; or, on real photos, fine-tuning seconds -> accuracy.
 struct ReliefBenchOptions {

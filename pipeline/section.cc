@@ -375,10 +375,7 @@ SectionCut CutSection(const SectionOptions& o, const std::vector<std::string>& i
   Stopwatch lap;
   for (const std::string& in : inputs) {
     // An archive, a build directory (its archive/), or a demo's output (its build in archive/).
-    std::string dir;
-    for (const fs::path& p : {fs::path(in), fs::path(in) / "archive", fs::path(in) / "archive" / "archive"}) {
-      if (dir.empty() && render::IsArchive(p.string())) dir = p.string();
-    }
+    const std::string dir = render::FindArchive(in);
     if (!dir.empty() && inputs.size() > 1) throw std::invalid_argument(in + " is an archive: section it alone");
     if (!dir.empty()) ReadArchiveSlab(o, dir, section, clip, &slab);
     else ReadFileSlab(o, in, section, clip, &slab);

@@ -340,6 +340,13 @@ bool IsArchive(const std::string& path) {
   return stat((path + "/" + kArchiveManifest).c_str(), &st) == 0;
 }
 
+std::string FindArchive(const std::string& path) {
+  for (const std::string& p : {path, path + "/archive", path + "/archive/archive"}) {
+    if (IsArchive(p)) return p;
+  }
+  return "";
+}
+
 // ---- Archive --------------------------------------------------------------------------------
 
 Archive::Archive(const std::string& directory) : directory_(directory) {

@@ -144,6 +144,9 @@ struct ArchiveManifest {
 
 // True when `path` is a directory holding a manifest.json.
 bool IsArchive(const std::string& path);
+// The render archive `path` names: itself, a build directory's archive/, or a demo's output's
+// archive/archive/ (what candi render, section, view and publish open); "" when none.
+std::string FindArchive(const std::string& path);
 
 // An open archive: the manifest and its data files, memory-mapped read-only.
 class Archive {

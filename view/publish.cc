@@ -4,13 +4,16 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
@@ -31,8 +34,32 @@ using nlohmann::json;
 constexpr const char* kSiteFormat = "candi site";
 constexpr int kPointBytes = 8;
 
+// How a byte plane is deflated: stored when its bytes are near-random (the low bits of the
+// positions: Huffman coding would save a few per cent at the cost of most of the time), runs when
+// few values dominate it (a layer's one colour), Huffman codes otherwise.
+struct PlaneCoding {
+  int level;
+  int strategy;
+};
+// (Levels do not matter to run-length and Huffman coding; 1 is deflate's fastest setup.)
+PlaneCoding CodingOf(const char* plane, size_t n) {
+  constexpr int level = 1;
+  uint64_t count[256] = {};
+  for (size_t i = 0; i < n; ++i) ++count[static_cast<uint8_t>(plane[i])];
+  double bits = 0;
+  for (uint64_t c : count) {
+    if (c) bits -= static_cast<double>(c) * std::log2(static_cast<double>(c) / static_cast<double>(n));
+  }
+  const double entropy = n ? bits / static_cast<double>(n) : 0;  // bits a byte
+  if (entropy > 7.5) return {0, Z_DEFAULT_STRATEGY};
+  if (entropy < 2) return {level, Z_RLE};
+  return {level, Z_HUFFMAN_ONLY};
+}
+
 // The 8 byte planes of `words`, gzip-compressed (RFC 1952: DecompressionStream("gzip") reads it).
-std::string GzipPlanes(const std::vector<uint64_t>& words, int level, const std::string& name) {
+// The coding of each plane (CodingOf) is deflate's own choice of block type; any gzip reader
+// reads the stream.
+std::string GzipPlanes(const std::vector<uint64_t>& words, const std::string& name) {
   const size_t n = words.size();
   std::string planes(n * kPointBytes, '\0');
   for (int j = 0; j < kPointBytes; ++j) {
@@ -42,18 +69,28 @@ std::string GzipPlanes(const std::vector<uint64_t>& words, int level, const std:
   z_stream z;
   std::memset(&z, 0, sizeof(z));
   // windowBits 15 + 16: a gzip header and trailer (CRC-32 and length) around the deflate stream.
-  if (deflateInit2(&z, level, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
+  const PlaneCoding first = CodingOf(planes.data(), n);
+  if (deflateInit2(&z, first.level, Z_DEFLATED, 15 + 16, 8, first.strategy) != Z_OK) {
     throw std::runtime_error(name + ": zlib's deflateInit2 failed");
   }
-  std::string out(deflateBound(&z, planes.size()), '\0');
-  z.next_in = reinterpret_cast<Bytef*>(planes.data());
-  z.avail_in = static_cast<uInt>(planes.size());
+  // Room for the worst case of every coding: stored blocks add 5 bytes each 16 KB or so.
+  std::string out(deflateBound(&z, planes.size()) + planes.size() / 1000 + 1024, '\0');
   z.next_out = reinterpret_cast<Bytef*>(out.data());
   z.avail_out = static_cast<uInt>(out.size());
-  const int rc = deflate(&z, Z_FINISH);
+  int rc = Z_OK;
+  for (int j = 0; j < kPointBytes && rc == Z_OK; ++j) {
+    if (j > 0) {
+      const PlaneCoding c = CodingOf(planes.data() + j * n, n);
+      if (deflateParams(&z, c.level, c.strategy) != Z_OK) rc = Z_STREAM_ERROR;
+    }
+    z.next_in = reinterpret_cast<Bytef*>(planes.data() + j * n);
+    z.avail_in = static_cast<uInt>(n);
+    if (rc == Z_OK) rc = deflate(&z, j + 1 == kPointBytes ? Z_FINISH : Z_NO_FLUSH);
+    if (rc == Z_OK && z.avail_in != 0) rc = Z_BUF_ERROR;
+  }
   const size_t written = z.total_out;
   deflateEnd(&z);
-  if (rc != Z_STREAM_END) throw std::runtime_error(name + ": zlib's deflate failed");
+  if (rc != Z_STREAM_END) throw std::runtime_error(name + ": zlib's deflate failed (" + std::to_string(rc) + ")");
   out.resize(written);
   return out;
 }
@@ -68,14 +105,6 @@ void WriteFile(const std::string& path, const void* data, size_t bytes) {
   }
 }
 
-// A build directory, a demo's output holding one, or an archive.
-std::string ArchiveOf(const std::string& input) {
-  for (const fs::path& p : {fs::path(input) / "archive", fs::path(input) / "archive" / "archive", fs::path(input)}) {
-    if (render::IsArchive(p.string())) return p.string();
-  }
-  return "";
-}
-
 std::string PageName(size_t group, int page) {
   char name[64];
   std::snprintf(name, sizeof(name), "data/%zu/%d.bin", group, page);
@@ -88,7 +117,6 @@ void PublishOptions::Check() const {
   CANDI_CHECK_OPTION_IN(repeat_level, 0, 1000);
   CANDI_CHECK_OPTION(group_points >= 1 && group_points <= (uint64_t{1} << 28), group_points, "in [1, 2^28]");
   CANDI_CHECK_OPTION_IN(memory_mb, 16, 65536);
-  CANDI_CHECK_OPTION_IN(compression, 1, 9);
   CANDI_CHECK_OPTION_IN(threads, 0, 256);
 }
 
@@ -108,7 +136,7 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
                          const render::Orientation& orientation, const ProgressCallback& progress) {
   options.Check();
   Stopwatch watch;
-  const std::string archive_dir = ArchiveOf(input);
+  const std::string archive_dir = render::FindArchive(input);
   if (archive_dir.empty()) {
     throw InputError(input, "", "neither a build directory (archive.json and archive/), a demo's output holding one "
                                 "in archive/, nor a render archive (manifest.json)");
@@ -153,44 +181,47 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
     }
   } cleanup{temp, RegisterTempPath(temp)};
 
-  // Page files, group by group in parallel: the same bytes for any thread count.
-  std::vector<std::vector<std::pair<uint64_t, uint64_t>>> pages(groups.size());  // (bytes, points)
+  // Page files, in parallel over (group, page) in group order (a group's chunks are released
+  // once its last page is written): the same bytes for any thread count.
+  for (size_t g = 0; g < groups.size(); ++g) fs::create_directories(fs::path(temp) / "data" / std::to_string(g));
+  std::vector<std::vector<std::pair<uint64_t, uint64_t>>> pages(groups.size(), std::vector<std::pair<uint64_t, uint64_t>>(L));
+  std::unique_ptr<std::atomic<int>[]> pages_done(new std::atomic<int>[groups.size()]);
+  for (size_t g = 0; g < groups.size(); ++g) pages_done[g] = 0;
   std::atomic<uint64_t> done{0};
   std::mutex progress_mutex;
-  auto body = [&](size_t g) {
-    fs::create_directories(fs::path(temp) / "data" / std::to_string(g));
-    pages[g].resize(L);
+  auto body = [&](size_t task) {
+    const size_t g = task / static_cast<size_t>(L);
+    const int k = static_cast<int>(task % static_cast<size_t>(L));
     std::vector<uint64_t> words;
     std::vector<render::PointRun> runs;
-    for (int k = 0; k < L; ++k) {
-      words.clear();
-      for (size_t c = groups[g].first; c < groups[g].second; ++c) {
-        const render::ArchiveChunk& chunk = m.chunks[c];
-        const uint64_t* data = archive.ChunkWords(c, /*verify=*/true);
-        runs.clear();
-        render::EnsembleSlices(chunk.count, chunk.first, L, seed, k, 1.0, &runs);
-        for (const render::PointRun& r : runs) words.insert(words.end(), data + r.begin, data + r.end);
-      }
-      const std::string name = PageName(g, k);
-      const std::string bytes = GzipPlanes(words, options.compression, name);
-      WriteFile(temp + "/" + name, bytes.data(), bytes.size());
-      pages[g][k] = {bytes.size(), words.size()};
+    for (size_t c = groups[g].first; c < groups[g].second; ++c) {
+      const render::ArchiveChunk& chunk = m.chunks[c];
+      const uint64_t* data = archive.ChunkWords(c, /*verify=*/true);
+      runs.clear();
+      render::EnsembleSlices(chunk.count, chunk.first, L, seed, k, 1.0, &runs);
+      for (const render::PointRun& r : runs) words.insert(words.end(), data + r.begin, data + r.end);
     }
-    std::vector<size_t> released;
-    for (size_t c = groups[g].first; c < groups[g].second; ++c) released.push_back(c);
-    archive.Release(released);
-    uint64_t points = 0;
-    for (size_t c = groups[g].first; c < groups[g].second; ++c) points += m.chunks[c].count;
-    const uint64_t now = done += points;
+    const std::string name = PageName(g, k);
+    const std::string bytes = GzipPlanes(words, name);
+    WriteFile(temp + "/" + name, bytes.data(), bytes.size());
+    pages[g][k] = {bytes.size(), words.size()};
+    const uint64_t now = done += words.size();
+    if (++pages_done[g] == L) {
+      std::vector<size_t> released;
+      for (size_t c = groups[g].first; c < groups[g].second; ++c) released.push_back(c);
+      archive.Release(released);
+    }
     if (progress) {
       std::lock_guard<std::mutex> lock(progress_mutex);
       progress(now, m.points);
     }
   };
+  const size_t tasks = groups.size() * static_cast<size_t>(L);
   if (options.threads == 1) {
-    for (size_t g = 0; g < groups.size(); ++g) body(g);
+    for (size_t t = 0; t < tasks; ++t) body(t);
   } else {
-    ParallelFor(size_t{0}, groups.size(), body);
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    arena.execute([&] { ParallelFor(size_t{0}, tasks, body); });
   }
 
   PublishStats stats;

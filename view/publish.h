@@ -40,7 +40,6 @@ struct PublishOptions {
   // The page's default budget of points held (decoded, on the CPU and the GPU: 16 bytes a point),
   // in MB; the visitor may change it. In [16, 65536]. 128 MB (8 M points) suits a phone.
   int memory_mb = 128;
-  int compression = 1;  // gzip level, [1, 9]: 1 is ~4x faster than 6 and within ~2 % of its size
   int threads = 0;      // 0: as TBB allows
   void Check() const;
 };

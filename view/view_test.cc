@@ -442,6 +442,22 @@ TEST(PickOptions, PickPointChecksThem) {
   EXPECT_THROW(PickPoint(archive, local, 48, 32, o), std::invalid_argument);
 }
 
+TEST(PublishOptions, BadValuesNameTheField) {
+  PublishOptions o;
+  EXPECT_EQ(OptionCheckMessage(o), "no throw");
+  o.repeat_level = 1001;
+  EXPECT_EQ(OptionCheckMessage(o), "PublishOptions::repeat_level = 1001; must be in [0, 1000]");
+  o = {};
+  o.group_points = 0;
+  EXPECT_EQ(OptionCheckMessage(o), "PublishOptions::group_points = 0; must be in [1, 2^28]");
+  o = {};
+  o.memory_mb = 8;
+  EXPECT_EQ(OptionCheckMessage(o), "PublishOptions::memory_mb = 8; must be in [16, 65536]");
+  o = {};
+  o.threads = 257;
+  EXPECT_EQ(OptionCheckMessage(o), "PublishOptions::threads = 257; must be in [0, 256]");
+}
+
 TEST(ServerOptions, BadValuesNameTheField) {
   ServerOptions o;
   o.port = 65536;

@@ -12,7 +12,8 @@
   before any later page.
 - A budget smaller than the data: the page holds at most it, before and after moving.
 - A damaged, a missing and a truncated data file: the page names each and draws the rest.
-- A build's licence, annotations and provenance (measured or reconstructed) reach the page.
+- A build in survey coordinates (10^6 m): the same image as candi render's; its licence,
+  annotations and provenance (measured or reconstructed) reach the page.
 - candi publish on bad input exits 2 naming the path and leaves nothing behind.
 Usage: publish_browser_test.py CANDI SOURCE_DIR"""
 import base64
@@ -231,15 +232,20 @@ def check(work):
         browser.close()
         served.close()
 
-    # 5. A build's provenance, licence and annotations reach the page.
+    # 5. A build in survey coordinates (E 416000, N 9168000): its image still candi render's, and
+    # its provenance, licence and annotations reach the page.
+    E, N, H = 416000.0, 9168000.0, 265.0
     scene = os.path.join(work, "scene.json")
     with open(scene, "w") as f:
         json.dump({"candi_scene": 1, "name": "hill", "licence": "CC BY 4.0 (test)",
                    "render": {"repeat_level": 8, "width": 160, "height": 120},
-                   "views": [{"name": "top", "camera": {"eye": [0, -1, 120], "target": [0, 0, 0], "up": [0, 1, 0]}}],
-                   "annotations": [{"title": "Summit", "text": "the top terrace", "position": [0, 0, 30], "view": "top"},
-                                   {"title": "Foot", "position": [60, 0, 0]}],
+                   "views": [{"name": "top", "camera": {"eye": [E, N - 1, H + 120], "target": [E, N, H],
+                                                        "up": [0, 1, 0]}}],
+                   "annotations": [{"title": "Summit", "text": "the top terrace", "position": [E, N, H + 30],
+                                    "view": "top"},
+                                   {"title": "Foot", "position": [E + 60, N, H]}],
                    "layers": [{"name": "hill", "kind": "foundation", "density": 0.5,
+                               "world_from_layer": {"translation": [E, N, H]},
                                "dxf": os.path.join(vb.SOURCE, "examples", "borobudur", "foundation.dxf")}]}, f)
     vb.run("build", scene, "-o", os.path.join(work, "build"))
     vb.run("publish", os.path.join(work, "build"), "-o", os.path.join(work, "build_site"))
@@ -248,6 +254,9 @@ def check(work):
     try:
         browser.call("Page.navigate", url=served3.url())
         converged(browser, "the build's site")
+        browser.evaluate("window.candiViewer.setSettings({brightness: 'none', repeat_level: 8})")
+        converged(browser, "the build's site, brightness none")
+        compare(browser, work, os.path.join(work, "build"), "survey", failures)
         notes = browser.evaluate("window.candiViewer.annotations().map((a) => a.title)")
         about = browser.evaluate("document.getElementById('provenance').textContent")
         print("build site: annotations %s; about: %s" % (notes, about[:160]))
@@ -259,7 +268,7 @@ def check(work):
         browser.evaluate("window.candiViewer.flyToAnnotation(0)")
         time.sleep(0.5)
         eye = browser.evaluate("window.candiViewer.camera().eye")
-        if max(abs(a - b) for a, b in zip(eye, [0, -1, 120])) > 1e-6:
+        if max(abs(a - b) for a, b in zip(eye, [E, N - 1, H + 120])) > 1e-6:
             failures.append("the annotation did not open its view: eye %s" % eye)
     finally:
         browser.close()

@@ -295,6 +295,7 @@
     let want = 0, have = 0;
     for (const gr of groups) if (gr.wanted) for (const p of gr.pages) { want += p.points; if (p.state === 'loaded') have += p.points; }
     $('bar').style.width = (want ? 100 * have / want : 100).toFixed(1) + '%';
+    if (want && (have === want || heldPoints + inFlight >= budgetPoints) && !inFlight && allLoadedAt === null) allLoadedAt = performance.now();
     progressText = (have === want ? 'all ' : '') + (have / 1e6).toFixed(2) + ' of ' + (want / 1e6).toFixed(2) + ' M points loaded (' +
       (bytesReceived / 1e6).toFixed(1) + ' MB)' + (heldPoints + inFlight >= budgetPoints && have < want ? ' · memory budget reached' : '');
   }
@@ -304,7 +305,7 @@
   let state = null;        // {camera, settings}
   let drawn = 0;           // ensembles accumulated
   let firstGrey = null;    // the first ensemble's grey histogram (auto brightness)
-  let gain = 1, lastFrameAt = 0, changedAt = 0, firstImageAt = null, firstImageBytes = null, convergedAt = null;
+  let gain = 1, changedAt = 0, firstImageAt = null, firstImageBytes = null, convergedAt = null, allLoadedAt = null;
   const stats = { images: 0, ensemblesDrawn: 0, pointsDrawn: 0 };
   function restart() { drawn = 0; firstGrey = null; convergedAt = null; }
   function onData(k) {
@@ -640,7 +641,7 @@
       errors: () => errors.slice(),
       imageRgb,
       progress: () => ({ drawn, L: state ? effectiveL() : 0, converged: !!state && drawn >= effectiveL() && !!convergedAt,
-        firstImageAt, firstImageBytes, convergedAt, bytesReceived, pagesLoaded, heldPoints, budgetPoints,
+        firstImageAt, firstImageBytes, convergedAt, allLoadedAt, bytesReceived, pagesLoaded, heldPoints, budgetPoints,
         pagesFailed: groups.reduce((n, g) => n + g.pages.filter((p) => p.state === 'failed').length, 0) }),
       stats,
       siteRepeatLevel: () => site.data.repeat_level,
