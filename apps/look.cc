@@ -120,7 +120,9 @@ pipeline::RenderOptions RenderOptionsOf(const RenderArgs& a) {
     // A page's saved or shared view also carries the layers' shares and the clipping.
     render::SavedViewSettings saved;
     o.view = render::LoadView(a.view, &saved);
-    for (size_t i = 0; i < saved.layer_names.size(); ++i) o.layer_shares.push_back({saved.layer_names[i], saved.layer_shares[i]});
+    for (size_t i = 0; i < saved.layer_names.size(); ++i) {
+      o.layer_shares.push_back({saved.layer_names[i], saved.layer_shares[i]});
+    }
     o.clip = o.clip.And(saved.clip);
   } else {
     o.orientation = ParseOrientation(a.orientation);

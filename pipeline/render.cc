@@ -284,7 +284,8 @@ RenderedImage RenderArchiveEnsembles(const RenderOptions& o, const render::Archi
   if (!o.layer_shares.empty()) {
     ao.layer_fraction.assign(m.layers.size(), 1.0);
     for (const auto& [name, share] : o.layer_shares) {
-      const auto it = std::find_if(m.layers.begin(), m.layers.end(), [&](const render::ArchiveLayer& l) { return l.name == name; });
+      const auto it = std::find_if(m.layers.begin(), m.layers.end(),
+                                   [&](const render::ArchiveLayer& l) { return l.name == name; });
       if (it == m.layers.end()) throw std::invalid_argument("the view's layer '" + name + "' is not in the archive");
       ao.layer_fraction[it - m.layers.begin()] = share;
     }
@@ -335,7 +336,9 @@ double WriteRender(const RenderOptions& o, const RenderedImage& image, const Ren
   if (!o.clip.empty()) text["candi:clip"] = o.clip.Describe();
   if (!o.layer_shares.empty()) {
     std::string shares;
-    for (const auto& [name, share] : o.layer_shares) shares += (shares.empty() ? "" : " ") + name + "=" + FormatDouble(share);
+    for (const auto& [name, share] : o.layer_shares) {
+      shares += (shares.empty() ? "" : " ") + name + "=" + FormatDouble(share);
+    }
     text["candi:layer_shares"] = shares;
   }
   io::WritePng(out.png, render::ToImage8(average), text);

@@ -177,9 +177,13 @@ TEST_F(SceneFile, LicenceAndAnnotations) {
   json j = Minimal();
   j["views"] = json::array({{{"name", "front"}}});
   j["licence"] = "CC BY 4.0, Balai Konservasi Borobudur";
-  j["annotations"] = json::array({{{"title", "Panel 1"}, {"text", "hidden foot"}, {"position", {416000.001, 9168000.002, 265.5}},
+  j["annotations"] = json::array({{{"title", "Panel 1"},
+                                   {"text", "hidden foot"},
+                                   {"position", {416000.001, 9168000.002, 265.5}},
                                    {"view", "front"}},
-                                  {{"title", "Stair"}, {"position", {1, 2, 3}}, {"view", {{"eye", {0, -5, 1}}, {"target", {0, 0, 0}}}}},
+                                  {{"title", "Stair"},
+                                   {"position", {1, 2, 3}},
+                                   {"view", {{"eye", {0, -5, 1}}, {"target", {0, 0, 0}}}}},
                                   {{"title", "Bare"}, {"position", {0, 0, 0}}}});
   const Scene s = Load(j);
   EXPECT_EQ(s.licence, "CC BY 4.0, Balai Konservasi Borobudur");

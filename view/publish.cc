@@ -161,7 +161,9 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
   for (size_t c = 0; c < m.chunks.size();) {
     size_t end = c + 1;
     uint64_t points = m.chunks[c].count;
-    while (end < m.chunks.size() && points + m.chunks[end].count <= options.group_points) points += m.chunks[end++].count;
+    while (end < m.chunks.size() && points + m.chunks[end].count <= options.group_points) {
+      points += m.chunks[end++].count;
+    }
     groups.push_back({c, end});
     c = end;
   }
@@ -184,7 +186,8 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
   // Page files, in parallel over (group, page) in group order (a group's chunks are released
   // once its last page is written): the same bytes for any thread count.
   for (size_t g = 0; g < groups.size(); ++g) fs::create_directories(fs::path(temp) / "data" / std::to_string(g));
-  std::vector<std::vector<std::pair<uint64_t, uint64_t>>> pages(groups.size(), std::vector<std::pair<uint64_t, uint64_t>>(L));
+  using Page = std::pair<uint64_t, uint64_t>;  // bytes, points
+  std::vector<std::vector<Page>> pages(groups.size(), std::vector<Page>(L));
   std::unique_ptr<std::atomic<int>[]> pages_done(new std::atomic<int>[groups.size()]);
   for (size_t g = 0; g < groups.size(); ++g) pages_done[g] = 0;
   std::atomic<uint64_t> done{0};
@@ -237,7 +240,8 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
       const render::ArchiveChunk& k = m.chunks[c];
       const render::ChunkQuantizer& q = k.quantizer;
       chunks.push_back({k.layer, k.count, k.first, g, q.box.min.x(), q.box.min.y(), q.box.min.z(), q.box.max.x(),
-                        q.box.max.y(), q.box.max.z(), q.step[0], q.step[1], q.step[2], q.bits[0], q.bits[1], q.bits[2]});
+                        q.box.max.y(), q.box.max.z(), q.step[0], q.step[1], q.step[2], q.bits[0], q.bits[1],
+                        q.bits[2]});
     }
   }
   json groups_json = json::array();

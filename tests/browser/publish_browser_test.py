@@ -3,10 +3,12 @@
 (SwiftShader), the site served by `python3 -m http.server` (no HTTP Range support).
 
 - WebGL2 must be there: a page without it is a failure, not a skip.
-- The converged image equals candi render's of the same archive, view, seed and L (the figures
+- The converged image equals candi render's of the same archive, view, seed and L, perspective,
+  orthographic and opaque (the figures
   are printed; the bound is >= 99 % of pixels within 1 level and at most 0.01 % beyond 8).
 - Layer shares and a clip box set on the page: candi render --view of the page's saved view
-  (which carries both) gives the same image, so the shares follow candi's point-number law.
+  (which carries both) gives the same image, so the shares follow candi's point-number law;
+  picks on the client take only drawn points (not the hidden layer, not the clipped part).
 - At 2 Mbit/s (DevTools' network emulation) the first image is drawn after the first ensemble's
   bytes (page 0 of every group), not after the whole data; DevTools sees every page 0 requested
   before any later page.
@@ -79,7 +81,7 @@ def compare(browser, work, archive, name, failures):
     png = os.path.join(work, name + ".png")
     brightness = "none" if settings["brightness"] == "none" else "auto"
     vb.run("render", archive, "--view", view, "-L", str(settings["repeat_level"]), "--seed", str(settings["seed"]),
-           "--brightness", brightness, "-o", png)
+           "--brightness", brightness, "-o", png, *(["--opaque"] if settings["opaque"] else []))
     with open(png, "rb") as f:
         w, h, channels, ref = decode_png(f.read())
     if channels != 3 or len(web) != len(ref):
@@ -153,6 +155,19 @@ def check(work):
         browser.evaluate("window.candiViewer.setSettings({brightness: 'auto'})")
         converged(browser, "brightness auto")
         compare(browser, work, archive, "auto", failures)
+        # Orthographic, and opaque (L = 1).
+        camera = browser.evaluate("window.candiViewer.camera()")
+        browser.evaluate("window.candiViewer.setCamera({projection: 'orthographic', ortho_height: %r})"
+                         % (0.8 * max(b - a for a, b in zip(index["scene"]["bounds"]["min"],
+                                                             index["scene"]["bounds"]["max"]))))
+        browser.evaluate("window.candiViewer.setSettings({brightness: 'none'})")
+        converged(browser, "orthographic")
+        compare(browser, work, archive, "orthographic", failures)
+        browser.evaluate("window.candiViewer.setCamera(%s)" % json.dumps(camera))
+        browser.evaluate("window.candiViewer.setSettings({opaque: true})")
+        converged(browser, "opaque")
+        compare(browser, work, archive, "opaque", failures)
+        browser.evaluate("window.candiViewer.setSettings({opaque: false})")
 
         # 2. Layer shares (one hidden, one doubled) and a clip box: candi render of the saved view.
         b = index["scene"]["bounds"]
@@ -162,6 +177,22 @@ def check(work):
                          % json.dumps(clip))
         converged(browser, "shares and clipping")
         shared = compare(browser, work, archive, "shares", failures)
+        # Picks on the client take only what is drawn: a point under the pixel, never of the
+        # hidden layer, never clipped away.
+        w, h = browser.evaluate("[window.candiViewer.camera().width, window.candiViewer.camera().height]")
+        hits = 0
+        for fx, fy in ((0.5, 0.5), (0.4, 0.55), (0.6, 0.45), (0.45, 0.6), (0.55, 0.5)):
+            x, y = int(fx * w) + 0.5, int(fy * h) + 0.5
+            m = browser.evaluate("window.candiViewer.pick(%r, %r)" % (x, y), await_promise=True)
+            if not m["hit"]:
+                continue
+            hits += 1
+            q = browser.evaluate("window.candiViewer.project(%s)" % json.dumps(m["point"]))
+            if any(hit["layer"] == 2 for hit in m["hits"]) or int(q[0]) != int(x) or int(q[1]) != int(y) or \
+                    m["point"][0] > mid[0] + 5 + 1e-6:
+                failures.append("pick at %r, %r: %s (projects to %s)" % (x, y, m, q))
+        if hits == 0:
+            failures.append("no pick hit a drawn point")
         if plain is not None and shared is not None and plain == shared:
             failures.append("layer shares and clipping left the image unchanged")
         address = browser.evaluate("window.candiViewer.address()")

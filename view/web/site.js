@@ -228,7 +228,8 @@
   }
   function evict(page) {
     if (page.vbo) gl.deleteBuffer(page.vbo);
-    for (const c of chunks) c.segments = c.segments.filter((s) => s.page !== page);
+    const gr = groups[page.group];
+    for (let c = gr.chunks[0]; c < gr.chunks[1]; ++c) chunks[c].segments = chunks[c].segments.filter((s) => s.page !== page);
     heldPoints -= page.points;
     page.vbo = null; page.words = null; page.state = 'none';
   }
@@ -272,20 +273,27 @@
   const priority = (g, k) => k * groups.length + groups[g].rank;
   function pump() {
     if (!state) return;
+    let evictable = null;  // loaded pages, the lowest priority (hidden layers, then finest and far) last
     for (const [g, k] of order) {
       if (requests >= 4) break;  // a few pages at a time, in the order planned
       const page = groups[g].pages[k];
       if (page.state !== 'none') continue;
       if (heldPoints + inFlight + page.points > budgetPoints) {
         // Drop the finest pages of far groups first, while they rank below this one.
-        let worst = null, wp = priority(g, k);
-        groups.forEach((gr, h) => gr.pages.forEach((p, j) => {
-          if (p.state === 'loaded' && (!gr.wanted || priority(h, j) > wp)) { const q = gr.wanted ? priority(h, j) : Infinity; if (!worst || q > worst.q) worst = { p, q }; }
-        }));
-        if (!worst) break;
-        evict(worst.p);
-        restart();
-        if (heldPoints + inFlight + page.points > budgetPoints) continue;
+        if (!evictable) {
+          evictable = [];
+          groups.forEach((gr, h) => gr.pages.forEach((p, j) => {
+            if (p.state === 'loaded') evictable.push({ p, q: gr.wanted ? priority(h, j) : Infinity });
+          }));
+          evictable.sort((a, b) => a.q - b.q);
+        }
+        const wp = priority(g, k);
+        while (heldPoints + inFlight + page.points > budgetPoints && evictable.length &&
+               evictable[evictable.length - 1].q > wp) {
+          evict(evictable.pop().p);
+          restart();
+        }
+        if (heldPoints + inFlight + page.points > budgetPoints) break;  // the rest ranks lower still
       }
       loadPage(g, k);
     }
@@ -605,12 +613,13 @@
       chunks = d.chunks.map((a) => ({ layer: a[F.layer], count: a[F.count], first: a[F.first], group: a[F.group],
         min: [a[F.min_x], a[F.min_y], a[F.min_z]], max: [a[F.max_x], a[F.max_y], a[F.max_z]],
         step: [a[F.step_x], a[F.step_y], a[F.step_z]], bits: [a[F.bits_x], a[F.bits_y], a[F.bits_z]], segments: [], hashes: {}, visible: true }));
-      groups = d.groups.map((g) => {
+      groups = d.groups.map((g, gi) => {
         const box = { min: [Infinity, Infinity, Infinity], max: [-Infinity, -Infinity, -Infinity] };
         for (let c = g.chunks[0]; c < g.chunks[1]; ++c) for (let a = 0; a < 3; ++a) {
           box.min[a] = Math.min(box.min[a], chunks[c].min[a]); box.max[a] = Math.max(box.max[a], chunks[c].max[a]);
         }
-        return { chunks: g.chunks, box, wanted: true, rank: 0, pages: g.pages.map(([bytes, points]) => ({ bytes, points, state: 'none' })) };
+        return { chunks: g.chunks, box, wanted: true, rank: 0,
+          pages: g.pages.map(([bytes, points]) => ({ bytes, points, state: 'none', group: gi })) };
       });
       const mb = Number(new URLSearchParams(location.search).get('memory_mb')) || d.memory_mb;
       budgetPoints = Math.floor(mb * 1e6 / 16);
