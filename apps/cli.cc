@@ -29,7 +29,7 @@ CLI::Option* OptionOf(void* option) { return static_cast<CLI::Option*>(option); 
 // were added, so the groups add them in this order; GroupCommands checks that they did.
 const std::vector<std::pair<std::string, std::vector<std::string>>>& CommandGroups() {
   static const std::vector<std::pair<std::string, std::vector<std::string>>> groups = {
-      {"Inspect and convert", {"info", "convert"}},
+      {"Inspect and convert", {"info", "convert", "compare"}},
       {"Digitize", {"sfm", "dense", "georef", "register", "clean", "colorcorrect", "foundation", "relief"}},
       {"Assemble", {"build", "pack"}},
       {"Look", {"render", "view", "publish", "section"}},

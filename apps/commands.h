@@ -19,7 +19,7 @@
 
 namespace candi::apps {
 
-void AddInspectCommands(Command& root);   // info, convert (inspect.cc)
+void AddInspectCommands(Command& root);   // info, convert, compare (inspect.cc)
 void AddDigitizeCommands(Command& root);  // sfm, dense, georef, register, clean, colorcorrect, foundation,
                                           // relief (digitize.cc, relief.cc)
 void AddReliefCommands(Command& root);    // relief synth|dataset|train|predict|points|eval|place (relief.cc)

@@ -10,7 +10,15 @@
 // races the same way and is suppressed in scripts/sanitize/tsan.supp.
 #pragma once
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+
+#include "core/progress.h"
 
 #if defined(__SANITIZE_THREAD__)
 #define CANDI_TSAN 1
@@ -87,6 +95,26 @@ void ParallelFor(Index first, Index last, const Body& body) {
   char join = 0;
   const parallel_internal::Finally joined{&join, &parallel_internal::Acquire};
   tbb::parallel_for(first, last, parallel_internal::Wrapped<Body>(&body, &join));
+}
+
+// body(begin, end) over [0, n) in blocks of `block` on at most `threads` workers (0 = TBB's
+// default), reporting progress (done, n) after each block when `progress` is set.
+template <typename Body>
+void ForEachBlock(int threads, size_t n, size_t block, const ProgressCallback& progress,
+                  const Body& body) {
+  std::atomic<uint64_t> done{0};
+  auto run = [&] {
+    ParallelFor(tbb::blocked_range<size_t>(0, n, block), [&](const tbb::blocked_range<size_t>& r) {
+      body(r.begin(), r.end());
+      if (progress) progress(done += r.size(), n);
+    });
+  };
+  if (threads > 0) {
+    tbb::task_arena arena(threads);
+    arena.execute(run);
+  } else {
+    run();
+  }
 }
 
 }  // namespace candi

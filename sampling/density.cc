@@ -89,25 +89,6 @@ std::vector<double> ReadWeights(const PointCloud& cloud, const std::string& fiel
   return weights;
 }
 
-// Runs body(begin, end) over [0, n) in blocks on at most `threads` workers (0 = TBB's default).
-template <typename Body>
-void ForEachBlock(int threads, size_t n, const ProgressCallback& progress, const Body& body) {
-  std::atomic<uint64_t> done{0};
-  auto run = [&] {
-    ParallelFor(tbb::blocked_range<size_t>(0, n, kBlock),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                        body(r.begin(), r.end());
-                        if (progress) progress(done += r.size(), n);
-                      });
-  };
-  if (threads > 0) {
-    tbb::task_arena arena(threads);
-    arena.execute(run);
-  } else {
-    run();
-  }
-}
-
 FloatCloud ToFloatCloud(const PointCloud& cloud, const Eigen::Vector3d& centre) {
   FloatCloud out;
   out.points.resize(cloud.size());
@@ -165,7 +146,7 @@ void KdTreeDensity(const DensityOptions& o, const KdTree& tree, const FloatCloud
   const float radius_sq = static_cast<float>(result->radius * result->radius);
   const double inverse_area = 1.0 / result->area;
   const size_t n = points.kdtree_get_point_count();
-  ForEachBlock(o.threads, n, o.progress, [&](size_t begin, size_t end) {
+  ForEachBlock(o.threads, n, kBlock, o.progress, [&](size_t begin, size_t end) {
     for (size_t k = begin; k < end; ++k) {
       const uint32_t i = tree.vAcc[k];
       WeightSum sum(radius_sq, weights);
@@ -194,7 +175,7 @@ std::vector<CellEntry> SortedCells(const DensityOptions& o, const PointCloud& cl
         "the kd-tree method)");
   }
   std::vector<CellEntry> entries(cloud.size());
-  ForEachBlock(o.threads, cloud.size(), nullptr, [&](size_t begin, size_t end) {
+  ForEachBlock(o.threads, cloud.size(), kBlock, nullptr, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       uint64_t key = 0;
       for (int k = 0; k < 3; ++k) {
@@ -256,7 +237,7 @@ void VoxelDensity(const DensityOptions& o, const PointCloud& cloud, const Box3d&
   starts.push_back(entries.size());
   const size_t cells = starts.size() - 1;
   std::atomic<uint64_t> done{0};
-  ForEachBlock(o.threads, cells, nullptr, [&](size_t begin, size_t end) {
+  ForEachBlock(o.threads, cells, kBlock, nullptr, [&](size_t begin, size_t end) {
     for (size_t c = begin; c < end; ++c) {
       const CellEntry* first = &entries[starts[c]];
       const size_t count = starts[c + 1] - starts[c];

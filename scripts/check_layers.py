@@ -15,14 +15,15 @@ import sys
 
 # Module -> the modules its library code may include (itself always). Kept in step with the
 # table "may include" of docs/design/architecture.md.
-BELOW_PIPELINE = {"core", "io", "mesh", "sampling", "section", "render", "photogrammetry", "relief",
-                  "view"}
+BELOW_PIPELINE = {"core", "io", "mesh", "sampling", "section", "compare", "render", "photogrammetry",
+                  "relief", "view"}
 ALLOWED = {
     "core": set(),
     "io": {"core"},
     "mesh": {"core", "io"},
     "sampling": {"core", "io"},
     "section": {"core"},
+    "compare": {"core", "io"},
     "render": {"core", "io"},
     "photogrammetry": {"core", "io"},
     "relief": {"core", "io", "photogrammetry"},

@@ -56,7 +56,7 @@ TEST(Cli, VersionHelpAndUsageErrors) {
 // `candi --help` lists the commands in groups along a user's path, every command once.
 TEST(Cli, HelpGroupsTheCommandsAlongTheUsersPath) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> expected = {
-      {"Inspect and convert", {"info", "convert"}},
+      {"Inspect and convert", {"info", "convert", "compare"}},
       {"Digitize",
        {"sfm", "dense", "georef", "register", "clean", "colorcorrect", "foundation", "relief"}},
       {"Assemble", {"build", "pack"}},
