@@ -87,6 +87,20 @@ void AddPublish(Command& bench) {
            "browser's side)");
 }
 
+void AddCompare(Command& bench) {
+  bench::CompareBenchOptions& a = bench.Keep<bench::CompareBenchOptions>();
+  Command c = bench.Add("compare", "candi compare on a known change: seconds and error against the truth per "
+                                   "setting (C2C models, M3C2 scales, thinning), and C2C beside CloudCompare's");
+  c.Option("--points", a.points, "Points in each cloud").Range(1e3, 1e9);
+  c.Option("--threads", a.threads, "Thread counts, comma separated");
+  c.Option("--runs", a.runs, "Runs of each setting (the median is printed)");
+  c.FlagOff("--no-cloudcompare", a.cloudcompare, "Do not time CloudCompare");
+  c.Option("--work-dir", a.work_dir, "Folder for the generated clouds");
+  c.Option("--seed", a.seed, "Seed of the generated clouds");
+  c.Run([&a] { return bench::RunCompareBench(a); });
+  c.Footer("Example: candi bench compare --points 1e7 --runs 3");
+}
+
 void AddRelief(Command& bench) {
   bench::ReliefBenchOptions& a = bench.Keep<bench::ReliefBenchOptions>();
   Command c = bench.Add("relief", "Relief depth: network width x training time -> accuracy, training and prediction "
@@ -119,6 +133,7 @@ void AddBenchCommands(Command& root) {
   AddView(bench);
   AddSection(bench);
   AddPublish(bench);
+  AddCompare(bench);
   AddRelief(bench);
 }
 

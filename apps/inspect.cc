@@ -280,7 +280,7 @@ void AddCompare(Command& root) {
   c.FlagOff("--unsigned", d.c2m.signed_distance, "C2M: |distance| instead of the signed distance");
   c.Option("--normal-scale", d.m3c2.normal_scale, "M3C2: D, the diameter normals are fitted over, m (0: 2 d)");
   c.Option("--projection-scale", d.m3c2.projection_scale,
-           "M3C2: d, the cylinder's diameter, m (0: 6 times the reference's median spacing)");
+           "M3C2: d, the cylinder's diameter, m (0: ~30 reference points in it)");
   c.Option("--max-depth", d.m3c2.max_depth, "M3C2: the cylinder's half-length, m (0: D)");
   c.Option("--registration-error", d.m3c2.registration_error, "M3C2: added to LoD95, m");
   c.Option("--min-points", d.m3c2.min_points, "M3C2: points each cloud needs in a cylinder");

@@ -91,6 +91,22 @@ struct PublishBenchOptions {
 };
 int RunPublishBench(const PublishBenchOptions& options);
 
+// `candi bench compare`: the deviation methods on a case with known change (a wavy surface with
+// 2 mm noise on both sides, moved 5 mm along its normal inside a disc): per setting (C2C plain or
+// with a local model, M3C2 at several D and d, the reference thinned) the seconds on 1 and 2
+// threads and the error against the truth; then C2C beside CloudCompare's on the same files
+// (when it is installed), both timed end to end and in their distance step.
+struct CompareBenchOptions {
+  double points = 1e6;                 // points in each cloud, [1e3, 1e9]
+  std::string threads = "1,2";         // thread counts, each [1, 256]
+  int runs = 3;                        // the median of runs is printed, [1, 100]
+  bool cloudcompare = true;            // also time CloudCompare (skipped when not installed)
+  std::string work_dir = "candi-bench-compare";
+  uint64_t seed = 1;
+  void Check() const;
+};
+int RunCompareBench(const CompareBenchOptions& options);
+
 // `candi bench relief` (candi_bench_relief): network width x training time -> accuracy, training
 // and prediction seconds; or, on real photos, fine-tuning seconds -> accuracy.
 struct ReliefBenchOptions {

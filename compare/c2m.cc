@@ -126,6 +126,7 @@ DeviationResult CompareToMesh(const DeviationOptions& options, const TriMesh& re
   options.Check();
   internal::CheckNotEmpty(reference.faces.size(), reference_name, "faces");
   internal::CheckNotEmpty(compared.size(), compared_name);
+  internal::CheckBelowIndexLimit(compared.size(), compared_name);
   const Eigen::Vector3d origin = internal::CommonOrigin(internal::FiniteWorldBounds(reference.vertices));
   const std::vector<Eigen::Vector3d> v = internal::RelativePositions(reference.vertices, origin);
   uint64_t degenerate = 0;
@@ -140,8 +141,10 @@ DeviationResult CompareToMesh(const DeviationOptions& options, const TriMesh& re
   DeviationResult result;
   result.method = Method::kC2M;
   result.distance.assign(q.size(), std::numeric_limits<double>::quiet_NaN());
+  const std::vector<uint32_t> order = internal::MortonOrder(q);
   ForEachBlock(options.threads, q.size(), internal::kBlock, progress, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) {
+    for (size_t j = begin; j < end; ++j) {
+      const size_t i = order[j];
       if (!q[i].allFinite()) continue;
       const auto hit = tree.closest_point_and_primitive(ToCgal(q[i]));
       const Eigen::Vector3d c = ToEigen(hit.first);

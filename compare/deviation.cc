@@ -1,6 +1,8 @@
 #include "compare/deviation.h"
 
 
+#include <tbb/parallel_sort.h>
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
@@ -35,6 +37,49 @@ std::vector<Eigen::Vector3d> RelativePositions(const PointCloud& cloud,
 
 void CheckNotEmpty(size_t size, const std::string& name, const char* what) {
   if (size == 0) throw InputError(name, "", std::string("holds no ") + what + " to compare");
+}
+
+void CheckBelowIndexLimit(size_t size, const std::string& name) {
+  if (size >= (uint64_t{1} << 32)) {
+    throw InputError(name, "", "holds " + std::to_string(size) +
+                                   " points; a comparison takes fewer than 2^32 a cloud");
+  }
+}
+
+std::vector<uint32_t> MortonOrder(const std::vector<Eigen::Vector3d>& points) {
+  Box3d box;
+  for (const auto& p : points) {
+    if (p.allFinite()) box.Extend(p);
+  }
+  std::vector<std::pair<uint64_t, uint32_t>> keys(points.size());
+  const Eigen::Vector3d extent = box.IsEmpty() ? Eigen::Vector3d::Ones() : box.Extent();
+  const double scale = ((1u << 21) - 1) / std::max({extent.x(), extent.y(), extent.z(), 1e-300});
+  // Spreads 21 bits to every third bit.
+  auto spread = [](uint64_t v) {
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffULL;
+    v = (v | v << 16) & 0x1f0000ff0000ffULL;
+    v = (v | v << 8) & 0x100f00f00f00f00fULL;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+    v = (v | v << 2) & 0x1249249249249249ULL;
+    return v;
+  };
+  ForEachBlock(0, points.size(), 1 << 16, nullptr, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3d& p = points[i];
+      uint64_t code = ~uint64_t{0};  // not finite: last
+      if (p.allFinite()) {
+        const Eigen::Vector3d q = (p - box.min) * scale;
+        code = spread(static_cast<uint64_t>(q.x())) | spread(static_cast<uint64_t>(q.y())) << 1 |
+               spread(static_cast<uint64_t>(q.z())) << 2;
+      }
+      keys[i] = {code, static_cast<uint32_t>(i)};
+    }
+  });
+  tbb::parallel_sort(keys.begin(), keys.end());
+  std::vector<uint32_t> order(points.size());
+  for (size_t i = 0; i < keys.size(); ++i) order[i] = keys[i].second;
+  return order;
 }
 
 Box3d FiniteWorldBounds(const PointCloud& cloud) {
@@ -77,14 +122,16 @@ namespace {
 using internal::KdTree;
 using internal::Points;
 
-// The reference's finite points about `origin`; the count left out goes to `dropped`.
+// The reference's finite points about `origin`, in Morton order (internal::MortonOrder); the
+// count left out goes to `dropped`.
 Points FinitePoints(const PointCloud& cloud, const Eigen::Vector3d& origin, uint64_t& dropped) {
+  const std::vector<Eigen::Vector3d> relative = internal::RelativePositions(cloud, origin);
   Points out;
   out.points.reserve(cloud.size());
   dropped = 0;
-  for (const Eigen::Vector3d& p : internal::RelativePositions(cloud, origin)) {
-    if (p.allFinite()) {
-      out.points.push_back(p);
+  for (uint32_t i : internal::MortonOrder(relative)) {
+    if (relative[i].allFinite()) {
+      out.points.push_back(relative[i]);
     } else {
       ++dropped;
     }
@@ -106,10 +153,8 @@ PreparedClouds Prepare(const PointCloud& reference, const PointCloud& compared,
                        std::vector<std::string>& warnings) {
   internal::CheckNotEmpty(reference.size(), reference_name);
   internal::CheckNotEmpty(compared.size(), compared_name);
-  if (reference.size() >= (uint64_t{1} << 32)) {
-    throw InputError(reference_name, "", "holds " + std::to_string(reference.size()) +
-                                             " points; the reference must hold fewer than 2^32");
-  }
+  internal::CheckBelowIndexLimit(reference.size(), reference_name);
+  internal::CheckBelowIndexLimit(compared.size(), compared_name);
   PreparedClouds p;
   p.origin = internal::CommonOrigin(internal::FiniteWorldBounds(reference));
   uint64_t dropped = 0;
@@ -180,6 +225,28 @@ double QuadricDistance(const Pca& pca, const std::vector<Eigen::Vector3d>& pts,
   return scale * std::abs(w - f) / std::sqrt(1 + fu * fu + fv * fv);
 }
 
+// A nanoflann result set for the one nearest point, its search bounded from the start by a
+// known point's squared distance (ties keep the known point). Exact: a point at that distance
+// exists, so the nearest is never farther.
+class Nearest {
+ public:
+  Nearest(double bound_sq, int64_t index) : worst_(bound_sq), index_(index) {}
+  bool addPoint(double dist_sq, uint32_t index) {
+    if (dist_sq < worst_) {
+      worst_ = dist_sq;
+      index_ = index;
+    }
+    return true;
+  }
+  double worstDist() const { return worst_; }
+  bool full() const { return index_ >= 0; }
+  int64_t index() const { return index_; }
+
+ private:
+  double worst_;
+  int64_t index_;
+};
+
 DeviationResult CloudToCloud(const DeviationOptions& options, PreparedClouds& p,
                              const ProgressCallback& progress) {
   const C2cOptions& o = options.c2c;
@@ -192,15 +259,30 @@ DeviationResult CloudToCloud(const DeviationOptions& options, PreparedClouds& p,
                        : std::min<size_t>(static_cast<size_t>(o.model_neighbours),
                                           p.reference.points.size());
   std::atomic<uint64_t> fallbacks{0};
+  const std::vector<uint32_t> order = internal::MortonOrder(p.compared);
   ForEachBlock(options.threads, n, internal::kBlock, progress, [&](size_t begin, size_t end) {
     std::vector<uint32_t> index(k);
     std::vector<double> dist_sq(k);
     std::vector<Eigen::Vector3d> pts;
     uint64_t local_fallbacks = 0;
-    for (size_t i = begin; i < end; ++i) {
+    int64_t hint = -1;  // the previous query's nearest reference point
+    for (size_t j = begin; j < end; ++j) {
+      const size_t i = order[j];
       const Eigen::Vector3d& q = p.compared[i];
       if (!q.allFinite()) continue;
-      const size_t got = p.tree->knnSearch(q.data(), k, index.data(), dist_sq.data());
+      size_t got = 1;
+      if (k == 1) {
+        // The previous query's nearest point bounds this one's search (the queries go along a
+        // Z-order curve, so it is near): the same answer, fewer nodes visited.
+        Nearest nearest(hint < 0 ? std::numeric_limits<double>::infinity()
+                                 : (q - p.reference.points[static_cast<size_t>(hint)]).squaredNorm(),
+                        hint);
+        p.tree->findNeighbors(nearest, q.data(), nanoflann::SearchParams());
+        index[0] = static_cast<uint32_t>(nearest.index());
+        hint = nearest.index();
+      } else {
+        got = p.tree->knnSearch(q.data(), k, index.data(), dist_sq.data());
+      }
       double d = (q - p.reference.points[index[0]]).norm();  // not nanoflann's sum: exact
       if (o.local_model != LocalModel::kNone && d > 0) {
         pts.clear();
@@ -326,22 +408,28 @@ std::pair<double, double> AutoM3c2Scales(const PointCloud& reference) {
                      "--normal-scale and --projection-scale");
   }
   const auto tree = internal::BuildTree(pts);
+  // The density from the distance r to the 16th neighbour (16 points in pi r^2 of a surface);
+  // d so that a cylinder of diameter d holds ~30 reference points.
+  constexpr size_t kNeighbours = 16;
+  constexpr double kTarget = 30;
+  const size_t k = std::min(kNeighbours + 1, pts.points.size());
   const size_t samples = std::min<size_t>(1000, pts.points.size());
-  std::vector<double> spacing;
+  std::vector<double> radius;
+  std::vector<uint32_t> index(k);
+  std::vector<double> dist_sq(k);
   for (size_t s = 0; s < samples; ++s) {
     const size_t i = s * pts.points.size() / samples;
-    uint32_t index[2];
-    double dist_sq[2];
-    if (tree->knnSearch(pts.points[i].data(), 2, index, dist_sq) == 2 && dist_sq[1] > 0) {
-      spacing.push_back(std::sqrt(dist_sq[1]));
-    }
+    const size_t got = tree->knnSearch(pts.points[i].data(), k, index.data(), dist_sq.data());
+    if (got == k && dist_sq[k - 1] > 0) radius.push_back(std::sqrt(dist_sq[k - 1]));
   }
-  if (spacing.empty()) {
-    throw InputError("cannot choose M3C2's scales: the reference's points coincide; give "
+  if (radius.empty()) {
+    throw InputError("cannot choose M3C2's scales: the reference holds too few distinct points; give "
                      "--normal-scale and --projection-scale");
   }
-  std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
-  const double d = 6 * spacing[spacing.size() / 2];
+  std::nth_element(radius.begin(), radius.begin() + radius.size() / 2, radius.end());
+  const double r = radius[radius.size() / 2];
+  const double density = static_cast<double>(k - 1) / (3.14159265358979323846 * r * r);
+  const double d = std::sqrt(4 * kTarget / (3.14159265358979323846 * density));
   return {2 * d, d};
 }
 

@@ -62,8 +62,8 @@ struct C2mOptions {
 };
 
 struct M3c2Options {
-  double normal_scale = 0;        // D, m, >= 0: normals from reference points within D/2; 0 = auto
-  double projection_scale = 0;    // d, m, >= 0: the cylinder's diameter; 0 = auto
+  double normal_scale = 0;        // D, m, >= 0: normals from reference points within D/2; 0 = 2 d
+  double projection_scale = 0;    // d, m, >= 0: the cylinder's diameter; 0 = ~30 points in it
   double max_depth = 0;           // m, >= 0: the cylinder's half-length; 0 = the normal scale D
   double registration_error = 0;  // m, >= 0: added to LoD95 (the paper's "reg")
   int min_points = 3;             // points a side needs for a distance, [2, 1000000]
@@ -115,9 +115,10 @@ DeviationResult CompareToMesh(const DeviationOptions& options, const TriMesh& re
                               const std::string& compared_name,
                               const ProgressCallback& progress = nullptr);
 
-// M3C2's automatic scales for a reference cloud: s = the median distance from a seeded sample of
-// points to their nearest neighbour; d = 6 s (about 30 points in a cylinder on a surface
-// sampled at spacing s), D = 2 d. Returns {D, d}.
+// M3C2's automatic scales for a reference cloud: the surface density from the median distance
+// of up to 1000 evenly spread points to their 16th neighbour; d such that a cylinder of diameter d
+// holds ~30 reference points on a surface, D = 2 d. Returns {D, d}. Throws InputError when fewer
+// than 17 distinct points give no density.
 std::pair<double, double> AutoM3c2Scales(const PointCloud& reference);
 
 // The compared cloud with the result as scalar fields: "distance" (float), and for M3C2 also

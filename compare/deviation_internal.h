@@ -21,6 +21,8 @@ std::vector<Eigen::Vector3d> RelativePositions(const PointCloud& cloud,
 
 // Throws InputError("<name>: holds no points") for an empty cloud.
 void CheckNotEmpty(size_t size, const std::string& name, const char* what = "points");
+// Throws InputError naming `name` for 2^32 points or more (the indices are 32-bit).
+void CheckBelowIndexLimit(size_t size, const std::string& name);
 
 // Compared points a task takes (core/parallel.h: ForEachBlock).
 constexpr size_t kBlock = 2048;
@@ -30,6 +32,11 @@ constexpr size_t kBlock = 2048;
 // apart (`gap` > 0, m).
 void Finish(DeviationResult& result, uint64_t not_finite, double gap,
             const std::string& compared_name);
+
+// The indices of `points` along a Z-order (Morton) curve over their bounding box, points that are
+// not finite last: neighbours in space become neighbours in memory, so queries made in this order
+// (and a tree built over points in it) stay in the cache. Deterministic (unique keys).
+std::vector<uint32_t> MortonOrder(const std::vector<Eigen::Vector3d>& points);
 
 // The world bounds of a cloud's finite positions (a NaN x beside a finite y counts for nothing).
 Box3d FiniteWorldBounds(const PointCloud& cloud);

@@ -395,9 +395,9 @@ TEST(M3c2Test, UndefinedPointsAreNaNAndCounted) {
   EXPECT_EQ(r.undefined, 3u);
   EXPECT_EQ(r.no_normal, 2u);  // far away, and above (no reference within D/2)
   EXPECT_GE(r.warnings.size(), 2u);
-  // Automatic scales: d = 6 x spacing (~2 cm here), D = 2 d.
+  // Automatic scales: ~30 points in a cylinder of diameter d at 2500 points/m^2, D = 2 d.
   const auto [big, small] = AutoM3c2Scales(ref);
-  EXPECT_NEAR(small, 6 * 0.02, 0.06);
+  EXPECT_NEAR(small, std::sqrt(4 * 30 / (kPi * 2500)), 0.02);
   EXPECT_DOUBLE_EQ(big, 2 * small);
 }
 

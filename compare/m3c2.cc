@@ -104,10 +104,12 @@ DeviationResult M3c2(const DeviationOptions& options, const std::vector<Eigen::V
   result.max_depth = o.max_depth > 0 ? o.max_depth : o.normal_scale;
   const double r = 0.5 * o.projection_scale, h = result.max_depth;
 
+  // Core points in Morton order, and the compared cloud's tree over its finite points in it.
+  const std::vector<uint32_t> order = MortonOrder(compared);
   Points finite;
   finite.points.reserve(compared.size());
-  for (const auto& q : compared) {
-    if (q.allFinite()) finite.points.push_back(q);
+  for (uint32_t i : order) {
+    if (compared[i].allFinite()) finite.points.push_back(compared[i]);
   }
   if (finite.points.empty()) {
     throw InputError("M3C2: no compared point has a finite position");
@@ -129,7 +131,8 @@ DeviationResult M3c2(const DeviationOptions& options, const std::vector<Eigen::V
   std::atomic<uint64_t> no_normal{0}, too_few{0};
   ForEachBlock(options.threads, n, kBlock, progress, [&](size_t begin, size_t end) {
     uint64_t local_no_normal = 0, local_too_few = 0;
-    for (size_t i = begin; i < end; ++i) {
+    for (size_t j = begin; j < end; ++j) {
+      const size_t i = order[j];
       const Eigen::Vector3d& q = compared[i];
       if (!q.allFinite()) continue;
       Eigen::Vector3d normal = NormalAt(reference_tree, reference, q, 0.5 * o.normal_scale);

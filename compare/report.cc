@@ -131,7 +131,7 @@ DeviationSummary Summarize(const DeviationResult& result, const SummaryOptions& 
 }
 
 std::string HistogramSvg(const DeviationSummary& s, const std::string& title) {
-  constexpr int kW = 720, kH = 360, kLeft = 70, kRight = 20, kTop = 40, kBottom = 60;
+  constexpr int kW = 720, kH = 360, kLeft = 70, kRight = 45, kTop = 40, kBottom = 60;
   const int plot_w = kW - kLeft - kRight, plot_h = kH - kTop - kBottom;
   const uint64_t peak = s.bins.empty() ? 0 : *std::max_element(s.bins.begin(), s.bins.end());
   std::ostringstream svg;
