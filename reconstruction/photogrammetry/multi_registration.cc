@@ -458,6 +458,186 @@ std::vector<LoopReport> FindLoops(const std::vector<PairWork>& pairs, const Fore
   return out;
 }
 
+std::vector<PairWork> CandidatePairs(const MultiRegistrationOptions& o,
+                                     const std::vector<Scan>& scans,
+                                     const std::vector<Pose>& start) {
+  std::vector<PairWork> pairs;
+  const int n = static_cast<int>(scans.size());
+  for (int a = 0; a < n; ++a) {
+    const Box3d ba = WorldBox(scans[a], LocalRigid(start[a]), o.max_correspondence_distance);
+    for (int b = a + 1; b < n; ++b) {
+      if (Intersect(ba, WorldBox(scans[b], LocalRigid(start[b]), 0))) pairs.push_back({a, b, {}, {}});
+    }
+  }
+  return pairs;
+}
+
+// Where the global solve starts: which scans it holds, the spanning forest from the anchors and
+// the poses along it.
+struct Start {
+  Forest forest;
+  std::vector<bool> held;
+  std::vector<Pose> poses;
+};
+
+int CountControls(const std::vector<ScanTarget>& targets) {
+  int controls = 0;
+  for (const ScanTarget& t : targets) controls += t.role == TargetRole::kControl;
+  return controls;
+}
+
+// Moves the forest's poses rigidly onto the control targets it holds (Umeyama, no scale); false
+// when it holds fewer than 3.
+bool MoveOntoTargets(const std::vector<ScanTarget>& targets, const Eigen::Vector3d& origin,
+                     Start* s) {
+  Eigen::Matrix3Xd src(3, 0), dst(3, 0);
+  for (const ScanTarget& t : targets) {
+    if (t.role != TargetRole::kControl || !s->forest.in[t.scan]) continue;
+    src.conservativeResize(3, src.cols() + 1);
+    dst.conservativeResize(3, dst.cols() + 1);
+    src.col(src.cols() - 1) = LocalRigid(s->poses[t.scan]) * t.in_scan;
+    dst.col(dst.cols() - 1) = t.world - origin;
+  }
+  if (src.cols() < 3) return false;
+  const Eigen::Matrix4d m = Eigen::umeyama(src, dst, false);
+  const Rigid3 move(Eigen::Quaterniond(Eigen::Matrix3d(m.topLeftCorner<3, 3>())),
+                    m.topRightCorner<3, 1>());
+  for (size_t i = 0; i < s->poses.size(); ++i) {
+    if (s->forest.in[i]) s->poses[i] = FromLocalRigid(move * LocalRigid(s->poses[i]));
+  }
+  return true;
+}
+
+// Anchors: the fixed scans; else, with >= 3 control targets, the first scan holding one (the
+// targets then fix the frame); else scan 0, held.
+Start StartPoses(const MultiRegistrationOptions& o, const std::vector<PairWork>& pairs,
+                 const std::vector<ScanTarget>& targets, const std::vector<Pose>& start,
+                 const Eigen::Vector3d& origin) {
+  const int n = static_cast<int>(start.size());
+  Start s;
+  s.held.assign(n, false);
+  std::vector<int> roots(o.fixed_scans.begin(), o.fixed_scans.end());
+  std::sort(roots.begin(), roots.end());
+  roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
+  for (int f : roots) s.held[f] = true;
+  const bool by_targets = roots.empty() && CountControls(targets) >= 3;
+  if (roots.empty()) {
+    int first = by_targets ? n : 0;
+    for (const ScanTarget& t : targets) {
+      if (by_targets && t.role == TargetRole::kControl) first = std::min(first, t.scan);
+    }
+    roots.push_back(first);
+  }
+  s.forest = GrowForest(n, pairs, roots);
+  s.poses = start;
+  for (int depth = 1; depth < n; ++depth) {  // parents before children
+    for (int i = 0; i < n; ++i) {
+      if (!s.forest.in[i] || s.forest.depth[i] != depth) continue;
+      const int parent = s.forest.parent[i];
+      s.poses[i] = FromLocalRigid(LocalRigid(s.poses[parent]) *
+                                  PairTransform(pairs[s.forest.edge[i]], i, parent));
+    }
+  }
+  // Without fixed scans the root is held unless >= 3 control targets in its component fix it.
+  if (o.fixed_scans.empty() && !(by_targets && MoveOntoTargets(targets, origin, &s))) {
+    s.held[roots[0]] = true;
+  }
+  return s;
+}
+
+// The global rounds; returns the correspondences of the final poses.
+std::vector<Correspondence> GlobalRounds(const MultiRegistrationOptions& o,
+                                         const std::vector<Scan>& scans,
+                                         const std::vector<PairWork>& pairs,
+                                         const std::vector<ScanTarget>& targets,
+                                         const ProgressCallback& progress, Start* s,
+                                         MultiRegistrationResult* result) {
+  std::vector<Pose>& poses = s->poses;
+  for (int round = 0; round < o.outer_iterations; ++round) {
+    const std::vector<Correspondence> corr = FindCorrespondences(o, scans, poses, pairs, s->forest.in);
+    const std::vector<Pose> before = poses;
+    if (!SolveRound(o, corr, targets, result->origin, s->forest.in, s->held, &poses,
+                    &result->message)) {
+      poses = before;
+      break;
+    }
+    ++result->outer_iterations;
+    if (progress) progress(pairs.size() + round + 1, pairs.size() + o.outer_iterations);
+    double move = 0, turn = 0;
+    for (size_t i = 0; i < poses.size(); ++i) {
+      const Rigid3 d = LocalRigid(before[i]).Inverse() * LocalRigid(poses[i]);
+      move = std::max(move, d.translation.norm());
+      turn = std::max(turn, Eigen::AngleAxisd(d.rotation).angle());
+    }
+    if (move <= kMoveTolerance && turn <= kTurnTolerance) {
+      result->converged = true;
+      break;
+    }
+  }
+  return FindCorrespondences(o, scans, poses, pairs, s->forest.in);
+}
+
+void ReportPairs(const std::vector<PairWork>& pairs, const std::vector<Correspondence>& corr,
+                 const Start& s, MultiRegistrationResult* result) {
+  std::vector<double> sum(pairs.size(), 0);
+  std::vector<int> count(pairs.size(), 0);
+  for (const Correspondence& c : corr) {
+    const double e = PlaneDistance(c, s.poses);
+    sum[c.pair] += e * e;
+    ++count[c.pair];
+  }
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    PairReport r = pairs[k].report;
+    r.fixed_from_moving = pairs[k].b_from_a;
+    if (count[k] > 0) r.rms_global = std::sqrt(sum[k] / count[k]);
+    if (r.accepted && s.forest.in[r.moving] && s.forest.in[r.fixed]) {
+      const Rigid3 global = LocalRigid(s.poses[r.fixed]).Inverse() * LocalRigid(s.poses[r.moving]);
+      const Rigid3 d = pairs[k].b_from_a.Inverse() * global;
+      r.discrepancy_translation = d.translation.norm();
+      r.discrepancy_rotation_deg = AngleDeg(d.rotation);
+    }
+    result->pairs.push_back(r);
+  }
+}
+
+// Per scan figures and the final poses (unconnected scans back at their start); returns how many
+// scans are unconnected.
+int ReportScans(const std::vector<Correspondence>& corr, const std::vector<Pose>& start,
+                Start* s, MultiRegistrationResult* result) {
+  const size_t n = start.size();
+  std::vector<double> sum(n, 0);
+  result->scans.resize(n);
+  for (const Correspondence& c : corr) {
+    const double e = PlaneDistance(c, s->poses);
+    for (int k : {c.src, c.dst}) sum[k] += e * e, ++result->scans[k].correspondences;
+  }
+  int unconnected = 0;
+  for (size_t i = 0; i < n; ++i) {
+    ScanReport& r = result->scans[i];
+    r.connected = s->forest.in[i];
+    if (!r.connected) s->poses[i] = start[i], ++unconnected;
+    r.fixed = r.connected && s->held[i];
+    const Rigid3 a = LocalRigid(start[i]), b = LocalRigid(s->poses[i]);
+    r.translation_change = (b.translation - a.translation).norm();
+    r.rotation_change_deg = AngleDeg(b.rotation * a.rotation.conjugate());
+    r.residual_rms = r.correspondences > 0 ? std::sqrt(sum[i] / r.correspondences) : kNaN;
+    result->world_from_scan.push_back(ToRigid(s->poses[i], result->origin));
+  }
+  return unconnected;
+}
+
+void ReportTargets(const std::vector<ScanTarget>& targets, const Start& s,
+                   MultiRegistrationResult* result) {
+  for (const ScanTarget& t : targets) {
+    result->target_residuals.push_back(
+        s.forest.in[t.scan]
+            ? Eigen::Vector3d(LocalRigid(s.poses[t.scan]) * t.in_scan - (t.world - result->origin))
+            : Eigen::Vector3d::Constant(kNaN));
+  }
+  FillRmse(result->target_residuals, targets, TargetRole::kControl, &result->control);
+  FillRmse(result->target_residuals, targets, TargetRole::kCheck, &result->check);
+}
+
 }  // namespace
 
 void MultiRegistrationOptions::Check() const {
@@ -488,137 +668,26 @@ MultiRegistrationResult RegisterScans(const MultiRegistrationOptions& options,
   Box3d stations;
   for (const Rigid3& p : world_from_scan) stations.Extend(p.translation);
   result.origin = CommonOrigin(stations);
-  const Eigen::Vector3d& origin = result.origin;
 
   std::vector<Scan> scans(n);
   ParallelFor(0, n, [&](int i) { scans[i] = PrepareScan(options, clouds[i]); });
   std::vector<Pose> start(n);
-  for (int i = 0; i < n; ++i) start[i] = ToPose(world_from_scan[i], origin);
+  for (int i = 0; i < n; ++i) start[i] = ToPose(world_from_scan[i], result.origin);
 
-  // Candidate pairs, refined in parallel, each into its own slot.
-  std::vector<PairWork> pairs;
-  for (int a = 0; a < n; ++a) {
-    const Box3d ba = WorldBox(scans[a], LocalRigid(start[a]), options.max_correspondence_distance);
-    for (int b = a + 1; b < n; ++b) {
-      if (Intersect(ba, WorldBox(scans[b], LocalRigid(start[b]), 0))) pairs.push_back({a, b, {}, {}});
-    }
-  }
+  // Candidate pairs: ICP in parallel, each into its own slot; then the robust rounds, serially
+  // (the kd-trees are shared between pairs and not safe for concurrent queries).
+  std::vector<PairWork> pairs = CandidatePairs(options, scans, start);
   ParallelFor(size_t{0}, pairs.size(), [&](size_t k) { RefinePair(options, scans, start, &pairs[k]); });
-  for (PairWork& w : pairs) RefinePairRobustly(options, scans, start, &w);  // kd-trees: serial
-  if (progress) progress(pairs.size(), pairs.size());
+  for (PairWork& w : pairs) RefinePairRobustly(options, scans, start, &w);
+  if (progress) progress(pairs.size(), pairs.size() + options.outer_iterations);
 
-  // Anchors, the registered component and the start of the global solve.
-  std::vector<bool> held(n, false);
-  for (int f : options.fixed_scans) held[f] = true;
-  int controls = 0;
-  for (const ScanTarget& t : targets) controls += t.role == TargetRole::kControl;
-  std::vector<int> roots(options.fixed_scans.begin(), options.fixed_scans.end());
-  std::sort(roots.begin(), roots.end());
-  roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
-  if (roots.empty()) {
-    int first = 0;
-    if (controls >= 3) {
-      first = n;
-      for (const ScanTarget& t : targets) if (t.role == TargetRole::kControl) first = std::min(first, t.scan);
-    }
-    roots.push_back(first);
-    if (controls < 3) held[first] = true;
-  }
-  const Forest forest = GrowForest(n, pairs, roots);
-  std::vector<Pose> poses = start;
-  for (int depth = 1; depth < n; ++depth) {  // parents before children
-    for (int i = 0; i < n; ++i) {
-      if (!forest.in[i] || forest.depth[i] != depth) continue;
-      const int par = forest.parent[i];
-      poses[i] = FromLocalRigid(LocalRigid(poses[par]) *
-                                PairTransform(pairs[forest.edge[i]], i, par));
-    }
-  }
-  if (options.fixed_scans.empty() && controls >= 3) {  // the component onto its targets, rigidly
-    Eigen::Matrix3Xd src(3, 0), dst(3, 0);
-    for (const ScanTarget& t : targets) {
-      if (t.role != TargetRole::kControl || !forest.in[t.scan]) continue;
-      src.conservativeResize(3, src.cols() + 1);
-      dst.conservativeResize(3, dst.cols() + 1);
-      src.col(src.cols() - 1) = LocalRigid(poses[t.scan]) * t.in_scan;
-      dst.col(dst.cols() - 1) = t.world - origin;
-    }
-    if (src.cols() >= 3) {
-      const Eigen::Matrix4d m = Eigen::umeyama(src, dst, false);
-      const Rigid3 move(Eigen::Quaterniond(Eigen::Matrix3d(m.topLeftCorner<3, 3>())),
-                        m.topRightCorner<3, 1>());
-      for (int i = 0; i < n; ++i) if (forest.in[i]) poses[i] = FromLocalRigid(move * LocalRigid(poses[i]));
-    } else {
-      held[roots[0]] = true;  // the targets of other components do not fix this one
-    }
-  }
-
-  // Global rounds.
-  std::vector<Correspondence> corr;
-  for (int round = 0; round < options.outer_iterations; ++round) {
-    corr = FindCorrespondences(options, scans, poses, pairs, forest.in);
-    const std::vector<Pose> before = poses;
-    if (!SolveRound(options, corr, targets, origin, forest.in, held, &poses, &result.message)) {
-      poses = before;
-      break;
-    }
-    ++result.outer_iterations;
-    if (progress) progress(pairs.size() + round + 1, pairs.size() + options.outer_iterations);
-    double move = 0, turn = 0;
-    for (int i = 0; i < n; ++i) {
-      const Rigid3 d = LocalRigid(before[i]).Inverse() * LocalRigid(poses[i]);
-      move = std::max(move, d.translation.norm());
-      turn = std::max(turn, Eigen::AngleAxisd(d.rotation).angle());
-    }
-    if (move <= kMoveTolerance && turn <= kTurnTolerance) {
-      result.converged = true;
-      break;
-    }
-  }
-
-  // Reports.
-  corr = FindCorrespondences(options, scans, poses, pairs, forest.in);
-  std::vector<double> pair_sum(pairs.size(), 0), scan_sum(n, 0);
-  std::vector<int> pair_count(pairs.size(), 0);
-  result.scans.resize(n);
-  for (const Correspondence& c : corr) {
-    const double e = PlaneDistance(c, poses), e2 = e * e;
-    pair_sum[c.pair] += e2;
-    ++pair_count[c.pair];
-    for (int s : {c.src, c.dst}) scan_sum[s] += e2, ++result.scans[s].correspondences;
-  }
-  for (size_t k = 0; k < pairs.size(); ++k) {
-    PairReport r = pairs[k].report;
-    r.fixed_from_moving = pairs[k].b_from_a;
-    if (pair_count[k] > 0) r.rms_global = std::sqrt(pair_sum[k] / pair_count[k]);
-    if (r.accepted && forest.in[r.moving] && forest.in[r.fixed]) {
-      const Rigid3 global = LocalRigid(poses[r.fixed]).Inverse() * LocalRigid(poses[r.moving]);
-      const Rigid3 d = pairs[k].b_from_a.Inverse() * global;
-      r.discrepancy_translation = d.translation.norm();
-      r.discrepancy_rotation_deg = AngleDeg(d.rotation);
-    }
-    result.pairs.push_back(r);
-  }
-  int unconnected = 0;
-  for (int i = 0; i < n; ++i) {
-    ScanReport& s = result.scans[i];
-    s.connected = forest.in[i];
-    if (!s.connected) poses[i] = start[i], ++unconnected;
-    s.fixed = s.connected && held[i];
-    const Rigid3 a = LocalRigid(start[i]), b = LocalRigid(poses[i]);
-    s.translation_change = (b.translation - a.translation).norm();
-    s.rotation_change_deg = AngleDeg(b.rotation * a.rotation.conjugate());
-    s.residual_rms = s.correspondences > 0 ? std::sqrt(scan_sum[i] / s.correspondences) : kNaN;
-    result.world_from_scan.push_back(ToRigid(poses[i], origin));
-  }
-  result.loops = FindLoops(pairs, forest);
-  for (const ScanTarget& t : targets) {
-    result.target_residuals.push_back(forest.in[t.scan]
-        ? Eigen::Vector3d(LocalRigid(poses[t.scan]) * t.in_scan - (t.world - origin))
-        : Eigen::Vector3d::Constant(kNaN));
-  }
-  FillRmse(result.target_residuals, targets, TargetRole::kControl, &result.control);
-  FillRmse(result.target_residuals, targets, TargetRole::kCheck, &result.check);
+  Start s = StartPoses(options, pairs, targets, start, result.origin);
+  const std::vector<Correspondence> corr =
+      GlobalRounds(options, scans, pairs, targets, progress, &s, &result);
+  ReportPairs(pairs, corr, s, &result);
+  const int unconnected = ReportScans(corr, start, &s, &result);
+  result.loops = FindLoops(pairs, s.forest);
+  ReportTargets(targets, s, &result);
   int accepted = 0;
   for (const PairReport& r : result.pairs) accepted += r.accepted;
   if (result.message.empty()) {
