@@ -22,19 +22,6 @@ using testing::CourtyardStations;
 
 constexpr double kDeg = M_PI / 180.0;
 
-// The scanner of these tests: 0.4 degree steps (about 2.5e5 points a station in the courtyard)
-// and 1 mm range noise.
-VirtualScannerOptions TestScanner(uint64_t seed) {
-  VirtualScannerOptions o;
-  o.azimuth_step_deg = o.elevation_step_deg = 0.4;
-  o.min_elevation_deg = -60;
-  o.max_elevation_deg = 60;
-  o.max_range = 40;
-  o.range_noise = 0.001;
-  o.seed = seed;
-  return o;
-}
-
 // Registration as the tests run it: thinned to 0.2 m (0.5 m for ICP), which keeps every test
 // well under 20 s on one core and still recovers the poses to a fraction of a millimetre.
 MultiRegistrationOptions TestRegistration() {
@@ -58,7 +45,7 @@ ScanSet MakeScans(int count, const Eigen::Vector3d& origin = Eigen::Vector3d::Ze
   s.truth = CourtyardStations(count, 10.5, origin);
   Rng rng(7);
   for (int i = 0; i < count; ++i) {
-    s.scans.push_back(ScanMesh(TestScanner(100 + i), scene, s.truth[i]));
+    s.scans.push_back(ScanMesh(testing::CourtyardScanner(100 + i), scene, s.truth[i]));
     if (i == 0) {
       s.start.push_back(s.truth[i]);
       continue;

@@ -1,5 +1,5 @@
 // Test helper (header-only): a courtyard scene as a triangle mesh, made in code, for the virtual
-// scanner and scan-registration tests, and a ring of scanner stations inside it.
+// scanner and scan-registration tests, a ring of scanner stations inside it and the tests' scanner.
 //
 // The courtyard (local metres): floor z = 0 over [-1, 41] x [-1, 31]; outer walls 0.4 m thick and
 // 4 m high along the edges of [0, 40] x [0, 30]; a central building 8 x 6 x 7 m at
@@ -18,6 +18,7 @@
 
 #include "core/transform.h"
 #include "core/tri_mesh.h"
+#include "reconstruction/photogrammetry/virtual_scanner.h"
 
 namespace candi::testing {
 
@@ -78,6 +79,19 @@ inline std::vector<Rigid3> CourtyardStations(int count, double radius = 10.5,
     out.emplace_back(q, c + origin);
   }
   return out;
+}
+
+// The scanner of the registration tests: 0.4 degree steps over elevations [-60, 60] (about
+// 1.7e5 points a station in the courtyard), 1 mm range noise, seeded.
+inline photogrammetry::VirtualScannerOptions CourtyardScanner(uint64_t seed) {
+  photogrammetry::VirtualScannerOptions o;
+  o.azimuth_step_deg = o.elevation_step_deg = 0.4;
+  o.min_elevation_deg = -60;
+  o.max_elevation_deg = 60;
+  o.max_range = 40;
+  o.range_noise = 0.001;
+  o.seed = seed;
+  return o;
 }
 
 }  // namespace candi::testing
