@@ -172,10 +172,9 @@ bool Intersect(const Box3d& a, const Box3d& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
 }
 
-// The scan's points (all, or ICP's subset), with normals, in world coordinates under
-// `local_pose`, stored relative to the common origin.
-PointCloud WorldCloud(const Scan& s, const Rigid3& local_pose, const Eigen::Vector3d& origin,
-                      bool icp_subset) {
+// The scan's points (all, or ICP's subset), with normals, moved by `local_pose`: world
+// coordinates relative to the common origin (RegisterPointClouds takes them as they are).
+PointCloud WorldCloud(const Scan& s, const Rigid3& local_pose, bool icp_subset) {
   std::vector<size_t> all;
   if (!icp_subset) {
     all.resize(s.points.size());
@@ -186,7 +185,6 @@ PointCloud WorldCloud(const Scan& s, const Rigid3& local_pose, const Eigen::Vect
   PointSchema schema;
   schema.normals = true;
   c.SetSchema(schema);
-  c.frame.origin = origin;
   c.Resize(subset.size());
   const Eigen::Matrix3d r = local_pose.rotation.toRotationMatrix();
   for (size_t k = 0; k < subset.size(); ++k) {
@@ -206,11 +204,10 @@ struct PairWork {
 void RefinePair(const MultiRegistrationOptions& o, const std::vector<Scan>& scans,
                 const std::vector<Pose>& start, PairWork* w) {
   const Rigid3 ta = LocalRigid(start[w->a]), tb = LocalRigid(start[w->b]);
-  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
   // The moving scan's ICP subset onto all the fixed scan's points: ICP's cost goes with the
   // moving points, and the overlap within solve_distance needs the fixed scan's full density.
-  const PointCloud moving = WorldCloud(scans[w->a], ta, zero, true);
-  const PointCloud fixed = WorldCloud(scans[w->b], tb, zero, false);
+  const PointCloud moving = WorldCloud(scans[w->a], ta, true);
+  const PointCloud fixed = WorldCloud(scans[w->b], tb, false);
   RegistrationOptions icp;
   icp.max_correspondence_distance = o.max_correspondence_distance;
   icp.max_iterations = o.icp_iterations;
