@@ -85,7 +85,8 @@ CoarseAlignmentResult CoarseAlign(const CoarseAlignmentOptions& options, const P
   r.moving_points = src->size();
   r.fixed_points = dst->size();
   if (src->size() < 3 || dst->size() < 3) {
-    r.message = "too few points with a normal after thinning to " + FormatDouble(options.voxel) + " m";
+    r.message =
+        "too few points with a normal after thinning to " + FormatDouble(options.voxel) + " m";
     return r;
   }
   pcl::SampleConsensusPrerejective<PointT, PointT, pcl::FPFHSignature33> sac;
@@ -112,8 +113,8 @@ CoarseAlignmentResult CoarseAlign(const CoarseAlignmentOptions& options, const P
   // local: x_dst - origin = M (x_src - moving_origin)  =>  world: R x + (t + origin - R mo).
   const Eigen::Matrix4d m = sac.getFinalTransformation().cast<double>();
   const Eigen::Matrix3d rot = m.topLeftCorner<3, 3>();
-  r.fixed_from_moving = Rigid3(Eigen::Quaterniond(rot),
-                               m.topRightCorner<3, 1>() + origin - rot * moving_origin);
+  r.fixed_from_moving =
+      Rigid3(Eigen::Quaterniond(rot), m.topRightCorner<3, 1>() + origin - rot * moving_origin);
   r.found = true;
   r.message = "found: " + FormatDouble(r.inlier_fraction) + " of the moving points are inliers";
   return r;

@@ -44,7 +44,8 @@ TEST(CoarseAlign, FindsAScanWithoutAStartPoseAndRegisterScansFinishesIt) {
   ASSERT_TRUE(coarse.found) << coarse.message;
   const double et = (coarse.fixed_from_moving.translation - truth[1].translation).norm();
   const double er =
-      Eigen::AngleAxisd(coarse.fixed_from_moving.rotation * truth[1].rotation.conjugate()).angle() / kDeg;
+      Eigen::AngleAxisd(coarse.fixed_from_moving.rotation * truth[1].rotation.conjugate()).angle() /
+      kDeg;
   EXPECT_LT(et, 0.5);
   EXPECT_LT(er, 3.0);
   MultiRegistrationOptions o;
@@ -54,13 +55,15 @@ TEST(CoarseAlign, FindsAScanWithoutAStartPoseAndRegisterScansFinishesIt) {
       RegisterScans(o, {fixed_scan, moving_scan}, {truth[0], coarse.fixed_from_moving});
   const double ft = (fine.world_from_scan[1].translation - truth[1].translation).norm();
   const double fr =
-      Eigen::AngleAxisd(fine.world_from_scan[1].rotation * truth[1].rotation.conjugate()).angle() / kDeg;
+      Eigen::AngleAxisd(fine.world_from_scan[1].rotation * truth[1].rotation.conjugate()).angle() /
+      kDeg;
   EXPECT_LT(ft, 0.002);
   EXPECT_LT(fr, 0.01);
-  std::printf("[coarse] %s; start error %.3f m %.3f deg (%llu/%llu points); after RegisterScans "
-              "%.3f mm %.5f deg\n",
-              coarse.message.c_str(), et, er, static_cast<unsigned long long>(coarse.moving_points),
-              static_cast<unsigned long long>(coarse.fixed_points), ft * 1e3, fr);
+  std::printf(
+      "[coarse] %s; start error %.3f m %.3f deg (%llu/%llu points); after RegisterScans "
+      "%.3f mm %.5f deg\n",
+      coarse.message.c_str(), et, er, static_cast<unsigned long long>(coarse.moving_points),
+      static_cast<unsigned long long>(coarse.fixed_points), ft * 1e3, fr);
 }
 
 TEST(CoarseAlign, BadInputThrows) {

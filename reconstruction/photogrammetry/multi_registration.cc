@@ -31,8 +31,8 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kDegPerRad = 180.0 / M_PI;
-constexpr double kMoveTolerance = 1e-5;    // m: a round that moves no pose more has converged
-constexpr double kTurnTolerance = 1e-6;    // rad
+constexpr double kMoveTolerance = 1e-5;  // m: a round that moves no pose more has converged
+constexpr double kTurnTolerance = 1e-6;  // rad
 
 // A scan prepared once: thinned points and their normals in the scan's frame, and a kd-tree of
 // them (float, relative to `origin`, the rounded centre of the scan's box).
@@ -81,8 +81,9 @@ void CheckInput(const MultiRegistrationOptions& o, const std::vector<PointCloud>
                 const std::vector<Rigid3>& poses, const std::vector<ScanTarget>& targets) {
   if (scans.empty()) throw InputError("scans", "", "no scans to register");
   if (poses.size() != scans.size()) {
-    throw InputError("start poses", "", std::to_string(poses.size()) + " poses for " +
-                                            std::to_string(scans.size()) + " scans");
+    throw InputError(
+        "start poses", "",
+        std::to_string(poses.size()) + " poses for " + std::to_string(scans.size()) + " scans");
   }
   const int n = static_cast<int>(scans.size());
   for (int i = 0; i < n; ++i) {
@@ -97,18 +98,18 @@ void CheckInput(const MultiRegistrationOptions& o, const std::vector<PointCloud>
   }
   for (int f : o.fixed_scans) {
     if (f < 0 || f >= n) {
-      throw InputError("MultiRegistrationOptions::fixed_scans", "",
-                       "scan index " + std::to_string(f) + " out of range [0, " +
-                           std::to_string(n) + ")");
+      throw InputError(
+          "MultiRegistrationOptions::fixed_scans", "",
+          "scan index " + std::to_string(f) + " out of range [0, " + std::to_string(n) + ")");
     }
   }
   for (size_t k = 0; k < targets.size(); ++k) {
     const ScanTarget& t = targets[k];
     const std::string where = "target " + std::to_string(k) + " '" + t.name + "'";
     if (t.scan < 0 || t.scan >= n) {
-      throw InputError("targets", where,
-                       "scan index " + std::to_string(t.scan) + " out of range [0, " +
-                           std::to_string(n) + ")");
+      throw InputError(
+          "targets", where,
+          "scan index " + std::to_string(t.scan) + " out of range [0, " + std::to_string(n) + ")");
     }
     if (!t.in_scan.allFinite() || !t.world.allFinite()) {
       throw InputError("targets", where, "coordinates are not finite");
@@ -196,8 +197,8 @@ PointCloud WorldCloud(const Scan& s, const Rigid3& local_pose, bool icp_subset) 
 }
 
 struct PairWork {
-  int a = 0, b = 0;             // moving a, fixed b
-  Rigid3 b_from_a;              // the pairwise ICP's relative pose (scan frames)
+  int a = 0, b = 0;  // moving a, fixed b
+  Rigid3 b_from_a;   // the pairwise ICP's relative pose (scan frames)
   PairReport report;
 };
 
@@ -274,9 +275,9 @@ Rigid3 PairTransform(const PairWork& p, int x, int y) {
 }
 
 struct Correspondence {
-  int src, dst;                  // scans
-  Eigen::Vector3d p, q, n;       // p in src's frame; q and its normal n in dst's frame
-  int pair;                      // index into the pairs
+  int src, dst;             // scans
+  Eigen::Vector3d p, q, n;  // p in src's frame; q and its normal n in dst's frame
+  int pair;                 // index into the pairs
 };
 
 // Point-to-plane residual n_b . (T_a p - T_b q), with n rotated into the common frame.
@@ -355,10 +356,9 @@ bool SolveRound(const MultiRegistrationOptions& o, const std::vector<Corresponde
   }
   for (const ScanTarget& t : targets) {
     if (t.role != TargetRole::kControl || !solved[t.scan]) continue;
-    problem.AddResidualBlock(
-        new ceres::AutoDiffCostFunction<TargetTerm, 3, 4, 3>(
-            new TargetTerm{t.in_scan, t.world - origin, 1.0 / t.accuracy}),
-        nullptr, p[t.scan].q, p[t.scan].t);
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TargetTerm, 3, 4, 3>(
+                                 new TargetTerm{t.in_scan, t.world - origin, 1.0 / t.accuracy}),
+                             nullptr, p[t.scan].q, p[t.scan].t);
   }
   for (size_t i = 0; i < p.size(); ++i) {
     if (!solved[i] || !problem.HasParameterBlock(p[i].q)) continue;
@@ -434,8 +434,10 @@ std::vector<LoopReport> FindLoops(const std::vector<PairWork>& pairs, const Fore
     std::vector<int> up, down;  // a up to the common ancestor; b up to it (reversed later)
     int u = p.a, v = p.b;
     while (u != v) {
-      if (f.depth[u] >= f.depth[v]) up.push_back(u), u = f.parent[u];
-      else down.push_back(v), v = f.parent[v];
+      if (f.depth[u] >= f.depth[v])
+        up.push_back(u), u = f.parent[u];
+      else
+        down.push_back(v), v = f.parent[v];
     }
     LoopReport loop;
     loop.scans = up;
@@ -463,7 +465,8 @@ std::vector<PairWork> CandidatePairs(const MultiRegistrationOptions& o,
   for (int a = 0; a < n; ++a) {
     const Box3d ba = WorldBox(scans[a], LocalRigid(start[a]), o.max_correspondence_distance);
     for (int b = a + 1; b < n; ++b) {
-      if (Intersect(ba, WorldBox(scans[b], LocalRigid(start[b]), 0))) pairs.push_back({a, b, {}, {}});
+      if (Intersect(ba, WorldBox(scans[b], LocalRigid(start[b]), 0)))
+        pairs.push_back({a, b, {}, {}});
     }
   }
   return pairs;
@@ -551,7 +554,8 @@ std::vector<Correspondence> GlobalRounds(const MultiRegistrationOptions& o,
                                          MultiRegistrationResult* result) {
   std::vector<Pose>& poses = s->poses;
   for (int round = 0; round < o.outer_iterations; ++round) {
-    const std::vector<Correspondence> corr = FindCorrespondences(o, scans, poses, pairs, s->forest.in);
+    const std::vector<Correspondence> corr =
+        FindCorrespondences(o, scans, poses, pairs, s->forest.in);
     const std::vector<Pose> before = poses;
     if (!SolveRound(o, corr, targets, result->origin, s->forest.in, s->held, &poses,
                     &result->message)) {
@@ -599,8 +603,8 @@ void ReportPairs(const std::vector<PairWork>& pairs, const std::vector<Correspon
 
 // Per scan figures and the final poses (unconnected scans back at their start); returns how many
 // scans are unconnected.
-int ReportScans(const std::vector<Correspondence>& corr, const std::vector<Pose>& start,
-                Start* s, MultiRegistrationResult* result) {
+int ReportScans(const std::vector<Correspondence>& corr, const std::vector<Pose>& start, Start* s,
+                MultiRegistrationResult* result) {
   const size_t n = start.size();
   std::vector<double> sum(n, 0);
   result->scans.resize(n);
@@ -674,7 +678,8 @@ MultiRegistrationResult RegisterScans(const MultiRegistrationOptions& options,
   // Candidate pairs: ICP in parallel, each into its own slot; then the robust rounds, serially
   // (the kd-trees are shared between pairs and not safe for concurrent queries).
   std::vector<PairWork> pairs = CandidatePairs(options, scans, start);
-  ParallelFor(size_t{0}, pairs.size(), [&](size_t k) { RefinePair(options, scans, start, &pairs[k]); });
+  ParallelFor(size_t{0}, pairs.size(),
+              [&](size_t k) { RefinePair(options, scans, start, &pairs[k]); });
   for (PairWork& w : pairs) RefinePairRobustly(options, scans, start, &w);
   if (progress) progress(pairs.size(), pairs.size() + options.outer_iterations);
 

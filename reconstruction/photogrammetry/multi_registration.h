@@ -68,59 +68,59 @@ struct MultiRegistrationOptions {
 // A surveyed point seen in one scan (e.g. a target's centre picked in the scan).
 struct ScanTarget {
   std::string name;
-  int scan = 0;                                        // index into the scans
-  Eigen::Vector3d in_scan = Eigen::Vector3d::Zero();   // in the scan's frame, m
-  Eigen::Vector3d world = Eigen::Vector3d::Zero();     // surveyed world coordinates, m
-  TargetRole role = TargetRole::kControl;              // control: in the solve; check: verified
-  double accuracy = 0.005;                             // 1-sigma, m, > 0 (weights the solve)
+  int scan = 0;                                       // index into the scans
+  Eigen::Vector3d in_scan = Eigen::Vector3d::Zero();  // in the scan's frame, m
+  Eigen::Vector3d world = Eigen::Vector3d::Zero();    // surveyed world coordinates, m
+  TargetRole role = TargetRole::kControl;             // control: in the solve; check: verified
+  double accuracy = 0.005;                            // 1-sigma, m, > 0 (weights the solve)
 };
 
 struct PairReport {
-  int moving = 0, fixed = 0;        // scan indices (moving < fixed)
+  int moving = 0, fixed = 0;  // scan indices (moving < fixed)
   bool accepted = false;
-  std::string reason;               // "accepted", or why not (ICP status, overlap below min)
-  double overlap = 0;               // fine ICP's overlap after, [0, 1]
-  double rms_before = 0;            // m, nearest-point RMS under the start poses (coarse distance)
-  double rms_after = 0;             // m, after the pairwise ICP (solve_distance); NaN: none
-  double rms_global = 0;            // m, point-to-plane RMS under the final poses; NaN: none
+  std::string reason;     // "accepted", or why not (ICP status, overlap below min)
+  double overlap = 0;     // fine ICP's overlap after, [0, 1]
+  double rms_before = 0;  // m, nearest-point RMS under the start poses (coarse distance)
+  double rms_after = 0;   // m, after the pairwise ICP (solve_distance); NaN: none
+  double rms_global = 0;  // m, point-to-plane RMS under the final poses; NaN: none
   // The pair's own best relative pose (ICP, then the robust rounds), scan frames:
   // x_in_fixed_scan = fixed_from_moving * x_in_moving_scan. Identity when ICP found no overlap.
   Rigid3 fixed_from_moving;
   // The final relative pose against the pairwise ICP's (fixed_from_moving): how far the global
   // solution is from this pair's own best fit. Zero on a tree edge of a consistent graph.
-  double discrepancy_translation = 0;  // m
-  double discrepancy_rotation_deg = 0; // degrees
+  double discrepancy_translation = 0;   // m
+  double discrepancy_rotation_deg = 0;  // degrees
 };
 
 struct ScanReport {
-  bool connected = false;           // in the anchor's component (else: start pose kept)
-  bool fixed = false;               // held at its start pose
-  double translation_change = 0;    // m: |t_final - t_start| of world_from_scan
-  double rotation_change_deg = 0;   // degrees: angle of R_final R_start^T
-  double residual_rms = 0;          // m: point-to-plane RMS of its final correspondences; NaN
-  int correspondences = 0;          // its final correspondences (as either side)
+  bool connected = false;          // in the anchor's component (else: start pose kept)
+  bool fixed = false;              // held at its start pose
+  double translation_change = 0;   // m: |t_final - t_start| of world_from_scan
+  double rotation_change_deg = 0;  // degrees: angle of R_final R_start^T
+  double residual_rms = 0;         // m: point-to-plane RMS of its final correspondences; NaN
+  int correspondences = 0;         // its final correspondences (as either side)
 };
 
 // A cycle of the accepted-pair graph (one per accepted pair off the spanning tree): the pairwise
 // ICP transforms composed around it, which is the identity for a perfectly consistent loop.
 struct LoopReport {
-  std::vector<int> scans;           // the cycle's scans in order (the first not repeated)
-  double translation = 0;           // m: the composition's translation
-  double rotation_deg = 0;          // degrees: the composition's rotation angle
+  std::vector<int> scans;   // the cycle's scans in order (the first not repeated)
+  double translation = 0;   // m: the composition's translation
+  double rotation_deg = 0;  // degrees: the composition's rotation angle
 };
 
 struct MultiRegistrationResult {
   std::vector<Rigid3> world_from_scan;  // final poses (start poses for unconnected scans)
   std::vector<ScanReport> scans;
-  std::vector<PairReport> pairs;        // every candidate pair, in (moving, fixed) order
+  std::vector<PairReport> pairs;  // every candidate pair, in (moving, fixed) order
   std::vector<LoopReport> loops;
-  std::vector<Eigen::Vector3d> target_residuals;  // per target: T * in_scan - world, m (NaN when
-                                                  // its scan is unconnected)
-  Rmse control, check;                  // over the targets of connected scans
+  // Per target: world_from_scan * in_scan - world, m (NaN when its scan is unconnected).
+  std::vector<Eigen::Vector3d> target_residuals;
+  Rmse control, check;                               // over the targets of connected scans
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the common origin used, world m
-  int outer_iterations = 0;             // global rounds run
-  bool converged = false;               // the last round's poses moved less than the tolerance
-  std::string message;                  // one line: what happened
+  int outer_iterations = 0;                          // global rounds run
+  bool converged = false;  // the last round's poses moved less than the tolerance
+  std::string message;     // one line: what happened
 };
 
 // `scans[i]` in its own frame (positions: scans[i].frame.ToWorld(p) is the point in scan i's

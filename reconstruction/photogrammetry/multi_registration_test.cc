@@ -51,14 +51,18 @@ ScanSet MakeScans(int count, const Eigen::Vector3d& origin = Eigen::Vector3d::Ze
       s.start.push_back(s.truth[i]);
       continue;
     }
-    Eigen::Vector3d dir(rng.Normal(), rng.Normal(), rng.Normal()), axis(rng.Normal(), rng.Normal(), rng.Normal());
+    Eigen::Vector3d dir(rng.Normal(), rng.Normal(), rng.Normal()),
+        axis(rng.Normal(), rng.Normal(), rng.Normal());
     const Eigen::Quaterniond turn(Eigen::AngleAxisd(5 * kDeg, axis.normalized()));
-    s.start.emplace_back(turn * s.truth[i].rotation, s.truth[i].translation + 0.5 * dir.normalized());
+    s.start.emplace_back(turn * s.truth[i].rotation,
+                         s.truth[i].translation + 0.5 * dir.normalized());
   }
   return s;
 }
 
-double TranslationError(const Rigid3& a, const Rigid3& b) { return (a.translation - b.translation).norm(); }
+double TranslationError(const Rigid3& a, const Rigid3& b) {
+  return (a.translation - b.translation).norm();
+}
 double RotationErrorDeg(const Rigid3& a, const Rigid3& b) {
   return Eigen::AngleAxisd(a.rotation * b.rotation.conjugate()).angle() / kDeg;
 }
@@ -93,10 +97,11 @@ void ExpectPosesRecovered(const ScanSet& s, const Timed& t, const char* what) {
   }
   size_t points = 0;
   for (const PointCloud& c : s.scans) points += c.size();
-  std::printf("[%s] %zu scans, %.0f points/scan, %zu candidate pairs, %zu loops, %d rounds, "
-              "worst pose error %.3f mm %.5f deg, %.1f s: %s\n",
-              what, s.scans.size(), static_cast<double>(points) / s.scans.size(), r.pairs.size(),
-              r.loops.size(), r.outer_iterations, worst_t * 1e3, worst_r, t.seconds, r.message.c_str());
+  std::printf(
+      "[%s] %zu scans, %.0f points/scan, %zu candidate pairs, %zu loops, %d rounds, "
+      "worst pose error %.3f mm %.5f deg, %.1f s: %s\n",
+      what, s.scans.size(), static_cast<double>(points) / s.scans.size(), r.pairs.size(),
+      r.loops.size(), r.outer_iterations, worst_t * 1e3, worst_r, t.seconds, r.message.c_str());
 }
 
 TEST(MultiRegistrationOptions, DefaultsPassAndEachRuleRejects) {
@@ -140,7 +145,8 @@ TEST(RegisterScans, RecoversARingOfPerturbedStationsAndClosesItsLoops) {
       }
     }
   }
-  const double ring_t = ring.translation.norm(), ring_r = Eigen::AngleAxisd(ring.rotation).angle() / kDeg;
+  const double ring_t = ring.translation.norm(),
+               ring_r = Eigen::AngleAxisd(ring.rotation).angle() / kDeg;
   EXPECT_LT(ring_t, 0.003);
   EXPECT_LT(ring_r, 0.01);
   std::printf("[ring of 8] the ring's own loop (pairwise fits composed): %.3f mm %.5f deg\n",
@@ -174,7 +180,8 @@ TEST(RegisterScans, AScanWithoutOverlapIsReportedAndKeepsItsStartPose) {
   ScanSet s = MakeScans(4);
   // A fifth scan 1 km away: a copy of scan 1 (geometry that would match, were it near).
   s.scans.push_back(s.scans[1]);
-  s.truth.push_back(Rigid3(s.truth[1].rotation, s.truth[1].translation + Eigen::Vector3d(1000, 0, 0)));
+  s.truth.push_back(
+      Rigid3(s.truth[1].rotation, s.truth[1].translation + Eigen::Vector3d(1000, 0, 0)));
   s.start.push_back(s.truth.back());
   const Timed t = Register(s);
   const MultiRegistrationResult& r = t.result;

@@ -58,7 +58,8 @@ uint32_t Bvh::Build(uint32_t first, uint32_t count) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = -lo, clo = lo, chi = -lo;
   for (uint32_t i = first; i < first + count; ++i) {
     const Triangle& t = triangles_[i];
-    for (const Eigen::Vector3d& p : {t.a, Eigen::Vector3d(t.a + t.e1), Eigen::Vector3d(t.a + t.e2)}) {
+    for (const Eigen::Vector3d& p :
+         {t.a, Eigen::Vector3d(t.a + t.e1), Eigen::Vector3d(t.a + t.e2)}) {
       lo = lo.cwiseMin(p);
       hi = hi.cwiseMax(p);
     }
@@ -143,7 +144,8 @@ double Bvh::Cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_mi
       continue;
     }
     const uint32_t left = static_cast<uint32_t>(&n - nodes_.data()) + 1, right = n.first;
-    const double tl = EnterBox(nodes_[left], o, inv, best), tr = EnterBox(nodes_[right], o, inv, best);
+    const double tl = EnterBox(nodes_[left], o, inv, best),
+                 tr = EnterBox(nodes_[right], o, inv, best);
     // Push the farther child first so the nearer is searched first (and shrinks `best`).
     if (tl <= tr) {
       if (tr != kInf) stack[top++] = right;
@@ -168,9 +170,9 @@ std::vector<Triangle> MeshTriangles(const TriMesh& scene) {
   for (size_t f = 0; f < scene.faces.size(); ++f) {
     for (uint32_t k : scene.faces[f]) {
       if (k >= v.size()) {
-        throw InputError("scene mesh", "face " + std::to_string(f),
-                         "vertex index " + std::to_string(k) + " >= " + std::to_string(v.size()) +
-                             " vertices");
+        throw InputError(
+            "scene mesh", "face " + std::to_string(f),
+            "vertex index " + std::to_string(k) + " >= " + std::to_string(v.size()) + " vertices");
       }
     }
     const auto& idx = scene.faces[f];
@@ -203,8 +205,9 @@ void VirtualScannerOptions::Check() const {
 }
 
 int ScannerRows(const VirtualScannerOptions& o) {
-  return static_cast<int>(std::floor((o.max_elevation_deg - o.min_elevation_deg) /
-                                         o.elevation_step_deg + 1e-9)) + 1;
+  return static_cast<int>(std::floor(
+             (o.max_elevation_deg - o.min_elevation_deg) / o.elevation_step_deg + 1e-9)) +
+         1;
 }
 
 int ScannerColumns(const VirtualScannerOptions& o) {
@@ -228,11 +231,13 @@ PointCloud ScanMesh(const VirtualScannerOptions& options, const TriMesh& scene,
     const double az = c * az_step * kDeg;
     for (int k = 0; k < rows; ++k) {
       const double el = (options.min_elevation_deg + k * options.elevation_step_deg) * kDeg;
-      const Eigen::Vector3d d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+      const Eigen::Vector3d d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
+                              std::sin(el));
       const double t = bvh.Cast(station, r * d, options.min_range, options.max_range);
       if (t == kInf) continue;
       const uint64_t ray = static_cast<uint64_t>(c) * rows + k;
-      const double noise = options.range_noise > 0 ? options.range_noise * RayNormal(options.seed, ray) : 0.0;
+      const double noise =
+          options.range_noise > 0 ? options.range_noise * RayNormal(options.seed, ray) : 0.0;
       hits[c].emplace_back(ray, t + noise);
     }
   });
@@ -243,9 +248,11 @@ PointCloud ScanMesh(const VirtualScannerOptions& options, const TriMesh& scene,
   for (const auto& column : hits) {
     for (const auto& [ray, range] : column) {
       const double az = static_cast<double>(ray / rows) * az_step * kDeg;
-      const double el = (options.min_elevation_deg + static_cast<double>(ray % rows) *
-                                                         options.elevation_step_deg) * kDeg;
-      const Eigen::Vector3d d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+      const double el = (options.min_elevation_deg +
+                         static_cast<double>(ray % rows) * options.elevation_step_deg) *
+                        kDeg;
+      const Eigen::Vector3d d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
+                              std::sin(el));
       cloud.positions.push_back(range * d);
       cloud.scalars[0].f32.push_back(static_cast<float>(range));
       cloud.scalars[1].f64.push_back(static_cast<double>(ray));

@@ -27,14 +27,14 @@
 namespace candi::photogrammetry {
 
 struct VirtualScannerOptions {
-  double azimuth_step_deg = 0.2;     // degrees between columns, (0, 90]; 360 deg are covered
-  double elevation_step_deg = 0.2;   // degrees between rays of a column, (0, 90]
-  double min_elevation_deg = -60;    // degrees, [-90, 90]: the lowest ray of a column
-  double max_elevation_deg = 90;     // degrees, [min_elevation_deg, 90]: the highest ray
-  double min_range = 0.5;            // m, >= 0: nearer hits are dropped (the scanner's blind zone)
-  double max_range = 100;            // m, > min_range: farther hits are dropped
-  double range_noise = 0.002;        // m, >= 0: Gaussian sigma of the range, along the ray
-  uint64_t seed = 1;                 // noise seed
+  double azimuth_step_deg = 0.2;    // degrees between columns, (0, 90]; 360 deg are covered
+  double elevation_step_deg = 0.2;  // degrees between rays of a column, (0, 90]
+  double min_elevation_deg = -60;   // degrees, [-90, 90]: the lowest ray of a column
+  double max_elevation_deg = 90;    // degrees, [min_elevation_deg, 90]: the highest ray
+  double min_range = 0.5;           // m, >= 0: nearer hits are dropped (the scanner's blind zone)
+  double max_range = 100;           // m, > min_range: farther hits are dropped
+  double range_noise = 0.002;       // m, >= 0: Gaussian sigma of the range, along the ray
+  uint64_t seed = 1;                // noise seed
   void Check() const;  // throws std::invalid_argument("VirtualScannerOptions::field = ...")
 };
 

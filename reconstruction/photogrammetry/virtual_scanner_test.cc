@@ -123,8 +123,8 @@ TEST(ScanMesh, SameSeedSameBytesWhateverTheThreadsOtherSeedOtherNoise) {
     b = ScanMesh(Coarse(0.003), scene, pose);
   }
   ASSERT_EQ(a.size(), b.size());
-  EXPECT_EQ(0, std::memcmp(a.positions.data(), b.positions.data(),
-                           a.size() * sizeof(Eigen::Vector3d)));
+  EXPECT_EQ(
+      0, std::memcmp(a.positions.data(), b.positions.data(), a.size() * sizeof(Eigen::Vector3d)));
   VirtualScannerOptions other = Coarse(0.003);
   other.seed = 2;
   const PointCloud c = ScanMesh(other, scene, pose);

@@ -50,13 +50,13 @@ inline TriMesh CourtyardScene(const Eigen::Vector3d& origin = Eigen::Vector3d::Z
   TriMesh mesh;
   mesh.vertices.frame.origin = origin;
   AddQuad(&mesh, V(-1, -1, 0), V(41, -1, 0), V(41, 31, 0), V(-1, 31, 0));  // floor
-  AddBox(&mesh, V(-0.4, -0.4, 0), V(40.4, 0, 4));                         // south wall
-  AddBox(&mesh, V(-0.4, 30, 0), V(40.4, 30.4, 4));                        // north wall
-  AddBox(&mesh, V(-0.4, 0, 0), V(0, 30, 4));                              // west wall
-  AddBox(&mesh, V(40, 0, 0), V(40.4, 30, 4));                             // east wall
-  AddBox(&mesh, V(16, 12, 0), V(24, 18, 7));                              // building
-  for (const auto& c : std::vector<std::array<double, 2>>{
-           {6, 6}, {33, 5}, {35, 24}, {7, 23}, {13, 27}, {30, 7}}) {
+  AddBox(&mesh, V(-0.4, -0.4, 0), V(40.4, 0, 4));                          // south wall
+  AddBox(&mesh, V(-0.4, 30, 0), V(40.4, 30.4, 4));                         // north wall
+  AddBox(&mesh, V(-0.4, 0, 0), V(0, 30, 4));                               // west wall
+  AddBox(&mesh, V(40, 0, 0), V(40.4, 30, 4));                              // east wall
+  AddBox(&mesh, V(16, 12, 0), V(24, 18, 7));                               // building
+  for (const auto& c :
+       std::vector<std::array<double, 2>>{{6, 6}, {33, 5}, {35, 24}, {7, 23}, {13, 27}, {30, 7}}) {
     AddBox(&mesh, V(c[0] - 0.3, c[1] - 0.3, 0), V(c[0] + 0.3, c[1] + 0.3, 3));  // pillars
   }
   for (int s = 0; s < 3; ++s) {  // steps against the west wall
@@ -69,8 +69,8 @@ inline TriMesh CourtyardScene(const Eigen::Vector3d& origin = Eigen::Vector3d::Z
 // `count` stations on a circle of `radius` m around the building's centre, 1.6 m above the floor,
 // each turned by a different heading (so no two scanner frames are aligned); local metres plus
 // `origin`, i.e. world coordinates.
-inline std::vector<Rigid3> CourtyardStations(int count, double radius = 10.5,
-                                             const Eigen::Vector3d& origin = Eigen::Vector3d::Zero()) {
+inline std::vector<Rigid3> CourtyardStations(
+    int count, double radius = 10.5, const Eigen::Vector3d& origin = Eigen::Vector3d::Zero()) {
   std::vector<Rigid3> out;
   for (int i = 0; i < count; ++i) {
     const double a = 2.0 * M_PI * i / count;
