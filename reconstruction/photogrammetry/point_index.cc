@@ -47,6 +47,18 @@ std::vector<double> PointIndex::NearestSquaredDistances(const std::vector<Eigen:
   return out;
 }
 
+std::pair<int64_t, double> PointIndex::Nearest(const Eigen::Vector3d& query) const {
+  if (size_ == 0) return {-1, std::numeric_limits<double>::infinity()};
+  pcl::Indices found(1);
+  std::vector<float> sq(1);
+  pcl::PointXYZ p;
+  p.getVector3fMap() = query.cast<float>();
+  if (impl_->tree.nearestKSearch(p, 1, found, sq) < 1) {
+    return {-1, std::numeric_limits<double>::infinity()};
+  }
+  return {found[0], ((*impl_->cloud)[found[0]].getVector3fMap().cast<double>() - query).squaredNorm()};
+}
+
 OverlapStats MeasureOverlap(const PointIndex& index, const std::vector<Eigen::Vector3f>& queries,
                             const Eigen::Matrix4d& transform, double max_distance) {
   OverlapStats s;

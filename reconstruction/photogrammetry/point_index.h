@@ -4,7 +4,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace candi::photogrammetry {
@@ -23,6 +25,9 @@ class PointIndex {
   // local frame, applied in double).
   std::vector<double> NearestSquaredDistances(const std::vector<Eigen::Vector3f>& queries,
                                               const Eigen::Matrix4d& transform) const;
+  // The index of the indexed point nearest to `query` and its squared distance (m^2, in double);
+  // {-1, +infinity} when the index is empty.
+  std::pair<int64_t, double> Nearest(const Eigen::Vector3d& query) const;
 
  private:
   struct Impl;
