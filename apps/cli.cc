@@ -30,7 +30,7 @@ CLI::Option* OptionOf(void* option) { return static_cast<CLI::Option*>(option); 
 const std::vector<std::pair<std::string, std::vector<std::string>>>& CommandGroups() {
   static const std::vector<std::pair<std::string, std::vector<std::string>>> groups = {
       {"Inspect and convert", {"info", "convert", "compare"}},
-      {"Digitize", {"sfm", "dense", "georef", "register", "clean", "colorcorrect", "foundation", "relief"}},
+      {"Digitize", {"sfm", "dense", "georef", "register", "register-scans", "clean", "colorcorrect", "foundation", "relief"}},
       {"Assemble", {"build", "pack"}},
       {"Look", {"render", "view", "publish", "section"}},
       {"Other", {"opacity", "demo", "bench"}},

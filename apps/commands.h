@@ -15,12 +15,14 @@
 #include "pipeline/build.h"
 #include "pipeline/demo_site.h"
 #include "reconstruction/photogrammetry/cleaning.h"
+#include "reconstruction/photogrammetry/coarse_alignment.h"
+#include "reconstruction/photogrammetry/multi_registration.h"
 #include "reconstruction/photogrammetry/registration.h"
 
 namespace candi::apps {
 
 void AddInspectCommands(Command& root);   // info, convert, compare (inspect.cc)
-void AddDigitizeCommands(Command& root);  // sfm, dense, georef, register, clean, colorcorrect, foundation,
+void AddDigitizeCommands(Command& root);  // sfm, dense, georef, register, register-scans, clean, colorcorrect, foundation,
                                           // relief (digitize.cc, relief.cc)
 void AddReliefCommands(Command& root);    // relief synth|dataset|train|predict|points|eval|place (relief.cc)
 void AddAssembleCommands(Command& root);  // build, pack (assemble.cc)
@@ -38,6 +40,20 @@ struct RegisterArgs {
   std::string initial;               // optional JSON: initial fixed_from_moving (same format)
 };
 int RunRegister(const RegisterArgs& args);
+
+// candi register-scans: many scans into one frame at once (multi_registration.h).
+struct RegisterScansArgs {
+  std::vector<std::string> scans;     // point files, one scan each
+  std::string output_dir;             // the moved scans, registration.json
+  photogrammetry::MultiRegistrationOptions options;
+  std::string fixed;                  // "0,2": scans held at their start pose
+  std::string poses;                  // optional JSON: start poses world_from_scan
+  std::string targets;                // optional CSV: targets seen in the scans
+  bool coarse = false;                // scans without a start pose: FPFH + RANSAC onto scan 0 first
+  photogrammetry::CoarseAlignmentOptions coarse_options;
+  std::string format;                 // output extension ("" = each scan's own)
+};
+int RunRegisterScans(const RegisterScansArgs& args);
 
 struct CleanArgs {
   std::string input, output;

@@ -1,4 +1,4 @@
-// candi sfm, dense, georef, register, clean, colorcorrect, foundation (and relief, relief.cc): the
+// candi sfm, dense, georef, register, register-scans, clean, colorcorrect, foundation (and relief, relief.cc): the
 // building from photos (pipeline/photogrammetry.h), colour-card correction, the foundation from
 // CAD sections (pipeline/foundation.h). register and clean run in candi-pcl (pcl_commands.cc).
 #include <cctype>
@@ -275,6 +275,36 @@ void AddRegister(Command& root) {
   c.Footer("Example: candi register scan2.las scan1.las -o scan2_reg.las --max-distance 0.2 --transform-out t.json");
 }
 
+void AddRegisterScans(Command& root) {
+  RegisterScansArgs& a = root.Keep<RegisterScansArgs>();
+  pg::MultiRegistrationOptions& o = a.options;
+  Command c = root.Add("register-scans", "Many scans into one frame at once: overlapping pairs by point-to-plane ICP, "
+                                         "then all poses in one robust Ceres solve (loops close), with control targets");
+  c.Option("scans", a.scans, "Point files, one scan each (2 or more)").Required();
+  c.Option("-o,--output", a.output_dir, "Folder for the moved scans and registration.json").Required();
+  c.Option("--poses", a.poses, "Start poses: JSON, a 4x4 world_from_scan per scan (or a registration.json); "
+           "default identity");
+  c.Flag("--coarse", a.coarse, "Scans without a start pose are first aligned onto scan 0 by FPFH features and "
+         "RANSAC (PCL)");
+  c.Option("--targets", a.targets, "Targets seen in the scans, CSV: name,scan,x,y,z,E,N,H[,role[,accuracy]] (scan: "
+           "index or file name; role control or check)");
+  c.Option("--fixed", a.fixed, "Scans held at their start pose, e.g. 0,2 (default: scan 0, or none with 3+ "
+           "control targets)");
+  c.Option("--max-distance", o.max_correspondence_distance, "Coarse ICP pairing distance, m");
+  c.Option("--solve-distance", o.solve_distance, "Fine ICP and global solve pairing distance, m");
+  c.Option("--iterations", o.icp_iterations, "ICP iterations per stage");
+  c.Option("--voxel", o.voxel, "Thin every scan to this voxel first, m (0: off)");
+  c.Option("--icp-voxel", o.icp_voxel, "Thin the moving scan of a pair further for ICP, m (0: off)");
+  c.Option("--min-overlap", o.min_overlap, "Overlap a pair needs to count (share of points within the solve distance)");
+  c.Option("--loss-scale", o.loss_scale, "Huber scale of the global solve's point-to-plane terms, m");
+  c.Option("--rounds", o.outer_iterations, "Global solve rounds (correspondences re-found each)");
+  c.Option("--correspondences", o.correspondences_per_pair, "Correspondences per pair and direction");
+  c.Option("--format", a.format, "Extension of the moved scans (ply, las, laz, e57, xyz; default: each scan's own)");
+  c.Run([&a] { return RunRegisterScans(a); });
+  c.Footer("Example: candi register-scans st1.las st2.las st3.las st4.las -o registered --targets targets.csv\n"
+           "         (then candi compare registered/st1.las registered/st2.las -o overlap.las --method m3c2)");
+}
+
 void AddClean(Command& root) {
   CleanArgs& a = root.Keep<CleanArgs>();
   pg::CleanOptions& o = a.clean;
@@ -523,6 +553,7 @@ void AddDigitizeCommands(Command& root) {
   AddDense(root);
   AddGeoref(root);
   AddRegister(root);
+  AddRegisterScans(root);
   AddClean(root);
   AddColorCorrect(root);
   AddFoundation(root);

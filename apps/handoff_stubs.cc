@@ -25,6 +25,7 @@ int RunDemo(const DemoArgs&) { HandedOver("demo"); }
 #endif
 #if CANDI_STUB_PCL
 int RunRegister(const RegisterArgs&) { HandedOver("register"); }
+int RunRegisterScans(const RegisterScansArgs&) { HandedOver("register-scans"); }
 int RunClean(const CleanArgs&) { HandedOver("clean"); }
 #endif
 

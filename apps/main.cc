@@ -20,7 +20,7 @@ namespace {
 // The commands are split over three executables from the same sources, so that a call loads only
 // the shared libraries it needs (dynamic linking is most of a short call's time):
 //   candi        everything else (start-up ~0.1 s);
-//   candi-pcl    register and clean (PCL: its BIND_NOW libraries cost ~0.4 s to load);
+//   candi-pcl    register, register-scans and clean (PCL: its BIND_NOW libraries cost ~0.4 s to load);
 //   candi-relief the relief commands and the demo, and everything else too (libtorch: seconds
 //                to load).
 // cli.cc is the same in all three (every command's options and --help); an executable without a
@@ -50,7 +50,10 @@ Group CommandGroup(int argc, char** argv) {
     // `relief place` (Ceres, no libtorch) runs here; the other relief commands need the network.
     return i + 1 < argc && !std::strcmp(argv[i + 1], "place") ? kCore : kRelief;
   }
-  if (!std::strcmp(command, "register") || !std::strcmp(command, "clean")) return kPcl;
+  if (!std::strcmp(command, "register") || !std::strcmp(command, "register-scans") ||
+      !std::strcmp(command, "clean")) {
+    return kPcl;
+  }
   // The demo predicts its relief panels' depth: in candi-relief, so libtorch loads once.
   if (!std::strcmp(command, "demo")) return kRelief;
   if (!std::strcmp(command, "bench")) {

@@ -58,7 +58,7 @@ TEST(Cli, HelpGroupsTheCommandsAlongTheUsersPath) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> expected = {
       {"Inspect and convert", {"info", "convert", "compare"}},
       {"Digitize",
-       {"sfm", "dense", "georef", "register", "clean", "colorcorrect", "foundation", "relief"}},
+       {"sfm", "dense", "georef", "register", "register-scans", "clean", "colorcorrect", "foundation", "relief"}},
       {"Assemble", {"build", "pack"}},
       {"Look", {"render", "view", "publish", "section"}},
       {"Other", {"opacity", "demo", "bench"}},

@@ -1,0 +1,178 @@
+// `candi register-scans` end to end: scans that candi's virtual scanner makes of the courtyard
+// (tests/util/scan_scene.h) at survey coordinates, written as point files in their scanner
+// frames, start poses perturbed by 0.5 m and 5 degrees, registered by the command; the poses in
+// registration.json and the moved scans against the truth; a scan with no overlap reported and
+// left where it was; targets; bad input.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/rng.h"
+#include "io/point_io.h"
+#include "reconstruction/photogrammetry/virtual_scanner.h"
+#include "tests/run_candi.h"
+#include "tests/util/scan_scene.h"
+#include "tests/util/test_util.h"
+
+namespace candi::testing {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+const Eigen::Vector3d kOrigin(500000.0, 4000000.0, 120.0);
+
+nlohmann::json Matrix(const Rigid3& t) {
+  const Eigen::Matrix4d m = t.ToMatrix();
+  nlohmann::json rows = nlohmann::json::array();
+  for (int i = 0; i < 4; ++i) rows.push_back({m(i, 0), m(i, 1), m(i, 2), m(i, 3)});
+  return rows;
+}
+
+Rigid3 FromJson(const nlohmann::json& m) {
+  Eigen::Matrix3d r;
+  Eigen::Vector3d t;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) r(i, j) = m[i][j].get<double>();
+    t[i] = m[i][3].get<double>();
+  }
+  return Rigid3(Eigen::Quaterniond(r), t);
+}
+
+struct Scans {
+  std::vector<Rigid3> truth, start;
+  std::string args;  // the scan files, space separated
+};
+
+// `count` stations of the courtyard at kOrigin, scanned, written as s<i>.ply in scanner frames;
+// every start pose but the first moved 0.5 m and turned 5 degrees (seeded).
+Scans MakeScans(const TempDir& dir, int count) {
+  Scans s;
+  const TriMesh scene = CourtyardScene(kOrigin);
+  s.truth = CourtyardStations(count, 10.5, kOrigin);
+  Rng rng(11);
+  for (int i = 0; i < count; ++i) {
+    const std::string file = dir.File("s" + std::to_string(i) + ".ply");
+    io::WritePointCloud(file, photogrammetry::ScanMesh(CourtyardScanner(200 + i), scene, s.truth[i]));
+    s.args += " " + file;
+    if (i == 0) {
+      s.start.push_back(s.truth[0]);
+      continue;
+    }
+    const Eigen::Vector3d dir3(rng.Normal(), rng.Normal(), rng.Normal()), axis(rng.Normal(), rng.Normal(), rng.Normal());
+    s.start.emplace_back(Eigen::Quaterniond(Eigen::AngleAxisd(5 * kDeg, axis.normalized())) * s.truth[i].rotation,
+                         s.truth[i].translation + 0.5 * dir3.normalized());
+  }
+  return s;
+}
+
+void WritePoses(const std::string& path, const std::vector<Rigid3>& poses) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const Rigid3& p : poses) j.push_back(Matrix(p));
+  WriteBytes(path, j.dump());
+}
+
+constexpr char kFast[] = " --voxel 0.2 --icp-voxel 0.5";
+
+TEST(RegisterScansCli, RecoversPerturbedStationsAtSurveyCoordinates) {
+  TempDir dir;
+  Scans s = MakeScans(dir, 5);
+  // A sixth scan a kilometre away: it overlaps nothing.
+  const TriMesh far_scene = CourtyardScene(kOrigin + Eigen::Vector3d(1000, 0, 0));
+  const Rigid3 far_pose = CourtyardStations(1, 10.5, kOrigin + Eigen::Vector3d(1000, 0, 0))[0];
+  io::WritePointCloud(dir.File("far.ply"), photogrammetry::ScanMesh(CourtyardScanner(300), far_scene, far_pose));
+  s.args += " " + dir.File("far.ply");
+  s.truth.push_back(far_pose);
+  s.start.push_back(far_pose);
+  WritePoses(dir.File("poses.json"), s.start);
+  const CommandResult r =
+      RunCandi("register-scans" + s.args + " -o " + dir.File("out") + " --poses " + dir.File("poses.json") + kFast);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("overlap no registered scan"), std::string::npos) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(ReadBytes(dir.File("out/registration.json")));
+  ASSERT_EQ(j["scans"].size(), 6u);
+  for (int i = 0; i < 5; ++i) {
+    SCOPED_TRACE("scan " + std::to_string(i));
+    EXPECT_TRUE(j["scans"][i]["connected"].get<bool>());
+    const Rigid3 got = FromJson(j["scans"][i]["world_from_scan"]);
+    EXPECT_LT((got.translation - s.truth[i].translation).norm(), 0.002);
+    EXPECT_LT(Eigen::AngleAxisd(got.rotation * s.truth[i].rotation.conjugate()).angle() / kDeg, 0.01);
+  }
+  EXPECT_FALSE(j["scans"][5]["connected"].get<bool>());
+  const Rigid3 kept = FromJson(j["scans"][5]["world_from_scan"]);
+  EXPECT_LT((kept.translation - far_pose.translation).norm(), 1e-6);
+  EXPECT_FALSE(j["loops"].empty());
+  for (const auto& loop : j["loops"]) EXPECT_LT(loop["translation_m"].get<double>(), 0.02);
+  // The moved scan 3 lies where the truth puts it, millimetres kept at E 500000.
+  const PointCloud moved = io::ReadPointCloud(dir.File("out/s3.ply"));
+  const PointCloud raw = io::ReadPointCloud(dir.File("s3.ply"));
+  ASSERT_EQ(moved.size(), raw.size());
+  double worst = 0;
+  for (size_t i = 0; i < raw.size(); i += 97) {
+    worst = std::max(worst, (moved.WorldPosition(i) - s.truth[3] * raw.WorldPosition(i)).norm());
+  }
+  EXPECT_LT(worst, 0.003);
+  EXPECT_GT(moved.WorldPosition(0).x(), 499000);
+}
+
+TEST(RegisterScansCli, ControlTargetsTieTheBlockToTheSurvey) {
+  TempDir dir;
+  Scans s = MakeScans(dir, 3);
+  // Four targets on the walls and the building, seen in the scans that face them; two are checks.
+  const std::vector<Eigen::Vector3d> corners = {{0.0, 5, 2}, {40.0, 25, 2}, {16, 15, 5}, {24, 13, 3}};
+  std::string csv = "name,scan,x,y,z,E,N,H,role,accuracy\n";
+  for (size_t k = 0; k < corners.size(); ++k) {
+    const int scan = static_cast<int>(k % 3);
+    const Eigen::Vector3d world = corners[k] + kOrigin;
+    const Eigen::Vector3d in_scan = s.truth[scan].Inverse() * world;
+    char line[256];
+    std::snprintf(line, sizeof(line), "t%zu,%d,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%s,0.002\n", k, scan, in_scan.x(),
+                  in_scan.y(), in_scan.z(), world.x(), world.y(), world.z(), k < 3 ? "control" : "check");
+    csv += line;
+  }
+  WriteBytes(dir.File("targets.csv"), csv);
+  // Every start pose perturbed, scan 0 too: the targets fix the frame.
+  std::vector<Rigid3> start = s.start;
+  start[0].translation += Eigen::Vector3d(0.3, -0.2, 0.1);
+  WritePoses(dir.File("poses.json"), start);
+  const CommandResult r = RunCandi("register-scans" + s.args + " -o " + dir.File("out") + " --poses " +
+                                   dir.File("poses.json") + " --targets " + dir.File("targets.csv") + kFast);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("control targets: 3"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("check targets: 1"), std::string::npos) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(ReadBytes(dir.File("out/registration.json")));
+  EXPECT_LT(j["check_rmse"]["xyz_m"].get<double>(), 0.005);
+  for (int i = 0; i < 3; ++i) {
+    const Rigid3 got = FromJson(j["scans"][i]["world_from_scan"]);
+    EXPECT_LT((got.translation - s.truth[i].translation).norm(), 0.005) << i;
+  }
+}
+
+TEST(RegisterScansCli, BadInputIsNamed) {
+  TempDir dir;
+  Scans s = MakeScans(dir, 2);
+  WriteBytes(dir.File("poses.json"), "[[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]]");
+  CommandResult r = RunCandi("register-scans" + s.args + " -o " + dir.File("out") + " --poses " + dir.File("poses.json"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("1 poses for 2 scans"), std::string::npos) << r.output;
+  WriteBytes(dir.File("t.csv"), "name,scan,x,y,z,E,N,H\nt1,7,0,0,0,1,2,3\n");
+  r = RunCandi("register-scans" + s.args + " -o " + dir.File("out") + " --targets " + dir.File("t.csv"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("line 2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("'7'"), std::string::npos) << r.output;
+  r = RunCandi("register-scans " + dir.File("s0.ply") + " -o " + dir.File("out"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  r = RunCandi("register-scans" + s.args + " -o " + dir.File("out") + " --fixed 5");
+  EXPECT_EQ(r.code, 1) << r.output;
+  WriteBytes(dir.File("empty.xyz"), "");
+  r = RunCandi("register-scans" + s.args + " " + dir.File("empty.xyz") + " -o " + dir.File("out") +
+               " --format ply");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("empty.xyz"), std::string::npos) << r.output;
+  EXPECT_FALSE(FileExists(dir.File("out/registration.json")));
+}
+
+}  // namespace
+}  // namespace candi::testing
