@@ -7,12 +7,15 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <filesystem>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "core/rng.h"
 #include "io/point_io.h"
+#include "reconstruction/photogrammetry/registration.h"
 #include "reconstruction/photogrammetry/virtual_scanner.h"
 #include "tests/run_candi.h"
 #include "tests/util/scan_scene.h"
@@ -148,6 +151,66 @@ TEST(RegisterScansCli, ControlTargetsTieTheBlockToTheSurvey) {
     const Rigid3 got = FromJson(j["scans"][i]["world_from_scan"]);
     EXPECT_LT((got.translation - s.truth[i].translation).norm(), 0.005) << i;
   }
+}
+
+// CloudCompare's ICP (-ICP, its partial-overlap setting at 60 %, to convergence) registers scan 1
+// onto scan 0 from the same perturbed start; candi's pose is no farther from the truth.
+TEST(RegisterScansCli, NoWorseThanCloudCompareIcpFromTheSameStart) {
+  if (RunCommand("command -v CloudCompare >/dev/null").code != 0) {
+    GTEST_SKIP() << "'CloudCompare' is not installed (Debian package cloudcompare; scripts/deps.sh installs it)";
+  }
+  TempDir dir;
+  const TriMesh scene = CourtyardScene(kOrigin);
+  const std::vector<Rigid3> truth = CourtyardStations(6, 10.5, kOrigin);
+  // Two neighbouring stations, coarser than the other tests (~4e4 points: below CloudCompare's
+  // default sampling limit, so its run is deterministic too).
+  std::vector<PointCloud> scans;
+  for (int i = 0; i < 2; ++i) {
+    photogrammetry::VirtualScannerOptions o = CourtyardScanner(400 + i);
+    o.azimuth_step_deg = o.elevation_step_deg = 0.8;
+    scans.push_back(photogrammetry::ScanMesh(o, scene, truth[i]));
+    io::WritePointCloud(dir.File("s" + std::to_string(i) + ".ply"), scans.back());
+  }
+  const Rigid3 start(Eigen::Quaterniond(Eigen::AngleAxisd(5 * kDeg, Eigen::Vector3d(1, 2, 3).normalized())) *
+                         truth[1].rotation,
+                     truth[1].translation + 0.5 * Eigen::Vector3d(2, -1, 1).normalized());
+  WritePoses(dir.File("poses.json"), {truth[0], start});
+  const CommandResult r = RunCandi("register-scans " + dir.File("s0.ply") + " " + dir.File("s1.ply") + " -o " +
+                                   dir.File("out") + " --poses " + dir.File("poses.json"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(ReadBytes(dir.File("out/registration.json")));
+  const Rigid3 candi = FromJson(j["scans"][1]["world_from_scan"]);
+  const double candi_error = (candi.translation - truth[1].translation).norm();
+  // CloudCompare on both scans in world coordinates under their start poses (shifted to the site).
+  for (int i = 0; i < 2; ++i) {
+    PointCloud world = photogrammetry::TransformPointCloud(i == 0 ? truth[0] : start, scans[i]);
+    world.Rebase(LocalFrame());
+    io::WritePointCloud(dir.File("w" + std::to_string(i) + ".ply"), world);
+  }
+  const std::string shift = " -GLOBAL_SHIFT -500000 -4000000 -120 ";
+  const CommandResult cc = RunCommand("cd " + dir.path() + " && timeout 600 env QT_QPA_PLATFORM=offscreen "
+                                      "CloudCompare -SILENT -AUTO_SAVE OFF -O" + shift + "w1.ply -O" + shift +
+                                      "w0.ply -ICP -OVERLAP 60 -MIN_ERROR_DIFF 1e-8");
+  ASSERT_EQ(cc.code, 0) << cc.output;
+  std::string matrix_file;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path())) {
+    if (e.path().filename().string().find("REGISTRATION_MATRIX") != std::string::npos) matrix_file = e.path();
+  }
+  ASSERT_FALSE(matrix_file.empty()) << cc.output;
+  std::istringstream in(ReadBytes(matrix_file));
+  Eigen::Matrix4d m;
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) in >> m(a, b);
+  // CloudCompare's matrix acts on its shifted coordinates x - kOrigin.
+  const Eigen::Matrix3d rot = m.block<3, 3>(0, 0);
+  const Rigid3 correction(Eigen::Quaterniond(rot), m.block<3, 1>(0, 3) + kOrigin - rot * kOrigin);
+  const Rigid3 cloudcompare = correction * start;
+  const double cc_error = (cloudcompare.translation - truth[1].translation).norm();
+  RecordProperty("candi_error_m", std::to_string(candi_error));
+  RecordProperty("cloudcompare_error_m", std::to_string(cc_error));
+  EXPECT_LT(candi_error, 0.002);
+  EXPECT_LE(candi_error, cc_error) << "CloudCompare's ICP came " << cc_error << " m from the truth, candi "
+                                   << candi_error << " m";
 }
 
 TEST(RegisterScansCli, BadInputIsNamed) {
