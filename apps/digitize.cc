@@ -280,7 +280,8 @@ void AddRegisterScans(Command& root) {
   pg::MultiRegistrationOptions& o = a.options;
   Command c = root.Add("register-scans", "Many scans into one frame at once: overlapping pairs by point-to-plane ICP, "
                                          "then all poses in one robust Ceres solve (loops close), with control targets");
-  c.Option("scans", a.scans, "Point files, one scan each (2 or more)").Required();
+  c.Option("scans", a.scans, "Point files, one scan each (an E57 file with several scans counts as several, each "
+           "starting from its stored pose)").Required();
   c.Option("-o,--output", a.output_dir, "Folder for the moved scans and registration.json").Required();
   c.Option("--poses", a.poses, "Start poses: JSON, a 4x4 world_from_scan per scan (or a registration.json); "
            "default identity");

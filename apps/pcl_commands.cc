@@ -20,6 +20,7 @@
 #include "core/progress.h"
 #include "core/text_format.h"
 #include "core/transform.h"
+#include "io/e57/e57_io.h"
 #include "io/point_io.h"
 #include "reconstruction/photogrammetry/cleaning.h"
 #include "reconstruction/photogrammetry/csv_table.h"
@@ -214,9 +215,58 @@ std::vector<Rigid3> ReadStartPoses(const std::string& path, size_t count) {
   return poses;
 }
 
-// Targets CSV: name,scan,x,y,z,E,N,H[,role[,accuracy]]; scan by index or by file name or stem.
+// One scan to register: a point file, or one scan of an E57 file that holds several.
+struct ScanInput {
+  std::string path;
+  int e57_scan = -1;   // >= 0: this scan of the E57 file, read in its own frame
+  std::string label;   // how it is named: the file, or "file#k" for an E57's scan k
+  std::string stem;    // the output's name without extension
+  bool has_pose = false;
+  Rigid3 pose;         // an E57 scan's stored pose: its start
+};
+
+// The files as scans: an E57 file with several scans counts as that many, each starting from
+// its stored pose.
+std::vector<ScanInput> ExpandScans(const std::vector<std::string>& files) {
+  std::vector<ScanInput> out;
+  for (const std::string& f : files) {
+    const std::filesystem::path p(f);
+    std::string ext = p.extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const std::vector<io::E57ScanInfo> e57 = ext == ".e57" ? io::ListE57Scans(f) : std::vector<io::E57ScanInfo>();
+    if (e57.size() <= 1) {
+      out.push_back({f, -1, f, p.stem().string(), false, Rigid3()});
+      continue;
+    }
+    for (size_t k = 0; k < e57.size(); ++k) {
+      ScanInput in{f, static_cast<int>(k), f + "#" + std::to_string(k) + " (" + e57[k].name + ")",
+                   p.stem().string() + "_" + std::to_string(k), true, Rigid3(e57[k].rotation, e57[k].translation)};
+      out.push_back(in);
+    }
+  }
+  return out;
+}
+
+PointCloud ReadScan(const ScanInput& in) {
+  if (in.e57_scan < 0) return ReadInput(in.path);
+  auto reader = io::OpenE57ScanReader(in.path, static_cast<size_t>(in.e57_scan));
+  PointCloud cloud, chunk;
+  while (reader->Read(1 << 20, &chunk) > 0) {
+    if (cloud.empty()) {
+      cloud = chunk;
+    } else {
+      cloud.Append(chunk);
+    }
+  }
+  if (cloud.empty()) throw InputError(in.path, "scan " + std::to_string(in.e57_scan), "no points");
+  photogrammetry::CheckFinitePositions(cloud, in.label);
+  return cloud;
+}
+
+// Targets CSV: name,scan,x,y,z,E,N,H[,role[,accuracy]]; scan by index, by file name or stem, or
+// (an E57's scan) by its label "file#k" or output stem "stem_k".
 std::vector<photogrammetry::ScanTarget> ReadScanTargets(const std::string& path,
-                                                        const std::vector<std::string>& scans) {
+                                                        const std::vector<ScanInput>& scans) {
   const photogrammetry::CsvTable t =
       photogrammetry::CsvTable::Read(path, {"name", "scan", "x", "y", "z", "e", "n", "h"});
   std::vector<photogrammetry::ScanTarget> out;
@@ -226,8 +276,12 @@ std::vector<photogrammetry::ScanTarget> ReadScanTargets(const std::string& path,
     const std::string& scan = t.Text(row, "scan");
     target.scan = -1;
     for (size_t i = 0; i < scans.size(); ++i) {
-      const std::filesystem::path p(scans[i]);
-      if (scan == scans[i] || scan == p.filename().string() || scan == p.stem().string()) target.scan = static_cast<int>(i);
+      const std::filesystem::path p(scans[i].path);
+      const bool whole_file = scans[i].e57_scan < 0;
+      if (scan == scans[i].label || scan == scans[i].stem ||
+          (whole_file && (scan == scans[i].path || scan == p.filename().string()))) {
+        target.scan = static_cast<int>(i);
+      }
     }
     if (target.scan < 0) {
       char* end = nullptr;
@@ -270,19 +324,18 @@ std::vector<int> ParseIndices(const std::string& text, size_t count) {
   return out;
 }
 
-// Output names: the scans' stems, made unique with _<index> where two scans share one.
-std::vector<std::string> OutputNames(const std::vector<std::string>& scans, const std::string& format) {
+// Output names: the scans' stems, made unique with _<index> where two scans share one; the
+// extension `format`, else the scan's file's (an E57 scan: .e57, one scan a file).
+std::vector<std::string> OutputNames(const std::vector<ScanInput>& scans, const std::string& format) {
   std::vector<std::string> names;
   std::set<std::string> seen, repeated;
   for (const auto& s : scans) {
-    const std::string stem = std::filesystem::path(s).stem().string();
-    if (!seen.insert(stem).second) repeated.insert(stem);
+    if (!seen.insert(s.stem).second) repeated.insert(s.stem);
   }
   for (size_t i = 0; i < scans.size(); ++i) {
-    const std::filesystem::path p(scans[i]);
-    std::string stem = p.stem().string();
+    std::string stem = scans[i].stem;
     if (repeated.count(stem)) stem += "_" + std::to_string(i);
-    names.push_back(stem + (format.empty() ? p.extension().string() : "." + format));
+    names.push_back(stem + (format.empty() ? std::filesystem::path(scans[i].path).extension().string() : "." + format));
   }
   return names;
 }
@@ -291,7 +344,7 @@ nlohmann::json Rmse(const photogrammetry::Rmse& r) {
   return {{"count", r.count}, {"x_m", r.x}, {"y_m", r.y}, {"z_m", r.z}, {"xy_m", r.xy}, {"xyz_m", r.d3}};
 }
 
-nlohmann::json ReportJson(const RegisterScansArgs& a, const std::vector<Rigid3>& start,
+nlohmann::json ReportJson(const std::vector<ScanInput>& inputs, const std::vector<Rigid3>& start,
                           const std::vector<std::string>& names, const std::vector<photogrammetry::ScanTarget>& targets,
                           const MultiRegistrationResult& r, const std::vector<std::string>& coarse) {
   nlohmann::json j;
@@ -302,7 +355,8 @@ nlohmann::json ReportJson(const RegisterScansArgs& a, const std::vector<Rigid3>&
   nlohmann::json scans = nlohmann::json::array();
   for (size_t i = 0; i < r.scans.size(); ++i) {
     const auto& s = r.scans[i];
-    scans.push_back({{"file", a.scans[i]}, {"output", names[i]}, {"connected", s.connected}, {"fixed", s.fixed},
+    scans.push_back({{"file", inputs[i].path}, {"e57_scan", inputs[i].e57_scan}, {"label", inputs[i].label},
+                     {"output", names[i]}, {"connected", s.connected}, {"fixed", s.fixed},
                      {"world_from_scan", MatrixJson(r.world_from_scan[i])}, {"start", MatrixJson(start[i])},
                      {"coarse", coarse[i]}, {"translation_change_m", s.translation_change},
                      {"rotation_change_deg", s.rotation_change_deg}, {"residual_rms_m", Number(s.residual_rms)},
@@ -337,12 +391,12 @@ nlohmann::json ReportJson(const RegisterScansArgs& a, const std::vector<Rigid3>&
   return j;
 }
 
-void PrintScans(const RegisterScansArgs& a, const MultiRegistrationResult& r,
+void PrintScans(const std::vector<ScanInput>& inputs, const MultiRegistrationResult& r,
                 const std::vector<PointCloud>& scans) {
   std::printf("%-24s %10s %9s %11s %9s %12s\n", "scan", "points", "connected", "moved m", "turned", "residual mm");
   for (size_t i = 0; i < r.scans.size(); ++i) {
     const auto& s = r.scans[i];
-    std::printf("%-24s %10zu %9s %11.4f %8.4f° %12.3f\n", std::filesystem::path(a.scans[i]).filename().string().c_str(),
+    std::printf("%-24s %10zu %9s %11.4f %8.4f° %12.3f\n", std::filesystem::path(inputs[i].label).filename().string().c_str(),
                 scans[i].size(), s.fixed ? "fixed" : (s.connected ? "yes" : "NO"), s.translation_change,
                 s.rotation_change_deg, s.residual_rms * 1000);
   }
@@ -375,27 +429,39 @@ void PrintScans(const RegisterScansArgs& a, const MultiRegistrationResult& r,
 
 int RunRegisterScans(const RegisterScansArgs& a) {
   a.options.Check();
-  if (a.scans.size() < 2) throw std::invalid_argument("scans: give 2 or more point files");
-  const std::vector<std::string> names = OutputNames(a.scans, a.format);
+  if (a.scans.empty()) throw std::invalid_argument("scans: give 2 or more scans");
+  const std::vector<ScanInput> inputs = ExpandScans(a.scans);
+  if (inputs.size() < 2) throw std::invalid_argument("scans: give 2 or more scans (or an E57 file with several)");
+  const std::vector<std::string> names = OutputNames(inputs, a.format);
   for (const auto& n : names) io::OutputPointFormat(n);  // a known extension, before the work
   CheckOutputFolder(a.output_dir);  // its parent exists; the folder is made when writing
   const auto start_time = std::chrono::steady_clock::now();
   photogrammetry::MultiRegistrationOptions options = a.options;
-  options.fixed_scans = ParseIndices(a.fixed, a.scans.size());
-  std::vector<Rigid3> start(a.scans.size());
-  if (!a.poses.empty()) start = ReadStartPoses(a.poses, a.scans.size());
+  options.fixed_scans = ParseIndices(a.fixed, inputs.size());
+  std::vector<Rigid3> start(inputs.size());
+  std::vector<std::string> coarse(inputs.size(), "none");
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    if (inputs[i].has_pose) {
+      start[i] = inputs[i].pose;
+      coarse[i] = "stored in the E57 file";
+    }
+  }
+  if (!a.poses.empty()) {
+    start = ReadStartPoses(a.poses, inputs.size());
+    coarse.assign(inputs.size(), "given");
+  }
   const std::vector<photogrammetry::ScanTarget> targets =
-      a.targets.empty() ? std::vector<photogrammetry::ScanTarget>() : ReadScanTargets(a.targets, a.scans);
+      a.targets.empty() ? std::vector<photogrammetry::ScanTarget>() : ReadScanTargets(a.targets, inputs);
   std::vector<PointCloud> scans;
-  for (const auto& path : a.scans) scans.push_back(ReadInput(path));
-  std::vector<std::string> coarse(a.scans.size(), a.poses.empty() ? "none" : "given");
-  if (a.coarse && a.poses.empty()) {
+  for (const auto& in : inputs) scans.push_back(ReadScan(in));
+  if (a.coarse) {
     coarse[0] = "anchor";
     for (size_t i = 1; i < scans.size(); ++i) {
+      if (coarse[i] != "none") continue;  // it has a start pose
       const auto c = photogrammetry::CoarseAlign(a.coarse_options, scans[i], scans[0]);
       coarse[i] = c.message;
-      if (c.found) start[i] = c.fixed_from_moving;
-      std::printf("coarse %s onto %s: %s\n", a.scans[i].c_str(), a.scans[0].c_str(), c.message.c_str());
+      if (c.found) start[i] = start[0] * c.fixed_from_moving;  // scan i -> scan 0 -> world
+      std::printf("coarse %s onto %s: %s\n", inputs[i].label.c_str(), inputs[0].label.c_str(), c.message.c_str());
     }
   }
   MultiRegistrationResult result;
@@ -405,14 +471,14 @@ int RunRegisterScans(const RegisterScansArgs& a) {
     ConsoleProgress progress("register " + std::to_string(scans.size()) + " scans", po);
     result = photogrammetry::RegisterScans(options, scans, start, targets, progress.Callback());
   }
-  PrintScans(a, result, scans);
+  PrintScans(inputs, result, scans);
   std::filesystem::create_directories(a.output_dir);
   for (size_t i = 0; i < scans.size(); ++i) {
     io::WritePointCloud(a.output_dir + "/" + names[i],
                         photogrammetry::TransformPointCloud(result.world_from_scan[i], scans[i]));
   }
   WriteFileAtomic(a.output_dir + "/registration.json",
-                  ReportJson(a, start, names, targets, result, coarse).dump(2) + "\n");
+                  ReportJson(inputs, start, names, targets, result, coarse).dump(2) + "\n");
   std::printf("wrote %zu scans and registration.json to %s, time %.2f s\n", scans.size(), a.output_dir.c_str(),
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count());
   size_t unconnected = 0;

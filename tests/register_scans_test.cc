@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/rng.h"
+#include "io/e57/e57_writer.h"
 #include "io/point_io.h"
 #include "reconstruction/photogrammetry/registration.h"
 #include "reconstruction/photogrammetry/virtual_scanner.h"
@@ -211,6 +212,43 @@ TEST(RegisterScansCli, NoWorseThanCloudCompareIcpFromTheSameStart) {
   EXPECT_LT(candi_error, 0.002);
   EXPECT_LE(candi_error, cc_error) << "CloudCompare's ICP came " << cc_error << " m from the truth, candi "
                                    << candi_error << " m";
+}
+
+// An E57 file with several scans counts as several: each read in its own frame, its stored pose
+// its start.
+TEST(RegisterScansCli, AnE57FileWithSeveralScansStartsFromItsPoses) {
+  TempDir dir;
+  Scans s = MakeScans(dir, 3);
+  std::vector<io::E57Scan> e57;
+  for (int i = 0; i < 3; ++i) {
+    const PointCloud scan = io::ReadPointCloud(dir.File("s" + std::to_string(i) + ".ply"));
+    io::E57Scan out;
+    out.name = "station " + std::to_string(i);
+    out.rotation = s.start[i].rotation;
+    out.translation = s.start[i].translation;
+    for (int k = 0; k < 3; ++k) {
+      io::E57Field f;
+      f.name = std::string("cartesian") + "XYZ"[k];
+      for (size_t p = 0; p < scan.size(); ++p) f.values.push_back(scan.WorldPosition(p)[k]);
+      out.fields.push_back(f);
+    }
+    e57.push_back(out);
+  }
+  io::WriteE57(dir.File("site.e57"), e57);
+  const CommandResult r =
+      RunCandi("register-scans " + dir.File("site.e57") + " -o " + dir.File("out") + " --format ply" + kFast);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(ReadBytes(dir.File("out/registration.json")));
+  ASSERT_EQ(j["scans"].size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    SCOPED_TRACE("scan " + std::to_string(i));
+    EXPECT_EQ(j["scans"][i]["e57_scan"], i);
+    EXPECT_EQ(j["scans"][i]["output"], "site_" + std::to_string(i) + ".ply");
+    const Rigid3 got = FromJson(j["scans"][i]["world_from_scan"]);
+    EXPECT_LT((got.translation - s.truth[i].translation).norm(), 0.002);
+    EXPECT_LT(Eigen::AngleAxisd(got.rotation * s.truth[i].rotation.conjugate()).angle() / kDeg, 0.01);
+  }
+  EXPECT_TRUE(FileExists(dir.File("out/site_2.ply")));
 }
 
 TEST(RegisterScansCli, BadInputIsNamed) {

@@ -47,7 +47,8 @@ std::string CodingName(const FieldDesc& f) {
 
 class E57Reader : public PointReader {
  public:
-  E57Reader(const std::string& path, const PointReadOptions& options);
+  // only_scan >= 0: that scan alone, in its own frame (its pose not applied).
+  E57Reader(const std::string& path, const PointReadOptions& options, int only_scan = -1);
   size_t Read(size_t max_points, PointCloud* chunk) override;
 
  private:
@@ -69,9 +70,19 @@ class E57Reader : public PointReader {
   std::vector<Eigen::Vector3d> positions_;
 };
 
-E57Reader::E57Reader(const std::string& path, const PointReadOptions& options)
+E57Reader::E57Reader(const std::string& path, const PointReadOptions& options, int only_scan)
     : PointReader(path), file_(path), scalar_fields_(options.scalar_fields) {
   desc_ = e57::ParseE57Xml(path, file_.ReadXml(), file_.header().physical_length);
+  if (only_scan >= 0) {
+    if (static_cast<size_t>(only_scan) >= desc_.scans.size()) {
+      throw InputError(path, "", "has " + std::to_string(desc_.scans.size()) + " scan(s); there is no scan " +
+                                     std::to_string(only_scan));
+    }
+    ScanDesc scan = desc_.scans[static_cast<size_t>(only_scan)];
+    scan.rotation = Eigen::Quaterniond::Identity();  // its own frame
+    scan.translation.setZero();
+    desc_.scans = {scan};
+  }
   for (const ScanDesc& scan : desc_.scans) plans_.push_back(PlanScan(scan));
   BuildInfo();
   if (desc_.images > 0) {
@@ -279,6 +290,23 @@ size_t E57Reader::Read(size_t max_points, PointCloud* chunk) {
 std::unique_ptr<PointReader> OpenE57Reader(const std::string& path,
                                            const PointReadOptions& options) {
   return std::make_unique<E57Reader>(path, options);
+}
+
+std::vector<E57ScanInfo> ListE57Scans(const std::string& path) {
+  e57::PagedReader file(path);
+  const e57::FileDesc desc = e57::ParseE57Xml(path, file.ReadXml(), file.header().physical_length);
+  std::vector<E57ScanInfo> out;
+  for (const ScanDesc& scan : desc.scans) {
+    out.push_back({scan.name.empty() ? scan.guid : scan.name, scan.rotation, scan.translation,
+                   scan.record_count});
+  }
+  return out;
+}
+
+std::unique_ptr<PointReader> OpenE57ScanReader(const std::string& path, size_t scan,
+                                               const PointReadOptions& options) {
+  if (scan > 1000000000) throw InputError(path, "", "has no scan " + std::to_string(scan));
+  return std::make_unique<E57Reader>(path, options, static_cast<int>(scan));
 }
 
 }  // namespace candi::io

@@ -38,8 +38,11 @@
 // io/e57/e57_writer.h.
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "io/point_file.h"
 
@@ -47,6 +50,21 @@ namespace candi::io {
 
 std::unique_ptr<PointReader> OpenE57Reader(const std::string& path,
                                            const PointReadOptions& options = {});
+// The scans of an E57 file as its XML states them (no point is read): name (or GUID), pose (file
+// frame = rotation * scan frame + translation) and record count. InputError as the reader.
+struct E57ScanInfo {
+  std::string name;
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  uint64_t records = 0;
+};
+std::vector<E57ScanInfo> ListE57Scans(const std::string& path);
+
+// One scan of an E57 file, in the scan's own frame (its pose not applied), for registration
+// (the pose is then its start). `scan` must be below the file's scan count (InputError naming it).
+std::unique_ptr<PointReader> OpenE57ScanReader(const std::string& path, size_t scan,
+                                               const PointReadOptions& options = {});
+
 std::unique_ptr<PointWriter> OpenE57Writer(const std::string& path, const PointWriteSpec& spec,
                                            const PointWriteOptions& options = {});
 

@@ -217,6 +217,37 @@ TEST(E57Io, ScansLandInTheFileFrame) {
   }
 }
 
+TEST(E57Io, OneScanInItsOwnFrameAndThePosesListed) {
+  TempDir dir;
+  const std::string path = dir.File("two.e57");
+  const auto a = RandomPoints(200, 10.0, 5), b = RandomPoints(100, 5.0, 6);
+  E57Scan s0 = CartesianScan(a, E57FieldType::kDouble);
+  s0.translation = Eigen::Vector3d(416000, 9168000, 100);
+  E57Scan s1 = CartesianScan(b, E57FieldType::kDouble);
+  s1.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()));
+  s1.translation = Eigen::Vector3d(416010, 9168005, 101);
+  s1.name = "station 2";
+  WriteE57(path, {s0, s1});
+  const std::vector<E57ScanInfo> scans = ListE57Scans(path);
+  ASSERT_EQ(scans.size(), 2u);
+  EXPECT_EQ(scans[1].name, "station 2");
+  EXPECT_EQ(scans[1].records, 100u);
+  EXPECT_EQ(scans[0].translation, s0.translation);
+  EXPECT_LT(scans[1].rotation.angularDistance(s1.rotation), 1e-12);
+  PointCloud one;
+  auto reader = OpenE57ScanReader(path, 1);
+  EXPECT_EQ(reader->info().count, 100u);
+  reader->Read(1000, &one);
+  ASSERT_EQ(one.size(), 100u);
+  for (size_t i = 0; i < b.size(); ++i) ASSERT_LT((one.WorldPosition(i) - b[i]).norm(), 1e-12) << i;
+  try {
+    OpenE57ScanReader(path, 2);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no scan 2"), std::string::npos) << e.what();
+  }
+}
+
 TEST(E57Io, SphericalWithInvalidPointsDropped) {
   TempDir dir;
   const std::string path = dir.File("spherical.e57");
