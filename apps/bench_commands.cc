@@ -94,6 +94,7 @@ void AddCompare(Command& bench) {
   c.Option("--points", a.points, "Points in each cloud").Range(1e3, 1e9);
   c.Option("--threads", a.threads, "Thread counts, comma separated");
   c.Option("--runs", a.runs, "Runs of each setting (the median is printed)");
+  c.Option("--methods", a.methods, "Rows: c2c, m3c2 or c2c,m3c2");
   c.FlagOff("--no-cloudcompare", a.cloudcompare, "Do not time CloudCompare");
   c.Option("--work-dir", a.work_dir, "Folder for the generated clouds");
   c.Option("--seed", a.seed, "Seed of the generated clouds");

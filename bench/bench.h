@@ -100,6 +100,7 @@ struct CompareBenchOptions {
   double points = 1e6;                 // points in each cloud, [1e3, 1e9]
   std::string threads = "1,2";         // thread counts, each [1, 256]
   int runs = 3;                        // the median of runs is printed, [1, 100]
+  std::string methods = "c2c,m3c2";    // which rows: c2c, m3c2 or both
   bool cloudcompare = true;            // also time CloudCompare (skipped when not installed)
   std::string work_dir = "candi-bench-compare";
   uint64_t seed = 1;

@@ -111,6 +111,19 @@ Errors Score(const compare::DeviationResult& r, const Scene& s) {
   return e;
 }
 
+std::vector<std::string> SplitList(const std::string& text) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (!item.empty()) out.push_back(item);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
@@ -174,6 +187,16 @@ int RunCompareBench(const CompareBenchOptions& a) {
   std::printf("error: RMS of (distance - truth) away from the disc's rim (C2C: against |truth|); "
               "M3C2 with max depth 0.05 m\n\n");
 
+  bool want_c2c = false, want_m3c2 = false;
+  for (const std::string& m : SplitList(a.methods)) {
+    if (m == "c2c") {
+      want_c2c = true;
+    } else if (m == "m3c2") {
+      want_m3c2 = true;
+    } else {
+      throw std::invalid_argument("--methods: '" + m + "'; each must be c2c or m3c2");
+    }
+  }
   std::vector<Setting> settings;
   auto add = [&](const std::string& name, compare::Method m, int thin = 1) {
     Setting st;
@@ -206,6 +229,11 @@ int RunCompareBench(const CompareBenchOptions& a) {
     o->m3c2.projection_scale = 0.12;
   }
 
+  settings.erase(std::remove_if(settings.begin(), settings.end(),
+                                [&](const Setting& st) {
+                                  return st.options.method == compare::Method::kC2C ? !want_c2c : !want_m3c2;
+                                }),
+                 settings.end());
   std::printf("%-36s", "setting");
   for (int t : threads) std::printf(" %8s", (std::to_string(t) + " thr s").c_str());
   std::printf(" %10s %9s %12s %12s %10s\n", "M pts/s", "RMS mm", "in disc mm", "outside mm", "undefined");

@@ -119,19 +119,19 @@ void Finish(DeviationResult& result, uint64_t not_finite, double gap,
 
 namespace {
 
-using internal::KdTree;
-using internal::Points;
+using internal::PointTree;
+using Points = std::vector<Eigen::Vector3d>;
 
 // The reference's finite points about `origin`, in Morton order (internal::MortonOrder); the
 // count left out goes to `dropped`.
 Points FinitePoints(const PointCloud& cloud, const Eigen::Vector3d& origin, uint64_t& dropped) {
   const std::vector<Eigen::Vector3d> relative = internal::RelativePositions(cloud, origin);
   Points out;
-  out.points.reserve(cloud.size());
+  out.reserve(cloud.size());
   dropped = 0;
   for (uint32_t i : internal::MortonOrder(relative)) {
     if (relative[i].allFinite()) {
-      out.points.push_back(relative[i]);
+      out.push_back(relative[i]);
     } else {
       ++dropped;
     }
@@ -145,7 +145,7 @@ struct PreparedClouds {
   std::vector<Eigen::Vector3d> compared;
   uint64_t compared_not_finite = 0;
   double gap = 0;
-  std::unique_ptr<KdTree> tree;
+  std::unique_ptr<PointTree> tree;
 };
 
 PreparedClouds Prepare(const PointCloud& reference, const PointCloud& compared,
@@ -159,7 +159,7 @@ PreparedClouds Prepare(const PointCloud& reference, const PointCloud& compared,
   p.origin = internal::CommonOrigin(internal::FiniteWorldBounds(reference));
   uint64_t dropped = 0;
   p.reference = FinitePoints(reference, p.origin, dropped);
-  if (p.reference.points.empty()) {
+  if (p.reference.empty()) {
     throw InputError(reference_name, "", "no point has a finite position");
   }
   if (dropped > 0) {
@@ -170,7 +170,7 @@ PreparedClouds Prepare(const PointCloud& reference, const PointCloud& compared,
   for (const auto& q : p.compared) p.compared_not_finite += q.allFinite() ? 0 : 1;
   p.gap = internal::BoxGap(internal::FiniteWorldBounds(reference),
                            internal::FiniteWorldBounds(compared));
-  p.tree = internal::BuildTree(p.reference);
+  p.tree = std::make_unique<PointTree>(p.reference);
   return p;
 }
 
@@ -225,28 +225,6 @@ double QuadricDistance(const Pca& pca, const std::vector<Eigen::Vector3d>& pts,
   return scale * std::abs(w - f) / std::sqrt(1 + fu * fu + fv * fv);
 }
 
-// A nanoflann result set for the one nearest point, its search bounded from the start by a
-// known point's squared distance (ties keep the known point). Exact: a point at that distance
-// exists, so the nearest is never farther.
-class Nearest {
- public:
-  Nearest(double bound_sq, int64_t index) : worst_(bound_sq), index_(index) {}
-  bool addPoint(double dist_sq, uint32_t index) {
-    if (dist_sq < worst_) {
-      worst_ = dist_sq;
-      index_ = index;
-    }
-    return true;
-  }
-  double worstDist() const { return worst_; }
-  bool full() const { return index_ >= 0; }
-  int64_t index() const { return index_; }
-
- private:
-  double worst_;
-  int64_t index_;
-};
-
 DeviationResult CloudToCloud(const DeviationOptions& options, PreparedClouds& p,
                              const ProgressCallback& progress) {
   const C2cOptions& o = options.c2c;
@@ -257,7 +235,7 @@ DeviationResult CloudToCloud(const DeviationOptions& options, PreparedClouds& p,
   const size_t k = o.local_model == LocalModel::kNone
                        ? 1
                        : std::min<size_t>(static_cast<size_t>(o.model_neighbours),
-                                          p.reference.points.size());
+                                          p.reference.size());
   std::atomic<uint64_t> fallbacks{0};
   const std::vector<uint32_t> order = internal::MortonOrder(p.compared);
   ForEachBlock(options.threads, n, internal::kBlock, progress, [&](size_t begin, size_t end) {
@@ -273,20 +251,16 @@ DeviationResult CloudToCloud(const DeviationOptions& options, PreparedClouds& p,
       size_t got = 1;
       if (k == 1) {
         // The previous query's nearest point bounds this one's search (the queries go along a
-        // Z-order curve, so it is near): the same answer, fewer nodes visited.
-        Nearest nearest(hint < 0 ? std::numeric_limits<double>::infinity()
-                                 : (q - p.reference.points[static_cast<size_t>(hint)]).squaredNorm(),
-                        hint);
-        p.tree->findNeighbors(nearest, q.data(), nanoflann::SearchParams());
-        index[0] = static_cast<uint32_t>(nearest.index());
-        hint = nearest.index();
+        // Z-order curve, so it is near): the same distance, fewer nodes visited.
+        hint = p.tree->Nearest(q, hint);
+        index[0] = static_cast<uint32_t>(hint);
       } else {
-        got = p.tree->knnSearch(q.data(), k, index.data(), dist_sq.data());
+        got = p.tree->Knn(q, k, index.data(), dist_sq.data());
       }
-      double d = (q - p.reference.points[index[0]]).norm();  // not nanoflann's sum: exact
+      double d = (q - p.reference[index[0]]).norm();  // not nanoflann's sum: exact
       if (o.local_model != LocalModel::kNone && d > 0) {
         pts.clear();
-        for (size_t j = 0; j < got; ++j) pts.push_back(p.reference.points[index[j]]);
+        for (size_t j = 0; j < got; ++j) pts.push_back(p.reference[index[j]]);
         const Pca pca = PcaOf(pts);
         double model = std::numeric_limits<double>::quiet_NaN();
         if (got >= 3 && pca.Planar()) {
@@ -403,23 +377,23 @@ std::pair<double, double> AutoM3c2Scales(const PointCloud& reference) {
   uint64_t dropped = 0;
   const Points pts =
       FinitePoints(reference, internal::CommonOrigin(internal::FiniteWorldBounds(reference)), dropped);
-  if (pts.points.size() < 2) {
+  if (pts.size() < 2) {
     throw InputError("cannot choose M3C2's scales from fewer than 2 reference points; give "
                      "--normal-scale and --projection-scale");
   }
-  const auto tree = internal::BuildTree(pts);
+  const PointTree tree(pts);
   // The density from the distance r to the 16th neighbour (16 points in pi r^2 of a surface);
   // d so that a cylinder of diameter d holds ~30 reference points.
   constexpr size_t kNeighbours = 16;
   constexpr double kTarget = 30;
-  const size_t k = std::min(kNeighbours + 1, pts.points.size());
-  const size_t samples = std::min<size_t>(1000, pts.points.size());
+  const size_t k = std::min(kNeighbours + 1, pts.size());
+  const size_t samples = std::min<size_t>(1000, pts.size());
   std::vector<double> radius;
   std::vector<uint32_t> index(k);
   std::vector<double> dist_sq(k);
   for (size_t s = 0; s < samples; ++s) {
-    const size_t i = s * pts.points.size() / samples;
-    const size_t got = tree->knnSearch(pts.points[i].data(), k, index.data(), dist_sq.data());
+    const size_t i = s * pts.size() / samples;
+    const size_t got = tree.Knn(pts[i], k, index.data(), dist_sq.data());
     if (got == k && dist_sq[k - 1] > 0) radius.push_back(std::sqrt(dist_sq[k - 1]));
   }
   if (radius.empty()) {
@@ -453,7 +427,7 @@ DeviationResult CompareToCloud(const DeviationOptions& options, const PointCloud
       if (resolved.m3c2.normal_scale == 0) resolved.m3c2.normal_scale = big_d;
       if (resolved.m3c2.projection_scale == 0) resolved.m3c2.projection_scale = small_d;
     }
-    result = internal::M3c2(resolved, p.reference.points, *p.tree, p.compared, progress);
+    result = internal::M3c2(resolved, p.reference, *p.tree, p.compared, progress);
   }
   warnings.insert(warnings.end(), result.warnings.begin(), result.warnings.end());
   result.warnings = warnings;

@@ -35,12 +35,12 @@ struct AxisStats {
 };
 
 // The points of `tree` in the cylinder through q along unit n: radius r, half-length h.
-AxisStats InCylinder(const KdTree& tree, const std::vector<Eigen::Vector3d>& pts,
-                     const Eigen::Vector3d& q, const Eigen::Vector3d& n, double r, double h) {
+AxisStats InCylinder(const PointTree& tree, const Eigen::Vector3d& q, const Eigen::Vector3d& n,
+                     double r, double h) {
   AxisStats stats;
   const double r_sq = r * r;
-  ForEachWithin(tree, q, std::sqrt(r_sq + h * h), [&](uint32_t index, double dist_sq) {
-    const double t = n.dot(pts[index] - q);
+  tree.ForEachWithin(q, std::sqrt(r_sq + h * h), [&](uint32_t index, double dist_sq) {
+    const double t = n.dot(tree.point(index) - q);
     if (std::abs(t) <= h && dist_sq - t * t <= r_sq) stats.Add(t);
   });
   return stats;
@@ -48,13 +48,12 @@ AxisStats InCylinder(const KdTree& tree, const std::vector<Eigen::Vector3d>& pts
 
 // The normal at q from the reference points within `radius`: PCA's smallest direction; NaN
 // when fewer than 3 points or they define no plane (coincident or collinear).
-Eigen::Vector3d NormalAt(const KdTree& tree, const std::vector<Eigen::Vector3d>& pts,
-                         const Eigen::Vector3d& q, double radius) {
+Eigen::Vector3d NormalAt(const PointTree& tree, const Eigen::Vector3d& q, double radius) {
   size_t count = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
-  ForEachWithin(tree, q, radius, [&](uint32_t index, double) {
-    const Eigen::Vector3d d = pts[index] - q;  // about q: small numbers, no cancellation
+  tree.ForEachWithin(q, radius, [&](uint32_t index, double) {
+    const Eigen::Vector3d d = tree.point(index) - q;  // about q: small numbers, no cancellation
     ++count;
     sum += d;
     outer.noalias() += d * d.transpose();
@@ -94,7 +93,7 @@ Eigen::Vector3d Oriented(Eigen::Vector3d n, NormalOrientation o, const Eigen::Ve
 }  // namespace
 
 DeviationResult M3c2(const DeviationOptions& options, const std::vector<Eigen::Vector3d>& reference,
-                     const KdTree& reference_tree, const std::vector<Eigen::Vector3d>& compared,
+                     const PointTree& reference_tree, const std::vector<Eigen::Vector3d>& compared,
                      const ProgressCallback& progress) {
   const M3c2Options& o = options.m3c2;
   DeviationResult result;
@@ -106,15 +105,15 @@ DeviationResult M3c2(const DeviationOptions& options, const std::vector<Eigen::V
 
   // Core points in Morton order, and the compared cloud's tree over its finite points in it.
   const std::vector<uint32_t> order = MortonOrder(compared);
-  Points finite;
-  finite.points.reserve(compared.size());
+  std::vector<Eigen::Vector3d> finite;
+  finite.reserve(compared.size());
   for (uint32_t i : order) {
-    if (compared[i].allFinite()) finite.points.push_back(compared[i]);
+    if (compared[i].allFinite()) finite.push_back(compared[i]);
   }
-  if (finite.points.empty()) {
+  if (finite.empty()) {
     throw InputError("M3C2: no compared point has a finite position");
   }
-  const auto compared_tree = BuildTree(finite);
+  const PointTree compared_tree(finite);
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (const auto& p : reference) centroid += p;
   centroid /= static_cast<double>(reference.size());
@@ -135,15 +134,15 @@ DeviationResult M3c2(const DeviationOptions& options, const std::vector<Eigen::V
       const size_t i = order[j];
       const Eigen::Vector3d& q = compared[i];
       if (!q.allFinite()) continue;
-      Eigen::Vector3d normal = NormalAt(reference_tree, reference, q, 0.5 * o.normal_scale);
+      Eigen::Vector3d normal = NormalAt(reference_tree, q, 0.5 * o.normal_scale);
       if (!normal.allFinite()) {
         ++local_no_normal;
         continue;
       }
       normal = Oriented(normal, o.orientation, q, centroid);
       result.normals[i] = normal.cast<float>();
-      const AxisStats s1 = InCylinder(reference_tree, reference, q, normal, r, h);
-      const AxisStats s2 = InCylinder(*compared_tree, finite.points, q, normal, r, h);
+      const AxisStats s1 = InCylinder(reference_tree, q, normal, r, h);
+      const AxisStats s2 = InCylinder(compared_tree, q, normal, r, h);
       result.reference_count[i] = s1.n;
       result.compared_count[i] = s2.n;
       result.reference_std[i] = s1.Std();

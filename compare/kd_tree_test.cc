@@ -1,0 +1,69 @@
+#include "compare/kd_tree.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "compare/deviation_internal.h"
+#include "core/rng.h"
+
+namespace candi::compare::internal {
+namespace {
+
+// Points on a wavy surface in Morton order, cut into many parts.
+std::vector<Eigen::Vector3d> SurfacePoints(size_t n, uint64_t seed) {
+  Rng rng(seed);
+  std::vector<Eigen::Vector3d> raw;
+  for (size_t i = 0; i < n; ++i) {
+    const double x = rng.Uniform(0, 10), y = rng.Uniform(0, 10);
+    raw.emplace_back(x, y, 0.3 * std::sin(x) + 0.001 * rng.Normal());
+  }
+  std::vector<Eigen::Vector3d> sorted;
+  for (uint32_t i : MortonOrder(raw)) sorted.push_back(raw[i]);
+  return sorted;
+}
+
+TEST(PointTreeTest, PartsAnswerAsABruteForceSearch) {
+  const std::vector<Eigen::Vector3d> pts = SurfacePoints(20000, 1);
+  const PointTree tree(pts, 1000);  // 20 parts
+  Rng rng(2);
+  int64_t hint = -1;
+  for (int t = 0; t < 300; ++t) {
+    const Eigen::Vector3d q(rng.Uniform(-1, 11), rng.Uniform(-1, 11), rng.Uniform(-1, 1));
+    std::vector<std::pair<double, uint32_t>> all;
+    for (uint32_t i = 0; i < pts.size(); ++i) all.emplace_back((pts[i] - q).squaredNorm(), i);
+    std::sort(all.begin(), all.end());
+    // Nearest, without and with a hint (the previous query's answer).
+    EXPECT_EQ((pts[static_cast<size_t>(tree.Nearest(q, -1))] - q).squaredNorm(), all[0].first);
+    hint = tree.Nearest(q, hint);
+    EXPECT_EQ((pts[static_cast<size_t>(hint)] - q).squaredNorm(), all[0].first);
+    // k nearest, sorted.
+    uint32_t index[12];
+    double dist_sq[12];
+    ASSERT_EQ(tree.Knn(q, 12, index, dist_sq), 12u);
+    for (int j = 0; j < 12; ++j) {
+      EXPECT_EQ(dist_sq[j], all[static_cast<size_t>(j)].first) << j;
+      EXPECT_EQ((pts[index[j]] - q).squaredNorm(), dist_sq[j]);
+    }
+    // Every point within a radius, once.
+    const double radius = 0.3;
+    std::vector<uint32_t> within;
+    tree.ForEachWithin(q, radius, [&](uint32_t i, double) { within.push_back(i); });
+    std::sort(within.begin(), within.end());
+    EXPECT_EQ(std::adjacent_find(within.begin(), within.end()), within.end());
+    size_t expected = 0;
+    for (const auto& [d, i] : all) expected += d <= radius * radius ? 1 : 0;
+    EXPECT_EQ(within.size(), expected);
+  }
+  // Fewer points than k.
+  const std::vector<Eigen::Vector3d> few = {{0, 0, 0}, {1, 0, 0}};
+  const PointTree small(few);
+  uint32_t index[5];
+  double dist_sq[5];
+  EXPECT_EQ(small.Knn({0.2, 0, 0}, 5, index, dist_sq), 2u);
+  EXPECT_EQ(index[0], 0u);
+  EXPECT_EQ(index[1], 1u);
+}
+
+}  // namespace
+}  // namespace candi::compare::internal
