@@ -132,6 +132,7 @@ int main(int argc, char** argv) {
   // The first pair alone: candi's pairwise ICP (register) and CloudCompare's ICP, same start.
   photogrammetry::RegistrationOptions icp;
   icp.max_correspondence_distance = 1.0;
+  icp.voxel = 0.05;  // the solve on a 5 cm voxel grid (the figures on all points)
   // Both scans in world coordinates under their start poses; ICP finds the correction of scan 1.
   const PointCloud moving = photogrammetry::TransformPointCloud(start[1], clouds[1]);
   const PointCloud fixed = photogrammetry::TransformPointCloud(start[0], clouds[0]);
@@ -143,7 +144,7 @@ int main(int argc, char** argv) {
   const double pair_seconds = Seconds(t0);
   // The truth: world_from_scan1 = truth[1], so the correction applied to start[1] must give it.
   const PoseError pe = Error(pair.fixed_from_moving * start[1], truth[1]);
-  std::printf("%-34s %8s %10.1f %14.3f %14.5f\n", "candi register (pair 0-1, 1 m, 0.1 m)", "1", pair_seconds, pe.mm,
+  std::printf("%-34s %8s %10.1f %14.3f %14.5f\n", "candi register (pair 0-1, voxel 5 cm)", "1", pair_seconds, pe.mm,
               pe.deg);
   if (cloudcompare) {
     std::filesystem::create_directories(dir);

@@ -41,13 +41,14 @@ using SpanTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adapto
 
 class PointTree {
  public:
-  static constexpr size_t kPartPoints = size_t{1} << 19;  // points a part, about
+  static constexpr size_t kPartPoints = size_t{1} << 21;  // points a part, about
   static constexpr size_t kMaxParts = 64;
 
-  // `points` (finite, best in Morton order) must outlive the tree, unchanged. `part_points`
+  // `points`' elements (finite, best in Morton order) must outlive the tree, unchanged; the
+  // vector itself may be moved (the tree keeps its buffer, not the vector). `part_points`
   // (tests) sets the parts' size.
   explicit PointTree(const std::vector<Eigen::Vector3d>& points, size_t part_points = kPartPoints)
-      : points_(points) {
+      : points_(points.data()), size_(points.size()) {
     const size_t n = points.size();
     const size_t parts = std::clamp<size_t>((n + part_points - 1) / part_points, 1, kMaxParts);
     for (size_t k = 0; k <= parts; ++k) begin_.push_back(n * k / parts);
@@ -62,7 +63,7 @@ class PointTree {
     });
   }
 
-  size_t size() const { return points_.size(); }
+  size_t size() const { return size_; }
   const Eigen::Vector3d& point(size_t i) const { return points_[i]; }
 
   // The point nearest q; the search starts bounded by point `hint` (an index, or -1). Returns
@@ -189,7 +190,8 @@ class PointTree {
     return sq;
   }
 
-  const std::vector<Eigen::Vector3d>& points_;
+  const Eigen::Vector3d* points_;
+  size_t size_;
   std::vector<size_t> begin_;  // parts: [begin_[k], begin_[k + 1])
   std::vector<PointSpan> spans_;
   std::vector<Box3d> boxes_;
