@@ -95,6 +95,7 @@ void AddCompare(Command& bench) {
   c.Option("--threads", a.threads, "Thread counts, comma separated");
   c.Option("--runs", a.runs, "Runs of each setting (the median is printed)");
   c.Option("--methods", a.methods, "Rows: c2c, m3c2 or c2c,m3c2");
+  c.Flag("--quick", a.quick, "Only the first row of each method (C2C nearest point, M3C2 at its smallest scales)");
   c.FlagOff("--no-cloudcompare", a.cloudcompare, "Do not time CloudCompare");
   c.Option("--work-dir", a.work_dir, "Folder for the generated clouds");
   c.Option("--seed", a.seed, "Seed of the generated clouds");

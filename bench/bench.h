@@ -101,6 +101,7 @@ struct CompareBenchOptions {
   std::string threads = "1,2";         // thread counts, each [1, 256]
   int runs = 3;                        // the median of runs is printed, [1, 100]
   std::string methods = "c2c,m3c2";    // which rows: c2c, m3c2 or both
+  bool quick = false;                  // only the first row of each method
   bool cloudcompare = true;            // also time CloudCompare (skipped when not installed)
   std::string work_dir = "candi-bench-compare";
   uint64_t seed = 1;

@@ -234,6 +234,13 @@ int RunCompareBench(const CompareBenchOptions& a) {
                                   return st.options.method == compare::Method::kC2C ? !want_c2c : !want_m3c2;
                                 }),
                  settings.end());
+  if (a.quick) {
+    std::vector<Setting> first;
+    for (const Setting& st : settings) {
+      if (first.empty() || first.back().options.method != st.options.method) first.push_back(st);
+    }
+    settings = first;
+  }
   std::printf("%-36s", "setting");
   for (int t : threads) std::printf(" %8s", (std::to_string(t) + " thr s").c_str());
   std::printf(" %10s %9s %12s %12s %10s\n", "M pts/s", "RMS mm", "in disc mm", "outside mm", "undefined");

@@ -88,8 +88,14 @@ class PointTree {
   // (k, or fewer when the tree holds fewer).
   size_t Knn(const Eigen::Vector3d& q, size_t k, uint32_t* index, double* dist_sq) const {
     KnnSet set(k, index, dist_sq);
-    for (size_t part = 0; part < trees_.size(); ++part) {
-      if (set.count() == k && !(BoxDistSq(part, q) < set.worstDist())) continue;
+    // The parts nearest first, so that the first one searched bounds the others.
+    std::pair<double, size_t> order[kMaxParts];
+    const size_t parts = trees_.size();
+    for (size_t part = 0; part < parts; ++part) order[part] = {BoxDistSq(part, q), part};
+    std::sort(order, order + parts);
+    for (size_t j = 0; j < parts; ++j) {
+      const auto [box_sq, part] = order[j];
+      if (set.count() == k && !(box_sq < set.worstDist())) break;
       set.offset = static_cast<uint32_t>(begin_[part]);
       trees_[part]->findNeighbors(set, q.data(), nanoflann::SearchParams());
     }
