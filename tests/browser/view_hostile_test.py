@@ -53,10 +53,12 @@ class Page:
     def __init__(self, viewer, rcvbuf=None):
         self.viewer = viewer
         self.first = viewer.first_view
+        # A small receive buffer is set before connecting: shrinking it on an open connection can
+        # wedge loopback TCP (segments that carry the peer's acknowledgements dropped), so that
+        # neither side's messages arrive; the server's write deadline covers that case as well.
         self.ws = websocket.create_connection("ws://127.0.0.1:%d/ws?token=%s" % (viewer.port, viewer.token),
-                                              timeout=HANG)
-        if rcvbuf:
-            self.ws.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
+                                              timeout=HANG,
+                                              sockopt=((socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf),) if rcvbuf else ())
         self.frames = {}     # seq -> (header, arrival time) of its first frame
         self.converged = set()  # seqs whose converged frame arrived
         self.texts = []      # (parsed reply, arrival time)
