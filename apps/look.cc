@@ -16,6 +16,7 @@
 #include "apps/commands.h"
 #include "apps/failure.h"
 #include "core/atomic_file.h"
+#include "core/field_colour.h"
 #include "core/check.h"
 #include "core/interrupt.h"
 #include "core/log.h"
@@ -52,6 +53,38 @@ void AddClip(Command& c, ClipArgs& clip) {
            "(world coordinates; repeat for several)").Repeatable();
 }
 
+// --colour-by, --field-range and --field-scale: points coloured by a scalar field.
+struct FieldArgs {
+  std::string field, range, scale = "auto";
+};
+
+void AddFieldColouring(Command& c, FieldArgs& f) {
+  c.Option("--colour-by", f.field, "Colour the points by a scalar field (e.g. distance from candi compare, "
+           "intensity, classification; elevation: world z); the image gets a legend");
+  c.Option("--field-range", f.range, "With --colour-by: the range lo,hi of the scale; values outside are grey "
+           "(default: from the values' 2nd-98th percentiles, symmetric about 0 on a diverging scale)");
+  c.Option("--field-scale", f.scale, "With --colour-by: auto, diverging (signed, e.g. deviations), sequential or "
+           "classes (LAS classes)");
+}
+
+FieldColouring ParseFieldColouring(const FieldArgs& f) {
+  FieldColouring c;
+  if (f.field.empty()) {
+    if (!f.range.empty() || f.scale != "auto") throw std::invalid_argument("--field-range and --field-scale need --colour-by");
+    return c;
+  }
+  c.field = f.field;
+  c.scale = ParseFieldScale(f.scale);
+  if (!f.range.empty()) {
+    const std::vector<double> v = ParseNumbers(f.range, ',', "--field-range");
+    if (v.size() != 2) throw std::invalid_argument("--field-range '" + f.range + "': expected lo,hi");
+    c.lo = v[0];
+    c.hi = v[1];
+  }
+  c.Check();
+  return c;
+}
+
 // --up, --from and --cameras: the default view's orientation.
 struct OrientationArgs {
   std::string up, from, cameras;
@@ -86,6 +119,7 @@ struct RenderArgs {
   double chunk_budget_mb = 256;        // archive input: chunks mapped at once (8 bytes a point)
   OrientationArgs orientation;
   ClipArgs clip;
+  FieldArgs field;
 };
 
 // -1: automatic; otherwise the gain.
@@ -105,6 +139,7 @@ pipeline::RenderOptions RenderOptionsOf(const RenderArgs& a) {
   ParseSize(a.size, "--size", &o.width, &o.height);
   o.background = ParseColour(a.background, "--background");
   o.brightness = ParseBrightness(a.brightness);
+  o.colour_by = ParseFieldColouring(a.field);
   if (!o.alpha.empty() && o.alpha.size() != 1 && o.alpha.size() != a.inputs.size()) {
     throw std::invalid_argument("--alpha: give one value, or one per input (" + std::to_string(a.inputs.size()) + ")");
   }
@@ -241,6 +276,7 @@ void AddRender(Command& root) {
   c.Option("--cameras", a.orientation.cameras, "Without --view: a COLMAP model (e.g. WORK/sparse/0) whose frame the "
            "points are in: up and the viewing side from its cameras");
   AddClip(c, a.clip);
+  AddFieldColouring(c, a.field);
   c.Run([&a] { return RunRender(a); });
   c.Footer("Example: candi render building.ply foundation.ply -o site.png -L 100 --alpha 0.3,0.8");
 }

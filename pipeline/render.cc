@@ -12,6 +12,7 @@
 #include "io/point_io.h"
 #include "reconstruction/photogrammetry/colmap_model.h"
 #include "render/archive_render.h"
+#include "render/legend.h"
 #include "render/spbr_stream.h"
 #include "render/splat_cloud.h"
 #include "render/view_json.h"
@@ -74,6 +75,18 @@ RenderedImage RenderOwnedClouds(const RenderOptions& o, std::vector<PointCloud>*
   RenderedImage image;
   image.mode = "memory";
   image.world_camera = WorldCamera(o, world);
+  if (o.colour_by.active()) {  // one legend over every input, before opacity control copies points
+    std::vector<std::vector<double>> values;
+    std::vector<const std::vector<double>*> pointers;
+    for (size_t k = 0; k < clouds->size(); ++k) values.push_back(FieldValues((*clouds)[k], o.colour_by.field, names[k]));
+    for (const auto& v : values) pointers.push_back(&v);
+    image.legend = ResolveFieldColouring(o.colour_by, pointers);
+    for (size_t k = 0; k < clouds->size(); ++k) ColourByField(*image.legend, values[k], &(*clouds)[k]);
+    LogInfo("coloured by " + o.colour_by.field + " (" + FieldScaleName(image.legend->scale) + ", " +
+            FormatDouble(image.legend->lo) + " to " + FormatDouble(image.legend->hi) + "): " +
+            std::to_string(image.legend->outside) + " points outside the range, " +
+            std::to_string(image.legend->undefined) + " undefined (grey)");
+  }
   // Opacity control sees the whole cloud (its density does not depend on the clipping); the
   // clipping then removes points, as the archive renderer skips them.
   for (size_t k = 0; k < clouds->size() && !o.alpha.empty(); ++k) {
@@ -182,7 +195,7 @@ RenderedImage RenderFilesStreaming(const RenderOptions& o, const std::vector<std
 
 bool Streams(const RenderOptions& o, const std::vector<std::string>& files) {
   if (o.mode != RenderMode::kAuto) return o.mode == RenderMode::kStream;
-  if (!o.alpha.empty()) return false;
+  if (!o.alpha.empty() || o.colour_by.active()) return false;
   uint64_t stated = 0;
   for (const std::string& in : files) {
     io::PointReadOptions read;
@@ -205,6 +218,10 @@ void RenderOptions::Check() const {
   CANDI_CHECK_OPTION(!(opaque && !alpha.empty()), opaque, "false when alpha is given (they exclude each other)");
   CANDI_CHECK_OPTION(!(mode == RenderMode::kStream && !alpha.empty()), alpha,
                      "empty in stream mode (opacity control needs the whole cloud)");
+  colour_by.Check();
+  if (mode == RenderMode::kStream && colour_by.active()) {
+    throw std::invalid_argument("colouring by a field needs memory mode: stream mode reads no scalar fields");
+  }
   CANDI_CHECK_OPTION_IN(threads, 0, 256);
   CANDI_CHECK_OPTION(point_size >= 1 && point_size <= 64, point_size, "in [1, 64]");
   CANDI_CHECK_OPTION_GE(preview, 0);
@@ -266,6 +283,10 @@ RenderedImage RenderArchiveEnsembles(const RenderOptions& o, const render::Archi
   o.Check();
   if (!o.alpha.empty()) {
     throw std::invalid_argument("--alpha needs point files: an archive holds one copy per point");
+  }
+  if (o.colour_by.active()) {
+    throw std::invalid_argument("colouring by a field needs point files: an archive holds the points' colours, "
+                                "not their fields");
   }
   const render::ArchiveManifest& m = archive.manifest();
   RenderedImage image;
@@ -341,7 +362,15 @@ double WriteRender(const RenderOptions& o, const RenderedImage& image, const Ren
     }
     text["candi:layer_shares"] = shares;
   }
-  io::WritePng(out.png, render::ToImage8(average), text);
+  Image8 image8 = render::ToImage8(average);
+  if (image.legend) {
+    const FieldLegend& l = *image.legend;
+    text["candi:colour_by"] = l.field + " " + FieldScaleName(l.scale) + " " + FormatDouble(l.lo) + " " +
+                              FormatDouble(l.hi) + " outside " + std::to_string(l.outside) + " undefined " +
+                              std::to_string(l.undefined);
+    if (!render::DrawFieldLegend(l, &image8)) LogWarning("the image is too small for the legend: drawn without it");
+  }
+  io::WritePng(out.png, image8, text);
   if (!out.png16.empty()) io::WritePng(out.png16, render::ToImage16(average), text);
   if (!out.save_view.empty()) render::SaveView(out.save_view, image.world_camera);
   return gain;

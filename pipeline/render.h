@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/clip.h"
+#include "core/field_colour.h"
 #include "core/point_cloud.h"
 #include "core/progress.h"
 #include "io/image/png_io.h"
@@ -55,6 +56,9 @@ struct RenderOptions {
   std::vector<std::pair<std::string, double>> layer_shares;
   std::optional<render::Camera> view;  // world coordinates; none: the default view of the data
   render::Orientation orientation;     // the default view's up and side
+  // Points coloured by a scalar field (point files and clouds, drawn in memory: stream mode and
+  // archives hold no fields); the 8-bit image then carries the legend.
+  FieldColouring colour_by;
   void Check() const;
 };
 
@@ -63,6 +67,7 @@ struct RenderedImage {
   render::SpbrResult result;
   render::Camera world_camera;
   std::string mode;              // "memory", "stream", "archive" (recorded in the PNG)
+  std::optional<FieldLegend> legend;  // the colouring by a field, when options.colour_by asked
 };
 
 // The local density a point cloud's opacity control needs does not depend on the view: renders
@@ -108,7 +113,8 @@ struct RenderOutputs {
 };
 
 // The average image (brightness applied) written as PNG with its provenance text; returns the
-// gain used.
+// gain used. A field colouring's legend is drawn into the 8-bit PNG (the 16-bit one, for
+// analysis, holds the render alone) and stated in the PNG's text.
 double WriteRender(const RenderOptions& options, const RenderedImage& image, const RenderOutputs& outputs);
 
 }  // namespace candi::pipeline

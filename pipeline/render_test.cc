@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "core/check.h"
 #include "io/point_io.h"
 #include "render/archive_pack.h"
@@ -126,6 +128,72 @@ TEST(WriteRender, ThePngAndItsProvenanceAndTheViewToRepeatIt) {
   again.brightness = 1.25;
   again.view = render::LoadView(out.save_view);
   EXPECT_TRUE(RenderPointFiles(again, files).result.sums == image.result.sums);
+}
+
+TEST(RenderPointFiles, ColouredByAFieldWithItsLegendInThePng) {
+  // A sheet at survey coordinates whose field runs from -1 (west) to +1 (east), one point NaN.
+  TempDir dir;
+  PointCloud sheet = Sheets()[0];
+  const int k = sheet.AddScalarField("distance");
+  const Box3d box = sheet.LocalBounds();
+  for (size_t i = 0; i < sheet.size(); ++i) {
+    sheet.scalars[k].Set(i, 2 * (sheet.positions[i].x() - box.min.x()) / (box.max.x() - box.min.x()) - 1);
+  }
+  sheet.scalars[k].Set(0, std::numeric_limits<double>::quiet_NaN());
+  const std::string file = dir.File("sheet.ply");
+  io::WritePointCloud(file, sheet);
+  RenderOptions o = Small();
+  o.width = 640;
+  o.height = 480;
+  o.opaque = true;
+  o.view = render::Camera();
+  const Eigen::Vector3d centre = sheet.frame.origin + box.Center();  // the 8 x 6 m sheet fills most of the view
+  o.view->eye = centre + Eigen::Vector3d(0, 0, 12);
+  o.view->target = centre;
+  o.view->up = Eigen::Vector3d::UnitY();
+  o.view->width = 640;
+  o.view->height = 480;
+  o.colour_by.field = "distance";
+  o.colour_by.lo = -1;
+  o.colour_by.hi = 1;
+  const RenderedImage image = RenderPointFiles(o, {file});
+  ASSERT_TRUE(image.legend.has_value());
+  EXPECT_EQ(image.legend->scale, FieldScale::kDiverging);
+  EXPECT_EQ(image.legend->undefined, 1u);
+  RenderOutputs out;
+  out.png = dir.File("coloured.png");
+  WriteRender(o, image, out);
+  const io::PngImage png = io::ReadPng(out.png);
+  EXPECT_EQ(png.text.at("candi:colour_by").rfind("distance diverging -1 1", 0), 0u) << png.text.at("candi:colour_by");
+  // The west of the sheet blue, the east red (above the legend, which sits bottom left).
+  const Image8& im = png.image8;
+  auto mean = [&](int x0, int x1, int c) {
+    double sum = 0;
+    int n = 0;
+    for (int y = 100; y < 220; ++y) {
+      for (int x = x0; x < x1; ++x, ++n) sum += im.at(x, y, c);
+    }
+    return sum / n;
+  };
+  EXPECT_GT(mean(110, 210, 2), 1.5 * mean(110, 210, 0));  // blue
+  EXPECT_GT(mean(430, 530, 0), 1.5 * mean(430, 530, 2));  // red
+  // The legend: the scale's deep blue and red at the bottom left, where the sheet is not.
+  int legend_blue = 0;
+  for (int y = 430; y < 470; ++y) {  // below the sheet
+    for (int x = 0; x < 200; ++x) legend_blue += im.at(x, y, 2) > im.at(x, y, 0) + 80;
+  }
+  EXPECT_GT(legend_blue, 50);
+  // A field the file lacks, stream mode and an archive are refused, naming why.
+  o.colour_by.field = "lod95";
+  try {
+    RenderPointFiles(o, {file});
+    FAIL() << "no error for a missing field";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("lod95"), std::string::npos) << e.what();
+  }
+  o.colour_by.field = "distance";
+  o.mode = RenderMode::kStream;
+  EXPECT_THROW(RenderPointFiles(o, {file}), std::invalid_argument);
 }
 
 }  // namespace

@@ -1,0 +1,154 @@
+#include "core/field_colour.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/check.h"
+
+namespace candi {
+namespace {
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+PointCloud CloudWithField(const std::vector<double>& values, const std::string& name = "distance") {
+  PointCloud cloud;
+  cloud.frame.origin = Eigen::Vector3d(416000, 9168000, 200);
+  cloud.Resize(values.size());
+  const int k = cloud.AddScalarField(name, ScalarType::kFloat64);
+  for (size_t i = 0; i < values.size(); ++i) {
+    cloud.positions[i] = Eigen::Vector3d(i * 0.01, 0, 0.001 * i);
+    cloud.scalars[k].Set(i, values[i]);
+  }
+  return cloud;
+}
+
+TEST(FieldColour, AutoDivergingRangeIsSymmetricAndCountsOutsideAndUndefined) {
+  std::vector<double> v;
+  for (int i = -500; i <= 500; ++i) v.push_back(i * 1e-5);  // +-5 mm
+  v.push_back(0.5);                                         // one far outlier
+  v.push_back(kNaN);
+  const PointCloud cloud = CloudWithField(v);
+  const std::vector<double> values = FieldValues(cloud, "distance", "a.ply");
+  FieldColouring c;
+  c.field = "distance";
+  const FieldLegend legend = ResolveFieldColouring(c, {&values});
+  EXPECT_EQ(legend.scale, FieldScale::kDiverging);
+  EXPECT_DOUBLE_EQ(legend.lo, -legend.hi);
+  EXPECT_NEAR(legend.hi, 0.0049, 0.0002);  // the 98th percentile of |v|, not the outlier
+  EXPECT_EQ(legend.count, v.size());
+  EXPECT_EQ(legend.undefined, 1u);
+  EXPECT_GE(legend.outside, 1u);
+  EXPECT_LE(legend.outside, 25u);
+  EXPECT_TRUE(legend.Colour(0.5) == kOutOfRangeGrey);
+  EXPECT_TRUE(legend.Colour(kNaN) == kOutOfRangeGrey);
+  EXPECT_TRUE(legend.Colour(0.0) == DivergingColour(0.0));
+  // Negative is blue, positive red.
+  EXPECT_GT(legend.Colour(-0.004).b, legend.Colour(-0.004).r);
+  EXPECT_GT(legend.Colour(0.004).r, legend.Colour(0.004).b);
+}
+
+TEST(FieldColour, GivenRangeAndScaleAreKept) {
+  const PointCloud cloud = CloudWithField({1, 2, 3, 4, 5}, "intensity");
+  const std::vector<double> values = FieldValues(cloud, "intensity", "a.las");
+  FieldColouring c;
+  c.field = "intensity";
+  c.lo = 2;
+  c.hi = 4;
+  const FieldLegend legend = ResolveFieldColouring(c, {&values});
+  EXPECT_EQ(legend.scale, FieldScale::kSequential);  // one sign: sequential
+  EXPECT_EQ(legend.lo, 2);
+  EXPECT_EQ(legend.hi, 4);
+  EXPECT_EQ(legend.outside, 2u);
+  EXPECT_TRUE(legend.Colour(2) == SequentialColour(0));
+  EXPECT_TRUE(legend.Colour(4) == SequentialColour(1));
+}
+
+TEST(FieldColour, ElevationIsWorldZAtSurveyCoordinates) {
+  const PointCloud cloud = CloudWithField({0, 0, 0});
+  const std::vector<double> z = FieldValues(cloud, "elevation", "a.ply");
+  ASSERT_EQ(z.size(), 3u);
+  EXPECT_DOUBLE_EQ(z[0], 200.0);
+  EXPECT_NEAR(z[2], 200.002, 1e-12);
+  FieldColouring c;
+  c.field = "elevation";
+  const FieldLegend legend = ResolveFieldColouring(c, {&z});
+  EXPECT_EQ(legend.scale, FieldScale::kSequential);
+  EXPECT_LT(legend.lo, legend.hi);
+  EXPECT_GE(legend.lo, 200.0);
+  EXPECT_LE(legend.hi, 200.002);
+}
+
+TEST(FieldColour, ClassesArePaletteColoursWithThePresentClassesListed) {
+  const PointCloud cloud = CloudWithField({2, 6, 6, 2, 9, 42}, "classification");
+  const std::vector<double> v = FieldValues(cloud, "classification", "a.las");
+  FieldColouring c;
+  c.field = "classification";
+  const FieldLegend legend = ResolveFieldColouring(c, {&v});
+  EXPECT_EQ(legend.scale, FieldScale::kClasses);
+  EXPECT_EQ(legend.classes, (std::vector<int>{2, 6, 9, 42}));
+  EXPECT_TRUE(legend.Colour(2) == ClassColour(2));
+  EXPECT_FALSE(ClassColour(2) == ClassColour(6));
+  EXPECT_EQ(ClassName(6), "building");
+  EXPECT_EQ(ClassName(42), "class 42");
+  EXPECT_EQ(legend.outside, 0u);
+}
+
+TEST(FieldColour, ColourByFieldAddsColoursToACloudWithout) {
+  PointCloud cloud = CloudWithField({-1, 0, 1, kNaN});
+  ASSERT_FALSE(cloud.schema.colors);
+  const std::vector<double> v = FieldValues(cloud, "distance", "a.ply");
+  FieldColouring c;
+  c.field = "distance";
+  c.lo = -1;
+  c.hi = 1;
+  const FieldLegend legend = ResolveFieldColouring(c, {&v});
+  ColourByField(legend, v, &cloud);
+  ASSERT_TRUE(cloud.schema.colors);
+  cloud.CheckConsistent();
+  EXPECT_TRUE(cloud.colors[0] == DivergingColour(-1));
+  EXPECT_TRUE(cloud.colors[2] == DivergingColour(1));
+  EXPECT_TRUE(cloud.colors[3] == kOutOfRangeGrey);
+}
+
+TEST(FieldColour, DegenerateValuesGiveAUsableRange) {
+  for (const std::vector<double>& v : {std::vector<double>{}, std::vector<double>{kNaN, kNaN},
+                                       std::vector<double>{0, 0, 0}, std::vector<double>{7, 7}}) {
+    FieldColouring c;
+    c.field = "f";
+    const FieldLegend legend = ResolveFieldColouring(c, {&v});
+    EXPECT_TRUE(std::isfinite(legend.lo) && std::isfinite(legend.hi));
+    EXPECT_LT(legend.lo, legend.hi);
+    for (double x : v) {
+      if (std::isfinite(x)) {
+        EXPECT_FALSE(legend.Colour(x) == kOutOfRangeGrey) << x;
+      }
+    }
+  }
+}
+
+TEST(FieldColour, BadInputIsNamed) {
+  const PointCloud cloud = CloudWithField({1, 2}, "distance");
+  try {
+    FieldValues(cloud, "lod95", "scan.ply");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("scan.ply"), std::string::npos) << what;
+    EXPECT_NE(what.find("lod95"), std::string::npos) << what;
+    EXPECT_NE(what.find("distance"), std::string::npos) << what;  // what it has
+  }
+  FieldColouring c;
+  c.field = "distance";
+  c.lo = 1;
+  EXPECT_THROW(c.Check(), std::invalid_argument);  // one end only
+  c.hi = 1;
+  EXPECT_THROW(c.Check(), std::invalid_argument);  // empty range
+  c.hi = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(c.Check(), std::invalid_argument);
+  EXPECT_THROW(ParseFieldScale("rainbow"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace candi
