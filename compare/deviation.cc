@@ -14,6 +14,7 @@
 #include "compare/deviation_internal.h"
 #include "compare/kd_tree.h"
 #include "core/check.h"
+#include "core/morton.h"
 #include "core/parallel.h"
 #include "core/text_format.h"
 
@@ -54,24 +55,13 @@ std::vector<uint32_t> MortonOrder(const std::vector<Eigen::Vector3d>& points) {
   std::vector<std::pair<uint64_t, uint32_t>> keys(points.size());
   const Eigen::Vector3d extent = box.IsEmpty() ? Eigen::Vector3d::Ones() : box.Extent();
   const double scale = ((1u << 21) - 1) / std::max({extent.x(), extent.y(), extent.z(), 1e-300});
-  // Spreads 21 bits to every third bit.
-  auto spread = [](uint64_t v) {
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffULL;
-    v = (v | v << 16) & 0x1f0000ff0000ffULL;
-    v = (v | v << 8) & 0x100f00f00f00f00fULL;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-    v = (v | v << 2) & 0x1249249249249249ULL;
-    return v;
-  };
   ForEachBlock(0, points.size(), 1 << 16, nullptr, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       const Eigen::Vector3d& p = points[i];
       uint64_t code = ~uint64_t{0};  // not finite: last
       if (p.allFinite()) {
         const Eigen::Vector3d q = (p - box.min) * scale;
-        code = spread(static_cast<uint64_t>(q.x())) | spread(static_cast<uint64_t>(q.y())) << 1 |
-               spread(static_cast<uint64_t>(q.z())) << 2;
+        code = MortonCode21(static_cast<uint64_t>(q.x()), static_cast<uint64_t>(q.y()), static_cast<uint64_t>(q.z()));
       }
       keys[i] = {code, static_cast<uint32_t>(i)};
     }

@@ -42,7 +42,7 @@ __attribute__((always_inline)) inline void EncodeRun(const ChunkQuantizer& q, co
   }
 }
 
-// Spread(quantized coordinate) of c[0, m) on one axis, position(c) as Position gives it, then
+// MortonSpread21(quantized coordinate) of c[0, m) on one axis, position(c) as Position gives it, then
 // Quantize's operations on doubles.
 template <typename T, typename Position>
 __attribute__((always_inline)) inline void SpreadAxis(const T* __restrict c, size_t m, Position position, double lo,
@@ -52,7 +52,7 @@ __attribute__((always_inline)) inline void SpreadAxis(const T* __restrict c, siz
     double v = (position(c[i]) - lo) * scale;
     v = v < 0.0 ? 0.0 : v;  // std::clamp(v, 0.0, top)
     v = top < v ? top : v;
-    out[i] = Spread(static_cast<uint64_t>(static_cast<int32_t>(v)));
+    out[i] = MortonSpread21(static_cast<uint64_t>(static_cast<int32_t>(v)));
   }
 }
 

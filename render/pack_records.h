@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 
 #include "core/check.h"
+#include "core/morton.h"
 #include "io/las/las_columns.h"
 #include "render/archive.h"
 
@@ -70,16 +71,6 @@ static_assert(sizeof(LasPoint) == 16, "LasPoint must be 16 bytes");
 
 constexpr int kMortonBits = 21;  // per axis; 63-bit codes, 21 levels of 3 bits
 
-inline uint64_t Spread(uint64_t v) {  // 21 bits -> every third bit
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffULL;
-  v = (v | v << 16) & 0x1f0000ff0000ffULL;
-  v = (v | v << 8) & 0x100f00f00f00f00fULL;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-  v = (v | v << 2) & 0x1249249249249249ULL;
-  return v;
-}
-
 struct MortonGrid {
   Eigen::Vector3d min, scale;  // cells per metre
   // The point's cell on each axis: 21 bits.
@@ -90,7 +81,7 @@ struct MortonGrid {
   uint64_t Code(const Eigen::Vector3d& p) const {
     uint64_t q[3];
     Quantize(p, q);
-    return Spread(q[0]) | Spread(q[1]) << 1 | Spread(q[2]) << 2;
+    return MortonCode21(q[0], q[1], q[2]);
   }
 };
 
