@@ -60,7 +60,7 @@ struct FieldArgs {
 
 void AddFieldColouring(Command& c, FieldArgs& f) {
   c.Option("--colour-by", f.field, "Colour the points by a scalar field (e.g. distance from candi compare, "
-           "intensity, classification; elevation: world z); the image gets a legend");
+           "intensity, classification; elevation: world z), with a legend of the scale");
   c.Option("--field-range", f.range, "With --colour-by: the range lo,hi of the scale; values outside are grey "
            "(default: from the values' 2nd-98th percentiles, symmetric about 0 on a diverging scale)");
   c.Option("--field-scale", f.scale, "With --colour-by: auto, diverging (signed, e.g. deviations), sequential or "
@@ -290,6 +290,7 @@ struct ViewArgs {
   OrientationArgs orientation;
   std::string columns;              // XYZ/PTS inputs
   ClipArgs clip;                    // the clipping the page starts with
+  FieldArgs field;                  // point files: coloured by a field
 };
 
 // The source to show: a build directory or an archive opened, or point files packed into a
@@ -307,7 +308,12 @@ struct OpenedSource {
 
 void OpenSource(const ViewArgs& a, const render::Orientation& orientation, OpenedSource* opened) {
   std::error_code ec;
+  const FieldColouring colour_by = ParseFieldColouring(a.field);
   if (a.inputs.size() == 1 && fs::is_directory(a.inputs[0], ec)) {
+    if (colour_by.active()) {
+      throw std::invalid_argument("--colour-by needs point files: " + a.inputs[0] +
+                                  " is an archive or a build, which holds the points' colours, not their fields");
+    }
     opened->source = view::OpenViewerSource(a.inputs[0], orientation);
     return;
   }
@@ -315,7 +321,7 @@ void OpenSource(const ViewArgs& a, const render::Orientation& orientation, Opene
     if (fs::is_directory(in, ec)) throw std::invalid_argument(in + " is a directory: open it alone");
   }
   ConsoleProgress progress("view: packing " + std::to_string(a.inputs.size()) + " point file(s)");
-  opened->source = view::PackViewerSource(a.inputs, a.columns, orientation, progress.Callback());
+  opened->source = view::PackViewerSource(a.inputs, a.columns, orientation, progress.Callback(), colour_by);
   progress.Finish();
   opened->temporary = RegisterTempPath(opened->source.temporary_dir);  // removed on Ctrl-C, or on exit
 }
@@ -412,6 +418,7 @@ void AddView(Command& root) {
   c.Option("--section-max-points", a.server.section_max_points, "The most points an exported slab may hold "
            "(default 20000000)");
   AddClip(c, a.clip);
+  AddFieldColouring(c, a.field);
   c.Run([&a] { return RunView(a); });
   c.Footer("Example: candi view borobudur_out/   (then open the printed http://127.0.0.1:8765/?token=... address)");
 }

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
@@ -149,6 +150,34 @@ ViewerSource FromBuild(const fs::path& dir, const render::Orientation& orientati
 
 }  // namespace
 
+namespace {
+
+std::string Hex(Rgb8 c) {
+  char text[8];
+  std::snprintf(text, sizeof(text), "#%02x%02x%02x", c.r, c.g, c.b);
+  return text;
+}
+
+// The legend as the page draws it: the scale's colours at 11 evenly spaced values (or the classes
+// with their colours and names), the range, and the grey's counts.
+json LegendJson(const FieldLegend& l) {
+  json j = {{"field", l.field}, {"scale", FieldScaleName(l.scale)}, {"lo", l.lo}, {"hi", l.hi},
+            {"count", l.count}, {"outside", l.outside}, {"undefined", l.undefined},
+            {"grey", Hex(kOutOfRangeGrey)}};
+  if (l.scale == FieldScale::kClasses) {
+    json classes = json::array();
+    for (int c : l.classes) classes.push_back({{"code", c}, {"name", ClassName(c)}, {"colour", Hex(ClassColour(c))}});
+    j["classes"] = classes;
+  } else {
+    json stops = json::array();
+    for (int i = 0; i <= 10; ++i) stops.push_back(Hex(l.Colour(l.lo + (l.hi - l.lo) * i / 10.0)));
+    j["stops"] = stops;
+  }
+  return j;
+}
+
+}  // namespace
+
 std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
   // The archive's layers (what the page can show and hide), with what the build says of each.
   json layers_json = json::array();
@@ -185,6 +214,7 @@ std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
               {"seed", settings.seed},
               {"clip", ClipPlaneArrays(settings.clip)}}}};
   if (!provenance_json.empty()) s["provenance"] = json::parse(provenance_json);
+  if (legend) s["legend"] = LegendJson(*legend);
   return s.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
@@ -212,14 +242,72 @@ ViewerSource OpenViewerSource(const std::string& path, const render::Orientation
   return source;
 }
 
+namespace {
+
+// A file's points with their colours replaced by a field's.
+class FieldColouringReader : public io::PointReader {
+ public:
+  FieldColouringReader(std::unique_ptr<io::PointReader> inner, const FieldLegend& legend)
+      : io::PointReader(inner->path()), inner_(std::move(inner)), legend_(legend) {
+    info_ = inner_->info();
+    info_.schema.colors = true;
+  }
+  size_t Read(size_t max_points, PointCloud* chunk) override {
+    const size_t n = inner_->Read(max_points, chunk);
+    if (n > 0) ColourByField(legend_, FieldValues(*chunk, legend_.field, path_), chunk);
+    points_read_ += n;
+    return n;
+  }
+
+ private:
+  std::unique_ptr<io::PointReader> inner_;
+  const FieldLegend& legend_;
+};
+
+io::PointReadOptions ReadWithFields(const std::string& columns) {
+  io::PointReadOptions read;
+  read.columns = columns;
+  read.scalar_fields = true;
+  return read;
+}
+
+// The colouring over every file's values of the field (read once, streaming).
+FieldLegend ResolveOverFiles(const std::vector<std::string>& files, const std::string& columns,
+                             const FieldColouring& colour_by) {
+  std::vector<std::vector<double>> values(files.size());
+  for (size_t k = 0; k < files.size(); ++k) {
+    auto reader = io::OpenPointReader(files[k], ReadWithFields(columns));
+    PointCloud chunk;
+    while (reader->Read(size_t{1} << 20, &chunk) > 0) {
+      const std::vector<double> v = FieldValues(chunk, colour_by.field, files[k]);
+      values[k].insert(values[k].end(), v.begin(), v.end());
+    }
+  }
+  std::vector<const std::vector<double>*> pointers;
+  for (const auto& v : values) pointers.push_back(&v);
+  return ResolveFieldColouring(colour_by, pointers);
+}
+
+}  // namespace
+
 ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,
-                              const render::Orientation& orientation, const ProgressCallback& progress) {
+                              const render::Orientation& orientation, const ProgressCallback& progress,
+                              const FieldColouring& colour_by) {
+  std::optional<FieldLegend> legend;
+  if (colour_by.active()) legend = ResolveOverFiles(files, columns, colour_by);  // before a folder is made
   std::string tmpl = (fs::temp_directory_path() / "candi-view-XXXXXX").string();
   if (mkdtemp(tmpl.data()) == nullptr) throw InputError(tmpl, "", "cannot create a temporary directory");
   const std::string archive_dir = tmpl + "/archive";
   try {
     std::vector<render::PackInput> inputs;
-    for (const std::string& in : files) inputs.push_back(render::PackInputFromFile(in, columns));
+    for (const std::string& in : files) {
+      inputs.push_back(render::PackInputFromFile(in, columns));
+      if (legend) {
+        inputs.back().open = [in, columns, &legend]() -> std::unique_ptr<io::PointReader> {
+          return std::make_unique<FieldColouringReader>(io::OpenPointReader(in, ReadWithFields(columns)), *legend);
+        };
+      }
+    }
     render::PackArchive(render::PackOptions(), inputs, archive_dir, progress);
   } catch (...) {
     std::error_code ec;
@@ -230,6 +318,7 @@ ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::
   source.kind = "points";
   source.title = fs::path(files.front()).filename().string() + (files.size() > 1 ? " + " + std::to_string(files.size() - 1) : "");
   source.temporary_dir = tmpl;
+  source.legend = legend;
   return source;
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/field_colour.h"
 #include "core/progress.h"
 #include "render/archive.h"
 #include "render/camera.h"
@@ -45,15 +46,19 @@ struct ViewerSource {
   // annotations the scene gives, and per layer its kind, whether it was measured (scanned) or
   // reconstructed, its method and its sources. Empty for an archive or point files.
   std::string provenance_json;
+  // Point files packed coloured by a scalar field: the colouring, for the page's legend.
+  std::optional<FieldLegend> legend;
   // The page's scene description (JSON): title, kind, layers, views, settings, first view,
-  // bounds (world), origin, points, provenance (when known).
+  // bounds (world), origin, points, provenance (when known), the legend (when coloured).
   std::string ToJson(const render::ArchiveManifest& manifest) const;
 };
 
 // Opens a build directory or an archive (InputError naming the file for anything malformed).
 ViewerSource OpenViewerSource(const std::string& path, const render::Orientation& orientation);
-// Packs point files into a fresh temporary directory.
+// Packs point files into a fresh temporary directory; with `colour_by` active, the points
+// coloured by that field (one legend over all the files; InputError naming a file without it).
 ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,
-                              const render::Orientation& orientation, const ProgressCallback& progress);
+                              const render::Orientation& orientation, const ProgressCallback& progress,
+                              const FieldColouring& colour_by = FieldColouring());
 
 }  // namespace candi::view

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "io/point_io.h"
 #include "render/archive_pack.h"
 #include "render/archive_render.h"
 #include "render/spbr.h"
@@ -600,6 +601,59 @@ TEST(Progressive, PickTakesOnlyWhatIsShown) {
     }
   }
   EXPECT_TRUE(drawn);
+}
+
+TEST(ViewerSource, PointFilesColouredByAFieldCarryTheLegend) {
+  // A sheet at survey coordinates whose distance runs from -1 (west) to +1 (east); one point
+  // has none (NaN) and one lies outside the range.
+  TempDir dir;
+  PointCloud sheet = render::UniformRectangle(5000, 8, 6, 0, {10, 200, 10}, 3);
+  sheet.frame.origin = Eigen::Vector3d(416000, 9168000, 100);
+  const int k = sheet.AddScalarField("distance");
+  for (size_t i = 0; i < sheet.size(); ++i) sheet.scalars[k].Set(i, sheet.positions[i].x() / 4 - 1);
+  sheet.scalars[k].Set(0, std::numeric_limits<double>::quiet_NaN());
+  sheet.scalars[k].Set(1, 7.0);
+  const std::string file = dir.File("deviation.ply");
+  io::WritePointCloud(file, sheet);
+  FieldColouring colour_by;
+  colour_by.field = "distance";
+  colour_by.lo = -1;
+  colour_by.hi = 1;
+  ViewerSource source = PackViewerSource({file}, "", render::Orientation(), nullptr, colour_by);
+  ASSERT_TRUE(source.legend.has_value());
+  const render::Archive archive(source.archive_dir);
+  const nlohmann::json scene = nlohmann::json::parse(source.ToJson(archive.manifest()));
+  const nlohmann::json& legend = scene.at("legend");
+  EXPECT_EQ(legend.at("field"), "distance");
+  EXPECT_EQ(legend.at("scale"), "diverging");
+  EXPECT_EQ(legend.at("lo"), -1.0);
+  EXPECT_EQ(legend.at("undefined"), 1);
+  EXPECT_EQ(legend.at("outside"), 1);
+  EXPECT_EQ(legend.at("stops").size(), 11u);
+  // Every archived point has its field's colour: west blue, east red, the two grey.
+  const PointCloud packed = archive.ReadAll();
+  ASSERT_EQ(packed.size(), sheet.size());
+  size_t grey = 0, west_blue = 0, east_red = 0, west = 0, east = 0;
+  for (size_t i = 0; i < packed.size(); ++i) {
+    const Rgb8 c = packed.colors[i];
+    const double x = packed.WorldPosition(i).x() - sheet.frame.origin.x();
+    grey += c == kOutOfRangeGrey;
+    if (x < 2) ++west, west_blue += c.b > c.r + 60;
+    if (x > 6) ++east, east_red += c.r > c.b + 60;
+  }
+  EXPECT_EQ(grey, 2u);
+  EXPECT_GE(west_blue + 1, west);
+  EXPECT_GE(east_red + 1, east);
+  std::error_code ec;
+  std::filesystem::remove_all(source.temporary_dir, ec);
+  // A file without the field names it (found before a temporary folder is made).
+  colour_by.field = "lod95";
+  try {
+    PackViewerSource({file}, "", render::Orientation(), nullptr, colour_by);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("deviation.ply"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

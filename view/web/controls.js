@@ -678,6 +678,31 @@ window.CandiPage = function (backend) {
       }
     }
   }
+  // The colouring by a field (candi view FILE --colour-by): its scale, range and grey's counts.
+  function buildLegend() {
+    const l = scene.legend;
+    const box = $('legend');
+    box.textContent = '';
+    box.hidden = !l;
+    if (!l) return;
+    const div = (text, cls) => { const d = document.createElement('div'); d.textContent = text; if (cls) d.className = cls; box.appendChild(d); return d; };
+    const swatch = (colour) => { const b = document.createElement('span'); b.className = 'swatch'; b.style.background = colour; return b; };
+    const num = (v) => (v === 0 ? '0' : Number(v).toPrecision(3).replace(/\.?0+(e|$)/, '$1'));
+    div(l.field, 'name');
+    if (Array.isArray(l.classes)) {
+      for (const c of l.classes) { const d = div(' ' + c.code + ' ' + c.name); d.prepend(swatch(c.colour)); }
+    } else {
+      const bar = div('', 'scale');
+      bar.style.background = 'linear-gradient(to right, ' + l.stops.join(', ') + ')';
+      const ticks = div('', 'ticks');
+      const mid = l.scale === 'diverging' && l.lo === -l.hi ? 0 : (l.lo + l.hi) / 2;
+      for (const v of [l.lo, mid, l.hi]) { const t = document.createElement('span'); t.textContent = num(v); ticks.appendChild(t); }
+    }
+    const grey = [];
+    if (!Array.isArray(l.classes)) grey.push(l.outside.toLocaleString() + ' outside');
+    if (l.undefined > 0) grey.push(l.undefined.toLocaleString() + ' without a value');
+    if (grey.length) { const d = div(' ' + grey.join(', '), 'hint'); d.prepend(swatch(l.grey)); }
+  }
   // A click (press and release without moving) on a marker opens it.
   canvas.addEventListener('pointerup', (e) => {
     if (!press || press.button !== 0 || $('measure').checked || !annotations.length) return;
@@ -700,6 +725,7 @@ window.CandiPage = function (backend) {
     if (shared) applyShared(shared);
     buildLayers();
     buildProvenance();
+    buildLegend();
     // The first view's own size when the window has it (so the first image is candi render's).
     fitCanvas(true);
     syncControls();
