@@ -69,6 +69,31 @@ Rgb8 FieldLegend::Colour(double value) const {
   return scale == FieldScale::kDiverging ? DivergingColour(2 * t - 1) : SequentialColour(t);
 }
 
+std::optional<double> FieldLegend::ValueOfColour(Rgb8 colour, double* half_width) const {
+  *half_width = 0;
+  if (colour == kOutOfRangeGrey) return std::nullopt;
+  if (scale == FieldScale::kClasses) {
+    for (int c : classes) {
+      if (ClassColour(c) == colour) return c;
+    }
+    return std::nullopt;
+  }
+  // The values drawn in this colour form one run along the scale (its colours change
+  // monotonically between stops); find its ends on a fine grid.
+  constexpr int kSteps = 1 << 14;
+  int first = -1, last = -1;
+  for (int i = 0; i <= kSteps; ++i) {
+    if (Colour(lo + (hi - lo) * i / kSteps) == colour) {
+      if (first < 0) first = i;
+      last = i;
+    }
+  }
+  if (first < 0) return std::nullopt;
+  const double step = (hi - lo) / kSteps;
+  *half_width = 0.5 * (last - first + 1) * step;
+  return lo + 0.5 * (first + last) * step;
+}
+
 std::vector<double> FieldValues(const PointCloud& cloud, const std::string& field, const std::string& name) {
   std::vector<double> values(cloud.size());
   if (const ScalarField* f = cloud.FindScalar(field)) {

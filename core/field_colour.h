@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,11 @@ struct FieldLegend {
   std::vector<int> classes;                    // kClasses: the classes present, ascending
   uint64_t count = 0, outside = 0, undefined = 0;  // points, outside [lo, hi] (grey), NaN (grey)
   Rgb8 Colour(double value) const;
+  // What a colour on this scale stands for (a point stored with its colour, as in a render
+  // archive): the middle of the values drawn in exactly that colour, and in *half_width how far
+  // they reach either side (8-bit colours: about (hi - lo) / 1000). Classes: the class code, 0.
+  // None for the grey (outside the range, or undefined) or a colour not on the scale.
+  std::optional<double> ValueOfColour(Rgb8 colour, double* half_width) const;
 };
 
 // The field's values of `cloud` in point order (double; world z for "elevation"). `name` names

@@ -150,5 +150,28 @@ TEST(FieldColour, BadInputIsNamed) {
   EXPECT_THROW(ParseFieldScale("rainbow"), std::invalid_argument);
 }
 
+TEST(FieldColour, AColourReadsBackAsItsValue) {
+  FieldLegend l;
+  l.field = "distance";
+  l.scale = FieldScale::kDiverging;
+  l.lo = -0.01;
+  l.hi = 0.01;
+  for (double v : {-0.0099, -0.004, -0.0003, 0.0, 0.0021, 0.0087}) {
+    double half = 0;
+    const std::optional<double> back = l.ValueOfColour(l.Colour(v), &half);
+    ASSERT_TRUE(back.has_value()) << v;
+    EXPECT_LE(std::abs(*back - v), half + 1e-12) << v;
+    EXPECT_LT(half, 0.0002) << v;  // 8-bit colours: about a hundredth of the range at worst
+  }
+  double half = 0;
+  EXPECT_FALSE(l.ValueOfColour(kOutOfRangeGrey, &half).has_value());
+  EXPECT_FALSE(l.ValueOfColour({0, 255, 0}, &half).has_value());  // not on the scale
+  FieldLegend classes;
+  classes.scale = FieldScale::kClasses;
+  classes.classes = {2, 6};
+  EXPECT_EQ(classes.ValueOfColour(ClassColour(6), &half), 6.0);
+  EXPECT_FALSE(classes.ValueOfColour(ClassColour(9), &half).has_value());  // not present
+}
+
 }  // namespace
 }  // namespace candi

@@ -182,6 +182,7 @@ PickResult PickPoint(const render::Archive& archive, const render::Camera& camer
       b.layer = chunk.layer;
       b.depth = depth;
       b.local = points.positions[i];
+      if (points.schema.colors) b.colour = points.colors[i];
     }
   }
   PickResult result;

@@ -97,6 +97,7 @@ struct PickHit {
   int layer = 0;
   Eigen::Vector3d local = Eigen::Vector3d::Zero();  // archive frame
   double depth = 0;
+  Rgb8 colour;                                      // the point's stored colour
 };
 struct PickResult {
   bool hit = false;

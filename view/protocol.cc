@@ -194,7 +194,12 @@ std::string PickReply(uint64_t seq, const std::vector<PickHitWorld>& hits) {
     j["layer"] = hits[0].layer;
     json all = json::array();
     for (const PickHitWorld& h : hits) {
-      all.push_back({{"layer", h.layer}, {"point", {h.world.x(), h.world.y(), h.world.z()}}, {"depth", h.depth}});
+      json hit = {{"layer", h.layer}, {"point", {h.world.x(), h.world.y(), h.world.z()}}, {"depth", h.depth}};
+      if (h.field) {
+        hit["value"] = h.value ? json(*h.value) : json(nullptr);
+        hit["value_half_width"] = h.value_half_width;
+      }
+      all.push_back(hit);
     }
     j["hits"] = all;
   }

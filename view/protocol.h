@@ -38,6 +38,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -123,6 +124,11 @@ struct PickHitWorld {
   int layer = 0;
   Eigen::Vector3d world = Eigen::Vector3d::Zero();
   double depth = 0;
+  // Points coloured by a field: its value, read back from the point's colour (none: grey,
+  // outside the range or undefined), and how far the values of that colour reach either side.
+  bool field = false;
+  std::optional<double> value;
+  double value_half_width = 0;
 };
 // `hits`: nearest first; empty: no hit.
 std::string PickReply(uint64_t seq, const std::vector<PickHitWorld>& hits);

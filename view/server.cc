@@ -162,6 +162,7 @@ struct Server::Impl {
   RangeRenderer renderer;
   std::string token;
   std::string scene_json;
+  std::optional<FieldLegend> legend;  // points coloured by a field: picks read its value back
   // Caps: pages reserved from their accepted upgrade, accumulation pixels of the pages' last
   // views, sockets open. Raised on the I/O thread; lowered wherever a session ends (also when
   // `io` destroys the handlers still queued at the end: so declared before it).
@@ -646,7 +647,17 @@ std::string Server::Impl::Pick(const ClientMessage& pick, const ViewState& state
   o.clip = state.settings.clip.ToLocal(origin);
   const PickResult r = PickPoint(archive, local, pick.x, pick.y, o);
   std::vector<PickHitWorld> hits;
-  for (const PickHit& h : r.hits) hits.push_back({h.layer, h.local + origin, h.depth});
+  for (const PickHit& h : r.hits) {
+    PickHitWorld w;
+    w.layer = h.layer;
+    w.world = h.local + origin;
+    w.depth = h.depth;
+    if (legend) {
+      w.field = true;
+      w.value = legend->ValueOfColour(h.colour, &w.value_half_width);
+    }
+    hits.push_back(w);
+  }
   return PickReply(pick.seq, hits);
 }
 
@@ -898,6 +909,7 @@ Server::Server(const ServerOptions& options, const ViewerSource& source, const r
   Impl& s = *impl_;
   s.token = options.token.empty() ? RandomToken() : options.token;
   s.scene_json = source.ToJson(archive.manifest());
+  s.legend = source.legend;
   boost::system::error_code ec;
   const net::ip::address address = net::ip::make_address(options.host == "localhost" ? "127.0.0.1" : options.host, ec);
   if (ec) throw std::runtime_error("--host '" + options.host + "': not an IP address");

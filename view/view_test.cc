@@ -644,6 +644,34 @@ TEST(ViewerSource, PointFilesColouredByAFieldCarryTheLegend) {
   EXPECT_EQ(grey, 2u);
   EXPECT_GE(west_blue + 1, west);
   EXPECT_GE(east_red + 1, east);
+  // A pick reads the value back from the point's colour: looking straight down at x = 6 m
+  // (distance 0.5), the picked point's value is its field's within the colour's width.
+  const Eigen::Vector3d origin = archive.manifest().frame.origin;
+  render::Camera top;
+  top.width = 200;
+  top.height = 200;
+  top.target = sheet.frame.origin + Eigen::Vector3d(6, 3, 0) - origin;
+  top.eye = top.target + Eigen::Vector3d(0, 0, 20);
+  top.up = Eigen::Vector3d::UnitY();
+  PickOptions po;
+  po.repeat_level = 1;
+  po.radius_px = 4;
+  const PickResult pick = PickPoint(archive, top, 100, 100, po);
+  ASSERT_TRUE(pick.hit);
+  double half = 0;
+  const std::optional<double> value = source.legend->ValueOfColour(pick.hits[0].colour, &half);
+  ASSERT_TRUE(value.has_value());
+  const double x = pick.hits[0].local.x() + origin.x() - sheet.frame.origin.x();
+  EXPECT_NEAR(*value, x / 4 - 1, half + 1e-6);
+  EXPECT_NEAR(*value, 0.5, 0.05);
+  PickHitWorld w;
+  w.field = true;
+  w.value = value;
+  w.value_half_width = half;
+  const nlohmann::json reply = nlohmann::json::parse(PickReply(7, {w}));
+  EXPECT_EQ(reply.at("hits")[0].at("value").get<double>(), *value);
+  w.value.reset();  // grey: no value, said as null
+  EXPECT_TRUE(nlohmann::json::parse(PickReply(7, {w})).at("hits")[0].at("value").is_null());
   std::error_code ec;
   std::filesystem::remove_all(source.temporary_dir, ec);
   // A file without the field names it (found before a temporary folder is made).

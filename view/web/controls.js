@@ -333,7 +333,10 @@ window.CandiPage = function (backend) {
     measurements.forEach((m, i) => {
       const tr = document.createElement('tr');
       const h = at(m);
-      const cells = [String(i + 1), layerName(h.layer) + (m.hits.length > 1 ? ' (' + (m.index + 1) + '/' + m.hits.length + ')' : ''),
+      // Points coloured by a field: its value, read back from the point's colour by the server.
+      const field = scene.legend && 'value' in h ? ' · ' + scene.legend.field + ' ' + (h.value === null ? 'grey (outside or none)'
+        : Number(h.value).toPrecision(4) + ' ± ' + Number(h.value_half_width).toPrecision(1)) : '';
+      const cells = [String(i + 1), layerName(h.layer) + (m.hits.length > 1 ? ' (' + (m.index + 1) + '/' + m.hits.length + ')' : '') + field,
         h.point[0].toFixed(3), h.point[1].toFixed(3), h.point[2].toFixed(3)];
       for (const c of cells) { const td = document.createElement('td'); td.textContent = c; tr.appendChild(td); }
       const td = document.createElement('td');
