@@ -300,6 +300,15 @@ void AddRegisterScans(Command& root) {
   c.Option("--loss-scale", o.loss_scale, "Huber scale of the global solve's point-to-plane terms, m");
   c.Option("--rounds", o.outer_iterations, "Global solve rounds (correspondences re-found each)");
   c.Option("--correspondences", o.correspondences_per_pair, "Correspondences per pair and direction");
+  c.Option("--coarse-voxel", a.coarse_options.voxel, "With --coarse: thin both scans to this for the features, m");
+  c.Option("--coarse-radius", a.coarse_options.feature_radius, "With --coarse: the FPFH features' support radius, m "
+           "(> the coarse voxel)");
+  c.Option("--coarse-inlier-distance", a.coarse_options.inlier_distance, "With --coarse: a moved point within this "
+           "of the other scan is an inlier, m");
+  c.Option("--coarse-min-inliers", a.coarse_options.min_inlier_fraction, "With --coarse: the share of inliers a pose "
+           "needs, [0, 1] (lower only for scans sharing less than half their points)");
+  c.Option("--coarse-iterations", a.coarse_options.max_iterations, "With --coarse: RANSAC iterations");
+  c.Option("--seed", a.coarse_options.seed, "With --coarse: the seed of RANSAC's sampling");
   c.Option("--format", a.format, "Extension of the moved scans (ply, las, laz, e57, xyz; default: each scan's own)");
   c.Run([&a] { return RunRegisterScans(a); });
   c.Footer("Example: candi register-scans st1.las st2.las st3.las st4.las -o registered --targets targets.csv\n"

@@ -346,7 +346,7 @@ nlohmann::json Rmse(const photogrammetry::Rmse& r) {
 
 nlohmann::json ReportJson(const std::vector<ScanInput>& inputs, const std::vector<Rigid3>& start,
                           const std::vector<std::string>& names, const std::vector<photogrammetry::ScanTarget>& targets,
-                          const MultiRegistrationResult& r, const std::vector<std::string>& coarse) {
+                          const MultiRegistrationResult& r, const std::vector<std::string>& start_from) {
   nlohmann::json j;
   j["message"] = r.message;
   j["converged"] = r.converged;
@@ -358,7 +358,7 @@ nlohmann::json ReportJson(const std::vector<ScanInput>& inputs, const std::vecto
     scans.push_back({{"file", inputs[i].path}, {"e57_scan", inputs[i].e57_scan}, {"label", inputs[i].label},
                      {"output", names[i]}, {"connected", s.connected}, {"fixed", s.fixed},
                      {"world_from_scan", MatrixJson(r.world_from_scan[i])}, {"start", MatrixJson(start[i])},
-                     {"coarse", coarse[i]}, {"translation_change_m", s.translation_change},
+                     {"start_from", start_from[i]}, {"translation_change_m", s.translation_change},
                      {"rotation_change_deg", s.rotation_change_deg}, {"residual_rms_m", Number(s.residual_rms)},
                      {"correspondences", s.correspondences}});
   }
@@ -429,6 +429,7 @@ void PrintScans(const std::vector<ScanInput>& inputs, const MultiRegistrationRes
 
 int RunRegisterScans(const RegisterScansArgs& a) {
   a.options.Check();
+  if (a.coarse) a.coarse_options.Check();  // before any scan is read
   if (a.scans.empty()) throw std::invalid_argument("scans: give 2 or more scans");
   const std::vector<ScanInput> inputs = ExpandScans(a.scans);
   if (inputs.size() < 2) throw std::invalid_argument("scans: give 2 or more scans (or an E57 file with several)");
@@ -439,27 +440,29 @@ int RunRegisterScans(const RegisterScansArgs& a) {
   photogrammetry::MultiRegistrationOptions options = a.options;
   options.fixed_scans = ParseIndices(a.fixed, inputs.size());
   std::vector<Rigid3> start(inputs.size());
-  std::vector<std::string> coarse(inputs.size(), "none");
+  // Where each scan's start pose came from (registration.json's start_from).
+  const std::string kNoStart = "identity (no start pose)";
+  std::vector<std::string> start_from(inputs.size(), kNoStart);
   for (size_t i = 0; i < inputs.size(); ++i) {
     if (inputs[i].has_pose) {
       start[i] = inputs[i].pose;
-      coarse[i] = "stored in the E57 file";
+      start_from[i] = "stored in the E57 file";
     }
   }
   if (!a.poses.empty()) {
     start = ReadStartPoses(a.poses, inputs.size());
-    coarse.assign(inputs.size(), "given");
+    start_from.assign(inputs.size(), "given (--poses)");
   }
   const std::vector<photogrammetry::ScanTarget> targets =
       a.targets.empty() ? std::vector<photogrammetry::ScanTarget>() : ReadScanTargets(a.targets, inputs);
   std::vector<PointCloud> scans;
   for (const auto& in : inputs) scans.push_back(ReadScan(in));
   if (a.coarse) {
-    coarse[0] = "anchor";
+    start_from[0] = "anchor of the coarse alignment (" + start_from[0] + ")";
     for (size_t i = 1; i < scans.size(); ++i) {
-      if (coarse[i] != "none") continue;  // it has a start pose
+      if (start_from[i] != kNoStart) continue;  // it has a start pose
       const auto c = photogrammetry::CoarseAlign(a.coarse_options, scans[i], scans[0]);
-      coarse[i] = c.message;
+      start_from[i] = "coarse alignment onto scan 0: " + c.message;
       if (c.found) start[i] = start[0] * c.fixed_from_moving;  // scan i -> scan 0 -> world
       std::printf("coarse %s onto %s: %s\n", inputs[i].label.c_str(), inputs[0].label.c_str(), c.message.c_str());
     }
@@ -478,7 +481,7 @@ int RunRegisterScans(const RegisterScansArgs& a) {
                         photogrammetry::TransformPointCloud(result.world_from_scan[i], scans[i]));
   }
   WriteFileAtomic(a.output_dir + "/registration.json",
-                  ReportJson(inputs, start, names, targets, result, coarse).dump(2) + "\n");
+                  ReportJson(inputs, start, names, targets, result, start_from).dump(2) + "\n");
   std::printf("wrote %zu scans and registration.json to %s, time %.2f s\n", scans.size(), a.output_dir.c_str(),
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count());
   size_t unconnected = 0;

@@ -105,6 +105,7 @@ TEST(RegisterScansCli, RecoversPerturbedStationsAtSurveyCoordinates) {
     EXPECT_LT(Eigen::AngleAxisd(got.rotation * s.truth[i].rotation.conjugate()).angle() / kDeg, 0.01);
   }
   EXPECT_FALSE(j["scans"][5]["connected"].get<bool>());
+  EXPECT_EQ(j["scans"][0]["start_from"], "given (--poses)");  // where each start came from
   const Rigid3 kept = FromJson(j["scans"][5]["world_from_scan"]);
   EXPECT_LT((kept.translation - far_pose.translation).norm(), 1e-6);
   EXPECT_FALSE(j["loops"].empty());
@@ -265,6 +266,9 @@ TEST(RegisterScansCli, BadInputIsNamed) {
   EXPECT_NE(r.output.find("'7'"), std::string::npos) << r.output;
   r = RunCandi("register-scans " + dir.File("s0.ply") + " -o " + dir.File("out"));
   EXPECT_EQ(r.code, 1) << r.output;
+  r = RunCandi("register-scans" + s.args + " -o " + dir.File("out") + " --coarse --coarse-radius 0.1");
+  EXPECT_EQ(r.code, 1) << r.output;  // a feature radius under the coarse voxel
+  EXPECT_NE(r.output.find("feature_radius"), std::string::npos) << r.output;
   r = RunCandi("register-scans" + s.args + " -o " + dir.File("out") + " --fixed 5");
   EXPECT_EQ(r.code, 1) << r.output;
   WriteBytes(dir.File("empty.xyz"), "");
