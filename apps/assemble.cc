@@ -38,10 +38,11 @@ void PrintBuildSummary(const std::string& output, const pipeline::BuildSummary& 
   }
   for (const pipeline::BuildComparisonSummary& c : s.comparisons) {
     auto mm = [](double m) { return std::isnan(m) ? std::string("n/a") : FormatSignificant(m * 1000, 4) + " mm"; };
+    const std::string within =
+        std::isnan(c.within_tolerance) ? "n/a" : FormatSignificant(100 * c.within_tolerance, 4) + " %";
     std::printf("comparison %s (%s, %llu points): mean %s, rms %s, %s within %s%s\n", c.name.c_str(),
                 c.method.c_str(), static_cast<unsigned long long>(c.count), mm(c.mean).c_str(), mm(c.rms).c_str(),
-                std::isnan(c.within_tolerance) ? "n/a" : (FormatSignificant(100 * c.within_tolerance, 4) + " %").c_str(),
-                mm(c.tolerance).c_str(), c.resumed ? " (resumed)" : "");
+                within.c_str(), mm(c.tolerance).c_str(), c.resumed ? " (resumed)" : "");
   }
   std::printf("%s: %llu points in %zu layers, frame origin %s, %zu render(s), %.1f s\n", output.c_str(),
               static_cast<unsigned long long>(s.points), s.layers.size(), s.frame.ToString().c_str(), s.views,
