@@ -1,11 +1,14 @@
 // candi build, candi pack, candi demo: the integrated archive of a scene file (pipeline/build.h),
 // point files packed into a render archive (render/archive_pack.h), and the bundled example's site
 // built (pipeline/demo_site.h; RunDemo in demo_command.cc, candi-relief only).
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
+#include <string>
 
 #include "apps/commands.h"
 #include "core/progress.h"
+#include "core/text_format.h"
 #include "pipeline/build.h"
 #include "pipeline/scene.h"
 #include "render/archive_pack.h"
@@ -32,6 +35,14 @@ void PrintBuildSummary(const std::string& output, const pipeline::BuildSummary& 
   for (const pipeline::BuildLayerSummary& l : s.layers) {
     std::printf("%-16s %-15s %12llu %8.3g %-8s %.1f\n", l.name.c_str(), pipeline::LayerKindName(l.kind).c_str(),
                 static_cast<unsigned long long>(l.points), l.opacity, l.scanned ? "yes" : "no", l.seconds);
+  }
+  for (const pipeline::BuildComparisonSummary& c : s.comparisons) {
+    auto mm = [](double m) { return std::isnan(m) ? std::string("n/a") : FormatSignificant(m * 1000, 4) + " mm"; };
+    const std::string within =
+        std::isnan(c.within_tolerance) ? "n/a" : FormatSignificant(100 * c.within_tolerance, 4) + " %";
+    std::printf("comparison %s (%s, %llu points): mean %s, rms %s, %s within %s%s\n", c.name.c_str(),
+                c.method.c_str(), static_cast<unsigned long long>(c.count), mm(c.mean).c_str(), mm(c.rms).c_str(),
+                within.c_str(), mm(c.tolerance).c_str(), c.resumed ? " (resumed)" : "");
   }
   std::printf("%s: %llu points in %zu layers, frame origin %s, %zu render(s), %.1f s\n", output.c_str(),
               static_cast<unsigned long long>(s.points), s.layers.size(), s.frame.ToString().c_str(), s.views,

@@ -1,6 +1,7 @@
 #include "pipeline/build.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -286,7 +287,7 @@ json LayersJson(const Scene& scene, FileHashes& hashes, const Layers& layers, js
 }
 
 json Provenance(const Scene& scene, const LocalFrame& frame, const std::string& scene_crs, uint64_t total,
-                const json& layers, bool pack_resumed, const json& views) {
+                const json& layers, bool pack_resumed, const json& views, const json& comparisons) {
   json p = {{"candi_version", kVersion}, {"scene", {{"path", scene.path}, {"sha256", Sha256Hex(scene.text)}}},
           {"name", scene.name}, {"seed", scene.seed},
           {"frame", {{"origin", {frame.origin.x(), frame.origin.y(), frame.origin.z()}}}},
@@ -318,6 +319,7 @@ json Provenance(const Scene& scene, const LocalFrame& frame, const std::string& 
     }
     p["annotations"] = list;
   }
+  if (!comparisons.empty()) p["comparisons"] = comparisons;
   return p;
 }
 
@@ -349,9 +351,10 @@ BuildSummary Build(const BuildOptions& options, const Scene& scene) {
   for (LayerResult& r : layers.results) digitized.push_back(&r.cloud);
   const std::string scene_crs = CommonCrs(scene, digitized);
   PlaceLayers(scene, frame, out, &layers);
+  json timings = {{"layers", json::object()}, {"views", json::object()}};  // seconds, apart from archive.json
+  const json comparisons = RunComparisons(options, scene, scene_json, out, checkpoints, hashes, layers.files, &timings);
   std::string pack_key;
   const auto [pack_seconds, pack_resumed] = PackLayers(options, scene_json, out, checkpoints, layers, &pack_key);
-  json timings = {{"layers", json::object()}, {"views", json::object()}};  // seconds, apart from archive.json
   const json views = RenderViews(options, scene, scene_json, out, checkpoints, hashes, layers, pack_key, &timings);
 
   // 5. MeshLab project, provenance.
@@ -365,9 +368,16 @@ BuildSummary Build(const BuildOptions& options, const Scene& scene) {
     summary.points += layers.clouds[k].size();
   }
   WriteFileAtomic((out / "archive.json").string(),
-                  Provenance(scene, frame, scene_crs, summary.points, layers_json, pack_resumed, views).dump(2) + "\n");
+                  Provenance(scene, frame, scene_crs, summary.points, layers_json, pack_resumed, views, comparisons).dump(2) + "\n");
   summary.frame = frame;
   summary.views = views.size();
+  auto figure = [](const json& v) { return v.is_number() ? v.get<double>() : NAN; };
+  for (const json& c : comparisons) {
+    summary.comparisons.push_back({c.at("name").get<std::string>(), c.at("method").get<std::string>(),
+                                   c.at("count").get<uint64_t>(), figure(c.at("mean_m")), figure(c.at("rms_m")),
+                                   c.at("tolerance_m").get<double>(), figure(c.at("within_tolerance")),
+                                   c.at("resumed").get<bool>()});
+  }
   summary.seconds = watch.Seconds();
   timings["pack"] = pack_seconds;
   timings["total"] = summary.seconds;

@@ -15,17 +15,22 @@
 //   archive.json           provenance: sources and hashes, method, parameters, seed, version, counts,
 //                          what makes the build reproducible; no run times, so that two builds of the
 //                          same input give the same bytes
-//   timings.json           seconds per layer, the pack, each view and in all
+//   compare/<name>.ply     each of the scene's comparisons (scene.h, "comparisons"; pipeline/compare.h):
+//                          the compared layer's points (world) with their distances, and beside it
+//                          .compare.json, .histogram.svg and .report.md; archive.json lists each
+//                          with its headline figures
+//   timings.json           seconds per layer, the pack, each view, each comparison and in all
 // Intermediate files go to work/ (the stages' own outputs: the foundation's and the dense cloud's
 // points, relief depth maps and panel points, COLMAP's workspace). The layers pass from stage to
 // stage in memory; relief panels pass through their files (they may come from child processes).
 // Every file is written atomically.
 //
 // Resuming (options.resume): every finished stage that is worth keeping (a digitized foundation,
-// relief or photogrammetry layer; the render archive; each render) leaves a checkpoint in
-// work/checkpoints/<stage>.json holding a key: the SHA-256 of what the stage depends on (candi's
-// version, the scene's JSON for it, the seed, the bytes of every input file (a dense workspace:
-// its files' names, sizes and times), the keys of the stages it uses). A resumed build redoes
+// relief or photogrammetry layer; the render archive; each render; each comparison) leaves a
+// checkpoint in work/checkpoints/<stage>.json holding a key: the SHA-256 of what the stage depends
+// on (candi's version, the scene's JSON for it, the seed, the bytes of every input file (a dense
+// workspace: its files' names, sizes and times; a comparison: the layer files it reads), the keys
+// of the stages it uses). A resumed build redoes
 // only stages whose key differs or whose outputs are missing; archive.json marks what was reused
 // ("resumed": true). An interrupted build (SIGINT, core/interrupt.h) leaves finished stages
 // complete and nothing half-written.
@@ -76,8 +81,19 @@ struct BuildLayerSummary {
   double seconds = 0;          // digitizing it (0 when resumed)
 };
 
+// A comparison of the scene (scene.h, "comparisons"), as archive.json lists it.
+struct BuildComparisonSummary {
+  std::string name, method;
+  uint64_t count = 0;               // compared points
+  double mean = 0, rms = 0;         // m; NaN when no distance is defined
+  double tolerance = 0;             // m
+  double within_tolerance = 0;      // share of the defined distances, [0, 1]; NaN when none
+  bool resumed = false;
+};
+
 struct BuildSummary {
   std::vector<BuildLayerSummary> layers;
+  std::vector<BuildComparisonSummary> comparisons;
   uint64_t points = 0;
   LocalFrame frame;            // the scene's frame
   size_t views = 0;            // renders

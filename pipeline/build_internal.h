@@ -1,6 +1,7 @@
 // Pieces of a build (pipeline/build.h) shared by its translation units: how each kind of layer is
-// digitized (build_layers.cc), how layers are moved into the scene's frame (build_frame.cc), and
-// the checkpoints that let a build resume (build_checkpoints.cc). Internal to pipeline/.
+// digitized (build_layers.cc), how layers are moved into the scene's frame (build_frame.cc), the
+// checkpoints that let a build resume (build_checkpoints.cc) and the scene's comparisons
+// (build_compare.cc). Internal to pipeline/.
 #pragma once
 
 #include <cstdint>
@@ -80,5 +81,13 @@ std::string Key(const std::vector<std::string>& parts);
 void SaveLayer(const Checkpoints& checkpoints, const std::string& stage, const std::string& key,
                const std::filesystem::path& points, const LayerResult& r);
 LayerResult LoadLayer(const nlohmann::json& checkpoint, const std::filesystem::path& points);
+
+// The scene's comparisons (build_compare.cc), each the compared layer's file in `layer_files`
+// (layers/<name>.ply, in scene order) against its reference, written to <out>/compare/ or
+// resumed (key: the comparison's JSON, the bytes of both inputs). Returns archive.json's
+// "comparisons"; each one's seconds go to (*timings)["comparisons"].
+nlohmann::json RunComparisons(const BuildOptions& options, const Scene& scene, const nlohmann::json& scene_json,
+                              const std::filesystem::path& out, const Checkpoints& checkpoints, FileHashes& hashes,
+                              const std::vector<std::string>& layer_files, nlohmann::json* timings);
 
 }  // namespace candi::pipeline::internal

@@ -1,12 +1,14 @@
 // A build of every layer kind that needs no network and no COLMAP (points; a foundation from a
 // drawing; relief panels given as points, placed by Ceres; photogrammetry from a dense cloud,
 // georeferenced on targets), end to end in one process: the outputs, the layers in one survey
-// frame, the same bytes for any thread count, resuming, and bad options.
+// frame, the same bytes for any thread count, resuming, and bad options; and the scene's
+// comparisons (deviation maps between layers, or a layer and a file).
 #include "pipeline/build.h"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -14,6 +16,7 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/rng.h"
+#include "io/ply/ply_io.h"
 #include "io/point_io.h"
 #include "render/synthetic_scene.h"
 #include "tests/util/dxf_text.h"
@@ -219,6 +222,146 @@ TEST_F(BuildScene, BadInputsAreNamed) {
     ADD_FAILURE();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("panel 'P09' of layer 'reliefs' has no correspondences"), std::string::npos)
+        << e.what();
+  }
+}
+
+// Two point layers of one flat surface, one lifted by kLift, compared with each other (C2C to
+// a local plane) and with a mesh of the surface (C2M): small enough for a second's build.
+class BuildComparisons : public ::testing::Test {
+ protected:
+  static constexpr double kLift = 0.05;  // m
+
+  void SetUp() override {
+    io::PointWriteOptions wide;
+    wide.precision = io::PositionPrecision::kFloat64;
+    PointCloud ground = render::UniformRectangle(3000, 10, 8, 0, {150, 150, 150}, 11);
+    PointCloud lifted = render::UniformRectangle(2000, 10, 8, kLift, {200, 60, 60}, 12);
+    for (PointCloud* c : {&ground, &lifted})
+      for (Eigen::Vector3d& p : c->positions) p += kSite;
+    io::WritePointCloud(dir_.File("ground.ply"), ground, wide);
+    io::WritePointCloud(dir_.File("lifted.ply"), lifted, wide);
+    // The surface as a mesh in world coordinates, a little larger than the points; facing up.
+    TriMesh mesh;
+    for (const Eigen::Vector3d& c : {Eigen::Vector3d(-1, -1, 0), Eigen::Vector3d(11, -1, 0),
+                                     Eigen::Vector3d(11, 9, 0), Eigen::Vector3d(-1, 9, 0)}) {
+      mesh.vertices.positions.push_back(kSite + c);
+    }
+    mesh.faces = {{0, 1, 2}, {0, 2, 3}};
+    io::WritePlyMesh(dir_.File("ground_mesh.ply"), mesh, wide);
+  }
+
+  json SceneJson(double tolerance = 0.06) const {
+    json j = {{"candi_scene", 1}, {"name", "flat"}, {"seed", 1}};
+    j["layers"] = json::array({{{"name", "ground"}, {"kind", "points"}, {"file", "ground.ply"}},
+                               {{"name", "lifted"}, {"kind", "points"}, {"file", "lifted.ply"}}});
+    j["comparisons"] = json::array(
+        {{{"name", "lifted_vs_ground"}, {"compared", "lifted"}, {"reference", "ground"}, {"method", "c2c"},
+          {"model", "plane"}, {"tolerance", tolerance}},
+         {{"name", "lifted_vs_mesh"}, {"compared", "lifted"}, {"reference", "ground_mesh.ply"}, {"method", "c2m"},
+          {"tolerance", 0.01}}});
+    return j;
+  }
+
+  json BuildInto(const json& scene, bool resume) {
+    testing::WriteBytes(dir_.File("scene.json"), scene.dump(2));
+    BuildOptions o;
+    o.output = dir_.File("out");
+    o.threads = 2;
+    o.resume = resume;
+    summary_ = Build(o, LoadScene(dir_.File("scene.json")));
+    return json::parse(ReadFileToString(dir_.File("out/archive.json")));
+  }
+
+  TempDir dir_;
+  BuildSummary summary_;  // of the last build
+};
+
+TEST_F(BuildComparisons, MeasureTheKnownOffsetAndAreListedInTheArchive) {
+  const json a = BuildInto(SceneJson(), false);
+  ASSERT_EQ(a.at("comparisons").size(), 2u);
+  const json& c2c = a["comparisons"][0];
+  EXPECT_EQ(c2c.at("name"), "lifted_vs_ground");
+  EXPECT_EQ(c2c.at("compared"), "lifted");
+  EXPECT_EQ(c2c.at("reference"), "ground");
+  EXPECT_EQ(c2c.at("reference_kind"), "layer");
+  EXPECT_EQ(c2c.at("method"), "c2c");
+  EXPECT_EQ(c2c.at("count").get<uint64_t>(), 2000u);
+  EXPECT_EQ(c2c.at("undefined").get<uint64_t>(), 0u);
+  EXPECT_NEAR(c2c.at("mean_m").get<double>(), kLift, 1e-6);  // the plane through the ground's points
+  EXPECT_NEAR(c2c.at("rms_m").get<double>(), kLift, 1e-6);
+  EXPECT_DOUBLE_EQ(c2c.at("within_tolerance").get<double>(), 1.0);  // tolerance 6 cm
+  EXPECT_FALSE(c2c.at("resumed").get<bool>());
+  const json& c2m = a["comparisons"][1];
+  EXPECT_EQ(c2m.at("reference_kind"), "file");
+  EXPECT_EQ(c2m.at("reference"), fs::path(dir_.File("ground_mesh.ply")).lexically_normal().string());
+  EXPECT_TRUE(c2m.at("signed").get<bool>());
+  EXPECT_NEAR(c2m.at("mean_m").get<double>(), kLift, 1e-6);  // above the upward-facing mesh: positive
+  EXPECT_DOUBLE_EQ(c2m.at("within_tolerance").get<double>(), 0.0);  // tolerance 1 cm
+  for (const json& c : a["comparisons"]) {
+    for (const char* f : {"cloud", "summary", "histogram", "report"}) {
+      EXPECT_TRUE(fs::exists(dir_.File("out/" + c.at("files").at(f).get<std::string>()))) << f;
+    }
+  }
+  // The deviation map: the compared layer's points, in world coordinates, with their distances.
+  const PointCloud map = io::ReadPointCloud(dir_.File("out/compare/lifted_vs_mesh.ply"));
+  ASSERT_EQ(map.size(), 2000u);
+  EXPECT_NEAR(map.frame.ToWorld(map.positions[0]).z(), kSite.z() + kLift, 1e-6);
+  const json summary = json::parse(ReadFileToString(dir_.File("out/compare/lifted_vs_ground.ply.compare.json")));
+  EXPECT_NEAR(summary.at("mean_m").get<double>(), kLift, 1e-6);
+  const json timings = json::parse(ReadFileToString(dir_.File("out/timings.json")));
+  EXPECT_TRUE(timings.at("comparisons").contains("lifted_vs_mesh"));
+  // What candi build prints.
+  ASSERT_EQ(summary_.comparisons.size(), 2u);
+  EXPECT_EQ(summary_.comparisons[1].name, "lifted_vs_mesh");
+  EXPECT_EQ(summary_.comparisons[1].method, "c2m");
+  EXPECT_EQ(summary_.comparisons[1].count, 2000u);
+  EXPECT_NEAR(summary_.comparisons[1].mean, kLift, 1e-6);
+  EXPECT_DOUBLE_EQ(summary_.comparisons[0].within_tolerance, 1.0);
+  EXPECT_DOUBLE_EQ(summary_.comparisons[0].tolerance, 0.06);
+}
+
+TEST_F(BuildComparisons, ResumeKeepsThemUnlessTheirSettingsChange) {
+  BuildInto(SceneJson(), false);
+  const fs::path c2c = dir_.File("out/compare/lifted_vs_ground.ply"), c2m = dir_.File("out/compare/lifted_vs_mesh.ply");
+  // Marks on the kept files: a comparison run again would replace them.
+  fs::last_write_time(c2c, fs::file_time_type::clock::now() - std::chrono::hours(1));
+  const fs::file_time_type old_time = fs::last_write_time(c2c);  // as the file system keeps it
+  fs::last_write_time(c2m, old_time);
+  const json a = BuildInto(SceneJson(), true);
+  EXPECT_TRUE(a.at("comparisons").at(0).at("resumed").get<bool>());
+  EXPECT_TRUE(a.at("comparisons").at(1).at("resumed").get<bool>());
+  EXPECT_NEAR(a["comparisons"][0].at("mean_m").get<double>(), kLift, 1e-6);  // the figures kept
+  EXPECT_EQ(fs::last_write_time(c2c), old_time);
+  EXPECT_EQ(fs::last_write_time(c2m), old_time);
+  // A changed tolerance redoes that comparison only.
+  const json b = BuildInto(SceneJson(0.04), true);
+  EXPECT_FALSE(b.at("comparisons").at(0).at("resumed").get<bool>());
+  EXPECT_TRUE(b.at("comparisons").at(1).at("resumed").get<bool>());
+  EXPECT_DOUBLE_EQ(b["comparisons"][0].at("within_tolerance").get<double>(), 0.0);
+  EXPECT_NE(fs::last_write_time(c2c), old_time);
+  EXPECT_EQ(fs::last_write_time(c2m), old_time);
+  // So does a changed layer file: the lifted layer moved 1 cm further up.
+  PointCloud lifted = io::ReadPointCloud(dir_.File("lifted.ply"));
+  for (Eigen::Vector3d& p : lifted.positions) p.z() += 0.01;
+  io::PointWriteOptions wide;
+  wide.precision = io::PositionPrecision::kFloat64;
+  io::WritePointCloud(dir_.File("lifted.ply"), lifted, wide);
+  const json c = BuildInto(SceneJson(0.04), true);
+  EXPECT_FALSE(c.at("comparisons").at(1).at("resumed").get<bool>());
+  EXPECT_NEAR(c["comparisons"][1].at("mean_m").get<double>(), kLift + 0.01, 1e-6);
+}
+
+TEST_F(BuildComparisons, AnUnknownReferenceIsNamedWhenTheSceneIsLoaded) {
+  json j = SceneJson();
+  j["comparisons"][0]["reference"] = "no_such_layer";
+  testing::WriteBytes(dir_.File("scene.json"), j.dump(2));
+  try {
+    LoadScene(dir_.File("scene.json"));
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/comparisons/0/reference: no layer named \"no_such_layer\""),
+              std::string::npos)
         << e.what();
   }
 }

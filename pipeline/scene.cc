@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <stdexcept>
@@ -333,6 +334,108 @@ SceneView ParseSceneView(const Node& n, const std::set<std::string>& layer_names
   return v;
 }
 
+// A name-to-value choice of the scene file (a method, a model, an orientation): the parse
+// function's std::invalid_argument becomes an error naming the key.
+template <typename T>
+T Choice(const Node& n, T (*parse)(const std::string&)) {
+  const std::string text = n.String();
+  try {
+    return parse(text);
+  } catch (const std::invalid_argument& e) {
+    n.Fail(e.what());
+  }
+}
+
+// The keys of a comparison that only one method reads.
+const std::map<std::string, compare::Method>& MethodKeys() {
+  static const std::map<std::string, compare::Method> keys = {
+      {"model", compare::Method::kC2C},
+      {"model_neighbours", compare::Method::kC2C},
+      {"unsigned", compare::Method::kC2M},
+      {"normal_scale", compare::Method::kM3C2},
+      {"projection_scale", compare::Method::kM3C2},
+      {"max_depth", compare::Method::kM3C2},
+      {"registration_error", compare::Method::kM3C2},
+      {"min_points", compare::Method::kM3C2},
+      {"orientation", compare::Method::kM3C2}};
+  return keys;
+}
+
+// The method's settings of a comparison (each key checked against the method first).
+void ParseMethodSettings(const Node& n, compare::DeviationOptions* d) {
+  for (const auto& [key, method] : MethodKeys()) {
+    if (n.Has(key) && method != d->method)
+      n[key].Fail("only with \"method\": \"" + compare::MethodName(method) + "\"");
+  }
+  if (n.Has("model")) d->c2c.local_model = Choice(n["model"], compare::ParseLocalModel);
+  if (n.Has("model_neighbours")) d->c2c.model_neighbours = static_cast<int>(n["model_neighbours"].Integer(3, 1000));
+  if (n.Has("unsigned")) d->c2m.signed_distance = !n["unsigned"].Bool();
+  if (n.Has("normal_scale")) d->m3c2.normal_scale = n["normal_scale"].Number(0, 1e9);
+  if (n.Has("projection_scale")) d->m3c2.projection_scale = n["projection_scale"].Number(0, 1e9);
+  if (n.Has("max_depth")) d->m3c2.max_depth = n["max_depth"].Number(0, 1e9);
+  if (n.Has("registration_error")) d->m3c2.registration_error = n["registration_error"].Number(0, 1e9);
+  if (n.Has("min_points")) d->m3c2.min_points = static_cast<int>(n["min_points"].Integer(2, 1000000));
+  if (n.Has("orientation")) d->m3c2.orientation = Choice(n["orientation"], compare::ParseNormalOrientation);
+  try {
+    d->Check();  // the rules between settings (a quadric needs 6 neighbours)
+  } catch (const std::invalid_argument& e) {
+    n.Fail(e.what());
+  }
+}
+
+// The reference of a comparison: a layer's name, or a file relative to the scene's folder.
+void ParseReference(const Node& n, const std::set<std::string>& layer_names, SceneComparison* c) {
+  const std::string text = n.String();
+  if (layer_names.count(text)) {
+    if (text == c->compared) n.Fail("layer \"" + text + "\" compared to itself");
+    if (c->deviation.method == compare::Method::kC2M)
+      n.Fail("c2m compares to a mesh: give a mesh file (PLY or OBJ), not the layer \"" + text + "\"");
+    c->reference_layer = text;
+    return;
+  }
+  c->reference_file = n.Path(false);
+  std::error_code ec;
+  if (!fs::is_regular_file(c->reference_file, ec))
+    n.Fail("no layer named \"" + text + "\" and no such file: " + c->reference_file);
+  std::string ext = fs::path(c->reference_file).extension().string();
+  for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  if (c->deviation.method == compare::Method::kC2M && ext != ".ply" && ext != ".obj")
+    n.Fail("c2m compares to a mesh: PLY or OBJ, not " + c->reference_file);
+}
+
+SceneComparison ParseComparison(const Node& n, const std::set<std::string>& layer_names) {
+  std::set<std::string> known = {"name", "compared", "reference", "method", "tolerance", "bins", "range"};
+  for (const auto& entry : MethodKeys()) known.insert(entry.first);
+  n.ExpectObject(known);
+  SceneComparison c;
+  for (const char* key : {"name", "compared", "reference"})
+    if (!n.Has(key)) n.Fail(std::string("missing key \"") + key + "\"");
+  c.name = n["name"].String();
+  if (!ValidName(c.name)) n["name"].Fail("a comparison name is 1-64 characters of A-Z a-z 0-9 _ - (it names files)");
+  c.compared = n["compared"].String();
+  if (!layer_names.count(c.compared)) n["compared"].Fail("no layer named \"" + c.compared + "\"");
+  if (n.Has("method")) c.deviation.method = Choice(n["method"], compare::ParseMethod);
+  ParseReference(n["reference"], layer_names, &c);
+  ParseMethodSettings(n, &c.deviation);
+  if (n.Has("tolerance")) c.summary.tolerance = n["tolerance"].Number(0, 1e9);
+  if (n.Has("bins")) c.summary.bins = static_cast<int>(n["bins"].Integer(1, 10000));
+  if (n.Has("range")) c.summary.range = n["range"].Number(0, 1e9);
+  return c;
+}
+
+// An array of named entries (views, comparisons), each parsed by `parse`; the names unique.
+template <typename T, typename Parse>
+std::vector<T> ParseNamedList(const Node& list, const std::string& what, Parse parse) {
+  std::vector<T> entries;
+  std::set<std::string> seen;
+  for (size_t i = 0; i < list.ArraySize(); ++i) {
+    entries.push_back(parse(list[i]));
+    if (!seen.insert(entries.back().name).second)
+      list[i]["name"].Fail(what + " name \"" + entries.back().name + "\" repeats");
+  }
+  return entries;
+}
+
 }  // namespace
 
 std::string LayerKindName(LayerKind kind) {
@@ -375,7 +478,7 @@ Scene LoadScene(const std::string& path) {
   }
   const Node root(scene.path, j, "");
   root.ExpectObject({"candi_scene", "name", "origin", "seed", "crs", "render", "views", "layers", "licence",
-                     "annotations"});
+                     "annotations", "comparisons"});
   if (!root.Has("candi_scene")) root.Fail("missing key \"candi_scene\" (the format version, 1)");
   if (root["candi_scene"].Integer(1, 1000) != 1) root["candi_scene"].Fail("this candi reads scene version 1");
   scene.name = root.Has("name") ? root["name"].String() : fs::path(path).stem().string();
@@ -424,13 +527,8 @@ Scene LoadScene(const std::string& path) {
     }
   }
   if (root.Has("views")) {
-    const Node views = root["views"];
-    std::set<std::string> view_names;
-    for (size_t i = 0; i < views.ArraySize(); ++i) {
-      scene.views.push_back(ParseSceneView(views[i], names));
-      if (!view_names.insert(scene.views.back().name).second)
-        views[i]["name"].Fail("view name \"" + scene.views.back().name + "\" repeats");
-    }
+    scene.views = ParseNamedList<SceneView>(root["views"], "view",
+                                            [&](const Node& n) { return ParseSceneView(n, names); });
   }
   if (root.Has("licence")) scene.licence = root["licence"].String();
   if (root.Has("annotations")) {
@@ -465,6 +563,10 @@ Scene LoadScene(const std::string& path) {
       }
       scene.annotations.push_back(a);
     }
+  }
+  if (root.Has("comparisons")) {
+    scene.comparisons = ParseNamedList<SceneComparison>(root["comparisons"], "comparison",
+                                                        [&](const Node& n) { return ParseComparison(n, names); });
   }
   return scene;
 }

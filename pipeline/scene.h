@@ -60,6 +60,18 @@
 //                     "max_image_size": 1600, "max_features": 4096 (SIFT, images),
 //                     "resolution_scale": 1, "iterations": 3
 //                     (dense stereo; images or workspace)
+//   }],
+//   "comparisons": [{                        deviation maps the build writes to compare/<name>.ply
+//     "name": "facade_vs_scan",              unique; [A-Za-z0-9_-]+ (it names files)
+//     "compared": "close",                   a layer: one distance per point of its built points
+//     "reference": "sheet" | "mesh.ply",     a layer's name, or a point file (for c2m a mesh, PLY
+//                                            or OBJ) in world coordinates; relative to this file
+//     "method": "c2c" | "c2m" | "m3c2",      default c2c (c2m needs a mesh file)
+//     "tolerance": 0.01, "bins": 60, "range": 0,     the summary (compare/report.h), m
+//     c2c:  "model": "none" | "plane" | "quadric", "model_neighbours": 12
+//     c2m:  "unsigned": false
+//     m3c2: "normal_scale", "projection_scale", "max_depth", "registration_error" (m),
+//           "min_points": 3, "orientation": "+z" | "-z" | "+x" | "-x" | "+y" | "-y" | "out"
 //   }]
 // }
 // Unknown keys, wrong types, missing files and bad values throw InputError naming the scene file
@@ -72,6 +84,8 @@
 #include <string>
 #include <vector>
 
+#include "compare/deviation.h"
+#include "compare/report.h"
 #include "core/point_cloud.h"
 #include "core/transform.h"
 
@@ -143,6 +157,18 @@ struct SceneAnnotation {
   std::string camera_json;           // an inline camera (view.json's format), or ""
 };
 
+// A deviation map the build writes once the layers are built (compare/deviation.h): the
+// compared layer's points (world coordinates, as layers/<name>.ply holds them) against a
+// reference layer's, or a file's.
+struct SceneComparison {
+  std::string name;             // unique among the comparisons; names compare/<name>.ply
+  std::string compared;         // a layer's name
+  std::string reference_layer;  // a layer's name, or "" (a file: reference_file)
+  std::string reference_file;   // absolute: a point file, or for C2M a mesh, in world coordinates
+  compare::DeviationOptions deviation;  // threads: set by the build
+  compare::SummaryOptions summary;
+};
+
 struct Scene {
   std::string path;   // the scene file
   std::string name;
@@ -156,6 +182,7 @@ struct Scene {
   std::vector<SceneLayer> layers;
   std::string licence;                        // the archive's licence text, shown by published pages
   std::vector<SceneAnnotation> annotations;
+  std::vector<SceneComparison> comparisons;
   std::string text;   // the file's bytes (hashed for provenance)
 };
 

@@ -505,5 +505,95 @@ TEST_F(SceneFile, ViewErrors) {
   ExpectError(two, "/views/1/name", "view name \"v\" repeats");
 }
 
+// Two point layers to compare, and a mesh file.
+json WithComparisons(const json& comparisons) {
+  json j = {{"candi_scene", 1}, {"comparisons", comparisons}};
+  j["layers"] = json::array({{{"name", "scan"}, {"kind", "points"}, {"file", "scan.ply"}},
+                             {{"name", "dense"}, {"kind", "points"}, {"file", "dense.ply"}}});
+  return j;
+}
+
+TEST_F(SceneFile, ComparisonsAndTheirDefaults) {
+  WriteBytes(dir_.File("wall.obj"), "x");
+  const Scene s = Load(WithComparisons(json::array(
+      {{{"name", "dense_vs_scan"}, {"compared", "dense"}, {"reference", "scan"}},
+       {{"name", "to_mesh"}, {"compared", "scan"}, {"reference", "wall.obj"}, {"method", "c2m"}, {"unsigned", true},
+        {"tolerance", 0.005}, {"bins", 20}, {"range", 0.1}},
+       {{"name", "m3c2"}, {"compared", "scan"}, {"reference", "dense"}, {"method", "m3c2"}, {"normal_scale", 0.4},
+        {"projection_scale", 0.2}, {"max_depth", 1}, {"registration_error", 0.003}, {"min_points", 5},
+        {"orientation", "out"}},
+       {{"name", "quadric"}, {"compared", "scan"}, {"reference", "dense.ply"}, {"model", "quadric"},
+        {"model_neighbours", 20}}})));
+  ASSERT_EQ(s.comparisons.size(), 4u);
+  const SceneComparison& plain = s.comparisons[0];
+  EXPECT_EQ(plain.name, "dense_vs_scan");
+  EXPECT_EQ(plain.compared, "dense");
+  EXPECT_EQ(plain.reference_layer, "scan");
+  EXPECT_TRUE(plain.reference_file.empty());
+  EXPECT_EQ(plain.deviation.method, compare::Method::kC2C);  // candi compare's defaults
+  EXPECT_EQ(plain.deviation.c2c.local_model, compare::LocalModel::kNone);
+  EXPECT_DOUBLE_EQ(plain.summary.tolerance, 0.01);
+  const SceneComparison& mesh = s.comparisons[1];
+  EXPECT_EQ(mesh.reference_file, Path("wall.obj"));
+  EXPECT_TRUE(mesh.reference_layer.empty());
+  EXPECT_EQ(mesh.deviation.method, compare::Method::kC2M);
+  EXPECT_FALSE(mesh.deviation.c2m.signed_distance);
+  EXPECT_DOUBLE_EQ(mesh.summary.tolerance, 0.005);
+  EXPECT_EQ(mesh.summary.bins, 20);
+  EXPECT_DOUBLE_EQ(mesh.summary.range, 0.1);
+  const compare::M3c2Options& m = s.comparisons[2].deviation.m3c2;
+  EXPECT_DOUBLE_EQ(m.normal_scale, 0.4);
+  EXPECT_DOUBLE_EQ(m.projection_scale, 0.2);
+  EXPECT_DOUBLE_EQ(m.max_depth, 1);
+  EXPECT_DOUBLE_EQ(m.registration_error, 0.003);
+  EXPECT_EQ(m.min_points, 5);
+  EXPECT_EQ(m.orientation, compare::NormalOrientation::kOutward);
+  const SceneComparison& q = s.comparisons[3];
+  EXPECT_EQ(q.reference_file, Path("dense.ply"));  // not a layer's name: a file
+  EXPECT_EQ(q.deviation.c2c.local_model, compare::LocalModel::kQuadric);
+  EXPECT_EQ(q.deviation.c2c.model_neighbours, 20);
+  EXPECT_TRUE(Load(Minimal()).comparisons.empty());
+}
+
+TEST_F(SceneFile, ComparisonErrors) {
+  const json ok = {{"name", "c"}, {"compared", "dense"}, {"reference", "scan"}};
+  auto with = [&](const json& changes) {
+    json c = ok;
+    for (auto it = changes.begin(); it != changes.end(); ++it) {
+      if (it.value().is_null()) c.erase(it.key());
+      else c[it.key()] = it.value();
+    }
+    return WithComparisons(json::array({c}));
+  };
+  ExpectError(WithComparisons(3), "/comparisons", "expected an array");
+  ExpectError(WithComparisons(json::array({3})), "/comparisons/0", "expected an object");
+  ExpectError(with({{"colour", 1}}), "/comparisons/0/colour", "unknown key");
+  ExpectError(with({{"name", nullptr}}), "/comparisons/0", "missing key \"name\"");
+  ExpectError(with({{"compared", nullptr}}), "/comparisons/0", "missing key \"compared\"");
+  ExpectError(with({{"reference", nullptr}}), "/comparisons/0", "missing key \"reference\"");
+  ExpectError(with({{"name", "a b"}}), "/comparisons/0/name", "a comparison name is 1-64 characters");
+  ExpectError(with({{"compared", "x"}}), "/comparisons/0/compared", "no layer named \"x\"");
+  ExpectError(with({{"reference", "x"}}), "/comparisons/0/reference",
+              "no layer named \"x\" and no such file: " + Path("x"));
+  ExpectError(with({{"reference", "dense"}}), "/comparisons/0/reference", "layer \"dense\" compared to itself");
+  ExpectError(with({{"method", "hausdorff"}}), "/comparisons/0/method", "must be c2c, c2m or m3c2");
+  ExpectError(with({{"method", "c2m"}}), "/comparisons/0/reference", "c2m compares to a mesh: give a mesh file");
+  ExpectError(with({{"method", "c2m"}, {"reference", "targets.csv"}}), "/comparisons/0/reference",
+              "c2m compares to a mesh: PLY or OBJ");
+  ExpectError(with({{"normal_scale", 0.2}}), "/comparisons/0/normal_scale", "only with \"method\": \"m3c2\"");
+  ExpectError(with({{"method", "m3c2"}, {"model", "plane"}}), "/comparisons/0/model",
+              "only with \"method\": \"c2c\"");
+  ExpectError(with({{"unsigned", true}}), "/comparisons/0/unsigned", "only with \"method\": \"c2m\"");
+  ExpectError(with({{"model", "cubic"}}), "/comparisons/0/model", "must be none, plane or quadric");
+  ExpectError(with({{"model", "quadric"}, {"model_neighbours", 4}}), "/comparisons/0", "model_neighbours");
+  ExpectError(with({{"model_neighbours", 2}}), "/comparisons/0/model_neighbours", "out of range");
+  ExpectError(with({{"method", "m3c2"}, {"orientation", "up"}}), "/comparisons/0/orientation", "must be +x");
+  ExpectError(with({{"method", "m3c2"}, {"max_depth", -1}}), "/comparisons/0/max_depth", "out of range");
+  ExpectError(with({{"tolerance", -0.01}}), "/comparisons/0/tolerance", "out of range");
+  ExpectError(with({{"bins", 0}}), "/comparisons/0/bins", "out of range");
+  json two = WithComparisons(json::array({ok, ok}));
+  ExpectError(two, "/comparisons/1/name", "comparison name \"c\" repeats");
+}
+
 }  // namespace
 }  // namespace candi::pipeline
