@@ -158,8 +158,13 @@ PreparedClouds Prepare(const PointCloud& reference, const PointCloud& compared,
   }
   p.compared = internal::RelativePositions(compared, p.origin);
   for (const auto& q : p.compared) p.compared_not_finite += q.allFinite() ? 0 : 1;
-  p.gap = internal::BoxGap(internal::FiniteWorldBounds(reference),
-                           internal::FiniteWorldBounds(compared));
+  // A gap small next to the clouds' size is a change (a floor raised 5 cm over 10 m: its flat
+  // box does not meet the other's), not clouds apart.
+  const Box3d reference_box = internal::FiniteWorldBounds(reference), compared_box = internal::FiniteWorldBounds(compared);
+  const double gap = internal::BoxGap(reference_box, compared_box);
+  const double size = std::max(reference_box.IsEmpty() ? 0.0 : reference_box.Extent().norm(),
+                               compared_box.IsEmpty() ? 0.0 : compared_box.Extent().norm());
+  p.gap = gap > 0.1 * size ? gap : 0.0;
   p.tree = std::make_unique<PointTree>(p.reference);
   return p;
 }

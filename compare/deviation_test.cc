@@ -169,6 +169,8 @@ TEST(C2cTest, BadInput) {
   ASSERT_FALSE(r2.warnings.empty());
   EXPECT_NE(r2.warnings[0].find("left out"), std::string::npos);
   EXPECT_THROW(C2c(Cloud({{kNaN, 0, 0}}), ref), InputError);
+  // A flat patch raised 5 cm (its box clear of the reference's flat one): a change, no warning.
+  EXPECT_TRUE(C2c(ref, Cloud(Patch(1, 0.1, 0.05, 0, 2))).warnings.empty());
   // Far apart: measured, and said.
   const auto far = C2c(ref, Cloud({{1000, 0, 0}}));
   ASSERT_FALSE(far.warnings.empty());
