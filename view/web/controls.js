@@ -690,7 +690,12 @@ window.CandiPage = function (backend) {
     if (!l) return;
     const div = (text, cls) => { const d = document.createElement('div'); d.textContent = text; if (cls) d.className = cls; box.appendChild(d); return d; };
     const swatch = (colour) => { const b = document.createElement('span'); b.className = 'swatch'; b.style.background = colour; return b; };
-    const num = (v) => (v === 0 ? '0' : Number(v).toPrecision(3).replace(/\.?0+(e|$)/, '$1'));
+    // 3 significant digits without trailing zeros after the point (100 stays 100; 0.0100 is 0.01).
+    const num = (v) => {
+      const t = Number(v).toPrecision(3);
+      if (t.includes('e')) return t.replace(/\.?0+e/, 'e');
+      return t.includes('.') ? t.replace(/\.?0+$/, '') : t;
+    };
     div(l.field, 'name');
     if (Array.isArray(l.classes)) {
       for (const c of l.classes) { const d = div(' ' + c.code + ' ' + c.name); d.prepend(swatch(c.colour)); }
