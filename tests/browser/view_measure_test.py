@@ -9,13 +9,16 @@ nearest first, and a pick where the top layer is hidden returns the visible laye
 never takes clipped-away points; a mouse click in measure mode adds a point, and distance, height
 difference and horizontal distance follow from the survey coordinates; a clipped converged frame
 equals `candi render --clip-plane` bit for bit; a section exported from the page holds the shown
-layers' lines. Timeouts only catch hangs; no verdict depends on speed.
+layers' lines. Point files viewed coloured by a field: the page's legend states the field, range
+and grey counts, and a pick gives the picked point's value. Timeouts only catch hangs; no verdict depends on speed.
 """
 import base64
 import json
 import math
 import os
+import shutil
 import sys
+import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -147,6 +150,71 @@ class MeasureInBrowser(ViewerPage):
         self.assertNotIn("foundation_C", m["dxf"])
         self.assertTrue(m["svg"].startswith("<?xml"))
         self.assertTrue(base64.b64decode(m["png_base64"]).startswith(b"\x89PNG"))
+
+
+class ColourByFieldInBrowser(unittest.TestCase):
+    """`candi view FILE --colour-by distance`: the page's legend states the field, the range and
+    the grey's counts, and a pick (and the measurement row) gives the picked point's value."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.dir = tempfile.mkdtemp(prefix="candi-view-field-")
+        # A 20 x 10 m sheet at survey coordinates whose distance is (x - 10) / 10: -1 west, +1
+        # east; the first point has none (nan), the second lies outside the range.
+        cls.origin = (416000.0, 9168000.0, 100.0)
+        ply = os.path.join(cls.dir, "deviation.ply")
+        rows = []
+        for i in range(200):
+            for j in range(100):
+                x, y = i * 0.1 + 0.05, j * 0.1 + 0.05
+                rows.append((x, y, (x - 10) / 10))
+        rows[0] = (rows[0][0], rows[0][1], float("nan"))
+        rows[1] = (rows[1][0], rows[1][1], 5.0)
+        with open(ply, "w") as f:
+            f.write("ply\nformat ascii 1.0\nelement vertex %d\nproperty double x\nproperty double y\n"
+                    "property double z\nproperty float scalar_distance\nend_header\n" % len(rows))
+            for x, y, d in rows:
+                f.write("%.3f %.3f %.3f %s\n" % (cls.origin[0] + x, cls.origin[1] + y, cls.origin[2], d))
+        cls.viewer = view_browser_test.Viewer(ply, args=("--colour-by", "distance", "--field-range", "-1,1"))
+        cls.browser = devtools.Browser(640, 480)
+        cls.browser.call("Page.enable")
+        cls.browser.call("Page.navigate", url=cls.viewer.url)
+        cls.browser.wait_for("window.candiViewer && candiViewer.stats.lastFrame !== null", HANG, "a first frame")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.browser.close()
+        cls.viewer.close()
+        shutil.rmtree(cls.dir, ignore_errors=True)
+
+    def test_legend_and_a_picked_value(self):
+        b = self.browser
+        legend = b.evaluate("(() => { const l = document.getElementById('legend'); return {hidden: l.hidden, "
+                            "text: l.innerText, bar: getComputedStyle(l.querySelector('.scale')).backgroundImage}; })()")
+        self.assertFalse(legend["hidden"], legend)
+        self.assertIn("distance", legend["text"])
+        for tick in ("-1", "0", "1", "1 outside", "1 without a value"):
+            self.assertIn(tick, legend["text"])
+        self.assertIn("linear-gradient", legend["bar"])
+        # Straight down at x = 15 m (distance 0.5): the pick's value is the picked point's own.
+        cx, cy = self.origin[0] + 15, self.origin[1] + 5
+        top = {"eye": [cx, cy, self.origin[2] + 30], "target": [cx, cy, self.origin[2]], "up": [0, 1, 0],
+               "projection": "perspective", "fov_y_deg": 40, "near": 0.01}
+        b.evaluate("candiViewer.setCamera(%s)" % json.dumps(top))
+        b.wait_for("(() => { const f = candiViewer.stats.lastFrame; return f && f.converged && "
+                   "f.seq === candiViewer.viewSeq() ? f : null; })()", HANG, "convergence")
+        c = b.evaluate("candiViewer.camera()")
+        r = b.evaluate("candiViewer.pick(%f, %f)" % (c["width"] / 2, c["height"] / 2), await_promise=True)
+        self.assertTrue(r["hit"], r)
+        hit = r["hits"][0]
+        expected = (hit["point"][0] - self.origin[0] - 10) / 10
+        self.assertAlmostEqual(hit["value"], expected, delta=hit["value_half_width"] + 1e-3)
+        self.assertAlmostEqual(hit["value"], 0.5, delta=0.05)
+        self.assertLess(hit["value_half_width"], 0.01)
+        # A measurement lists it beside the point.
+        b.evaluate("candiViewer.measureAt(%f, %f)" % (c["width"] / 2, c["height"] / 2), await_promise=True)
+        row = b.evaluate("document.querySelector('#measurements tbody tr').innerText")
+        self.assertIn("distance 0.", row)
 
 
 if __name__ == "__main__":
