@@ -133,10 +133,15 @@ class ViewerPage(unittest.TestCase):
     POINTS = 200000
 
     @classmethod
+    def open_viewer(cls):
+        """The viewer the page opens (a subclass may serve other data from cls.dir)."""
+        cls.archive = foundation_archive(cls.dir, cls.POINTS)
+        return Viewer(cls.archive)
+
+    @classmethod
     def setUpClass(cls):
         cls.dir = tempfile.mkdtemp(prefix="candi-view-test-")
-        cls.archive = foundation_archive(cls.dir, cls.POINTS)
-        cls.viewer = Viewer(cls.archive)
+        cls.viewer = cls.open_viewer()
         cls.browser = devtools.Browser(640, 480)
         cls.browser.call("Page.enable")
         cls.browser.call("Page.navigate", url=cls.viewer.url)

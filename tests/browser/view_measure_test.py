@@ -16,9 +16,7 @@ import base64
 import json
 import math
 import os
-import shutil
 import sys
-import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -152,13 +150,12 @@ class MeasureInBrowser(ViewerPage):
         self.assertTrue(base64.b64decode(m["png_base64"]).startswith(b"\x89PNG"))
 
 
-class ColourByFieldInBrowser(unittest.TestCase):
+class ColourByFieldInBrowser(ViewerPage):
     """`candi view FILE --colour-by distance`: the page's legend states the field, the range and
     the grey's counts, and a pick (and the measurement row) gives the picked point's value."""
 
     @classmethod
-    def setUpClass(cls):
-        cls.dir = tempfile.mkdtemp(prefix="candi-view-field-")
+    def open_viewer(cls):
         # A 20 x 10 m sheet at survey coordinates whose distance is (x - 10) / 10: -1 west, +1
         # east; the first point has none (nan), the second lies outside the range.
         cls.origin = (416000.0, 9168000.0, 100.0)
@@ -175,17 +172,7 @@ class ColourByFieldInBrowser(unittest.TestCase):
                     "property double z\nproperty float scalar_distance\nend_header\n" % len(rows))
             for x, y, d in rows:
                 f.write("%.3f %.3f %.3f %s\n" % (cls.origin[0] + x, cls.origin[1] + y, cls.origin[2], d))
-        cls.viewer = view_browser_test.Viewer(ply, args=("--colour-by", "distance", "--field-range", "-1,1"))
-        cls.browser = devtools.Browser(640, 480)
-        cls.browser.call("Page.enable")
-        cls.browser.call("Page.navigate", url=cls.viewer.url)
-        cls.browser.wait_for("window.candiViewer && candiViewer.stats.lastFrame !== null", HANG, "a first frame")
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.browser.close()
-        cls.viewer.close()
-        shutil.rmtree(cls.dir, ignore_errors=True)
+        return view_browser_test.Viewer(ply, args=("--colour-by", "distance", "--field-range", "-1,1"))
 
     def test_legend_and_a_picked_value(self):
         b = self.browser
