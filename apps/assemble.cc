@@ -71,6 +71,7 @@ struct PackArgs {
   render::PackOptions options;
   double memory_mb = 400;    // sort buffers (~100 bytes a point)
   std::string columns;       // XYZ/PTS inputs
+  FieldArgs field;           // the points coloured by a scalar field
 };
 
 int RunPack(const PackArgs& a) {
@@ -78,7 +79,9 @@ int RunPack(const PackArgs& a) {
   render::PackOptions o = a.options;
   o.memory_points = std::max<uint64_t>(o.chunk_points, static_cast<uint64_t>(a.memory_mb * 1048576.0 / 100));
   ConsoleProgress progress("pack");
-  const render::PackSummary s = render::PackFiles(o, a.inputs, a.columns, a.output, progress.Callback());
+  const FieldColouring colour_by = ParseFieldColouring(a.field);
+  const render::PackSummary s =
+      render::PackFiles(o, a.inputs, a.columns, a.output, progress.Callback(), colour_by);
   progress.Finish();
   std::printf("%s: %llu points in %llu chunks, %llu data file(s), %.2f bytes/point, %.1f s (%.1f M points/s: "
               "bounds %.1f s, sort and write %.1f s; input hashes %.1f s during the bounds)%s, %zu-byte records; "
@@ -88,6 +91,13 @@ int RunPack(const PackArgs& a) {
               s.seconds, s.points / s.seconds / 1e6, s.bounds_seconds, s.sort_seconds, s.hash_seconds,
               s.spilled_points ? ", sorted on disk" : "", s.record_bytes, 1e3 * s.max_error[0], 1e3 * s.max_error[1],
               1e3 * s.max_error[2]);
+  if (s.colour_by) {
+    const FieldLegend& l = *s.colour_by;
+    std::printf("  coloured by %s (%s, %s to %s): %llu of %llu points outside the range, %llu without a value (grey)\n",
+                l.field.c_str(), FieldScaleName(l.scale), FormatDouble(l.lo).c_str(), FormatDouble(l.hi).c_str(),
+                static_cast<unsigned long long>(l.outside), static_cast<unsigned long long>(l.count),
+                static_cast<unsigned long long>(l.undefined));
+  }
   return kOk;
 }
 
@@ -101,8 +111,11 @@ void AddPack(Command& root) {
   c.Option("--memory", a.memory_mb, "MB for sorting (larger inputs are bucketed on disk)");
   c.Option("--columns", a.columns, "XYZ/PTS column spec");
   c.Option("--threads", a.options.threads, "Threads (0: all)").Range(0, 256);
+  AddFieldColouring(c, a.field);
   c.Run([&a] { return RunPack(a); });
-  c.Footer("Example: candi pack site.las photos.ply -o site.archive && candi render site.archive -o site.png");
+  c.Footer("Example: candi pack site.las photos.ply -o site.archive && candi render site.archive -o site.png   "
+           "(candi pack deviations.ply --colour-by distance -o dev.archive: render, view and publish show its "
+           "legend)");
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 
 #include "apps/cli.h"
 #include "bench/bench.h"
+#include "core/field_colour.h"
 #include "pipeline/build.h"
 #include "pipeline/demo_site.h"
 #include "reconstruction/photogrammetry/cleaning.h"
@@ -31,6 +32,15 @@ void AddLookCommands(Command& root);      // render, view, publish, section, opa
 void AddOpacity(Command& root);           // opacity (look.cc: SPBR opacity, by the renderer)
 void AddDemo(Command& root);              // demo (assemble.cc: it builds the bundled example)
 void AddBenchCommands(Command& root);     // bench and its subcommands (bench_commands.cc)
+
+// --colour-by, --field-range and --field-scale of render, view and pack: points coloured by a
+// scalar field (look.cc).
+struct FieldArgs {
+  std::string field, range, scale = "auto";
+};
+void AddFieldColouring(Command& c, FieldArgs& f);
+// std::invalid_argument for a bad range or scale, or a range or scale without a field.
+FieldColouring ParseFieldColouring(const FieldArgs& f);
 
 // candi-pcl (pcl_commands.cc).
 struct RegisterArgs {

@@ -53,10 +53,7 @@ void AddClip(Command& c, ClipArgs& clip) {
            "(world coordinates; repeat for several)").Repeatable();
 }
 
-// --colour-by, --field-range and --field-scale: points coloured by a scalar field.
-struct FieldArgs {
-  std::string field, range, scale = "auto";
-};
+}  // namespace
 
 void AddFieldColouring(Command& c, FieldArgs& f) {
   c.Option("--colour-by", f.field, "Colour the points by a scalar field (e.g. distance from candi compare, "
@@ -84,6 +81,8 @@ FieldColouring ParseFieldColouring(const FieldArgs& f) {
   c.Check();
   return c;
 }
+
+namespace {
 
 // --up, --from and --cameras: the default view's orientation.
 struct OrientationArgs {

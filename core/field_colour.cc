@@ -69,6 +69,22 @@ Rgb8 FieldLegend::Colour(double value) const {
   return scale == FieldScale::kDiverging ? DivergingColour(2 * t - 1) : SequentialColour(t);
 }
 
+std::vector<FieldLegend::ColourRun> FieldLegend::ColourRuns() const {
+  std::vector<ColourRun> runs;
+  if (scale == FieldScale::kClasses) return runs;
+  // The values drawn in one colour form one run along the scale (its colours change
+  // monotonically between stops): consecutive grid values of the same colour.
+  for (int i = 0; i <= kColourSteps; ++i) {
+    const Rgb8 c = Colour(lo + (hi - lo) * i / kColourSteps);
+    if (!runs.empty() && runs.back().colour == c) {
+      runs.back().last = i;
+    } else {
+      runs.push_back({c, i, i});
+    }
+  }
+  return runs;
+}
+
 std::optional<double> FieldLegend::ValueOfColour(Rgb8 colour, double* half_width) const {
   *half_width = 0;
   if (colour == kOutOfRangeGrey) return std::nullopt;
@@ -78,20 +94,31 @@ std::optional<double> FieldLegend::ValueOfColour(Rgb8 colour, double* half_width
     }
     return std::nullopt;
   }
-  // The values drawn in this colour form one run along the scale (its colours change
-  // monotonically between stops); find its ends on a fine grid.
-  constexpr int kSteps = 1 << 14;
+  const std::vector<ColourRun> runs = ColourRuns();
+  const double step = (hi - lo) / kColourSteps;
   int first = -1, last = -1;
-  for (int i = 0; i <= kSteps; ++i) {
-    if (Colour(lo + (hi - lo) * i / kSteps) == colour) {
-      if (first < 0) first = i;
-      last = i;
+  for (const ColourRun& r : runs) {
+    if (!(r.colour == colour)) continue;
+    if (first < 0) first = r.first;
+    last = r.last;
+  }
+  if (first >= 0) {
+    // The colour's values reach past the samples that show it by less than a step either side.
+    *half_width = 0.5 * (last - first + 2) * step;
+    return lo + 0.5 * (first + last) * step;
+  }
+  // A colour the samples skip: where two channels change within one step of the samples, the
+  // colour between the two changes is drawn only inside that step. It lies channel by channel
+  // between the runs on either side of the step.
+  auto between = [](uint8_t c, uint8_t a, uint8_t b) { return (a <= c && c <= b) || (b <= c && c <= a); };
+  for (size_t k = 0; k + 1 < runs.size(); ++k) {
+    const Rgb8 a = runs[k].colour, b = runs[k + 1].colour;
+    if (between(colour.r, a.r, b.r) && between(colour.g, a.g, b.g) && between(colour.b, a.b, b.b)) {
+      *half_width = 0.5 * step;
+      return lo + (runs[k].last + 0.5) * step;
     }
   }
-  if (first < 0) return std::nullopt;
-  const double step = (hi - lo) / kSteps;
-  *half_width = 0.5 * (last - first + 1) * step;
-  return lo + 0.5 * (first + last) * step;
+  return std::nullopt;
 }
 
 std::vector<double> FieldValues(const PointCloud& cloud, const std::string& field, const std::string& name) {
@@ -124,9 +151,11 @@ FieldLegend ResolveFieldColouring(const FieldColouring& c, const std::vector<con
         positive |= x > 0;
       }
     }
-    legend.scale = c.field == "classification"                   ? FieldScale::kClasses
-                   : c.field == "distance" || (negative && positive) ? FieldScale::kDiverging
-                                                                      : FieldScale::kSequential;
+    // An elevation is a level, not a deviation: sequential even where it crosses zero.
+    const bool level = c.field == "elevation";
+    legend.scale = c.field == "classification"                              ? FieldScale::kClasses
+                   : c.field == "distance" || (negative && positive && !level) ? FieldScale::kDiverging
+                                                                                 : FieldScale::kSequential;
   }
   if (legend.scale == FieldScale::kClasses) {
     std::set<int> present;

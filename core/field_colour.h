@@ -51,6 +51,15 @@ struct FieldLegend {
   // they reach either side (8-bit colours: about (hi - lo) / 1000). Classes: the class code, 0.
   // None for the grey (outside the range, or undefined) or a colour not on the scale.
   std::optional<double> ValueOfColour(Rgb8 colour, double* half_width) const;
+  // The scale sampled at kColourSteps + 1 even values lo + (hi - lo) * i / kColourSteps: runs of
+  // consecutive samples drawn in one colour, in value order (what ValueOfColour reads; a page
+  // decodes a picked colour from them). Empty for classes.
+  static constexpr int kColourSteps = 1 << 14;
+  struct ColourRun {
+    Rgb8 colour;
+    int first, last;  // sample indices, inclusive
+  };
+  std::vector<ColourRun> ColourRuns() const;
 };
 
 // The field's values of `cloud` in point order (double; world z for "elevation"). `name` names

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <set>
 
 #include "core/check.h"
 
@@ -163,6 +164,19 @@ TEST(FieldColour, AColourReadsBackAsItsValue) {
     EXPECT_LE(std::abs(*back - v), half + 1e-12) << v;
     EXPECT_LT(half, 0.0002) << v;  // 8-bit colours: about a hundredth of the range at worst
   }
+  // Every value's colour, over a sweep far finer than the scale's samples (colours the samples
+  // skip included: where two channels change within one sample step).
+  size_t worst = 0;
+  double worst_error = 0;
+  for (int i = 0; i <= 200000; ++i) {
+    const double v = l.lo + (l.hi - l.lo) * i / 200000.0;
+    double half = 0;
+    const std::optional<double> back = l.ValueOfColour(l.Colour(v), &half);
+    ASSERT_TRUE(back.has_value()) << v;
+    ASSERT_LE(std::abs(*back - v), half + 1e-12) << v;
+    if (std::abs(*back - v) > worst_error) worst_error = std::abs(*back - v), worst = i;
+  }
+  EXPECT_LT(worst_error, 0.0002) << "at sample " << worst;
   double half = 0;
   EXPECT_FALSE(l.ValueOfColour(kOutOfRangeGrey, &half).has_value());
   EXPECT_FALSE(l.ValueOfColour({0, 255, 0}, &half).has_value());  // not on the scale
@@ -171,6 +185,49 @@ TEST(FieldColour, AColourReadsBackAsItsValue) {
   classes.classes = {2, 6};
   EXPECT_EQ(classes.ValueOfColour(ClassColour(6), &half), 6.0);
   EXPECT_FALSE(classes.ValueOfColour(ClassColour(9), &half).has_value());  // not present
+}
+
+// The runs a page decodes picks from: they tile the samples in order, each a different colour
+// from the one before, and the colours come back in the order of the values (the scale is
+// monotonic between its stops, so no colour runs twice).
+TEST(FieldColour, ColourRunsTileTheScaleOnce) {
+  for (FieldScale scale : {FieldScale::kDiverging, FieldScale::kSequential}) {
+    FieldLegend l;
+    l.scale = scale;
+    l.lo = -2;
+    l.hi = 3;
+    const std::vector<FieldLegend::ColourRun> runs = l.ColourRuns();
+    ASSERT_GT(runs.size(), 100u) << FieldScaleName(scale);  // 8-bit colours: hundreds along a scale
+    EXPECT_EQ(runs.front().first, 0);
+    EXPECT_EQ(runs.back().last, FieldLegend::kColourSteps);
+    std::set<uint32_t> seen;
+    for (size_t k = 0; k < runs.size(); ++k) {
+      if (k > 0) {
+        EXPECT_EQ(runs[k].first, runs[k - 1].last + 1);
+      }
+      EXPECT_LE(runs[k].first, runs[k].last);
+      const Rgb8 c = runs[k].colour;
+      EXPECT_TRUE(seen.insert((c.r << 16) | (c.g << 8) | c.b).second) << "colour of run " << k << " runs twice";
+    }
+  }
+  FieldLegend classes;
+  classes.scale = FieldScale::kClasses;
+  EXPECT_TRUE(classes.ColourRuns().empty());
+}
+
+// An elevation crossing zero (a site near sea level) is a level, not a deviation: sequential.
+TEST(FieldColour, ElevationCrossingZeroIsSequential) {
+  PointCloud cloud = CloudWithField({-1, 0, 2}, "height");
+  cloud.frame.origin.z() = -0.001;  // z: -1, 0, +1 mm
+  const std::vector<double> z = FieldValues(cloud, "elevation", "cloud");
+  ASSERT_LT(z.front(), 0);
+  ASSERT_GT(z.back(), 0);
+  FieldColouring c;
+  c.field = "elevation";
+  EXPECT_EQ(ResolveFieldColouring(c, {&z}).scale, FieldScale::kSequential);
+  c.field = "height";  // any other signed field: diverging
+  const std::vector<double> h = FieldValues(cloud, "height", "cloud");
+  EXPECT_EQ(ResolveFieldColouring(c, {&h}).scale, FieldScale::kDiverging);
 }
 
 }  // namespace

@@ -286,10 +286,11 @@ RenderedImage RenderArchiveEnsembles(const RenderOptions& o, const render::Archi
   }
   if (o.colour_by.active()) {
     throw std::invalid_argument("colouring by a field needs point files: an archive holds the points' colours, "
-                                "not their fields");
+                                "not their fields (candi pack --colour-by packs them coloured)");
   }
   const render::ArchiveManifest& m = archive.manifest();
   RenderedImage image;
+  image.legend = m.colour_by;  // packed coloured by a field: the image carries its legend
   image.mode = ranks > 1 ? "archive, MPI" : "archive";
   image.world_camera = WorldCamera(o, m.bounds.Translated(m.frame.origin));
   const int repeat_level = RepeatLevel(o);

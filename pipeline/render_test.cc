@@ -194,6 +194,22 @@ TEST(RenderPointFiles, ColouredByAFieldWithItsLegendInThePng) {
   o.colour_by.field = "distance";
   o.mode = RenderMode::kStream;
   EXPECT_THROW(RenderPointFiles(o, {file}), std::invalid_argument);
+
+  // Packed coloured (candi pack --colour-by), the archive renders with the same legend.
+  render::PackFiles(render::PackOptions(), {file}, "", dir.File("arch"), nullptr, o.colour_by);
+  const render::Archive archive(dir.File("arch"));
+  RenderOptions a = o;
+  a.mode = RenderMode::kAuto;
+  a.colour_by = FieldColouring();
+  const RenderedImage packed = RenderArchiveEnsembles(a, archive, 0, 1);
+  ASSERT_TRUE(packed.legend.has_value());
+  EXPECT_EQ(packed.legend->field, "distance");
+  EXPECT_EQ(packed.legend->undefined, 1u);
+  out.png = dir.File("archive.png");
+  WriteRender(a, packed, out);
+  EXPECT_EQ(io::ReadPng(out.png).text.at("candi:colour_by"), png.text.at("candi:colour_by"));
+  a.colour_by = o.colour_by;  // an archive holds colours, not fields: colouring it again is refused
+  EXPECT_THROW(RenderArchiveEnsembles(a, archive, 0, 1), std::invalid_argument);
 }
 
 }  // namespace

@@ -152,6 +152,41 @@ Eigen::Vector3d GetVec(const Json& j, const char* key, const std::string& path, 
   return {v[0], v[1], v[2]};
 }
 
+// The colouring by a field the points were packed in: what a legend needs (the field, the
+// scale, the range, the classes present, the counts).
+Json ColourByJson(const FieldLegend& l) {
+  Json j = {{"field", l.field},   {"scale", FieldScaleName(l.scale)}, {"lo", l.lo},
+            {"hi", l.hi},         {"count", l.count},                 {"outside", l.outside},
+            {"undefined", l.undefined}};
+  if (l.scale == FieldScale::kClasses) j["classes"] = l.classes;
+  return j;
+}
+
+FieldLegend ParseColourBy(const Json& j, const std::string& path) {
+  const std::string where = "colour_by";
+  if (!j.is_object()) throw InputError(path, where, "expected an object");
+  FieldLegend l;
+  l.field = Get<std::string>(j, "field", path, where);
+  if (l.field.empty()) throw InputError(path, where + ".field", "empty");
+  const std::string scale = Get<std::string>(j, "scale", path, where);
+  try {
+    l.scale = ParseFieldScale(scale);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path, where + ".scale", e.what());
+  }
+  if (l.scale == FieldScale::kAuto) throw InputError(path, where + ".scale", "a packed colouring has a resolved scale");
+  l.lo = Get<double>(j, "lo", path, where);
+  l.hi = Get<double>(j, "hi", path, where);
+  if (!std::isfinite(l.lo) || !std::isfinite(l.hi) || (l.scale != FieldScale::kClasses && !(l.lo < l.hi))) {
+    throw InputError(path, where, "expected finite lo < hi");
+  }
+  l.count = Get<uint64_t>(j, "count", path, where);
+  l.outside = Get<uint64_t>(j, "outside", path, where);
+  l.undefined = Get<uint64_t>(j, "undefined", path, where);
+  if (l.scale == FieldScale::kClasses) l.classes = Get<std::vector<int>>(j, "classes", path, where);
+  return l;
+}
+
 }  // namespace
 
 std::string ArchiveManifest::ToJson() const {
@@ -192,6 +227,7 @@ std::string ArchiveManifest::ToJson() const {
                  {"hash", Hex(ch.hash)}});
   }
   j["chunks"] = c;
+  if (colour_by) j["colour_by"] = ColourByJson(*colour_by);
   return j.dump(1) + "\n";
 }
 
@@ -307,6 +343,7 @@ ArchiveManifest ArchiveManifest::FromJson(const std::string& text, const std::st
     throw InputError(path, "points", "the chunks hold " + std::to_string(next) + " points, the manifest says " +
                                          std::to_string(m.points));
   }
+  if (j.contains("colour_by")) m.colour_by = ParseColourBy(j["colour_by"], path);
   return m;
 }
 

@@ -37,10 +37,12 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/box.h"
+#include "core/field_colour.h"
 #include "core/local_frame.h"
 #include "core/point_cloud.h"
 
@@ -136,6 +138,9 @@ struct ArchiveManifest {
   std::vector<ArchiveSource> sources;
   std::vector<ArchiveFile> files;
   std::vector<ArchiveChunk> chunks;
+  // Points packed coloured by a scalar field (candi pack --colour-by): the colouring, so that
+  // renders draw its legend and pages read a picked colour back as the field's value.
+  std::optional<FieldLegend> colour_by;
 
   std::string ToJson() const;
   // Throws InputError naming `path` and the field for anything malformed.

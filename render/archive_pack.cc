@@ -376,6 +376,7 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   ArchiveManifest manifest;
   manifest.chunk_points = options.chunk_points;
   manifest.shuffle_seed = options.seed;
+  manifest.colour_by = options.colour_by;
   // The layers, in the order their first input comes; the inputs of each.
   std::vector<std::vector<size_t>> layer_inputs;
   for (size_t k = 0; k < inputs.size(); ++k) {
@@ -575,6 +576,7 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   });
 
   summary.points = manifest.points;
+  summary.colour_by = manifest.colour_by;
   summary.chunks = manifest.chunks.size();
   summary.files = manifest.files.size();
   for (const ArchiveFile& f : manifest.files) summary.bytes += f.bytes;
@@ -583,7 +585,14 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
 }
 
 PackSummary PackFiles(const PackOptions& options, const std::vector<std::string>& files, const std::string& columns,
-                      const std::string& output_dir, const ProgressCallback& progress) {
+                      const std::string& output_dir, const ProgressCallback& progress,
+                      const FieldColouring& colour_by) {
+  if (colour_by.active()) {
+    PackOptions coloured = options;
+    coloured.colour_by = ResolveFieldColouringOfFiles(files, columns, colour_by, progress);
+    return PackArchive(coloured, PackInputsColouredByField(files, columns, *coloured.colour_by), output_dir,
+                       progress);
+  }
   std::vector<PackInput> inputs;
   for (const std::string& file : files) inputs.push_back(PackInputFromFile(file, columns));
   return PackArchive(options, inputs, output_dir, progress);

@@ -24,9 +24,11 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/field_colour.h"
 #include "core/progress.h"
 #include "io/point_io.h"
 #include "render/archive.h"
@@ -47,6 +49,9 @@ struct PackOptions {
   // directly: PLY's bounds and hash from one read, records without widening to doubles. false:
   // through their point readers (the same archive). For tests and benchmarks.
   bool direct_reads = true;
+  // The inputs' colours are a scalar field's (PackFiles with a colouring): recorded in the
+  // manifest (ArchiveManifest::colour_by).
+  std::optional<FieldLegend> colour_by;
   void Check() const;
 };
 
@@ -76,14 +81,27 @@ struct PackSummary {
   // hashing the input files for the manifest (on another thread, during pass 1).
   double bounds_seconds = 0, sort_seconds = 0, hash_seconds = 0;
   double max_error[3] = {0, 0, 0};  // largest quantization step / 2 over the chunks, m
+  std::optional<FieldLegend> colour_by;  // the colouring by a field the manifest records
 };
 
 PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>& inputs,
                         const std::string& output_dir, const ProgressCallback& progress = nullptr);
 // Point files (one layer each, named by the file's stem; `columns` for XYZ/PTS) packed into
-// `output_dir`.
+// `output_dir`. With `colour_by` active, the points are coloured by that scalar field (one
+// colouring over every file, resolved from their values before anything is written; InputError
+// naming a file without the field), and the manifest records the colouring.
 PackSummary PackFiles(const PackOptions& options, const std::vector<std::string>& files, const std::string& columns,
-                      const std::string& output_dir, const ProgressCallback& progress = nullptr);
+                      const std::string& output_dir, const ProgressCallback& progress = nullptr,
+                      const FieldColouring& colour_by = FieldColouring());
+
+// The inputs of point files whose colours are replaced by a scalar field's in `legend` (resolved
+// over every file's values by ResolveFieldColouringOfFiles). Each reads the file with its
+// scalar fields; `legend` must outlive them.
+std::vector<PackInput> PackInputsColouredByField(const std::vector<std::string>& files, const std::string& columns,
+                                                 const FieldLegend& legend);
+// The colouring of `colour_by` over the values of every file's field (one read of each).
+FieldLegend ResolveFieldColouringOfFiles(const std::vector<std::string>& files, const std::string& columns,
+                                         const FieldColouring& colour_by, const ProgressCallback& progress = nullptr);
 
 // The hash of a file recorded in the manifest: xxHash64 over the xxHash64s of its 64 MiB blocks.
 uint64_t HashFile(const std::string& path, uint64_t* bytes);

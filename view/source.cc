@@ -132,6 +132,7 @@ ViewerSource FromBuild(const fs::path& dir, const render::Orientation& orientati
   const render::Archive archive(source.archive_dir);
   const render::ArchiveManifest& m = archive.manifest();
   SceneSettings(p, &source);
+  source.legend = m.colour_by;
   source.first_view = render::FirstView(m.bounds.Translated(m.frame.origin), source.first_view.width,
                                 source.first_view.height, orientation);
   if (p.contains("views") && p["views"].is_array()) {
@@ -172,6 +173,14 @@ json LegendJson(const FieldLegend& l) {
     json stops = json::array();
     for (int i = 0; i <= 10; ++i) stops.push_back(Hex(l.Colour(l.lo + (l.hi - l.lo) * i / 10.0)));
     j["stops"] = stops;
+    // What a picked colour stands for, for a page without a server (candi publish): the scale's
+    // colours along `steps` + 1 even values from lo to hi, as runs [0xRRGGBB, first, last].
+    json runs = json::array();
+    for (const FieldLegend::ColourRun& r : l.ColourRuns()) {
+      runs.push_back({(r.colour.r << 16) | (r.colour.g << 8) | r.colour.b, r.first, r.last});
+    }
+    j["steps"] = FieldLegend::kColourSteps;
+    j["runs"] = runs;
   }
   return j;
 }
@@ -239,76 +248,18 @@ ViewerSource OpenViewerSource(const std::string& path, const render::Orientation
   const render::Archive archive(path);
   const render::ArchiveManifest& m = archive.manifest();
   source.first_view = render::FirstView(m.bounds.Translated(m.frame.origin), 1024, 768, orientation);
+  source.legend = m.colour_by;
   return source;
 }
-
-namespace {
-
-// A file's points with their colours replaced by a field's.
-class FieldColouringReader : public io::PointReader {
- public:
-  FieldColouringReader(std::unique_ptr<io::PointReader> inner, const FieldLegend& legend)
-      : io::PointReader(inner->path()), inner_(std::move(inner)), legend_(legend) {
-    info_ = inner_->info();
-    info_.schema.colors = true;
-  }
-  size_t Read(size_t max_points, PointCloud* chunk) override {
-    const size_t n = inner_->Read(max_points, chunk);
-    if (n > 0) ColourByField(legend_, FieldValues(*chunk, legend_.field, path_), chunk);
-    points_read_ += n;
-    return n;
-  }
-
- private:
-  std::unique_ptr<io::PointReader> inner_;
-  const FieldLegend& legend_;
-};
-
-io::PointReadOptions ReadWithFields(const std::string& columns) {
-  io::PointReadOptions read;
-  read.columns = columns;
-  read.scalar_fields = true;
-  return read;
-}
-
-// The colouring over every file's values of the field (read once, streaming).
-FieldLegend ResolveOverFiles(const std::vector<std::string>& files, const std::string& columns,
-                             const FieldColouring& colour_by) {
-  std::vector<std::vector<double>> values(files.size());
-  for (size_t k = 0; k < files.size(); ++k) {
-    auto reader = io::OpenPointReader(files[k], ReadWithFields(columns));
-    PointCloud chunk;
-    while (reader->Read(size_t{1} << 20, &chunk) > 0) {
-      const std::vector<double> v = FieldValues(chunk, colour_by.field, files[k]);
-      values[k].insert(values[k].end(), v.begin(), v.end());
-    }
-  }
-  std::vector<const std::vector<double>*> pointers;
-  for (const auto& v : values) pointers.push_back(&v);
-  return ResolveFieldColouring(colour_by, pointers);
-}
-
-}  // namespace
 
 ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,
                               const render::Orientation& orientation, const ProgressCallback& progress,
                               const FieldColouring& colour_by) {
-  std::optional<FieldLegend> legend;
-  if (colour_by.active()) legend = ResolveOverFiles(files, columns, colour_by);  // before a folder is made
   std::string tmpl = (fs::temp_directory_path() / "candi-view-XXXXXX").string();
   if (mkdtemp(tmpl.data()) == nullptr) throw InputError(tmpl, "", "cannot create a temporary directory");
   const std::string archive_dir = tmpl + "/archive";
   try {
-    std::vector<render::PackInput> inputs;
-    for (const std::string& in : files) {
-      inputs.push_back(render::PackInputFromFile(in, columns));
-      if (legend) {
-        inputs.back().open = [in, columns, &legend]() -> std::unique_ptr<io::PointReader> {
-          return std::make_unique<FieldColouringReader>(io::OpenPointReader(in, ReadWithFields(columns)), *legend);
-        };
-      }
-    }
-    render::PackArchive(render::PackOptions(), inputs, archive_dir, progress);
+    render::PackFiles(render::PackOptions(), files, columns, archive_dir, progress, colour_by);
   } catch (...) {
     std::error_code ec;
     fs::remove_all(tmpl, ec);
@@ -318,7 +269,6 @@ ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::
   source.kind = "points";
   source.title = fs::path(files.front()).filename().string() + (files.size() > 1 ? " + " + std::to_string(files.size() - 1) : "");
   source.temporary_dir = tmpl;
-  source.legend = legend;
   return source;
 }
 

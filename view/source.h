@@ -46,7 +46,8 @@ struct ViewerSource {
   // annotations the scene gives, and per layer its kind, whether it was measured (scanned) or
   // reconstructed, its method and its sources. Empty for an archive or point files.
   std::string provenance_json;
-  // Point files packed coloured by a scalar field: the colouring, for the page's legend.
+  // Points packed coloured by a scalar field (candi pack or view --colour-by; the archive's
+  // manifest records it): the colouring, for the page's legend and the values of picks.
   std::optional<FieldLegend> legend;
   // The page's scene description (JSON): title, kind, layers, views, settings, first view,
   // bounds (world), origin, points, provenance (when known), the legend (when coloured).

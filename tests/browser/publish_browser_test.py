@@ -16,6 +16,8 @@
 - A damaged, a missing and a truncated data file: the page names each and draws the rest.
 - A build in survey coordinates (10^6 m): the same image as candi render's; its licence,
   annotations and provenance (measured or reconstructed) reach the page.
+- Points packed coloured by a field: the legend on the page, and a pick's value on the client
+  (decoded from the point's colour) equal to the picked point's field.
 - candi publish on bad input exits 2 naming the path and leaves nothing behind.
 Usage: publish_browser_test.py CANDI SOURCE_DIR"""
 import base64
@@ -101,6 +103,62 @@ def compare(browser, work, archive, name, failures):
         failures.append("%s: %.4f %% of pixels within 1 level (>= 99 %% wanted), %d beyond 8 (<= 0.01 %% wanted)"
                         % (name, 100 * within1, beyond8))
     return web
+
+
+def coloured_site(work):
+    failures = []
+    # A 20 x 10 m sheet at survey coordinates whose distance is (x - 10) / 10: -1 west, +1 east;
+    # one point has none (nan), one lies outside the range.
+    E, N, H = 416000.0, 9168000.0, 100.0
+    ply = os.path.join(work, "deviation.ply")
+    with open(ply, "w") as f:
+        f.write("ply\nformat ascii 1.0\nelement vertex 20000\nproperty double x\nproperty double y\n"
+                "property double z\nproperty float scalar_distance\nend_header\n")
+        for i in range(200):
+            for j in range(100):
+                x, y = i * 0.1 + 0.05, j * 0.1 + 0.05
+                d = "nan" if (i, j) == (0, 0) else "5" if (i, j) == (0, 1) else repr((x - 10) / 10)
+                f.write("%.3f %.3f %.3f %s\n" % (E + x, N + y, H, d))
+    archive = os.path.join(work, "deviation.archive")
+    vb.run("pack", ply, "-o", archive, "--colour-by", "distance", "--field-range", "-1,1")
+    vb.run("publish", archive, "-o", os.path.join(work, "deviation_site"), "-L", "4")
+    served = Served(os.path.join(work, "deviation_site"))
+    browser = Browser(640, 480, webgl=True)
+    try:
+        browser.call("Page.navigate", url=served.url())
+        converged(browser, "the coloured site")
+        legend = browser.evaluate("(() => { const l = document.getElementById('legend'); return {hidden: l.hidden, "
+                                  "text: l.innerText}; })()")
+        print("coloured site legend: %r" % legend["text"])
+        if legend["hidden"]:
+            failures.append("the coloured site shows no legend")
+        for words in ("distance", "-1", "1 outside", "1 without a value"):
+            if words not in legend["text"]:
+                failures.append("the coloured site's legend does not say %r: %r" % (words, legend["text"]))
+        # Straight down at x = 15 m (distance 0.5).
+        cx, cy = E + 15, N + 5
+        browser.evaluate("window.candiViewer.setCamera(%s)" % json.dumps(
+            {"eye": [cx, cy, H + 30], "target": [cx, cy, H], "up": [0, 1, 0], "projection": "perspective",
+             "fov_y_deg": 40, "near": 0.01}))
+        converged(browser, "the coloured site from above")
+        # The site picks a point under the very pixel: the pixel of a point of the sheet.
+        q = browser.evaluate("window.candiViewer.project(%s)" % json.dumps([E + 15.05, N + 5.05, H]))
+        r = browser.evaluate("window.candiViewer.pick(%r, %r)" % (int(q[0]) + 0.5, int(q[1]) + 0.5),
+                             await_promise=True)
+        hit = r["hits"][0] if r.get("hit") else None
+        print("coloured site pick: %s" % hit)
+        if hit is None or hit.get("value") is None:
+            failures.append("a pick on the coloured site gave no value: %s" % r)
+        else:
+            expected = (hit["point"][0] - E - 10) / 10
+            if not (abs(hit["value"] - expected) <= hit["value_half_width"] + 1e-3 and abs(hit["value"] - 0.5) < 0.05
+                    and hit["value_half_width"] < 0.01):
+                failures.append("the coloured site's pick: value %s +- %s, the point's %s"
+                                % (hit["value"], hit["value_half_width"], expected))
+    finally:
+        browser.close()
+        served.close()
+    return failures
 
 
 def check(work):
@@ -305,7 +363,11 @@ def check(work):
         browser.close()
         served3.close()
 
-    # 6. Bad input: exit 2, the path named, nothing left behind.
+    # 6. Points packed coloured by a field (candi pack --colour-by): the site's legend states the
+    # field, range and grey counts, and a pick on the client gives the picked point's value.
+    failures += coloured_site(work)
+
+    # 7. Bad input: exit 2, the path named, nothing left behind.
     def publish(*args):
         return subprocess.run([vb.CANDI, "publish", *args], capture_output=True, text=True)
     r = publish(work, "-o", os.path.join(work, "nosite"))

@@ -538,6 +538,40 @@
   requestAnimationFrame(frame);
 
   // ---- picking: the shown points under a pixel, on the client -----------------------------------
+  // Points packed coloured by a field: the value a picked colour stands for, as candi view's
+  // server reads it (FieldLegend::ValueOfColour): the middle of the values drawn in that colour
+  // and how far they reach either side; null for the grey (outside the range, or no value).
+  let colourRuns = null;  // colour -> [first, last] sample of the legend's scale
+  function valueOfColour(legend, colour) {
+    if (Array.isArray(legend.classes)) {
+      const c = legend.classes.find((k) => parseInt(k.colour.slice(1), 16) === colour);
+      return { value: c ? c.code : null, value_half_width: 0 };
+    }
+    if (colour === parseInt(legend.grey.slice(1), 16)) return { value: null, value_half_width: 0 };
+    if (!colourRuns) {
+      colourRuns = new Map();
+      for (const [c, first, last] of legend.runs) {
+        const r = colourRuns.get(c);
+        colourRuns.set(c, r ? [r[0], last] : [first, last]);
+      }
+    }
+    const r = colourRuns.get(colour);
+    const step = (legend.hi - legend.lo) / legend.steps;
+    if (!r) {
+      // A colour the samples skip lies, channel by channel, between the runs either side of one
+      // step (FieldLegend::ValueOfColour).
+      const ch = (c, s) => (c >> s) & 255;
+      const between = (c, a, b, s) => (ch(a, s) <= ch(c, s) && ch(c, s) <= ch(b, s)) || (ch(b, s) <= ch(c, s) && ch(c, s) <= ch(a, s));
+      for (let k = 0; k + 1 < legend.runs.length; ++k) {
+        const a = legend.runs[k][0], b = legend.runs[k + 1][0];
+        if (between(colour, a, b, 16) && between(colour, a, b, 8) && between(colour, a, b, 0)) {
+          return { value: legend.lo + (legend.runs[k][2] + 0.5) * step, value_half_width: 0.5 * step };
+        }
+      }
+      return { value: null, value_half_width: 0 };
+    }
+    return { value: legend.lo + 0.5 * (r[0] + r[1]) * step, value_half_width: 0.5 * (r[1] - r[0] + 2) * step };
+  }
   function pick(x, y) {
     const px = Math.floor(x), py = Math.floor(y), L = effectiveL(), f = state.settings.layers;
     const clip = clipPlanes();
@@ -570,12 +604,16 @@
             const uv = projectLocal(p);
             if (!uv || Math.floor(uv[0]) !== px || Math.floor(uv[1]) !== py) continue;
             const cur = best.get(ch.layer);
-            if (!cur || uv[2] < cur.depth) best.set(ch.layer, { layer: ch.layer, depth: uv[2], point: p.map((v, a) => v + origin[a]) });
+            if (!cur || uv[2] < cur.depth) {
+              best.set(ch.layer, { layer: ch.layer, depth: uv[2], point: p.map((v, a) => v + origin[a]), colour: lo & 0xffffff });
+            }
           }
         }
       }
     }
     const hits = [...best.values()].sort((a, b) => a.depth - b.depth);
+    const legend = site.scene.legend;
+    if (legend) for (const h of hits) Object.assign(h, valueOfColour(legend, h.colour));
     return Promise.resolve(hits.length ? { type: 'pick', hit: true, point: hits[0].point, depth: hits[0].depth, layer: hits[0].layer, hits }
       : { type: 'pick', hit: false, hits: [] });
   }
