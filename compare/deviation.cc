@@ -47,12 +47,12 @@ void CheckBelowIndexLimit(size_t size, const std::string& name) {
   }
 }
 
-std::vector<uint32_t> MortonOrder(const std::vector<Eigen::Vector3d>& points) {
+std::vector<uint64_t> MortonCodes(const std::vector<Eigen::Vector3d>& points) {
   Box3d box;
   for (const auto& p : points) {
     if (p.allFinite()) box.Extend(p);
   }
-  std::vector<std::pair<uint64_t, uint32_t>> keys(points.size());
+  std::vector<uint64_t> codes(points.size());
   const Eigen::Vector3d extent = box.IsEmpty() ? Eigen::Vector3d::Ones() : box.Extent();
   const double scale = ((1u << 21) - 1) / std::max({extent.x(), extent.y(), extent.z(), 1e-300});
   ForEachBlock(0, points.size(), 1 << 16, nullptr, [&](size_t begin, size_t end) {
@@ -63,8 +63,17 @@ std::vector<uint32_t> MortonOrder(const std::vector<Eigen::Vector3d>& points) {
         const Eigen::Vector3d q = (p - box.min) * scale;
         code = MortonCode21(static_cast<uint64_t>(q.x()), static_cast<uint64_t>(q.y()), static_cast<uint64_t>(q.z()));
       }
-      keys[i] = {code, static_cast<uint32_t>(i)};
+      codes[i] = code;
     }
+  });
+  return codes;
+}
+
+std::vector<uint32_t> MortonOrder(const std::vector<Eigen::Vector3d>& points) {
+  const std::vector<uint64_t> codes = MortonCodes(points);
+  std::vector<std::pair<uint64_t, uint32_t>> keys(points.size());
+  ForEachBlock(0, points.size(), 1 << 16, nullptr, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) keys[i] = {codes[i], static_cast<uint32_t>(i)};
   });
   tbb::parallel_sort(keys.begin(), keys.end());
   std::vector<uint32_t> order(points.size());
@@ -252,7 +261,7 @@ DeviationResult CloudToCloud(const DeviationOptions& options, PreparedClouds& p,
       } else {
         got = p.tree->Knn(q, k, index.data(), dist_sq.data());
       }
-      double d = (q - p.reference[index[0]]).norm();  // not nanoflann's sum: exact
+      double d = (q - p.reference[index[0]]).norm();
       if (o.local_model != LocalModel::kNone && d > 0) {
         pts.clear();
         for (size_t j = 0; j < got; ++j) pts.push_back(p.reference[index[j]]);

@@ -37,6 +37,9 @@ void Finish(DeviationResult& result, uint64_t not_finite, double gap,
 // not finite last: neighbours in space become neighbours in memory, so queries made in this order
 // (and a tree built over points in it) stay in the cache. Deterministic (unique keys).
 std::vector<uint32_t> MortonOrder(const std::vector<Eigen::Vector3d>& points);
+// The 63-bit Morton codes MortonOrder sorts by (21 bits an axis over the finite points' bounding
+// box; ~0 for a point that is not finite).
+std::vector<uint64_t> MortonCodes(const std::vector<Eigen::Vector3d>& points);
 
 // The world bounds of a cloud's finite positions (a NaN x beside a finite y counts for nothing).
 Box3d FiniteWorldBounds(const PointCloud& cloud);

@@ -1,66 +1,44 @@
-// The spatial index of the deviation methods (nanoflann kd-trees, double): included by
-// compare/*.cc only, so nanoflann stays out of public headers.
+// The spatial index of the deviation methods: a binary radix tree over points in Morton order
+// (MortonOrder), included by compare/*.cc only.
 //
-// nanoflann 1.4 (Debian 12) builds a tree on one thread, which at 10^7 points took most of a
-// comparison's time. PointTree cuts points that are in Morton order (MortonOrder) into parts of
-// consecutive points, compact in space, and builds one tree a part in parallel; a query visits
-// the parts whose bounding box lies within its current bound. The number of parts depends on the
-// point count only, so results do not depend on the threads. Distances are exact; where two
-// points are equally near, which one a query names may differ from a single tree's choice (the
-// distance does not).
+// Sorted by their Morton codes (MortonCodes), the points of any octree cell are one run, so the
+// tree needs no search for splits: a node's run splits where the first Morton bit in which its
+// ends differ turns to 1 (a binary search), which halves its cell along one axis, down to leaves
+// of at most kLeafPoints points. Building it takes a pass over the points and one over the nodes
+// (a kd-tree's build, nanoflann's in Debian 12 on one thread, cost as much as all the queries of
+// a comparison). Node boxes are the boxes of their points, in floats rounded outwards, so pruning
+// by them never skips a point; distances are the points' own, in double, exact. A query descends
+// nearer child first. The tree depends on the points only, so results do not depend on the
+// threads. Where two points are equally near, a query names the first it meets (the distance
+// does not depend on which). Points out of Morton order give a correct but slower tree.
 #pragma once
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
-#include <memory>
-#include <nanoflann.hpp>
 #include <vector>
 
 #include "compare/deviation.h"
-#include "core/box.h"
-#include "core/parallel.h"
+#include "compare/deviation_internal.h"
 
 namespace candi::compare::internal {
 
-// Points seen by nanoflann without a copy.
-struct PointSpan {
-  const Eigen::Vector3d* data = nullptr;
-  size_t n = 0;
-  size_t kdtree_get_point_count() const { return n; }
-  double kdtree_get_pt(uint32_t i, size_t dim) const { return data[i][static_cast<int>(dim)]; }
-  template <class Box>
-  bool kdtree_get_bbox(Box&) const {
-    return false;
-  }
-};
-
-using SpanTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, PointSpan>,
-                                                     PointSpan, 3, uint32_t>;
-
 class PointTree {
  public:
-  static constexpr size_t kPartPoints = size_t{1} << 21;  // points a part, about
-  static constexpr size_t kMaxParts = 64;
+  static constexpr size_t kLeafPoints = 12;  // points a leaf, at most (but for coincident codes)
 
   // `points`' elements (finite, best in Morton order) must outlive the tree, unchanged; the
-  // vector itself may be moved (the tree keeps its buffer, not the vector). `part_points`
-  // (tests) sets the parts' size.
-  explicit PointTree(const std::vector<Eigen::Vector3d>& points, size_t part_points = kPartPoints)
-      : points_(points.data()), size_(points.size()) {
-    const size_t n = points.size();
-    const size_t parts = std::clamp<size_t>((n + part_points - 1) / part_points, 1, kMaxParts);
-    for (size_t k = 0; k <= parts; ++k) begin_.push_back(n * k / parts);
-    spans_.resize(parts);
-    boxes_.resize(parts);
-    trees_.resize(parts);
-    ParallelFor(size_t{0}, parts, [&](size_t k) {
-      spans_[k] = {points.data() + begin_[k], begin_[k + 1] - begin_[k]};
-      for (size_t i = begin_[k]; i < begin_[k + 1]; ++i) boxes_[k].Extend(points[i]);
-      trees_[k] = std::make_unique<SpanTree>(3, spans_[k], nanoflann::KDTreeSingleIndexAdaptorParams(10));
-      trees_[k]->buildIndex();
-    });
+  // vector itself may be moved (the tree keeps its buffer, not the vector).
+  explicit PointTree(const std::vector<Eigen::Vector3d>& points) : points_(points.data()), size_(points.size()) {
+    if (size_ == 0) return;
+    const std::vector<uint64_t> codes = MortonCodes(points);
+    sorted_ = std::is_sorted(codes.begin(), codes.end());
+    nodes_.reserve(4 * (size_ / kLeafPoints + 1));
+    parent_.reserve(nodes_.capacity());
+    nodes_.push_back({});
+    Build(0, codes, 0, static_cast<uint32_t>(size_));
   }
 
   size_t size() const { return size_; }
@@ -69,139 +47,169 @@ class PointTree {
   // The point nearest q; the search starts bounded by point `hint` (an index, or -1). Returns
   // its index (-1 only for an empty tree).
   int64_t Nearest(const Eigen::Vector3d& q, int64_t hint) const {
-    Best best;
-    if (hint >= 0) {
-      best.index = hint;
-      best.dist_sq = (q - points_[static_cast<size_t>(hint)]).squaredNorm();
+    int64_t best = -1;
+    double best_sq = kInf;
+    const auto bound = [&] { return best_sq; };
+    const auto meet = [&](size_t i, double d) {
+      if (d < best_sq) best_sq = d, best = static_cast<int64_t>(i);
+    };
+    if (hint < 0) {
+      Search(0, q, bound, meet);
+      return best;
     }
-    const size_t first = hint >= 0 ? PartOf(static_cast<size_t>(hint)) : 0;
-    for (size_t j = 0; j < trees_.size(); ++j) {
-      const size_t k = (first + j) % trees_.size();
-      if (!(BoxDistSq(k, q) < best.dist_sq) && best.index >= 0) continue;
-      NearestSet set(&best, begin_[k]);
-      trees_[k]->findNeighbors(set, q.data(), nanoflann::SearchParams());
+    // From the hint's leaf up: the leaf, then at each level the sibling subtree when its box is
+    // nearer than the best so far (queries in Morton order meet their answer near the
+    // previous one's, and skip the descent from the root).
+    best = hint;
+    best_sq = (q - points_[static_cast<size_t>(hint)]).squaredNorm();
+    uint32_t node = 0;
+    while (nodes_[node].child != 0) {
+      const uint32_t c = nodes_[node].child;
+      node = static_cast<uint64_t>(hint) < nodes_[c].end ? c : c + 1;
     }
-    return best.index;
+    Search(node, q, bound, meet);
+    while (node != 0) {
+      const uint32_t parent = parent_[node];
+      const uint32_t sibling = node == nodes_[parent].child ? node + 1 : node - 1;
+      Search(sibling, q, bound, meet);
+      node = parent;
+    }
+    return best;
   }
 
   // The k nearest points, nearest first: their indices and squared distances. Returns how many
   // (k, or fewer when the tree holds fewer).
   size_t Knn(const Eigen::Vector3d& q, size_t k, uint32_t* index, double* dist_sq) const {
-    KnnSet set(k, index, dist_sq);
-    // The parts nearest first, so that the first one searched bounds the others.
-    std::pair<double, size_t> order[kMaxParts];
-    const size_t parts = trees_.size();
-    for (size_t part = 0; part < parts; ++part) order[part] = {BoxDistSq(part, q), part};
-    std::sort(order, order + parts);
-    for (size_t j = 0; j < parts; ++j) {
-      const auto [box_sq, part] = order[j];
-      if (set.count() == k && !(box_sq < set.worstDist())) break;
-      set.offset = static_cast<uint32_t>(begin_[part]);
-      trees_[part]->findNeighbors(set, q.data(), nanoflann::SearchParams());
-    }
-    return set.count();
+    if (k == 0) return 0;
+    size_t count = 0;
+    Search(0, q, [&] { return count < k ? kInf : dist_sq[k - 1]; }, [&](size_t i, double d) {
+      if (count == k && !(d < dist_sq[k - 1])) return;
+      size_t j = count < k ? count++ : k - 1;  // insertion: k is small
+      while (j > 0 && dist_sq[j - 1] > d) {
+        dist_sq[j] = dist_sq[j - 1];
+        index[j] = index[j - 1];
+        --j;
+      }
+      dist_sq[j] = d;
+      index[j] = static_cast<uint32_t>(i);
+    });
+    return count;
   }
 
   // Calls visit(index, dist_sq) for every point within `radius` of q.
   template <typename Visit>
   void ForEachWithin(const Eigen::Vector3d& q, double radius, Visit visit) const {
     const double radius_sq = radius * radius;
-    for (size_t part = 0; part < trees_.size(); ++part) {
-      if (BoxDistSq(part, q) > radius_sq) continue;
-      WithinSet<Visit> set(radius_sq, static_cast<uint32_t>(begin_[part]), visit);
-      trees_[part]->findNeighbors(set, q.data(), nanoflann::SearchParams());
-    }
+    // (A node is entered when its box is nearer than the bound: on the sphere counts as within.)
+    const double bound = std::nextafter(radius_sq, kInf);
+    Search(0, q, [bound] { return bound; }, [&](size_t i, double d) {
+      if (d <= radius_sq) visit(static_cast<uint32_t>(i), d);
+    });
   }
 
  private:
-  struct Best {
-    int64_t index = -1;
-    double dist_sq = std::numeric_limits<double>::infinity();
-  };
-  // nanoflann result set: the nearest point across parts (ties keep the earlier one).
-  class NearestSet {
-   public:
-    NearestSet(Best* best, size_t offset) : best_(best), offset_(offset) {}
-    bool addPoint(double d, uint32_t i) {
-      if (d < best_->dist_sq) {
-        best_->dist_sq = d;
-        best_->index = static_cast<int64_t>(offset_ + i);
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+  // A node: the box of its points in floats rounded outwards, its run of points, and its first
+  // child (the second follows it; 0: a leaf).
+  struct Node {
+    float lo[3], hi[3];
+    uint32_t begin, end, child;
+    double DistSq(const Eigen::Vector3d& q) const {
+      double sq = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double g = std::max({0.0, static_cast<double>(lo[a]) - q[a], q[a] - static_cast<double>(hi[a])});
+        sq += g * g;
       }
-      return true;
+      return sq;
     }
-    double worstDist() const { return best_->dist_sq; }
-    bool full() const { return best_->index >= 0; }
-
-   private:
-    Best* best_;
-    size_t offset_;
   };
-  // nanoflann result set: the k nearest across parts, kept sorted (insertion: k is small).
-  class KnnSet {
-   public:
-    KnnSet(size_t k, uint32_t* index, double* dist_sq) : k_(k), index_(index), dist_sq_(dist_sq) {}
-    bool addPoint(double d, uint32_t i) {
-      if (count_ == k_ && !(d < dist_sq_[k_ - 1])) return true;
-      size_t j = count_ < k_ ? count_++ : k_ - 1;
-      while (j > 0 && dist_sq_[j - 1] > d) {
-        dist_sq_[j] = dist_sq_[j - 1];
-        index_[j] = index_[j - 1];
-        --j;
+
+  // Fills node `at` with the run [begin, end) and its subtree (depth first; codes sorted).
+  void Build(size_t at, const std::vector<uint64_t>& codes, uint32_t begin, uint32_t end) {
+    uint32_t split = end;
+    const uint64_t differ = codes[begin] ^ codes[end - 1];
+    if (end - begin > kLeafPoints && !sorted_) {
+      split = begin + (end - begin) / 2;  // out of Morton order: halves (a correct, looser tree)
+    } else if (end - begin > kLeafPoints && differ != 0) {
+      // The first bit in which the run's ends differ: 0 before the split, 1 from it on.
+      const uint64_t bit = uint64_t{1} << (63 - __builtin_clzll(differ));
+      split = static_cast<uint32_t>(
+          std::partition_point(codes.begin() + begin, codes.begin() + end, [bit](uint64_t c) { return !(c & bit); }) -
+          codes.begin());
+    }
+    double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+    uint32_t child = 0;
+    if (split == end) {
+      for (uint32_t i = begin; i < end; ++i) {
+        for (int a = 0; a < 3; ++a) {
+          lo[a] = std::min(lo[a], points_[i][a]);
+          hi[a] = std::max(hi[a], points_[i][a]);
+        }
       }
-      dist_sq_[j] = d;
-      index_[j] = offset + i;
-      return true;
+    } else {
+      child = static_cast<uint32_t>(nodes_.size());
+      nodes_.push_back({});
+      nodes_.push_back({});
+      parent_.resize(nodes_.size());
+      parent_[child] = parent_[child + 1] = static_cast<uint32_t>(at);
+      Build(child, codes, begin, split);
+      Build(child + 1, codes, split, end);
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(nodes_[child].lo[a], nodes_[child + 1].lo[a]);
+        hi[a] = std::max(nodes_[child].hi[a], nodes_[child + 1].hi[a]);
+      }
     }
-    double worstDist() const {
-      return count_ < k_ ? std::numeric_limits<double>::infinity() : dist_sq_[k_ - 1];
+    Node& node = nodes_[at];
+    node.begin = begin;
+    node.end = end;
+    node.child = child;
+    for (int a = 0; a < 3; ++a) {
+      node.lo[a] = static_cast<float>(lo[a]);
+      if (static_cast<double>(node.lo[a]) > lo[a]) node.lo[a] = std::nextafter(node.lo[a], -HUGE_VALF);
+      node.hi[a] = static_cast<float>(hi[a]);
+      if (static_cast<double>(node.hi[a]) < hi[a]) node.hi[a] = std::nextafter(node.hi[a], HUGE_VALF);
     }
-    bool full() const { return count_ == k_; }
-    size_t count() const { return count_; }
-    uint32_t offset = 0;
-
-   private:
-    size_t k_, count_ = 0;
-    uint32_t* index_;
-    double* dist_sq_;
-  };
-  // nanoflann result set: hands every point within the radius to visit(index, dist_sq).
-  template <typename Visit>
-  class WithinSet {
-   public:
-    WithinSet(double radius_sq, uint32_t offset, Visit& visit)
-        : radius_sq_(radius_sq), offset_(offset), visit_(visit) {}
-    bool addPoint(double d, uint32_t i) {
-      if (d <= radius_sq_) visit_(offset_ + i, d);
-      return true;
-    }
-    double worstDist() const { return radius_sq_; }
-    bool full() const { return true; }
-
-   private:
-    double radius_sq_;
-    uint32_t offset_;
-    Visit& visit_;
-  };
-
-  size_t PartOf(size_t i) const {
-    return static_cast<size_t>(std::upper_bound(begin_.begin(), begin_.end(), i) - begin_.begin()) - 1;
   }
-  double BoxDistSq(size_t part, const Eigen::Vector3d& q) const {
-    const Box3d& b = boxes_[part];
-    double sq = 0;
-    for (int k = 0; k < 3; ++k) {
-      const double g = std::max({0.0, b.min[k] - q[k], q[k] - b.max[k]});
-      sq += g * g;
+
+  // The subtree of `start`, depth first, nearer child first: a node is entered while its box is
+  // nearer than bound() (which may shrink as points are met); every point of an entered leaf
+  // goes to meet(i, dist_sq).
+  template <typename Bound, typename Meet>
+  void Search(uint32_t start, const Eigen::Vector3d& q, Bound bound, Meet meet) const {
+    if (nodes_.empty()) return;
+    struct Entry {
+      uint32_t node;
+      double dist_sq;
+    };
+    // Depth first, each node's children pushed as it is taken: at most the depth + 1 entries (a
+    // sorted tree's depth is at most 63 code bits, an unsorted one's 32 halvings).
+    Entry stack[128];
+    int top = 0;
+    stack[top++] = {start, nodes_[start].DistSq(q)};
+    while (top > 0) {
+      const Entry e = stack[--top];
+      if (!(e.dist_sq < bound())) continue;
+      const Node& node = nodes_[e.node];
+      if (node.child == 0) {
+        for (uint32_t i = node.begin; i < node.end; ++i) meet(i, (q - points_[i]).squaredNorm());
+        continue;
+      }
+      const Entry a{node.child, nodes_[node.child].DistSq(q)}, b{node.child + 1, nodes_[node.child + 1].DistSq(q)};
+      if (a.dist_sq <= b.dist_sq) {
+        stack[top++] = b;
+        stack[top++] = a;
+      } else {
+        stack[top++] = a;
+        stack[top++] = b;
+      }
     }
-    return sq;
   }
 
   const Eigen::Vector3d* points_;
   size_t size_;
-  std::vector<size_t> begin_;  // parts: [begin_[k], begin_[k + 1])
-  std::vector<PointSpan> spans_;
-  std::vector<Box3d> boxes_;
-  std::vector<std::unique_ptr<SpanTree>> trees_;
+  bool sorted_ = true;       // the points in Morton order
+  std::vector<Node> nodes_;  // nodes_[0] the root
+  std::vector<uint32_t> parent_;  // of each node but the root
 };
 
 // M3C2 (m3c2.cc) of `compared` (NaN where not finite) against `reference` (finite, with its

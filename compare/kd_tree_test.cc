@@ -10,7 +10,7 @@
 namespace candi::compare::internal {
 namespace {
 
-// Points on a wavy surface in Morton order, cut into many parts.
+// Points on a wavy surface in Morton order.
 std::vector<Eigen::Vector3d> SurfacePoints(size_t n, uint64_t seed) {
   Rng rng(seed);
   std::vector<Eigen::Vector3d> raw;
@@ -23,9 +23,9 @@ std::vector<Eigen::Vector3d> SurfacePoints(size_t n, uint64_t seed) {
   return sorted;
 }
 
-TEST(PointTreeTest, PartsAnswerAsABruteForceSearch) {
-  const std::vector<Eigen::Vector3d> pts = SurfacePoints(20000, 1);
-  const PointTree tree(pts, 1000);  // 20 parts
+TEST(PointTreeTest, AnswersAsABruteForceSearch) {
+  const std::vector<Eigen::Vector3d> pts = SurfacePoints(20000, 1);  // 2048 leaves of 10 (the last ones fewer)
+  const PointTree tree(pts);
   Rng rng(2);
   int64_t hint = -1;
   for (int t = 0; t < 300; ++t) {
@@ -63,6 +63,19 @@ TEST(PointTreeTest, PartsAnswerAsABruteForceSearch) {
   EXPECT_EQ(small.Knn({0.2, 0, 0}, 5, index, dist_sq), 2u);
   EXPECT_EQ(index[0], 0u);
   EXPECT_EQ(index[1], 1u);
+  // One point, none, and coincident points (every leaf's box a point).
+  const std::vector<Eigen::Vector3d> one = {{416000.25, 9168000.5, 200.125}};
+  EXPECT_EQ(PointTree(one).Nearest({0, 0, 0}, -1), 0);
+  const std::vector<Eigen::Vector3d> none;
+  EXPECT_EQ(PointTree(none).Nearest({0, 0, 0}, -1), -1);
+  EXPECT_EQ(PointTree(none).Knn({0, 0, 0}, 3, index, dist_sq), 0u);
+  const std::vector<Eigen::Vector3d> same(1000, Eigen::Vector3d(1, 2, 3));
+  const PointTree coincident(same);
+  EXPECT_EQ(coincident.Knn({1, 2, 3.5}, 5, index, dist_sq), 5u);
+  EXPECT_EQ(dist_sq[4], 0.25);
+  size_t within = 0;
+  coincident.ForEachWithin({1, 2, 3.5}, 0.5, [&](uint32_t, double) { ++within; });  // on the sphere: in
+  EXPECT_EQ(within, 1000u);
 }
 
 }  // namespace
