@@ -1,8 +1,11 @@
 #include "core/point_cloud.h"
 
+#include <algorithm>
+#include <array>
 #include <limits>
 
 #include "core/check.h"
+#include "core/parallel.h"
 
 namespace candi {
 
@@ -156,20 +159,31 @@ void PointCloud::Append(const PointCloud& other) {
 }
 
 Box3d PointCloud::LocalBounds() const {
-  // Local accumulators: the compiler keeps them in registers (Box3d members may alias the data).
-  double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                  std::numeric_limits<double>::infinity()};
-  double hi[3] = {-lo[0], -lo[1], -lo[2]};
-  for (const Eigen::Vector3d& p : positions) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = p[k] < lo[k] ? p[k] : lo[k];
-      hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+  // Blocks in parallel, each with local accumulators (the compiler keeps them in registers; Box3d
+  // members may alias the data); min and max do not depend on the order they are combined in.
+  constexpr size_t kBlock = size_t{1} << 16;
+  const size_t n = positions.size(), blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::array<double, 6>> part(blocks);
+  ParallelFor(size_t{0}, blocks, [&](size_t b) {
+    double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                    std::numeric_limits<double>::infinity()};
+    double hi[3] = {-lo[0], -lo[1], -lo[2]};
+    const Eigen::Vector3d* p = positions.data() + b * kBlock;
+    const size_t m = std::min(kBlock, n - b * kBlock);
+    for (size_t i = 0; i < m; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = p[i][k] < lo[k] ? p[i][k] : lo[k];
+        hi[k] = p[i][k] > hi[k] ? p[i][k] : hi[k];
+      }
     }
-  }
+    part[b] = {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
+  });
   Box3d box;
-  if (!positions.empty()) {
-    box.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
-    box.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+  for (size_t b = 0; b < blocks; ++b) {
+    for (int k = 0; k < 3; ++k) {
+      if (b == 0 || part[b][k] < box.min[k]) box.min[k] = part[b][k];
+      if (b == 0 || part[b][3 + k] > box.max[k]) box.max[k] = part[b][3 + k];
+    }
   }
   return box;
 }

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "core/check.h"
 
 namespace candi {
@@ -53,6 +55,33 @@ TEST(PointCloud, RebaseKeepsWorldPositionsAndBoundsFollow) {
   EXPECT_EQ(c.WorldBounds().min, before.min);
   EXPECT_EQ(c.WorldBounds().max, before.max);
   EXPECT_TRUE(PointCloud{}.WorldBounds().IsEmpty());
+}
+
+// Bounds are taken over blocks in parallel: over many blocks they equal one pass's, a NaN
+// coordinate counts for nothing (its finite ones still count), and the extremes in the last,
+// short block are found.
+TEST(PointCloud, BoundsOverManyBlocksSkipNaN) {
+  PointCloud c;
+  c.Resize(300001);
+  for (size_t i = 0; i < c.size(); ++i) {
+    const double t = static_cast<double>(i);
+    c.positions[i] = Eigen::Vector3d(std::sin(t), std::cos(0.5 * t), 1e-3 * t);
+  }
+  c.positions[7] = Eigen::Vector3d(std::nan(""), -5, 0);
+  c.positions[c.size() - 1].x() = 9;
+  Box3d serial;
+  for (const Eigen::Vector3d& p : c.positions) {
+    for (int k = 0; k < 3; ++k) {
+      if (p[k] < serial.min[k]) serial.min[k] = p[k];
+      if (p[k] > serial.max[k]) serial.max[k] = p[k];
+    }
+  }
+  const Box3d box = c.LocalBounds();
+  EXPECT_EQ(box.min, serial.min);
+  EXPECT_EQ(box.max, serial.max);
+  EXPECT_EQ(box.min.y(), -5.0);
+  EXPECT_EQ(box.max.x(), 9.0);
+  EXPECT_EQ(box.max.z(), 300.0);
 }
 
 TEST(PointCloud, ScalarFieldsAreUniqueByName) {

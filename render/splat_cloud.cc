@@ -65,21 +65,41 @@ inline uint32_t Morton30(const Eigen::Vector3f& p, const Eigen::Vector3f& lo, co
 }
 
 // Indices 0..n-1 ordered by `codes` (30 bits; stable): an LSD radix sort of (code, index) pairs
-// packed in 64 bits, two 15-bit passes, so each pass reads its input sequentially.
-std::vector<uint32_t> SortByCode(const std::vector<uint32_t>& codes) {
+// packed in 64 bits, three 10-bit passes. Each pass counts the digits of consecutive parts of
+// the input in parallel, then scatters each part after the same digits of the parts before it:
+// the serial sort's result, on any thread count.
+std::vector<uint32_t> SortByCode(const UninitVector<uint32_t>& codes) {
   const size_t n = codes.size();
-  std::vector<uint64_t> a(n), b(n);
+  constexpr int kBits = 10;
+  constexpr size_t kDigits = size_t{1} << kBits;
+  const size_t parts = std::clamp<size_t>(n / 65536, 1, 64);
+  const size_t per_part = (n + parts - 1) / parts;
+  UninitVector<uint64_t> a(n), b(n);
   ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) a[i] = uint64_t{codes[i]} << 32 | i;
   });
-  for (int shift : {32, 47}) {
-    std::vector<size_t> count((1u << 15) + 1, 0);
-    for (size_t i = 0; i < n; ++i) ++count[((a[i] >> shift) & 0x7fff) + 1];
-    for (size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
-    for (size_t i = 0; i < n; ++i) b[count[(a[i] >> shift) & 0x7fff]++] = a[i];
+  std::vector<uint64_t> offset(parts * kDigits);
+  for (int shift = 32; shift < 62; shift += kBits) {
+    std::fill(offset.begin(), offset.end(), 0);
+    ParallelFor(size_t{0}, parts, [&](size_t p) {
+      uint64_t* count = offset.data() + p * kDigits;
+      for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) ++count[(a[i] >> shift) & (kDigits - 1)];
+    });
+    uint64_t at = 0;
+    for (size_t d = 0; d < kDigits; ++d) {
+      for (size_t p = 0; p < parts; ++p) {
+        const uint64_t c = offset[p * kDigits + d];
+        offset[p * kDigits + d] = at;
+        at += c;
+      }
+    }
+    ParallelFor(size_t{0}, parts, [&](size_t p) {
+      uint64_t* fill = offset.data() + p * kDigits;
+      for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) b[fill[(a[i] >> shift) & (kDigits - 1)]++] = a[i];
+    });
     a.swap(b);
   }
-  std::vector<uint64_t>().swap(b);
+  UninitVector<uint64_t>().swap(b);
   std::vector<uint32_t> order(n);
   ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) order[i] = static_cast<uint32_t>(a[i]);
@@ -88,13 +108,13 @@ std::vector<uint32_t> SortByCode(const std::vector<uint32_t>& codes) {
 }
 
 // v[order[k]] for k = 0..n-1.
-template <typename T>
-std::vector<T> Permuted(std::vector<T>* v, const std::vector<uint32_t>& order) {
-  std::vector<T> out(order.size());
+template <typename V>
+V Permuted(V* v, const std::vector<uint32_t>& order) {
+  V out(order.size());
   ParallelFor(tbb::blocked_range<size_t>(0, order.size(), 65536), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k < r.end(); ++k) out[k] = (*v)[order[k]];
   });
-  std::vector<T>().swap(*v);
+  V().swap(*v);
   return out;
 }
 
@@ -122,8 +142,12 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
                            const std::vector<const PointCloud*>& clouds,
                            const ProgressCallback& progress) {
   options.Check();
+  std::vector<Box3d> local_bounds;  // of each cloud, in its frame
   Box3d world;
-  for (const PointCloud* c : clouds) world.Extend(c->WorldBounds());
+  for (const PointCloud* c : clouds) {
+    local_bounds.push_back(c->LocalBounds());
+    world.Extend(local_bounds.back().Translated(c->frame.origin));
+  }
   SplatCloud out;
   out.repeat_level = options.repeat_level;
   out.seed = options.seed;
@@ -134,9 +158,9 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
 
   // Positions in the render frame, colours and multiplicities (in parallel); NaN is an error
   // naming the first bad point whatever the thread count.
-  std::vector<Eigen::Vector3f> local(n);
-  std::vector<Rgb8> color(n);
-  std::vector<uint16_t> multiplicity(n, 1);
+  UninitVector<Eigen::Vector3f> local(n);
+  UninitVector<Rgb8> color(n);
+  UninitVector<uint16_t> multiplicity(n);
   const double cap = std::min(options.repeat_level, 65535);  // more copies than ensembles add nothing
   std::atomic<uint64_t> first_bad{std::numeric_limits<uint64_t>::max()};
   for (const Source& s : located.sources) {
@@ -154,6 +178,8 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
         if (weights) {
           const double m = s.multiplicity->Get(i);
           multiplicity[s.first + i] = static_cast<uint16_t>(std::isfinite(m) ? std::clamp(std::round(m), 0.0, cap) : 0.0);
+        } else {
+          multiplicity[s.first + i] = 1;
         }
       }
     });
@@ -162,11 +188,12 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
     throw InputError("point " + std::to_string(first_bad.load()) + " of the render input has a NaN or "
                      "infinite coordinate");
   }
-  for (const Source& s : located.sources) {
-    if (!s.cloud->empty()) out.bounds.Extend(s.cloud->LocalBounds().Translated(s.shift));
+  for (size_t k = 0; k < located.sources.size(); ++k) {
+    const Source& s = located.sources[k];
+    if (!s.cloud->empty()) out.bounds.Extend(local_bounds[k].Translated(s.shift));
   }
   if (progress) progress(n / 4, n);
-  std::vector<uint32_t> codes(n);
+  UninitVector<uint32_t> codes(n);
   const Eigen::Vector3f lo = out.bounds.min.cast<float>();
   const Eigen::Vector3f inv_cell = (1024.0 / out.bounds.Extent().array().max(1e-9)).matrix().cast<float>();
   ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
@@ -175,7 +202,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   // From here on, points are numbered in Morton order (rank k); order[k] is the input index,
   // which the ensemble hash uses.
   const std::vector<uint32_t> order = SortByCode(codes);
-  std::vector<uint32_t>().swap(codes);
+  UninitVector<uint32_t>().swap(codes);
   local = Permuted(&local, order);
   color = Permuted(&color, order);
   multiplicity = Permuted(&multiplicity, order);
