@@ -216,17 +216,23 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   const size_t chunks = std::clamp<size_t>(n / 65536, 1, std::max<size_t>(1, (size_t{1} << 22) / L));
   const size_t per_chunk = (n + chunks - 1) / chunks;
   std::vector<uint64_t> offset(chunks * static_cast<size_t>(L), 0);  // counts, then fill positions
-  auto for_each_copy = [&](size_t c, auto&& f) {
+  // A point drawn once has its ensemble hashed on the count and kept for the fill.
+  UninitVector<uint32_t> single(n);
+  auto for_each_copy = [&](size_t c, bool counting, auto&& f) {
     const size_t end = std::min(n, (c + 1) * per_chunk);
     for (size_t k = c * per_chunk; k < end; ++k) {
       const int m = multiplicity[k];
-      if (m == 1) f(EnsembleOf(options.seed, order[k], L), k);
-      else ForEachEnsemble(options.seed, order[k], m, L, [&](int e) { f(e, k); });
+      if (m == 1) {
+        if (counting) single[k] = static_cast<uint32_t>(EnsembleOf(options.seed, order[k], L));
+        f(static_cast<int>(single[k]), k);
+      } else {
+        ForEachEnsemble(options.seed, order[k], m, L, [&](int e) { f(e, k); });
+      }
     }
   };
   ParallelFor(size_t{0}, chunks, [&](size_t c) {
     uint64_t* count = offset.data() + c * L;
-    for_each_copy(c, [&](int e, size_t) { ++count[e]; });
+    for_each_copy(c, true, [&](int e, size_t) { ++count[e]; });
   });
   std::vector<uint64_t> start(L + 1, 0);
   for (int e = 0; e < L; ++e) {
@@ -242,9 +248,10 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   std::vector<uint32_t, DefaultInitAllocator<uint32_t>> source(copies);  // Morton rank of each copy
   ParallelFor(size_t{0}, chunks, [&](size_t c) {
     uint64_t* fill = offset.data() + c * L;
-    for_each_copy(c, [&](int e, size_t k) { source[fill[e]++] = static_cast<uint32_t>(k); });
+    for_each_copy(c, false, [&](int e, size_t k) { source[fill[e]++] = static_cast<uint32_t>(k); });
   });
   std::vector<uint64_t>().swap(offset);
+  UninitVector<uint32_t>().swap(single);
 
   // Blocks: cut each ensemble, quantize each block on its own bounding box.
   out.ensemble_blocks.assign(L + 1, 0);
