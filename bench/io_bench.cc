@@ -4,10 +4,13 @@
 // pointwise v2, format 3; tests/data/laz/append-bug.laz, layered v3, format 8), each read
 // repeatedly, on 1 and 2 threads. Prints Google Benchmark's table with points/s; medians of 5
 // repetitions. Targets: read >= 50 M points/s, write >= 30 M points/s (issue 2); E57 float read
-// >= 20 M points/s, LAZ >= 10 M points/s on one core (issue 25). Set CANDI_BENCH_POINTS to change
-// the size.
+// >= 20 M points/s, LAZ >= 10 M points/s on one core (issue 25). LAZ writing (issue 38, target
+// >= 3 M points/s a core): the Autzen points (real lidar, format 3) written 10 times and the
+// synthetic cloud once, as .laz on 1 and 2 threads; the label gives the bytes a point against
+// LAS. Set CANDI_BENCH_POINTS to change the size.
 #include <benchmark/benchmark.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -125,12 +128,44 @@ void BM_ReadLaz(benchmark::State& state) {
                  description.substr(0, description.find(',')) + "]");
 }
 
+// range(0) = 0: ../shared/data/las/autzen_trim.las written 10 times; 1: the synthetic double
+// cloud (LAS format 3 with colour) once. range(1): threads.
+void BM_WriteLaz(benchmark::State& state) {
+  PointCloud autzen;
+  const bool real = state.range(0) == 0;
+  if (real) {
+    const std::string path = std::string(CANDI_SOURCE_DIR) + "/../shared/data/las/autzen_trim.las";
+    if (!std::filesystem::exists(path)) {
+      state.SkipWithError((path + " is absent").c_str());
+      return;
+    }
+    autzen = io::ReadPointCloud(path);
+  }
+  const PointCloud& cloud = real ? autzen : Cloud(ScalarType::kFloat64);
+  const int repeat = real ? 10 : 1;
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(1));
+  const std::string laz = Dir() + "/write.laz", las = Dir() + "/write.las";
+  for (auto _ : state) {
+    for (int r = 0; r < repeat; ++r) io::WritePointCloud(laz, cloud);
+  }
+  state.SetItemsProcessed(state.iterations() * repeat * cloud.size());
+  io::WritePointCloud(las, cloud);
+  const double n = static_cast<double>(cloud.size());
+  char label[160];
+  std::snprintf(label, sizeof label, "%s, %d thread(s): LAZ %.2f bytes/point, LAS %.2f",
+                real ? "autzen_trim" : "synthetic", static_cast<int>(state.range(1)),
+                std::filesystem::file_size(laz) / n, std::filesystem::file_size(las) / n);
+  state.SetLabel(label);
+}
+
 BENCHMARK(BM_Write)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(5)->ReportAggregatesOnly(true)->Iterations(1);
 BENCHMARK(BM_Read)->ArgsProduct({{0, 1, 2, 3, 4}, {0}})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(5)->ReportAggregatesOnly(true)->Iterations(1);
 BENCHMARK(BM_ReadLaz)->ArgsProduct({{0, 1}, {1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(5)->ReportAggregatesOnly(true)->Iterations(1);
+BENCHMARK(BM_WriteLaz)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime()
+    ->Repetitions(3)->ReportAggregatesOnly(true)->Iterations(1);
 
 }  // namespace
 

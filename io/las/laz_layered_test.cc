@@ -73,7 +73,7 @@ std::vector<Chunk> ReadChunkTable(const LazFile& f) {
   const uint32_t count = At<uint32_t>(f.bytes, table + 4);
   ArithmeticDecoder dec;
   dec.Init(data + table + 8, data + f.bytes.size());
-  IntegerDecompressor ic(32, 2);
+  IntegerCoder ic(32, 2);
   ic.Init();
   std::vector<Chunk> chunks(count);
   size_t offset = f.point_offset + 8;
