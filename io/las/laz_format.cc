@@ -1,5 +1,7 @@
 #include "io/las/laz_format.h"
 
+#include <utility>
+
 #include "core/check.h"
 
 namespace candi::io::laz {
@@ -136,16 +138,13 @@ std::string EncodeVlr(const Vlr& vlr) {
   auto put = [&](uint64_t v, int bytes) {
     for (int i = 0; i < bytes; ++i) s.push_back(static_cast<char>(v >> (8 * i)));
   };
-  put(vlr.compressor, 2);
-  put(vlr.coder, 2);
-  put(vlr.version_major, 1);
-  put(vlr.version_minor, 1);
-  put(vlr.revision, 2);
-  put(vlr.options, 4);
-  put(vlr.chunk_size, 4);
-  put(static_cast<uint64_t>(vlr.special_evlr_count), 8);
-  put(static_cast<uint64_t>(vlr.special_evlr_offset), 8);
-  put(vlr.items.size(), 2);
+  // (value, bytes) in ParseVlr's order.
+  const std::pair<uint64_t, int> fields[] = {
+      {vlr.compressor, 2}, {vlr.coder, 2}, {vlr.version_major, 1}, {vlr.version_minor, 1},
+      {vlr.revision, 2}, {vlr.options, 4}, {vlr.chunk_size, 4},
+      {static_cast<uint64_t>(vlr.special_evlr_count), 8},
+      {static_cast<uint64_t>(vlr.special_evlr_offset), 8}, {vlr.items.size(), 2}};
+  for (const auto& [value, bytes] : fields) put(value, bytes);
   for (const Item& item : vlr.items) {
     put(item.type, 2);
     put(item.size, 2);

@@ -513,8 +513,8 @@ void Point14Encoder::Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* b
   }
 }
 
-void ColorEncoder::Start(const uint8_t* first, uint32_t context) {
-  current_ = context;
+ColorEncoder::ColorEncoder(bool nir, const uint8_t* first, uint32_t context)
+    : nir_(nir), current_(context) {
   ColorContext& c = contexts_[context];
   c.used = true;
   for (int i = 0; i < (nir_ ? 4 : 3); ++i) c.last[i] = LoadU16(first + 2 * i);
@@ -547,12 +547,12 @@ void ColorEncoder::Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* byt
   if (nir_) FinishLayer(&nir_enc_, nir_changed_, sizes, bytes);
 }
 
-void ByteEncoder::Start(const uint8_t* first, uint32_t context) {
-  current_ = context;
+ByteEncoder::ByteEncoder(uint32_t count, const uint8_t* first, uint32_t context)
+    : enc_(count), changed_(count), current_(context) {
   ByteContext& c = contexts_[context];
   c.used = true;
-  c.last.assign(first, first + count_);
-  c.models.assign(count_, SymbolModel(256));
+  c.last.assign(first, first + count);
+  c.models.assign(count, SymbolModel(256));
 }
 
 void ByteEncoder::Encode(const uint8_t* item, uint32_t context) {
@@ -560,18 +560,18 @@ void ByteEncoder::Encode(const uint8_t* item, uint32_t context) {
                                 [&](ByteContext* c, const ByteContext& from) {
                                   c->used = true;
                                   c->last = from.last;
-                                  c->models.assign(count_, SymbolModel(256));
+                                  c->models.assign(enc_.size(), SymbolModel(256));
                                 })
                       ->last.data();
   SymbolModel* models = contexts_[current_].models.data();
-  for (uint32_t i = 0; i < count_; ++i) {
+  for (size_t i = 0; i < enc_.size(); ++i) {
     enc_[i].EncodeSymbol(&models[i], static_cast<uint8_t>(item[i] - last[i]));
     if (item[i] != last[i]) changed_[i] = 1, last[i] = item[i];
   }
 }
 
 void ByteEncoder::Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* bytes) {
-  for (uint32_t i = 0; i < count_; ++i) FinishLayer(&enc_[i], changed_[i] != 0, sizes, bytes);
+  for (size_t i = 0; i < enc_.size(); ++i) FinishLayer(&enc_[i], changed_[i] != 0, sizes, bytes);
 }
 
 }  // namespace candi::io::laz::layered
@@ -749,12 +749,11 @@ void EncodeLayeredChunk(const std::vector<Item>& items, const uint8_t* records, 
   std::unique_ptr<layered::ByteEncoder> extra;
   uint32_t context = point.Start(records);
   if (set.color >= 0) {
-    color = std::make_unique<layered::ColorEncoder>(set.nir);
-    color->Start(records + set.color_offset, context);
+    color = std::make_unique<layered::ColorEncoder>(set.nir, records + set.color_offset, context);
   }
   if (set.extra >= 0) {
-    extra = std::make_unique<layered::ByteEncoder>(set.extra_count);
-    extra->Start(records + set.extra_offset, context);
+    extra = std::make_unique<layered::ByteEncoder>(set.extra_count, records + set.extra_offset,
+                                                   context);
   }
   const uint8_t* rec = records + set.record;
   for (uint32_t i = 1; i < points; ++i, rec += set.record) {

@@ -297,34 +297,33 @@ class Point14Encoder {
   uint32_t current_ = 0;
 };
 
+// RGB14 (nir false) or RGBNIR14, started from the chunk's first colour and POINT14's context.
 class ColorEncoder {
  public:
-  explicit ColorEncoder(bool nir) : nir_(nir) {}
-  void Start(const uint8_t* first, uint32_t context);
+  ColorEncoder(bool nir, const uint8_t* first, uint32_t context);
   void Encode(const uint8_t* item, uint32_t context);
   void Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* bytes);
 
  private:
   bool nir_;
+  bool rgb_changed_ = false, nir_changed_ = false;  // a layer is stored only when it changed
   ArithmeticEncoder rgb_enc_, nir_enc_;
-  bool rgb_changed_ = false, nir_changed_ = false;
   std::array<ColorContext, 4> contexts_;
-  uint32_t current_ = 0;
+  uint32_t current_;
 };
 
+// BYTE14 of `count` bytes a record, started as ColorEncoder.
 class ByteEncoder {
  public:
-  explicit ByteEncoder(uint32_t count) : count_(count), enc_(count), changed_(count) {}
-  void Start(const uint8_t* first, uint32_t context);
+  ByteEncoder(uint32_t count, const uint8_t* first, uint32_t context);
   void Encode(const uint8_t* item, uint32_t context);
   void Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* bytes);
 
  private:
-  uint32_t count_;
   std::vector<ArithmeticEncoder> enc_;
-  std::vector<uint8_t> changed_;
+  std::vector<uint8_t> changed_;  // per byte, as ColorEncoder's flags
   std::array<ByteContext, 4> contexts_;
-  uint32_t current_ = 0;
+  uint32_t current_;
 };
 
 }  // namespace candi::io::laz::layered

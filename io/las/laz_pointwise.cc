@@ -95,7 +95,7 @@ class Point10Decoder {
     source_id_ = LoadLE<uint16_t>(first + 18);
   }
 
-  void Decode(ArithmeticDecoder* dec, uint8_t* out) {
+  void Code(ArithmeticDecoder* dec, uint8_t* out) {
     const uint32_t changed = dec->DecodeSymbol(&c_.changed_values);
     if (changed != 0) DecodeAttributes(dec, changed);
     const uint32_t n = (bits_ >> 3) & 7;
@@ -161,7 +161,7 @@ class Point10Encoder {
  public:
   explicit Point10Encoder(const uint8_t* first) { std::memcpy(last_, first, 20); }
 
-  void Encode(ArithmeticEncoder* enc, const uint8_t* item) {
+  void Code(ArithmeticEncoder* enc, const uint8_t* item) {
     const uint32_t n = (item[14] >> 3) & 7;
     const uint32_t m = kNumberReturnMap[n][item[14] & 7];
     const uint32_t l = kNumberReturnLevel[n][item[14] & 7];
@@ -227,7 +227,7 @@ class GpsTime11Decoder {
  public:
   explicit GpsTime11Decoder(const uint8_t* first) : c_(first) {}
 
-  void Decode(ArithmeticDecoder* dec, uint8_t* out) {
+  void Code(ArithmeticDecoder* dec, uint8_t* out) {
     // A switch to another sequence decodes that sequence's value next; an encoder switches only
     // to a sequence it can code, so a second switch in a row means corrupt data.
     for (int switches = 0; !DecodeStep(dec); ++switches) {
@@ -323,7 +323,7 @@ class GpsTime11Decoder {
 class GpsTime11Encoder {
  public:
   explicit GpsTime11Encoder(const uint8_t* first) : c_(first) {}
-  void Encode(ArithmeticEncoder* enc, const uint8_t* item) {
+  void Code(ArithmeticEncoder* enc, const uint8_t* item) {
     EncodeGpsTime(enc, {&c_.zero_diff, &c_.multi, &c_.ic_gps_time, true}, LoadLE<uint64_t>(item),
                   &c_.g);
   }
@@ -339,12 +339,12 @@ class Rgb12Coder {
   explicit Rgb12Coder(const uint8_t* first) {
     for (int c = 0; c < 3; ++c) last_[c] = LoadLE<uint16_t>(first + 2 * c);
   }
-  void Decode(ArithmeticDecoder* dec, uint8_t* out) {
+  void Code(ArithmeticDecoder* dec, uint8_t* out) {
     uint16_t rgb[3];
     DecodeRgb(dec, &models_, last_, rgb);
     for (int c = 0; c < 3; ++c) StoreLE<uint16_t>(out + 2 * c, last_[c] = rgb[c]);
   }
-  void Encode(ArithmeticEncoder* enc, const uint8_t* item) {
+  void Code(ArithmeticEncoder* enc, const uint8_t* item) {
     uint16_t rgb[3];
     for (int c = 0; c < 3; ++c) rgb[c] = LoadLE<uint16_t>(item + 2 * c);
     EncodeRgb(enc, &models_, last_, rgb);
@@ -363,13 +363,13 @@ class ByteCoder {
   ByteCoder(const uint8_t* first, size_t count)
       : last_(first, first + count), models_(count, SymbolModel(256)) {}
 
-  void Decode(ArithmeticDecoder* dec, uint8_t* out) {
+  void Code(ArithmeticDecoder* dec, uint8_t* out) {
     for (size_t i = 0; i < last_.size(); ++i) {
       last_[i] = static_cast<uint8_t>(last_[i] + dec->DecodeSymbol(&models_[i]));
       out[i] = last_[i];
     }
   }
-  void Encode(ArithmeticEncoder* enc, const uint8_t* item) {
+  void Code(ArithmeticEncoder* enc, const uint8_t* item) {
     for (size_t i = 0; i < last_.size(); ++i) {
       enc->EncodeSymbol(&models_[i], static_cast<uint8_t>(item[i] - last_[i]));
       last_[i] = item[i];
@@ -429,11 +429,21 @@ Layout LayoutOf(const std::vector<Item>& items) {
 // A chunk's item coders (decoders or encoders), made from its first record.
 template <class Point, class Gps, bool kGps, bool kRgb, bool kBytes>
 struct ChunkItems {
-  ChunkItems(const Layout& l, const uint8_t* first) : point(first) {
+  ChunkItems(const Layout& layout, const uint8_t* first) : l(layout), point(first) {
     if (kGps) gps = std::make_unique<Gps>(first + l.gps);
     if (kRgb) rgb = std::make_unique<Rgb12Coder>(first + l.rgb);
     if (kBytes) bytes = std::make_unique<ByteCoder>(first + l.bytes, l.byte_count);
   }
+  // Decodes into (ArithmeticDecoder, uint8_t*) or encodes from (ArithmeticEncoder, const
+  // uint8_t*) the next record, item by item.
+  template <class Coder, class Byte>
+  void Code(Coder* coder, Byte* record) {
+    point.Code(coder, record);
+    if constexpr (kGps) gps->Code(coder, record + l.gps);
+    if constexpr (kRgb) rgb->Code(coder, record + l.rgb);
+    if constexpr (kBytes) bytes->Code(coder, record + l.bytes);
+  }
+  const Layout& l;
   Point point;
   std::unique_ptr<Gps> gps;
   std::unique_ptr<Rgb12Coder> rgb;
@@ -453,10 +463,7 @@ void DecodeChunk(const Layout& l, const uint8_t* data, size_t size, uint32_t poi
   uint8_t* record = out;
   for (uint32_t i = 1; i < points; ++i) {
     record += l.length;
-    items.point.Decode(&dec, record);
-    if constexpr (kGps) items.gps->Decode(&dec, record + l.gps);
-    if constexpr (kRgb) items.rgb->Decode(&dec, record + l.rgb);
-    if constexpr (kBytes) items.bytes->Decode(&dec, record + l.bytes);
+    items.Code(&dec, record);
     if ((i & 4095) == 0 && dec.overrun()) ThrowEndsEarly(size, i);  // stop early on truncation
   }
   if (dec.overrun()) ThrowEndsEarly(size, points - 1);
@@ -470,14 +477,7 @@ void EncodeChunk(const Layout& l, const uint8_t* records, uint32_t points,
   out->insert(out->end(), records, records + l.length);
   ChunkItems<Point10Encoder, GpsTime11Encoder, kGps, kRgb, kBytes> items(l, records);
   ArithmeticEncoder enc;
-  const uint8_t* record = records;
-  for (uint32_t i = 1; i < points; ++i) {
-    record += l.length;
-    items.point.Encode(&enc, record);
-    if constexpr (kGps) items.gps->Encode(&enc, record + l.gps);
-    if constexpr (kRgb) items.rgb->Encode(&enc, record + l.rgb);
-    if constexpr (kBytes) items.bytes->Encode(&enc, record + l.bytes);
-  }
+  for (uint32_t i = 1; i < points; ++i) items.Code(&enc, records + i * l.length);
   enc.Done();
   out->insert(out->end(), enc.bytes().begin(), enc.bytes().end());
 }

@@ -31,15 +31,13 @@
 namespace candi::io {
 namespace {
 
-using ::candi::testing::FileExists;
-using ::candi::testing::LasPointRecords;
-using ::candi::testing::LaszipVlrOf;
-using ::candi::testing::LazRecords;
-using ::candi::testing::ReadBytes;
-using ::candi::testing::SourceDir;
-using ::candi::testing::TempDir;
+namespace util = ::candi::testing;
+using util::LasPointRecords;
+using util::LazRecords;
+using util::ReadBytes;
+using util::TempDir;
 
-std::string DataPath(const std::string& name) { return SourceDir() + "/tests/data/laz/" + name; }
+std::string DataPath(const std::string& name) { return util::SourceDir() + "/tests/data/laz/" + name; }
 
 // ---- The entropy coder ----
 
@@ -271,7 +269,7 @@ ReencodeResult Reencode(const std::string& path) {
   BinaryFile file(path);
   LasHeader header = ReadLasHeader(&file);
   header.point_format &= 0x3F;
-  const laz::Vlr vlr = LaszipVlrOf(&file, header);
+  const laz::Vlr vlr = util::LaszipVlrOf(&file, header);
   const std::vector<LazChunk> chunks = ReadLazChunkTable(
       file, vlr, header.offset_to_point_data, LasPointCount(header), header.record_length);
   ReencodeResult result;
@@ -487,8 +485,8 @@ TEST(LazWrite, EmptyCloud) {
     const std::string bytes = ReadBytes(path);
     EXPECT_EQ(static_cast<uint8_t>(bytes[104]), 0x80 | format);
     // The point data: the table's offset, then a table of 0 chunks (as LASzip writes it).
-    const uint32_t at = ::candi::testing::GetLE<uint32_t>(bytes, 96);
-    EXPECT_EQ(::candi::testing::GetLE<uint64_t>(bytes, at), at + 8u);
+    const uint32_t at = util::GetLE<uint32_t>(bytes, 96);
+    EXPECT_EQ(util::GetLE<uint64_t>(bytes, at), at + 8u);
     EXPECT_EQ(bytes.size(), at + 16u);
   }
 }
@@ -500,7 +498,7 @@ TEST(LazWrite, ReadOnlyFolderLeavesNoFile) {
     // root writes into a folder of mode 0555; /proc refuses new files to everyone.
     EXPECT_THROW(WritePointCloud("/proc/candi_laz_write_test.laz", cloud, OptionsFor(1)),
                  InputError);
-    EXPECT_FALSE(FileExists("/proc/candi_laz_write_test.laz"));
+    EXPECT_FALSE(util::FileExists("/proc/candi_laz_write_test.laz"));
     return;
   }
   const std::string folder = dir.File("locked");
@@ -521,7 +519,7 @@ TEST(LazWrite, InterruptedWriteLeavesNoPartialFile) {
                                   OptionsFor(6));
     writer->Write(cloud);
   }
-  EXPECT_FALSE(FileExists(dir.File("cut.laz")));
+  EXPECT_FALSE(util::FileExists(dir.File("cut.laz")));
   EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
 }
 
