@@ -465,13 +465,37 @@ TEST(LazWrite, SharedDataLasToLazToLas) {
   }
 }
 
+// Writes the LAS file as LAZ and compares the point data (chunks and chunk table) with that of
+// `laz`, its twin written by another tool with 50,000-point chunks.
+void ExpectPointDataOf(const std::string& las, const std::string& laz) {
+  TempDir dir;
+  WritePointCloud(dir.File("x.laz"), ReadPointCloud(las));
+  // Only meaningful when candi's rewrite keeps every record byte.
+  ASSERT_TRUE(LazRecords(dir.File("x.laz")) == LasPointRecords(ReadBytes(las))) << las;
+  const std::string ours = ReadBytes(dir.File("x.laz")), theirs = ReadBytes(laz);
+  const uint32_t a = util::GetLE<uint32_t>(ours, 96), b = util::GetLE<uint32_t>(theirs, 96);
+  EXPECT_TRUE(ours.substr(a + 8) == theirs.substr(b + 8))
+      << "point data of " << ours.size() - a << " vs " << theirs.size() - b << " bytes";
+}
+
+TEST(LazWrite, PointDataEqualsLaszipsForTheSameLasFile) {
+  // (extrabytes.las is not among them: its undocumented and array extra bytes are not kept by
+  // candi's points, so its LAS rewrite already differs; LazChunk tests cover its chunks.)
+  ExpectPointDataOf(DataPath("1815.las"), DataPath("1815.laz"));  // LAStools las2las, format 1
+  CANDI_REQUIRE_SHARED_DATA(simple, "las/simple.las");
+  ExpectPointDataOf(simple, DataPath("simple.laz"));  // format 3
+}
+
 TEST(LazWrite, SameBytesOnOneAndTwoThreads) {
   TempDir dir;
   const PointCloud cloud = RandomCloud(dir, 3, 450000, 5);  // 9 chunks: two batches
   tbb::task_arena one(1), two(2);
   one.execute([&] { WritePointCloud(dir.File("one.laz"), cloud, OptionsFor(3)); });
   two.execute([&] { WritePointCloud(dir.File("two.laz"), cloud, OptionsFor(3)); });
-  EXPECT_TRUE(ReadBytes(dir.File("one.laz")) == ReadBytes(dir.File("two.laz")));
+  std::string a = ReadBytes(dir.File("one.laz")), b = ReadBytes(dir.File("two.laz"));
+  a.replace(90, 4, 4, '\0');  // the creation day and year: the runs may straddle midnight
+  b.replace(90, 4, 4, '\0');
+  EXPECT_TRUE(a == b);
 }
 
 TEST(LazWrite, EmptyCloud) {
