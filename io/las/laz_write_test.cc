@@ -23,6 +23,7 @@
 #include "io/las/laz_arith.h"
 #include "io/las/laz_chunks.h"
 #include "io/las/laz_format.h"
+#include "io/convert.h"
 #include "io/point_io.h"
 #include "tests/util/las_bytes.h"
 #include "tests/util/laz_records.h"
@@ -484,6 +485,23 @@ TEST(LazWrite, PointDataEqualsLaszipsForTheSameLasFile) {
   ExpectPointDataOf(DataPath("1815.las"), DataPath("1815.laz"));  // LAStools las2las, format 1
   CANDI_REQUIRE_SHARED_DATA(simple, "las/simple.las");
   ExpectPointDataOf(simple, DataPath("simple.laz"));  // format 3
+}
+
+TEST(LazWrite, ConvertWritesLazWithTheCrsRecords) {
+  // 1815.las states its CRS (NAD83(2011) / Texas Centric Lambert + NAVD88) in LASF_Projection
+  // records; the LAZ keeps them, and a reprojection states the new CRS.
+  TempDir dir;
+  const std::string source = DataPath("1815.las");
+  ConvertPointFile({}, source, dir.File("same.laz"));
+  EXPECT_TRUE(LazRecords(dir.File("same.laz")) == LasPointRecords(ReadBytes(source)));
+  EXPECT_EQ(OpenPointReader(dir.File("same.laz"))->info().meta.crs,
+            OpenPointReader(source)->info().meta.crs);
+  ConvertOptions options;
+  options.to_crs = "EPSG:6588";  // NAD83(2011) / Texas South Central (ftUS)
+  ConvertPointFile(options, source, dir.File("moved.laz"));
+  const auto reader = OpenPointReader(dir.File("moved.laz"));
+  EXPECT_NE(reader->info().meta.crs.find("6588"), std::string::npos) << reader->info().meta.crs;
+  EXPECT_EQ(reader->info().count, 1247u);
 }
 
 TEST(LazWrite, SameBytesOnOneAndTwoThreads) {
