@@ -353,7 +353,8 @@ inline void IntegerCoder::WriteCorrector(ArithmeticEncoder* encoder, int32_t cor
 inline void IntegerCoder::Compress(ArithmeticEncoder* encoder, int32_t prediction, int32_t real,
                                    uint32_t context) {
   // The corrector folded into [corr_min_, corr_max_], in unsigned arithmetic as Decompress.
-  int32_t corr = static_cast<int32_t>(static_cast<uint32_t>(real) - static_cast<uint32_t>(prediction));
+  int32_t corr =
+      static_cast<int32_t>(static_cast<uint32_t>(real) - static_cast<uint32_t>(prediction));
   if (corr < corr_min_) {
     corr = static_cast<int32_t>(static_cast<uint32_t>(corr) + corr_range_);
   } else if (corr > corr_max_) {

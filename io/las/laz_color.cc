@@ -42,7 +42,8 @@ void DecodeRgb(ArithmeticDecoder* dec, RgbModels* m, const uint16_t* last, uint1
   rgb[2] = static_cast<uint16_t>(b_hi << 8 | b_lo);
 }
 
-uint32_t EncodeRgb(ArithmeticEncoder* enc, RgbModels* m, const uint16_t* last, const uint16_t* rgb) {
+uint32_t EncodeRgb(ArithmeticEncoder* enc, RgbModels* m, const uint16_t* last,
+                   const uint16_t* rgb) {
   uint32_t sym = 0;
   for (int c = 0; c < 3; ++c) {
     sym |= (Lo(last[c]) != Lo(rgb[c]) ? 1u : 0u) << (2 * c);
@@ -53,9 +54,7 @@ uint32_t EncodeRgb(ArithmeticEncoder* enc, RgbModels* m, const uint16_t* last, c
     sym |= 64;  // not grey
   }
   enc->EncodeSymbol(&m->byte_used, sym);
-  auto corr = [&](int i, int32_t c) {
-    enc->EncodeSymbol(&m->diff[i], static_cast<uint8_t>(c));
-  };
+  auto corr = [&](int i, int32_t c) { enc->EncodeSymbol(&m->diff[i], static_cast<uint8_t>(c)); };
   // The corrections DecodeRgb adds, in its order.
   const int32_t diff_lo = Lo(rgb[0]) - Lo(last[0]), diff_hi = Hi(rgb[0]) - Hi(last[0]);
   if (sym & 1) corr(0, diff_lo);

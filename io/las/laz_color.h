@@ -23,12 +23,11 @@ struct NirModels {
   std::vector<SymbolModel> diff = std::vector<SymbolModel>(2, SymbolModel(256));
 };
 
-// rgb, last: red, green, blue (distinct arrays). EncodeRgb returns the byte-used symbol (0: the colour is grey
-// and equal to `last`).
-void DecodeRgb(ArithmeticDecoder* decoder, RgbModels* models, const uint16_t* last,
-               uint16_t* rgb);
+// rgb, last: red, green, blue (distinct arrays). EncodeRgb returns the byte-used symbol (0: the
+// colour is grey and equal to `last`).
+void DecodeRgb(ArithmeticDecoder* decoder, RgbModels* models, const uint16_t* last, uint16_t* rgb);
 uint32_t EncodeRgb(ArithmeticEncoder* encoder, RgbModels* models, const uint16_t* last,
-               const uint16_t* rgb);
+                   const uint16_t* rgb);
 uint16_t DecodeNir(ArithmeticDecoder* decoder, NirModels* models, uint16_t last);
 void EncodeNir(ArithmeticEncoder* encoder, NirModels* models, uint16_t last, uint16_t nir);
 

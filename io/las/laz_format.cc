@@ -170,8 +170,8 @@ Vlr WriterVlr(int point_format, int extra_bytes, uint32_t chunk_size) {
     vlr.items.push_back({type, static_cast<uint16_t>(ItemSize(type)), version});
   }
   if (extra_bytes > 0) {
-    vlr.items.push_back(
-        {layered ? uint16_t{kByte14} : uint16_t{kByte}, static_cast<uint16_t>(extra_bytes), version});
+    const uint16_t type = layered ? kByte14 : kByte;
+    vlr.items.push_back({type, static_cast<uint16_t>(extra_bytes), version});
   }
   return vlr;
 }

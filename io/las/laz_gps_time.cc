@@ -6,9 +6,9 @@ namespace candi::io::laz {
 
 namespace {
 
-constexpr int32_t kMulti = 500;        // LASZIP_GPSTIME_MULTI
-constexpr int32_t kMultiMinus = -10;   // LASZIP_GPSTIME_MULTI_MINUS
-constexpr uint32_t kMultiFull = 511;   // the multi model's "new sequence" code in v3 (512 in v2)
+constexpr int32_t kMulti = 500;       // LASZIP_GPSTIME_MULTI
+constexpr int32_t kMultiMinus = -10;  // LASZIP_GPSTIME_MULTI_MINUS
+constexpr uint32_t kMultiFull = 511;  // the multi model's "new sequence" code in v3 (512 in v2)
 
 int32_t WrapMul(int32_t a, int32_t b) {
   return static_cast<int32_t>(static_cast<uint32_t>(a) * static_cast<uint32_t>(b));
@@ -63,8 +63,7 @@ void EncodeMultipleDiff(ArithmeticEncoder* enc, const GpsTimeModels& m, int32_t 
 
 }  // namespace
 
-void EncodeGpsTime(ArithmeticEncoder* enc, const GpsTimeModels& m, uint64_t time,
-                   GpsSequences* g) {
+void EncodeGpsTime(ArithmeticEncoder* enc, const GpsTimeModels& m, uint64_t time, GpsSequences* g) {
   const uint32_t shift = m.unchanged_codes ? 1 : 0;
   for (;;) {  // at most one switch to another sequence, then the time is coded there
     const uint64_t last_time = g->time[g->last];

@@ -75,7 +75,9 @@ struct Point10Context {
 };
 
 // The y coder's context from the x corrector's class, the z coder's from both.
-uint32_t DyContext(uint32_t single, uint32_t k_dx) { return single + (k_dx < 20 ? k_dx & ~1u : 20); }
+uint32_t DyContext(uint32_t single, uint32_t k_dx) {
+  return single + (k_dx < 20 ? k_dx & ~1u : 20);
+}
 uint32_t ZContext(uint32_t single, uint32_t k_dx, uint32_t k_dy) {
   const uint32_t k = (k_dx + k_dy) / 2;
   return single + (k < 18 ? k & ~1u : 18);

@@ -19,12 +19,12 @@
 
 #include "core/binary_file.h"
 #include "core/check.h"
+#include "io/convert.h"
 #include "io/las/las_header.h"
 #include "io/las/las_io.h"
 #include "io/las/laz_arith.h"
 #include "io/las/laz_chunks.h"
 #include "io/las/laz_format.h"
-#include "io/convert.h"
 #include "io/point_io.h"
 #include "tests/util/las_bytes.h"
 #include "tests/util/laz_records.h"
@@ -39,7 +39,9 @@ using util::LazRecords;
 using util::ReadBytes;
 using util::TempDir;
 
-std::string DataPath(const std::string& name) { return util::SourceDir() + "/tests/data/laz/" + name; }
+std::string DataPath(const std::string& name) {
+  return util::SourceDir() + "/tests/data/laz/" + name;
+}
 
 // ---- The entropy coder ----
 
@@ -59,16 +61,31 @@ TEST(LazEncoder, SymbolsBitsAndRawValuesDecodeToTheirInput) {
     const uint32_t skew = rng() % 8 == 0 ? rng() : rng() % 3;
     Op op{kind, 0, 0};
     switch (kind) {
-      case 0: op.value = skew % 5; enc.EncodeSymbol(&small, op.value); break;
-      case 1: op.value = skew % 300; enc.EncodeSymbol(&large, op.value); break;
-      case 2: op.value = skew % 2; enc.EncodeBit(&bit, op.value); break;
+      case 0:
+        op.value = skew % 5;
+        enc.EncodeSymbol(&small, op.value);
+        break;
+      case 1:
+        op.value = skew % 300;
+        enc.EncodeSymbol(&large, op.value);
+        break;
+      case 2:
+        op.value = skew % 2;
+        enc.EncodeBit(&bit, op.value);
+        break;
       case 3:
         op.bits = 1 + rng() % 32;
         op.value = op.bits == 32 ? static_cast<uint32_t>(rng()) : rng() & ((1u << op.bits) - 1);
         enc.WriteBits(op.bits, op.value);
         break;
-      case 4: op.value = rng() & 0xFFFF; enc.WriteShort(static_cast<uint16_t>(op.value)); break;
-      default: op.value = static_cast<uint32_t>(rng()); enc.WriteInt(op.value); break;
+      case 4:
+        op.value = rng() & 0xFFFF;
+        enc.WriteShort(static_cast<uint16_t>(op.value));
+        break;
+      default:
+        op.value = static_cast<uint32_t>(rng());
+        enc.WriteInt(op.value);
+        break;
     }
     ops.push_back(op);
   }
@@ -80,12 +97,24 @@ TEST(LazEncoder, SymbolsBitsAndRawValuesDecodeToTheirInput) {
     const Op& op = ops[i];
     uint32_t got = 0;
     switch (op.kind) {
-      case 0: got = dec.DecodeSymbol(&decoded_small); break;
-      case 1: got = dec.DecodeSymbol(&decoded_large); break;
-      case 2: got = dec.DecodeBit(&decoded_bit); break;
-      case 3: got = dec.ReadBits(op.bits); break;
-      case 4: got = dec.ReadShort(); break;
-      default: got = dec.ReadInt(); break;
+      case 0:
+        got = dec.DecodeSymbol(&decoded_small);
+        break;
+      case 1:
+        got = dec.DecodeSymbol(&decoded_large);
+        break;
+      case 2:
+        got = dec.DecodeBit(&decoded_bit);
+        break;
+      case 3:
+        got = dec.ReadBits(op.bits);
+        break;
+      case 4:
+        got = dec.ReadShort();
+        break;
+      default:
+        got = dec.ReadInt();
+        break;
     }
     ASSERT_EQ(got, op.value) << "operation " << i << " of kind " << op.kind;
   }
@@ -107,7 +136,7 @@ TEST(LazEncoder, IntegersOfEveryWidthAndExtremeCorrectorsRoundTrip) {
       int32_t p = static_cast<int32_t>(rng()), r = static_cast<int32_t>(rng());
       if (bits < 32) p &= hi, r &= hi;
       if (i % 5 == 0) r = p + static_cast<int32_t>(rng() % 7) - 3;  // small correctors
-      if (i % 97 == 0) p = lo, r = hi;                               // extremes
+      if (i % 97 == 0) p = lo, r = hi;                              // extremes
       if (i % 89 == 0) p = hi, r = lo;
       if (bits < 32) r &= hi;
       const int32_t context = static_cast<int32_t>(rng() % 3);
@@ -118,7 +147,8 @@ TEST(LazEncoder, IntegersOfEveryWidthAndExtremeCorrectorsRoundTrip) {
     laz::ArithmeticDecoder dec;
     dec.Init(enc.bytes().data(), enc.bytes().data() + enc.bytes().size());
     for (size_t i = 0; i < values.size(); ++i) {
-      const int32_t got = dec_ic.Decompress(&dec, values[i][0], static_cast<uint32_t>(values[i][2]));
+      const int32_t got =
+          dec_ic.Decompress(&dec, values[i][0], static_cast<uint32_t>(values[i][2]));
       ASSERT_EQ(got, values[i][1]) << bits << " bits, value " << i;
     }
     EXPECT_FALSE(dec.overrun());
@@ -307,8 +337,8 @@ ReencodeResult Reencode(const std::string& path) {
 TEST(LazChunk, LaszipWrittenChunksAreReencodedByteForByte) {
   // Files of tests/data/laz written by LASzip (LAStools, LASzip DLL) and by PDAL/laz-perf, with
   // 50,000-point chunks: every chunk and the chunk table come out identical.
-  for (const char* name : {"1815.laz", "extrabytes.laz", "simple.laz", "point-time-1.4.las.laz",
-                           "simple.copc.laz"}) {
+  for (const char* name :
+       {"1815.laz", "extrabytes.laz", "simple.laz", "point-time-1.4.las.laz", "simple.copc.laz"}) {
     const ReencodeResult r = Reencode(DataPath(name));
     EXPECT_GT(r.chunks, 0u) << name;
     EXPECT_EQ(r.identical, r.chunks) << name << ": " << r.first_difference;
@@ -336,10 +366,14 @@ PointCloud RandomCloud(const TempDir& dir, int format, size_t n, uint32_t seed) 
   PointSchema schema;
   schema.colors = layout.color_offset >= 0;
   using namespace las_field;
-  schema.scalars = {{kIntensity, ScalarType::kFloat32},       {kReturnNumber, ScalarType::kFloat32},
-                    {kNumberOfReturns, ScalarType::kFloat32}, {kScanDirection, ScalarType::kFloat32},
-                    {kEdgeOfFlightLine, ScalarType::kFloat32}, {kClassification, ScalarType::kFloat32},
-                    {kClassFlags, ScalarType::kFloat32},      {kUserData, ScalarType::kFloat32},
+  schema.scalars = {{kIntensity, ScalarType::kFloat32},
+                    {kReturnNumber, ScalarType::kFloat32},
+                    {kNumberOfReturns, ScalarType::kFloat32},
+                    {kScanDirection, ScalarType::kFloat32},
+                    {kEdgeOfFlightLine, ScalarType::kFloat32},
+                    {kClassification, ScalarType::kFloat32},
+                    {kClassFlags, ScalarType::kFloat32},
+                    {kUserData, ScalarType::kFloat32},
                     {kPointSourceId, ScalarType::kFloat32},
                     {format >= 6 ? kScanAngle : kScanAngleRank, ScalarType::kFloat32}};
   if (layout.gps_offset >= 0) schema.scalars.push_back({kGpsTime, ScalarType::kFloat64});
@@ -360,9 +394,7 @@ PointCloud RandomCloud(const TempDir& dir, int format, size_t n, uint32_t seed) 
                                 4500000.0 + 0.001 * LoadLE<int32_t>(p + 4),
                                 0.001 * LoadLE<int32_t>(p + 8));
     cloud.positions[i] = cloud.frame.ToLocal(world);
-    auto set = [&](const char* name, double v) {
-      cloud.FindScalar(name)->Set(i, v);
-    };
+    auto set = [&](const char* name, double v) { cloud.FindScalar(name)->Set(i, v); };
     set(kIntensity, LoadLE<uint16_t>(p + 12));
     const bool ext = format >= 6;
     set(kReturnNumber, ext ? p[14] & 15 : p[14] & 7);
@@ -386,8 +418,8 @@ PointCloud RandomCloud(const TempDir& dir, int format, size_t n, uint32_t seed) 
     }
     if (layout.color_offset >= 0) {
       const uint8_t* c = p + layout.color_offset;
-      cloud.colors[i] = Rgb8{static_cast<uint8_t>(c[1]), static_cast<uint8_t>(c[3]),
-                             static_cast<uint8_t>(c[5])};
+      cloud.colors[i] =
+          Rgb8{static_cast<uint8_t>(c[1]), static_cast<uint8_t>(c[3]), static_cast<uint8_t>(c[5])};
     }
     if (format == 8) set(kNir, LoadLE<uint16_t>(p + layout.color_offset + 6));
     set("confidence", (rng() % 1000) * 0.001);
@@ -405,7 +437,6 @@ PointWriteOptions OptionsFor(int format) {
   options.las_offset = Eigen::Vector3d(500000.0, 4500000.0, 0.0);
   return options;
 }
-
 
 // The header of a file as its LAS twin would have it: no LAZ bit, the laszip VLR and the chunk
 // table's offset not counted.
@@ -453,8 +484,8 @@ TEST(LazWrite, LasToLazToLasIsBitForBitForEveryFormat) {
 }
 
 TEST(LazWrite, SharedDataLasToLazToLas) {
-  for (const char* name : {"las/simple.las", "las/autzen_trim.las", "las/simple1_4.las",
-                           "las/1_4_w_evlr.las"}) {
+  for (const char* name :
+       {"las/simple.las", "las/autzen_trim.las", "las/simple1_4.las", "las/1_4_w_evlr.las"}) {
     CANDI_REQUIRE_SHARED_DATA(path, name);
     SCOPED_TRACE(name);
     TempDir dir;
@@ -579,9 +610,8 @@ TEST(LazWrite, InterruptedWriteLeavesNoPartialFile) {
   TempDir dir;
   const PointCloud cloud = RandomCloud(dir, 6, 60000, 4);
   {
-    auto writer = OpenPointWriter(dir.File("cut.laz"),
-                                  {cloud.schema, cloud.frame, cloud.meta, cloud.size()},
-                                  OptionsFor(6));
+    auto writer = OpenPointWriter(
+        dir.File("cut.laz"), {cloud.schema, cloud.frame, cloud.meta, cloud.size()}, OptionsFor(6));
     writer->Write(cloud);
   }
   EXPECT_FALSE(util::FileExists(dir.File("cut.laz")));

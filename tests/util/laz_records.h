@@ -27,10 +27,10 @@ inline std::string LazRecords(const std::string& path) {
   header.point_format &= 0x3F;
   const io::laz::Vlr vlr = LaszipVlrOf(&file, header);
   const uint64_t count = io::LasPointCount(header);
-  io::LazPointData data(&file, vlr,
-                        io::ReadLazChunkTable(file, vlr, header.offset_to_point_data, count,
-                                              header.record_length),
-                        header.record_length);
+  io::LazPointData data(
+      &file, vlr,
+      io::ReadLazChunkTable(file, vlr, header.offset_to_point_data, count, header.record_length),
+      header.record_length);
   std::string records;
   for (uint64_t done = 0; done < count;) {
     size_t n = 0;
