@@ -335,10 +335,13 @@ ReencodeResult Reencode(const std::string& path) {
 }
 
 TEST(LazChunk, LaszipWrittenChunksAreReencodedByteForByte) {
-  // Files of tests/data/laz written by LASzip (LAStools, LASzip DLL) and by PDAL/laz-perf, with
-  // 50,000-point chunks: every chunk and the chunk table come out identical.
-  for (const char* name :
-       {"1815.laz", "extrabytes.laz", "simple.laz", "point-time-1.4.las.laz", "simple.copc.laz"}) {
+  // The LAZ files of tests/data/laz (tests/data/README.md), written by LAStools (1815,
+  // extrabytes: formats 1 and 3 + extra bytes), TerraScan's LASzip (simple, point-time-1.4,
+  // append-bug: formats 3, 1 and 8 + NIR + BYTE14), pylas (1_4_w_evlr: format 6) and a COPC
+  // writer (simple.copc: format 7, variable chunks): every chunk comes out identical, and the
+  // chunk table of the fixed-size ones too.
+  for (const char* name : {"1815.laz", "extrabytes.laz", "simple.laz", "point-time-1.4.las.laz",
+                           "append-bug.laz", "1_4_w_evlr.laz", "simple.copc.laz"}) {
     const ReencodeResult r = Reencode(DataPath(name));
     EXPECT_GT(r.chunks, 0u) << name;
     EXPECT_EQ(r.identical, r.chunks) << name << ": " << r.first_difference;
