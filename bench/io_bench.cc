@@ -4,17 +4,26 @@
 // pointwise v2, format 3; tests/data/laz/append-bug.laz, layered v3, format 8), each read
 // repeatedly, on 1 and 2 threads. Prints Google Benchmark's table with points/s; medians of 5
 // repetitions. Targets: read >= 50 M points/s, write >= 30 M points/s (issue 2); E57 float read
-// >= 20 M points/s, LAZ >= 10 M points/s on one core (issue 25). Set CANDI_BENCH_POINTS to change
+// >= 20 M points/s, LAZ >= 10 M points/s on one core (issue 25). LAZ writing (issue 38, target
+// >= 3 M points/s a core): the Autzen points (real lidar, format 3) written 10 times and the
+// synthetic cloud once, as .laz on 1 and 2 threads; the label gives the bytes a point against
+// LAS, and the encoder alone compresses LAS records into chunks. Set CANDI_BENCH_POINTS to change
 // the size.
 #include <benchmark/benchmark.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <tbb/global_control.h>
 
+#include "core/binary_file.h"
 #include "core/rng.h"
+#include "io/las/las_header.h"
+#include "io/las/laz_chunks.h"
+#include "io/las/laz_format.h"
 #include "io/point_io.h"
 
 namespace {
@@ -125,12 +134,89 @@ void BM_ReadLaz(benchmark::State& state) {
                  description.substr(0, description.find(',')) + "]");
 }
 
+// range(0) = 0: ../shared/data/las/autzen_trim.las written 10 times; 1: the synthetic double
+// cloud (LAS format 3 with colour) once. range(1): threads.
+void BM_WriteLaz(benchmark::State& state) {
+  PointCloud autzen;
+  const bool real = state.range(0) == 0;
+  if (real) {
+    const std::string path = std::string(CANDI_SOURCE_DIR) + "/../shared/data/las/autzen_trim.las";
+    if (!std::filesystem::exists(path)) {
+      state.SkipWithError((path + " is absent").c_str());
+      return;
+    }
+    autzen = io::ReadPointCloud(path);
+  }
+  const PointCloud& cloud = real ? autzen : Cloud(ScalarType::kFloat64);
+  const int repeat = real ? 10 : 1;
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(1));
+  const std::string laz = Dir() + "/write.laz", las = Dir() + "/write.las";
+  for (auto _ : state) {
+    for (int r = 0; r < repeat; ++r) io::WritePointCloud(laz, cloud);
+  }
+  state.SetItemsProcessed(state.iterations() * repeat * cloud.size());
+  io::WritePointCloud(las, cloud);
+  const double n = static_cast<double>(cloud.size());
+  char label[160];
+  std::snprintf(label, sizeof label, "%s, %d thread(s): LAZ %.2f bytes/point, LAS %.2f",
+                real ? "autzen_trim" : "synthetic", static_cast<int>(state.range(1)),
+                std::filesystem::file_size(laz) / n, std::filesystem::file_size(las) / n);
+  state.SetLabel(label);
+}
+
+// The encoder alone: LAS records (read from a LAS file's bytes) compressed into LAZ chunks, the
+// chunks dropped. range(0) = 0: autzen_trim.las (format 3, pointwise v2) 10 times; 1: the
+// synthetic cloud written as LAS 1.4 format 7 (layered v3). range(1): threads.
+void BM_CompressLaz(benchmark::State& state) {
+  const bool real = state.range(0) == 0;
+  std::string path = std::string(CANDI_SOURCE_DIR) + "/../shared/data/las/autzen_trim.las";
+  if (!real) {
+    path = Dir() + "/fmt7.las";
+    io::PointWriteOptions options;
+    options.las_point_format = 7;
+    options.las_version_minor = 4;
+    if (!std::filesystem::exists(path)) io::WritePointCloud(path, Cloud(ScalarType::kFloat64), options);
+  }
+  if (!std::filesystem::exists(path)) {
+    state.SkipWithError((path + " is absent").c_str());
+    return;
+  }
+  BinaryFile file(path);
+  io::LasHeader header = io::ReadLasHeader(&file);
+  const uint64_t count = io::LasPointCount(header);
+  std::vector<uint8_t> records(count * header.record_length);
+  file.ReadAt(header.offset_to_point_data, records.data(), records.size());
+  const int extra = header.record_length - io::LasLayoutOf(header.point_format).record_size;
+  const io::laz::Vlr vlr = io::laz::WriterVlr(header.point_format, extra, 50000);
+  const int repeat = real ? 10 : 1;
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(1));
+  size_t bytes = 0;
+  for (auto _ : state) {
+    for (int r = 0; r < repeat; ++r) {
+      bytes = 0;
+      io::LazChunkWriter writer(vlr, header.record_length, [&](const uint8_t*, size_t n) { bytes += n; });
+      writer.Add(records.data(), count);
+      bytes += writer.Finish().size();
+    }
+  }
+  state.SetItemsProcessed(state.iterations() * repeat * count);
+  char label[160];
+  std::snprintf(label, sizeof label, "%s, format %d, %d thread(s): %.2f bytes/point, LAS records %d",
+                real ? "autzen_trim" : "synthetic", header.point_format, static_cast<int>(state.range(1)),
+                static_cast<double>(bytes) / count, header.record_length);
+  state.SetLabel(label);
+}
+
 BENCHMARK(BM_Write)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(5)->ReportAggregatesOnly(true)->Iterations(1);
 BENCHMARK(BM_Read)->ArgsProduct({{0, 1, 2, 3, 4}, {0}})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(5)->ReportAggregatesOnly(true)->Iterations(1);
 BENCHMARK(BM_ReadLaz)->ArgsProduct({{0, 1}, {1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(5)->ReportAggregatesOnly(true)->Iterations(1);
+BENCHMARK(BM_CompressLaz)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime()
+    ->Repetitions(3)->ReportAggregatesOnly(true)->Iterations(1);
+BENCHMARK(BM_WriteLaz)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime()
+    ->Repetitions(3)->ReportAggregatesOnly(true)->Iterations(1);
 
 }  // namespace
 

@@ -77,13 +77,12 @@ std::string ContentName(Content c) {
 PointFormat OutputPointFormat(const std::string& path) {
   const std::string ext = Extension(path);
   if (ext == "ply") return PointFormat::kPly;
-  if (ext == "las") return PointFormat::kLas;
+  if (ext == "las" || ext == "laz") return PointFormat::kLas;  // the LAS writer compresses .laz
   if (ext == "pts") return PointFormat::kPts;
   if (ext == "e57") return PointFormat::kE57;
   if (ext == "xyz" || ext == "txt" || ext == "asc" || ext == "csv") return PointFormat::kXyz;
-  if (ext == "laz") throw InputError(path, "", "writing LAZ is not supported; write .las");
   throw InputError(path, "", "unknown point-file extension '." + ext +
-                                 "' (known: .ply .las .xyz .txt .asc .csv .pts .e57)");
+                                 "' (known: .ply .las .laz .xyz .txt .asc .csv .pts .e57)");
 }
 
 PointFormat DetectPointFormat(const std::string& path) {

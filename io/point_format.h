@@ -14,8 +14,8 @@ std::string PointFormatName(PointFormat format);  // "PLY", "LAS", "XYZ", "PTS",
 // .laz reads as kLas (LAZ content). Throws InputError for .dxf (a drawing, not a point file),
 // unknown extensions, and content that contradicts the extension.
 PointFormat DetectPointFormat(const std::string& path);
-// Format from the extension only, for outputs. Throws InputError for unknown extensions and for
-// .laz (writing LAZ is not supported).
+// Format from the extension only, for outputs (.laz: kLas, which the LAS writer compresses).
+// Throws InputError for unknown extensions.
 PointFormat OutputPointFormat(const std::string& path);
 
 }  // namespace candi::io

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <ctime>
@@ -30,6 +31,7 @@ namespace {
 constexpr size_t kBlockRecords = 4096;
 constexpr size_t kColorScanBytes = 8 << 20;
 constexpr const char* kGeneratingSoftware = "candi 0.1.0";
+constexpr uint32_t kLazChunkPoints = 50000;  // LASzip's default chunk size
 
 // ---- Reader ----
 
@@ -443,6 +445,7 @@ class LasWriter : public PointWriter {
   void SplitVlrs();
   void AddCrsVlr();
   void WriteHeaderAndVlrs();
+  std::string EncodedHeader() const;
   void EncodeBlock(const PointCloud& chunk, size_t first, size_t n, uint8_t* records);
   void EncodePositions(const PointCloud& chunk, size_t first, size_t n, uint8_t* records);
   [[noreturn]] void ThrowOutOfRange(const PointCloud& chunk, size_t i) const;
@@ -462,12 +465,24 @@ class LasWriter : public PointWriter {
   std::array<uint64_t, 15> by_return_{};
   std::vector<uint8_t> buffer_;
   std::unique_ptr<AtomicFile> file_;  // created last: a rejected spec creates nothing
+  // LAZ (a .laz name): the records go through the chunk writer; the point data starts with the
+  // chunk table's offset, patched by Close().
+  bool compressed_ = false;
+  std::unique_ptr<LazChunkWriter> laz_;
   bool failed_ = false, closed_ = false;
 };
 
+bool IsLazPath(const std::string& path) {
+  if (path.size() < 4) return false;
+  std::string ext = path.substr(path.size() - 4);
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".laz";
+}
+
 LasWriter::LasWriter(const std::string& path, const PointWriteSpec& spec,
                      const PointWriteOptions& options)
-    : path_(path), spec_(spec) {
+    : path_(path), spec_(spec), compressed_(IsLazPath(path)) {
   min_.fill(std::numeric_limits<int32_t>::max());
   max_.fill(std::numeric_limits<int32_t>::min());
   InitHeader(ChooseLasFormat(spec, options), options);
@@ -626,6 +641,15 @@ void LasWriter::SplitVlrs() {
     vlrs_.push_back({"LASF_Spec", 4, "Extra Bytes", EncodeLasExtraBytes(extra_), false});
   }
   AddCrsVlr();
+  if (compressed_) {  // last, as LASzip writes it
+    const laz::Vlr vlr = laz::WriterVlr(header_.point_format,
+                                        header_.record_length - layout_.record_size,
+                                        kLazChunkPoints);
+    vlrs_.push_back({"laszip encoded", 22204, "laszip", laz::EncodeVlr(vlr), false});
+    laz_ = std::make_unique<LazChunkWriter>(
+        vlr, header_.record_length,
+        [this](const uint8_t* data, size_t size) { file_->Write(data, size); });
+  }
 }
 
 // Points from a file that stated its CRS elsewhere (E57's coordinateMetadata, a scene) carry it
@@ -662,9 +686,19 @@ void LasWriter::WriteHeaderAndVlrs() {
   }
   header_.number_of_vlrs = static_cast<uint32_t>(vlrs_.size());
   header_.offset_to_point_data = static_cast<uint32_t>(point_offset);
-  if (spec_.count != kUnknownCount) file_->Reserve(point_offset + spec_.count * header_.record_length);
-  file_->Write(EncodeLasHeader(header_));  // counts and bounds are patched by Close()
+  if (spec_.count != kUnknownCount && !compressed_) {
+    file_->Reserve(point_offset + spec_.count * header_.record_length);
+  }
+  file_->Write(EncodedHeader());  // counts and bounds are patched by Close()
   file_->Write(records);
+  if (compressed_) file_->Write(std::string(8, '\0'));  // the chunk table's offset
+}
+
+std::string LasWriter::EncodedHeader() const {
+  if (!compressed_) return EncodeLasHeader(header_);
+  LasHeader header = header_;
+  header.point_format |= 0x80;  // LASzip's mark of compressed point data
+  return EncodeLasHeader(header);
 }
 
 void LasWriter::Write(const PointCloud& chunk) {
@@ -687,7 +721,11 @@ void LasWriter::Write(const PointCloud& chunk) {
   for (size_t first = 0; first < n; first += kBlockRecords) {
     const size_t block = std::min(kBlockRecords, n - first);
     EncodeBlock(chunk, first, block, buffer_.data());
-    file_->Write(buffer_.data(), block * length);
+    if (laz_) {
+      laz_->Add(buffer_.data(), block);
+    } else {
+      file_->Write(buffer_.data(), block * length);
+    }
   }
   failed_ = false;
   points_written_ += n;
@@ -761,12 +799,19 @@ void LasWriter::Close() {
                          "; write LAS 1.4");
   }
   header_.bounds = WrittenBounds();
+  if (laz_) {
+    const std::vector<uint8_t> table = laz_->Finish();
+    uint8_t offset[8];
+    StoreLE<uint64_t>(offset, file_->Tell());
+    file_->Write(table.data(), table.size());
+    file_->WriteAt(header_.offset_to_point_data, offset, 8);
+  }
   if (!evlrs_.empty()) {
     header_.start_of_first_evlr = file_->Tell();
     header_.number_of_evlrs = static_cast<uint32_t>(evlrs_.size());
     for (const LasVlr& evlr : evlrs_) file_->Write(EncodeLasVlr(evlr));
   }
-  const std::string header = EncodeLasHeader(header_);
+  const std::string header = EncodedHeader();
   file_->WriteAt(0, header.data(), header.size());
   file_->Commit();
 }

@@ -15,7 +15,9 @@
 // chunks at a time and in parallel; LASzip 1.x files (items of version 1, the unchunked
 // compressor), waveform items and files without a chunk table are refused with a clear message.
 // meta.las holds the uncompressed point format and no laszip VLR; record_layout() is nullopt.
-// Writing LAZ is not supported.
+// Writing to a .laz name writes LAZ as LASzip 3.4 does (point-format bit 7, the laszip VLR last,
+// 50,000-point chunks with the chunk table, compressed in parallel; io/las/laz_chunks.h), with
+// the same header, VLRs and records as the LAS file the name .las would give.
 //
 // Reading: the whole header, VLRs and EVLRs are parsed and validated at open (a truncated file,
 // bad signature, unsupported point format, short record length or zero scale throws InputError

@@ -107,13 +107,41 @@ void ArithmeticDecoder::Init(const uint8_t* begin, const uint8_t* end) {
   for (int i = 0; i < 4; ++i) value_ = (value_ << 8) | NextByte();
 }
 
-// ---- IntegerDecompressor ----
+// ---- ArithmeticEncoder ----
 
-IntegerDecompressor::IntegerDecompressor(uint32_t bits, uint32_t contexts, uint32_t bits_high,
+void ArithmeticEncoder::Init() {
+  out_.clear();
+  base_ = 0;
+  length_ = 0xFFFFFFFFu;
+}
+
+void ArithmeticEncoder::Done() {
+  // Pick a value inside the final interval that takes one byte (or two when the interval is
+  // short), then pad with zeros: the decoder reads 4 bytes ahead of what it decodes.
+  const uint32_t init_base = base_;
+  bool another_byte = true;
+  if (length_ > 2 * arith_internal::kMinLength) {
+    base_ += arith_internal::kMinLength;
+    length_ = arith_internal::kMinLength >> 1;
+  } else {
+    base_ += arith_internal::kMinLength >> 1;
+    length_ = arith_internal::kMinLength >> 9;
+    another_byte = false;
+  }
+  if (init_base > base_) PropagateCarry();
+  Renormalize();
+  out_.push_back(0);
+  out_.push_back(0);
+  if (another_byte) out_.push_back(0);
+}
+
+// ---- IntegerCoder ----
+
+IntegerCoder::IntegerCoder(uint32_t bits, uint32_t contexts, uint32_t bits_high,
                                          uint32_t range)
     : bits_(bits), contexts_(contexts), bits_high_(bits_high), range_(range) {
-  CANDI_CHECK(bits >= 1 && bits <= 32) << "IntegerDecompressor bits = " << bits;
-  CANDI_CHECK(contexts >= 1) << "IntegerDecompressor needs a context";
+  CANDI_CHECK(bits >= 1 && bits <= 32) << "IntegerCoder bits = " << bits;
+  CANDI_CHECK(contexts >= 1) << "IntegerCoder needs a context";
   if (range != 0) {  // the corrector's significant bits and range
     corr_bits_ = 0;
     corr_range_ = range;
@@ -134,7 +162,7 @@ IntegerDecompressor::IntegerDecompressor(uint32_t bits, uint32_t contexts, uint3
   }
 }
 
-void IntegerDecompressor::Init() {
+void IntegerCoder::Init() {
   k_ = 0;
   if (m_bits_.empty()) {
     m_bits_.assign(contexts_, SymbolModel(corr_bits_ + 1));

@@ -1,8 +1,11 @@
-// The entropy coder of LASzip-compressed LAS (LAZ): an adaptive arithmetic decoder with its bit
-// and symbol models, and the integer decompressor that codes a corrector against a prediction
-// (LASzip's "IntegerCompressor": k-bit class symbol, then the low bits raw).
+// The entropy coder of LASzip-compressed LAS (LAZ): an adaptive arithmetic decoder and encoder
+// sharing their bit and symbol models, and the integer coder that codes a corrector against a
+// prediction (LASzip's "IntegerCompressor": k-bit class symbol, then the low bits raw), both ways.
+// The encoder is the exact inverse of the decoder: the same models see the same symbols in the
+// same order, so a stream the encoder writes decodes to its input, and (as LASzip's encoder does)
+// it ends a stream with the bytes that let the decoder read its 4-byte look-ahead.
 //
-// Pure byte-level decoding, no file access. The decoder reads only inside [begin, end): reading
+// Pure byte-level coding, no file access. The decoder reads only inside [begin, end): reading
 // past `end` yields zero bytes and sets overrun(), which the chunk decoders report as a corrupt
 // chunk (so truncated or bit-flipped input can never read out of bounds). Models and decoders
 // are not thread-safe; each chunk gets its own.
@@ -30,6 +33,7 @@ class BitModel {
 
  private:
   friend class ArithmeticDecoder;
+  friend class ArithmeticEncoder;
   void Update();
   uint32_t update_cycle_ = 0, bits_until_update_ = 0;
   uint32_t bit_0_prob_ = 0, bit_0_count_ = 0, bit_count_ = 0;
@@ -45,6 +49,7 @@ class SymbolModel {
 
  private:
   friend class ArithmeticDecoder;
+  friend class ArithmeticEncoder;
   void Update();
   uint32_t symbols_, last_symbol_, table_size_, table_shift_;
   uint32_t total_count_, update_cycle_, symbols_until_update_;
@@ -77,21 +82,51 @@ class ArithmeticDecoder {
   bool overrun_ = false;
 };
 
-// Decompresses integers coded as corrections of a prediction (LASzip IntegerCompressor, decoder
-// side). bits: the integer's width (1..32); contexts: independent model sets; bits_high: the
-// class threshold above which low bits are coded raw; range: the value range (0: 2^bits).
-class IntegerDecompressor {
+// Writes an arithmetic-coded stream into a growing byte buffer (LASzip ArithmeticEncoder). A carry
+// is propagated back through the bytes already written, so the buffer holds the whole stream.
+class ArithmeticEncoder {
  public:
-  IntegerDecompressor(uint32_t bits = 16, uint32_t contexts = 1, uint32_t bits_high = 8,
-                      uint32_t range = 0);
-  // (Re)creates the models; call before the first Decompress of a chunk.
+  ArithmeticEncoder() { Init(); }
+  // Starts a new stream, dropping any bytes of the last one.
+  void Init();
+  void EncodeBit(BitModel* model, uint32_t bit);
+  void EncodeSymbol(SymbolModel* model, uint32_t symbol);  // symbol < model->symbols()
+  void WriteBits(uint32_t bits, uint32_t value);           // 1..32 raw bits
+  void WriteByte(uint8_t value) { WriteRaw(8, value); }
+  void WriteShort(uint16_t value) { WriteRaw(16, value); }
+  void WriteInt(uint32_t value);
+  void WriteInt64(uint64_t value);
+  // Ends the stream (LASzip done(): the interval's final bytes, then two or three zero bytes).
+  void Done();
+  const std::vector<uint8_t>& bytes() const { return out_; }
+
+ private:
+  void WriteRaw(uint32_t bits, uint32_t value);  // bits <= 16
+  void PropagateCarry();
+  void Renormalize();
+  std::vector<uint8_t> out_;
+  uint32_t base_ = 0, length_ = 0;
+};
+
+// Codes integers as corrections of a prediction (LASzip IntegerCompressor), both ways: one set
+// of models, which an object uses either to compress or to decompress a stream. bits: the
+// integer's width (1..32); contexts: independent model sets; bits_high: the class threshold
+// above which low bits are coded raw; range: the value range (0: 2^bits).
+class IntegerCoder {
+ public:
+  IntegerCoder(uint32_t bits = 16, uint32_t contexts = 1, uint32_t bits_high = 8,
+               uint32_t range = 0);
+  // (Re)creates the models; call before the first Compress/Decompress of a chunk.
   void Init();
   int32_t Decompress(ArithmeticDecoder* decoder, int32_t prediction, uint32_t context = 0);
-  // k (the corrector's class) of the last Decompress.
+  void Compress(ArithmeticEncoder* encoder, int32_t prediction, int32_t real,
+                uint32_t context = 0);
+  // k (the corrector's class) of the last Compress or Decompress.
   uint32_t k() const { return k_; }
 
  private:
   int32_t ReadCorrector(ArithmeticDecoder* decoder, SymbolModel* model);
+  void WriteCorrector(ArithmeticEncoder* encoder, int32_t corrector, SymbolModel* model);
   uint32_t bits_, contexts_, bits_high_, range_;
   uint32_t corr_bits_, corr_range_;
   int32_t corr_min_, corr_max_;
@@ -219,7 +254,116 @@ inline uint64_t ArithmeticDecoder::ReadInt64() {
   return (high << 32) | low;
 }
 
-inline int32_t IntegerDecompressor::ReadCorrector(ArithmeticDecoder* decoder, SymbolModel* model) {
+inline void ArithmeticEncoder::PropagateCarry() {
+  // The carry runs back over 0xFF bytes; a stream's first byte never overflows (base < 2^32).
+  for (size_t i = out_.size(); i-- > 0;) {
+    if (++out_[i] != 0) return;
+  }
+}
+
+inline void ArithmeticEncoder::Renormalize() {
+  do {
+    out_.push_back(static_cast<uint8_t>(base_ >> 24));
+    base_ <<= 8;
+  } while ((length_ <<= 8) < arith_internal::kMinLength);
+}
+
+inline void ArithmeticEncoder::EncodeBit(BitModel* m, uint32_t bit) {
+  const uint32_t x = m->bit_0_prob_ * (length_ >> arith_internal::kBitLengthShift);
+  if (bit == 0) {
+    length_ = x;
+    ++m->bit_0_count_;
+  } else {
+    const uint32_t init_base = base_;
+    base_ += x;
+    length_ -= x;
+    if (init_base > base_) PropagateCarry();
+  }
+  if (length_ < arith_internal::kMinLength) Renormalize();
+  if (__builtin_expect(--m->bits_until_update_ == 0, 0)) m->Update();
+}
+
+inline void ArithmeticEncoder::EncodeSymbol(SymbolModel* m, uint32_t sym) {
+  const uint32_t init_base = base_;
+  const uint32_t* dist = m->distribution_.data();
+  if (sym == m->last_symbol_) {  // the interval's top: no product needed (as the decoder)
+    const uint32_t x = dist[sym] * (length_ >> arith_internal::kSymbolLengthShift);
+    base_ += x;
+    length_ -= x;
+  } else {
+    const uint32_t x = dist[sym] * (length_ >>= arith_internal::kSymbolLengthShift);
+    base_ += x;
+    length_ = dist[sym + 1] * length_ - x;
+  }
+  if (init_base > base_) PropagateCarry();
+  if (length_ < arith_internal::kMinLength) Renormalize();
+  ++m->symbol_count_[sym];
+  if (__builtin_expect(--m->symbols_until_update_ == 0, 0)) m->Update();
+}
+
+inline void ArithmeticEncoder::WriteRaw(uint32_t bits, uint32_t value) {
+  const uint32_t init_base = base_;
+  base_ += value * (length_ >>= bits);
+  if (init_base > base_) PropagateCarry();
+  if (length_ < arith_internal::kMinLength) Renormalize();
+}
+
+inline void ArithmeticEncoder::WriteBits(uint32_t bits, uint32_t value) {
+  if (bits > 19) {  // as the decoder's ReadBits: the low 16 bits first
+    WriteShort(static_cast<uint16_t>(value & 0xFFFF));
+    value >>= 16;
+    bits -= 16;
+  }
+  WriteRaw(bits, value);
+}
+
+inline void ArithmeticEncoder::WriteInt(uint32_t value) {
+  WriteShort(static_cast<uint16_t>(value & 0xFFFF));
+  WriteShort(static_cast<uint16_t>(value >> 16));
+}
+
+inline void ArithmeticEncoder::WriteInt64(uint64_t value) {
+  WriteInt(static_cast<uint32_t>(value));
+  WriteInt(static_cast<uint32_t>(value >> 32));
+}
+
+inline void IntegerCoder::WriteCorrector(ArithmeticEncoder* encoder, int32_t corrector,
+                                         SymbolModel* model) {
+  // k: the class of the tightest interval [-(2^k - 1), 2^k] holding c (c = 2^k counts as k).
+  const uint32_t c = static_cast<uint32_t>(corrector);
+  uint32_t c1 = corrector <= 0 ? 0u - c : c - 1;
+  k_ = c1 == 0 ? 0 : 32 - static_cast<uint32_t>(__builtin_clz(c1));
+  encoder->EncodeSymbol(model, k_);
+  if (k_ == 0) {  // c is 0 or 1
+    encoder->EncodeBit(&m_corrector0_, c);
+    return;
+  }
+  if (k_ >= 32) return;  // only corr_min_ (INT32_MIN) has class 32
+  // The inverse of ReadCorrector's mapping into [0, 2^k).
+  const uint32_t mapped = corrector < 0 ? c + ((1u << k_) - 1) : c - 1;
+  if (k_ <= bits_high_) {
+    encoder->EncodeSymbol(&m_corrector_[k_ - 1], mapped);
+  } else {  // the high bits_high bits modelled, the low k - bits_high raw
+    const uint32_t low_bits = k_ - bits_high_;
+    encoder->EncodeSymbol(&m_corrector_[k_ - 1], mapped >> low_bits);
+    encoder->WriteBits(low_bits, mapped & ((1u << low_bits) - 1));
+  }
+}
+
+inline void IntegerCoder::Compress(ArithmeticEncoder* encoder, int32_t prediction, int32_t real,
+                                   uint32_t context) {
+  // The corrector folded into [corr_min_, corr_max_], in unsigned arithmetic as Decompress.
+  int32_t corr =
+      static_cast<int32_t>(static_cast<uint32_t>(real) - static_cast<uint32_t>(prediction));
+  if (corr < corr_min_) {
+    corr = static_cast<int32_t>(static_cast<uint32_t>(corr) + corr_range_);
+  } else if (corr > corr_max_) {
+    corr = static_cast<int32_t>(static_cast<uint32_t>(corr) - corr_range_);
+  }
+  WriteCorrector(encoder, corr, &m_bits_[context]);
+}
+
+inline int32_t IntegerCoder::ReadCorrector(ArithmeticDecoder* decoder, SymbolModel* model) {
   k_ = decoder->DecodeSymbol(model);
   if (k_ == 0) return static_cast<int32_t>(decoder->DecodeBit(&m_corrector0_));  // 0 or 1
   if (k_ >= 32) return corr_min_;
@@ -237,7 +381,7 @@ inline int32_t IntegerDecompressor::ReadCorrector(ArithmeticDecoder* decoder, Sy
   return static_cast<int32_t>(c);
 }
 
-inline int32_t IntegerDecompressor::Decompress(ArithmeticDecoder* decoder, int32_t prediction,
+inline int32_t IntegerCoder::Decompress(ArithmeticDecoder* decoder, int32_t prediction,
                                                uint32_t context) {
   // Unsigned arithmetic: LASzip's int32 sums wrap, which is undefined for signed C++ integers.
   uint32_t real = static_cast<uint32_t>(prediction) +

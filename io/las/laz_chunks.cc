@@ -58,7 +58,7 @@ TableEntries DecodeTableEntries(const BinaryFile& file, uint64_t at, uint32_t ch
   const size_t got = file.ReadAt(at, data.data(), data.size());
   laz::ArithmeticDecoder decoder;
   decoder.Init(data.data(), data.data() + got);
-  laz::IntegerDecompressor ic(32, 2);
+  laz::IntegerCoder ic(32, 2);
   ic.Init();
   TableEntries e;
   e.bytes.resize(chunks);
@@ -223,6 +223,82 @@ void LazPointData::DecodeRun(size_t first, size_t count) {
   }
   decoded_first_ = a.first_point;
   decoded_end_ = b.first_point + b.points;
+}
+
+// ---- Writing ----
+
+std::vector<uint8_t> EncodeLazChunkTable(const std::vector<uint32_t>& chunk_bytes) {
+  std::vector<uint8_t> table(8, 0);
+  StoreLE<uint32_t>(table.data() + 4, static_cast<uint32_t>(chunk_bytes.size()));
+  if (chunk_bytes.empty()) return table;
+  laz::ArithmeticEncoder encoder;
+  laz::IntegerCoder ic(32, 2);
+  ic.Init();
+  for (size_t i = 0; i < chunk_bytes.size(); ++i) {
+    ic.Compress(&encoder, static_cast<int32_t>(i ? chunk_bytes[i - 1] : 0),
+                static_cast<int32_t>(chunk_bytes[i]), 1);
+  }
+  encoder.Done();
+  table.insert(table.end(), encoder.bytes().begin(), encoder.bytes().end());
+  return table;
+}
+
+LazChunkWriter::LazChunkWriter(laz::Vlr vlr, size_t record_length, Sink sink)
+    : vlr_(std::move(vlr)), record_length_(record_length), sink_(std::move(sink)) {
+  CANDI_CHECK(vlr_.chunk_size != laz::kVariableChunkSize && vlr_.chunk_size > 0)
+      << "LazChunkWriter writes fixed-size chunks";
+  CANDI_CHECK(record_length_ == static_cast<size_t>(vlr_.record_length()))
+      << "record length " << record_length_ << " vs LAZ items " << vlr_.record_length();
+}
+
+void LazChunkWriter::Add(const uint8_t* records, size_t n) {
+  const size_t batch = kBatchChunks * vlr_.chunk_size;
+  while (n > 0) {
+    const size_t held = pending_.size() / record_length_;
+    const size_t take = std::min(n, batch - held);
+    pending_.insert(pending_.end(), records, records + take * record_length_);
+    records += take * record_length_;
+    n -= take;
+    if (held + take == batch) CompressBatch(batch);
+  }
+}
+
+// Compresses the first `points` pending records as ceil(points / chunk_size) chunks in parallel,
+// then hands them to the sink in order.
+void LazChunkWriter::CompressBatch(size_t points) {
+  const size_t chunk = vlr_.chunk_size;
+  const size_t count = (points + chunk - 1) / chunk;
+  chunks_.resize(count);
+  std::vector<std::string> errors(count);
+  ParallelFor(size_t{0}, count, [&](size_t j) {
+    const size_t first = j * chunk;
+    const uint32_t n = static_cast<uint32_t>(std::min(chunk, points - first));
+    chunks_[j].clear();
+    const uint8_t* records = pending_.data() + first * record_length_;
+    try {
+      if (vlr_.compressor == laz::kLayeredChunked) {
+        laz::EncodeLayeredChunk(vlr_.items, records, n, &chunks_[j]);
+      } else {
+        laz::EncodePointwiseChunk(vlr_.items, records, n, &chunks_[j]);
+      }
+    } catch (const laz::LazError& e) {
+      errors[j] = e.what();
+    }
+  });
+  for (size_t j = 0; j < count; ++j) {
+    CANDI_CHECK(errors[j].empty()) << "LAZ chunk encoding: " << errors[j];
+    CANDI_CHECK(chunks_[j].size() <= std::numeric_limits<uint32_t>::max())
+        << "LAZ chunk of " << chunks_[j].size() << " bytes";
+    sink_(chunks_[j].data(), chunks_[j].size());
+    chunk_bytes_.push_back(static_cast<uint32_t>(chunks_[j].size()));
+  }
+  pending_.erase(pending_.begin(),
+                 pending_.begin() + static_cast<std::ptrdiff_t>(points * record_length_));
+}
+
+std::vector<uint8_t> LazChunkWriter::Finish() {
+  if (!pending_.empty()) CompressBatch(pending_.size() / record_length_);
+  return EncodeLazChunkTable(chunk_bytes_);
 }
 
 }  // namespace candi::io

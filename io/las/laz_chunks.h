@@ -2,7 +2,7 @@
 // point records (LASzip's layout: an int64 at the start of the point data gives the table's file
 // offset, or -1 when LASzip wrote that offset in the last 8 bytes of the file; the chunks follow
 // the int64; the table is u32 version 0, u32 chunk count, then the chunk byte sizes, and the
-// point counts first when the chunk size is variable, each coded with an IntegerDecompressor(32,
+// point counts first when the chunk size is variable, each coded with an IntegerCoder(32,
 // 2) against the previous one on one arithmetic stream).
 //
 // Internal to the LAS reader (io/las/las_io.cc). Memory is bounded: the table (a few words a chunk,
@@ -18,6 +18,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -60,5 +61,37 @@ class LazPointData {
   std::vector<uint8_t> compressed_, decoded_;
   uint64_t decoded_first_ = 0, decoded_end_ = 0;  // points held in decoded_
 };
+
+// Compresses LAS point records into LAZ chunks of vlr.chunk_size points (the last one shorter)
+// and hands the chunks, in order, to `sink`. The chunks of a batch (kBatchChunks chunks) are
+// compressed in parallel (ParallelFor); chunk boundaries depend only on the point index, so the
+// bytes are the same for any thread count. Memory: one batch of records and of chunks.
+// Thread-safety: one object per file.
+class LazChunkWriter {
+ public:
+  using Sink = std::function<void(const uint8_t* data, size_t size)>;
+  static constexpr size_t kBatchChunks = 8;
+
+  // CANDI_CHECK unless vlr has fixed chunks and record_length == vlr.record_length().
+  LazChunkWriter(laz::Vlr vlr, size_t record_length, Sink sink);
+  // Adds n records (record_length bytes each).
+  void Add(const uint8_t* records, size_t n);
+  // Compresses the records left and returns the chunk table (LASzip's layout, see above).
+  std::vector<uint8_t> Finish();
+
+ private:
+  void CompressBatch(size_t points);
+
+  laz::Vlr vlr_;
+  size_t record_length_;
+  Sink sink_;
+  std::vector<uint8_t> pending_;  // records not yet compressed, less than a batch
+  std::vector<std::vector<uint8_t>> chunks_;
+  std::vector<uint32_t> chunk_bytes_;
+};
+
+// The chunk table for fixed-size chunks of the given byte sizes: u32 version 0, u32 count, then
+// the sizes coded on one arithmetic stream (the inverse of the reader's decoding).
+std::vector<uint8_t> EncodeLazChunkTable(const std::vector<uint32_t>& chunk_bytes);
 
 }  // namespace candi::io

@@ -1,5 +1,9 @@
 #include "io/las/laz_format.h"
 
+#include <utility>
+
+#include "core/check.h"
+
 namespace candi::io::laz {
 
 namespace {
@@ -125,6 +129,49 @@ Vlr ParseVlr(const std::string& payload) {
   for (size_t i = 0; i < count; ++i) {
     const size_t at = 34 + 6 * i;
     vlr.items.push_back({U16(payload, at), U16(payload, at + 2), U16(payload, at + 4)});
+  }
+  return vlr;
+}
+
+std::string EncodeVlr(const Vlr& vlr) {
+  std::string s;
+  auto put = [&](uint64_t v, int bytes) {
+    for (int i = 0; i < bytes; ++i) s.push_back(static_cast<char>(v >> (8 * i)));
+  };
+  // (value, bytes) in ParseVlr's order.
+  const std::pair<uint64_t, int> fields[] = {
+      {vlr.compressor, 2}, {vlr.coder, 2}, {vlr.version_major, 1}, {vlr.version_minor, 1},
+      {vlr.revision, 2}, {vlr.options, 4}, {vlr.chunk_size, 4},
+      {static_cast<uint64_t>(vlr.special_evlr_count), 8},
+      {static_cast<uint64_t>(vlr.special_evlr_offset), 8}, {vlr.items.size(), 2}};
+  for (const auto& [value, bytes] : fields) put(value, bytes);
+  for (const Item& item : vlr.items) {
+    put(item.type, 2);
+    put(item.size, 2);
+    put(item.version, 2);
+  }
+  return s;
+}
+
+Vlr WriterVlr(int point_format, int extra_bytes, uint32_t chunk_size) {
+  const std::vector<uint16_t> types = ExpectedItems(point_format);
+  CANDI_CHECK(!types.empty() && extra_bytes >= 0 && extra_bytes <= 65535 && chunk_size > 0)
+      << "no LAZ items for point format " << point_format << " with " << extra_bytes
+      << " extra bytes and chunks of " << chunk_size;
+  const bool layered = point_format >= 6;
+  Vlr vlr;
+  vlr.compressor = layered ? kLayeredChunked : kPointwiseChunked;
+  vlr.version_major = 3;
+  vlr.version_minor = 4;
+  vlr.revision = 3;
+  vlr.chunk_size = chunk_size;
+  const uint16_t version = layered ? 3 : 2;
+  for (uint16_t type : types) {
+    vlr.items.push_back({type, static_cast<uint16_t>(ItemSize(type)), version});
+  }
+  if (extra_bytes > 0) {
+    const uint16_t type = layered ? kByte14 : kByte;
+    vlr.items.push_back({type, static_cast<uint16_t>(extra_bytes), version});
   }
   return vlr;
 }

@@ -64,6 +64,12 @@ struct Vlr {
 
 // Parses the VLR payload (34 + 6 * items bytes); throws LazError naming the field.
 Vlr ParseVlr(const std::string& payload);
+// The payload ParseVlr reads.
+std::string EncodeVlr(const Vlr& vlr);
+// The VLR LASzip 3.4r3 writes for LAS point format 0-3 or 6-8 with `extra_bytes` bytes after the
+// standard fields: compressor 2 with items of version 2 (formats 0-3) or compressor 3 with items
+// of version 3 (6-8), fixed chunks of `chunk_size` points. CANDI_CHECK on another format.
+Vlr WriterVlr(int point_format, int extra_bytes, uint32_t chunk_size);
 // Checks that candi decodes every item (types and versions above) and that the items match
 // the LAS point format and record length; throws LazError naming the first that does not.
 void CheckSupported(const Vlr& vlr, int point_format, int record_length);
@@ -79,5 +85,13 @@ void DecodePointwiseChunk(const std::vector<Item>& items, const uint8_t* data, s
                           uint32_t points, uint8_t* out);
 void DecodeLayeredChunk(const std::vector<Item>& items, const uint8_t* data, size_t size,
                         uint32_t points, uint8_t* out);
+
+// The inverse of the decoders: appends the chunk of `points` records (vlr.record_length() bytes
+// each, at `records`) to `out`, byte for byte as LASzip writes it. Nothing for 0 points. Throws
+// LazError, as the decoders, for an item set candi does not code.
+void EncodePointwiseChunk(const std::vector<Item>& items, const uint8_t* records, uint32_t points,
+                          std::vector<uint8_t>* out);
+void EncodeLayeredChunk(const std::vector<Item>& items, const uint8_t* records, uint32_t points,
+                        std::vector<uint8_t>* out);
 
 }  // namespace candi::io::laz

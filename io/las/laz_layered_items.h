@@ -23,6 +23,8 @@
 #include <vector>
 
 #include "io/las/laz_arith.h"
+#include "io/las/laz_color.h"
+#include "io/las/laz_gps_time.h"
 
 namespace candi::io::laz::layered {
 
@@ -117,15 +119,6 @@ inline void PackPoint14(const Point14& q, uint8_t* p) {
   StoreU64(p + 22, q.gps_time);
 }
 
-// GPS time prediction state: up to four interleaved time sequences (LASzip "multi-sequence"),
-// each with its last time and last integer difference of the float64 bits.
-struct GpsSequences {
-  uint32_t last = 0, next = 0;
-  std::array<uint64_t, 4> time{};
-  std::array<int32_t, 4> diff{};
-  std::array<int32_t, 4> extreme_count{};
-};
-
 // The nine POINT14 layers in stream order.
 enum Point14Layer {
   kXY,
@@ -166,18 +159,18 @@ struct Point14Context {
   SymbolModel scanner_channel{3};
   std::array<std::unique_ptr<SymbolModel>, 16> number_of_returns, return_number;
   SymbolModel return_number_gps_same{13};
-  IntegerDecompressor dx{32, 2}, dy{32, 22};
+  IntegerCoder dx{32, 2}, dy{32, 22};
   std::array<Median5, 12> x_diff_median, y_diff_median;
   // the other layers
-  IntegerDecompressor z{32, 20};
+  IntegerCoder z{32, 20};
   std::array<int32_t, 8> last_z{};
   std::array<std::unique_ptr<SymbolModel>, 64> classification, flags, user_data;
-  IntegerDecompressor intensity{16, 4};
+  IntegerCoder intensity{16, 4};
   std::array<uint16_t, 8> last_intensity{};
-  IntegerDecompressor scan_angle{16, 2};
-  IntegerDecompressor point_source{16};
+  IntegerCoder scan_angle{16, 2};
+  IntegerCoder point_source{16};
   std::unique_ptr<SymbolModel> gps_multi, gps_no_diff;
-  IntegerDecompressor gps_time{32, 9};
+  IntegerCoder gps_time{32, 9};
   GpsSequences gps;
 };
 
@@ -210,14 +203,37 @@ class Point14Decoder {
 // ---------------------------------------------------------------------------------------------
 // RGB14 / RGBNIR14 and BYTE14
 
-struct RgbModels {
-  SymbolModel byte_used{128};
-  std::vector<SymbolModel> diff = std::vector<SymbolModel>(6, SymbolModel(256));
+// The per-channel state of the colour and extra-bytes items, for both directions.
+struct ColorContext {
+  bool used = false;
+  std::array<uint16_t, 4> last{};  // red, green, blue, NIR
+  std::unique_ptr<RgbModels> rgb;
+  std::unique_ptr<NirModels> nir;
 };
-struct NirModels {
-  SymbolModel byte_used{4};
-  std::vector<SymbolModel> diff = std::vector<SymbolModel>(2, SymbolModel(256));
+struct ByteContext {
+  bool used = false;
+  std::vector<uint8_t> last;
+  std::vector<SymbolModel> models;
 };
+
+// Follows POINT14's context (the scanner channel when it changed at this point, else 0) and
+// returns the context whose `last` the item predicts from and updates. LASzip quirk: only a
+// context's first use re-seeds it (init(new context, previous context)); back on a context seen
+// before, the item keeps predicting from the previous context's last values, with the models of
+// the context it switched to.
+template <class Context, class Init>
+Context* FollowContext(std::array<Context, 4>* contexts, uint32_t* current, uint32_t context,
+                       Init init) {
+  Context* last = &(*contexts)[*current];
+  if (context != *current) {
+    *current = context;
+    if (!(*contexts)[context].used) {
+      init(&(*contexts)[context], *last);
+      last = &(*contexts)[context];
+    }
+  }
+  return last;
+}
 
 class ColorDecoder {
  public:
@@ -229,17 +245,11 @@ class ColorDecoder {
   int OverrunLayer() const;
 
  private:
-  struct Context {
-    bool used = false;
-    std::array<uint16_t, 4> last{};
-    std::unique_ptr<RgbModels> rgb;
-    std::unique_ptr<NirModels> nir;
-  };
-  void InitContext(uint32_t context, const uint16_t* seed);
+  void InitContext(ColorContext* c, const uint16_t* seed) const;
   bool nir_;
   ArithmeticDecoder rgb_dec_, nir_dec_;
   bool rgb_active_ = false, nir_active_ = false;
-  std::array<Context, 4> contexts_;
+  std::array<ColorContext, 4> contexts_;
   uint32_t current_ = 0;
 };
 
@@ -252,17 +262,68 @@ class ByteDecoder {
   int OverrunLayer() const;
 
  private:
-  struct Context {
-    bool used = false;
-    std::vector<uint8_t> last;
-    std::vector<SymbolModel> models;
-  };
-  void InitContext(uint32_t context, const uint8_t* seed);
+  void InitContext(ByteContext* c, const uint8_t* seed) const;
   uint32_t count_;
   std::vector<ArithmeticDecoder> dec_;
   std::vector<uint8_t> active_;
-  std::array<Context, 4> contexts_;
+  std::array<ByteContext, 4> contexts_;
   uint32_t current_ = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Encoders: the inverse of the decoders above (LASzip's laswriteitemcompressed_v3.cpp). Each
+// codes a chunk's records after the first into its layers; Finish() ends the layers and appends
+// their sizes (uint32 LE each) to `sizes` and their bytes to `bytes`. A layer whose field never
+// changed in the chunk is stored with size 0 (the decoder then keeps the field), except POINT14's
+// XY and Z layers, which are always stored.
+
+class Point14Encoder {
+ public:
+  // Starts the chunk from its first record; returns its scanner channel, the other items' context.
+  uint32_t Start(const uint8_t* first);
+  // Codes the next record (30 bytes); returns the other items' context as Point14Decoder::Decode.
+  uint32_t Encode(const uint8_t* record);
+  void Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* bytes);
+
+ private:
+  void EncodeReturns(Point14Context* c, const Point14& p, uint32_t changed, bool gps_change);
+  void EncodeXYZ(Point14Context* c, const Point14& p, bool gps_change);
+  void EncodeAttributes(Point14Context* c, const Point14& p, bool angle_change,
+                        bool source_change, bool gps_change);
+
+  std::array<ArithmeticEncoder, kPoint14Layers> enc_;
+  std::array<bool, kPoint14Layers> changed_{};
+  std::array<std::unique_ptr<Point14Context>, 4> contexts_;
+  uint32_t current_ = 0;
+};
+
+// RGB14 (nir false) or RGBNIR14, started from the chunk's first colour and POINT14's context.
+class ColorEncoder {
+ public:
+  ColorEncoder(bool nir, const uint8_t* first, uint32_t context);
+  void Encode(const uint8_t* item, uint32_t context);
+  void Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* bytes);
+
+ private:
+  bool nir_;
+  bool rgb_changed_ = false, nir_changed_ = false;  // a layer is stored only when it changed
+  ArithmeticEncoder rgb_enc_, nir_enc_;
+  std::array<ColorContext, 4> contexts_;
+  uint32_t current_;
+};
+
+// BYTE14 of `count` bytes a record, started as ColorEncoder.
+class ByteEncoder {
+ public:
+  ByteEncoder(uint32_t count, const uint8_t* first, uint32_t context);
+  void Encode(const uint8_t* item, uint32_t context);
+  void Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* bytes);
+
+ private:
+  std::vector<ArithmeticEncoder> enc_;
+  std::vector<uint8_t> changed_;  // per byte, as ColorEncoder's flags
+  std::array<ByteContext, 4> contexts_;
+  uint32_t current_;
 };
 
 }  // namespace candi::io::laz::layered

@@ -1,16 +1,21 @@
-// LASzip's pointwise chunked compressor (compressor 2), decoder side, items of version 2:
-// POINT10, GPSTIME11, RGB12 and BYTE (LASzip's LASreadItemCompressed_*_v2). A chunk is its first
+// LASzip's pointwise chunked compressor (compressor 2), both directions, items of version 2:
+// POINT10, GPSTIME11, RGB12 and BYTE (LASzip's LAS{read,write}ItemCompressed_*_v2; each item's
+// decoder and encoder share one context struct of models and predictions). A chunk is its first
 // record raw, then one arithmetic stream that codes every later record item by item, each
 // predicted from the previous record (and, for POINT10, from contexts selected by the return
 // number and the number of returns).
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/binary_file.h"
+#include "io/las/laz_color.h"
 #include "io/las/laz_format.h"
+#include "io/las/laz_gps_time.h"
 
 namespace candi::io::laz {
 
@@ -46,11 +51,37 @@ class LazyModels {
 inline int32_t AddWrapping(int32_t a, int32_t b) {
   return static_cast<int32_t>(static_cast<uint32_t>(a) + static_cast<uint32_t>(b));
 }
+inline int32_t SubWrapping(int32_t a, int32_t b) {
+  return static_cast<int32_t>(static_cast<uint32_t>(a) - static_cast<uint32_t>(b));
+}
 inline int32_t MulWrapping(int32_t a, int32_t b) {
   return static_cast<int32_t>(static_cast<uint32_t>(a) * static_cast<uint32_t>(b));
 }
 
 // ---- POINT10 v2: x, y, z, intensity, return bits, class, scan angle, user data, source id ----
+
+// What the POINT10 encoder and decoder both keep: the models and the predictions' state.
+struct Point10Context {
+  Point10Context() {
+    for (IntegerCoder* ic : {&ic_intensity, &ic_source_id, &ic_dx, &ic_dy, &ic_z}) ic->Init();
+  }
+  std::array<uint16_t, 16> last_intensity{};  // LASzip predicts the 2nd point's from 0
+  std::array<int32_t, 8> last_height{};
+  std::array<Median5, 16> x_median, y_median;
+  SymbolModel changed_values{64};
+  SymbolModel scan_angle_rank[2] = {SymbolModel(256), SymbolModel(256)};
+  LazyModels bit_byte, classification, user_data;
+  IntegerCoder ic_intensity{16, 4}, ic_source_id{16}, ic_dx{32, 2}, ic_dy{32, 22}, ic_z{32, 20};
+};
+
+// The y coder's context from the x corrector's class, the z coder's from both.
+uint32_t DyContext(uint32_t single, uint32_t k_dx) {
+  return single + (k_dx < 20 ? k_dx & ~1u : 20);
+}
+uint32_t ZContext(uint32_t single, uint32_t k_dx, uint32_t k_dy) {
+  const uint32_t k = (k_dx + k_dy) / 2;
+  return single + (k < 18 ? k & ~1u : 18);
+}
 
 class Point10Decoder {
  public:
@@ -58,34 +89,31 @@ class Point10Decoder {
     x_ = LoadLE<int32_t>(first);
     y_ = LoadLE<int32_t>(first + 4);
     z_ = LoadLE<int32_t>(first + 8);
-    intensity_ = 0;  // LASzip predicts the second point's intensity from 0, not the first's
+    intensity_ = 0;
     bits_ = first[14];
     class_ = first[15];
     scan_angle_ = first[16];
     user_data_ = first[17];
     source_id_ = LoadLE<uint16_t>(first + 18);
-    for (IntegerDecompressor* ic : {&ic_intensity_, &ic_source_id_, &ic_dx_, &ic_dy_, &ic_z_}) {
-      ic->Init();
-    }
   }
 
-  void Decode(ArithmeticDecoder* dec, uint8_t* out) {
-    const uint32_t changed = dec->DecodeSymbol(&changed_values_);
+  void Code(ArithmeticDecoder* dec, uint8_t* out) {
+    const uint32_t changed = dec->DecodeSymbol(&c_.changed_values);
     if (changed != 0) DecodeAttributes(dec, changed);
     const uint32_t n = (bits_ >> 3) & 7;
     const uint32_t m = kNumberReturnMap[n][bits_ & 7];
     const uint32_t l = kNumberReturnLevel[n][bits_ & 7];
     const uint32_t single = n == 1;
-    const int32_t dx = ic_dx_.Decompress(dec, x_median_[m].Get(), single);
+    const int32_t dx = c_.ic_dx.Decompress(dec, c_.x_median[m].Get(), single);
     x_ = AddWrapping(x_, dx);
-    x_median_[m].Add(dx);
-    uint32_t k = ic_dx_.k();
-    const int32_t dy = ic_dy_.Decompress(dec, y_median_[m].Get(), single + (k < 20 ? k & ~1u : 20));
+    c_.x_median[m].Add(dx);
+    const int32_t dy =
+        c_.ic_dy.Decompress(dec, c_.y_median[m].Get(), DyContext(single, c_.ic_dx.k()));
     y_ = AddWrapping(y_, dy);
-    y_median_[m].Add(dy);
-    k = (ic_dx_.k() + ic_dy_.k()) / 2;
-    z_ = ic_z_.Decompress(dec, last_height_[l], single + (k < 18 ? k & ~1u : 18));
-    last_height_[l] = z_;
+    c_.y_median[m].Add(dy);
+    z_ = c_.ic_z.Decompress(dec, c_.last_height[l],
+                            ZContext(single, c_.ic_dx.k(), c_.ic_dy.k()));
+    c_.last_height[l] = z_;
     StoreLE<int32_t>(out, x_);
     StoreLE<int32_t>(out + 4, y_);
     StoreLE<int32_t>(out + 8, z_);
@@ -100,39 +128,82 @@ class Point10Decoder {
  private:
   // `changed`: bit 5 return bits, 4 intensity, 3 class, 2 scan angle, 1 user data, 0 source id.
   void DecodeAttributes(ArithmeticDecoder* dec, uint32_t changed) {
-    if (changed & 32) bits_ = static_cast<uint8_t>(dec->DecodeSymbol(bit_byte_.At(bits_)));
+    if (changed & 32) bits_ = static_cast<uint8_t>(dec->DecodeSymbol(c_.bit_byte.At(bits_)));
     const uint32_t m = kNumberReturnMap[(bits_ >> 3) & 7][bits_ & 7];
     if (changed & 16) {
       intensity_ = static_cast<uint16_t>(
-          ic_intensity_.Decompress(dec, last_intensity_[m], m < 3 ? m : 3));
-      last_intensity_[m] = intensity_;
+          c_.ic_intensity.Decompress(dec, c_.last_intensity[m], m < 3 ? m : 3));
+      c_.last_intensity[m] = intensity_;
     } else {
-      intensity_ = last_intensity_[m];
+      intensity_ = c_.last_intensity[m];
     }
-    if (changed & 8) class_ = static_cast<uint8_t>(dec->DecodeSymbol(classification_.At(class_)));
+    if (changed & 8) {
+      class_ = static_cast<uint8_t>(dec->DecodeSymbol(c_.classification.At(class_)));
+    }
     if (changed & 4) {
-      const uint32_t delta = dec->DecodeSymbol(&scan_angle_rank_[(bits_ >> 6) & 1]);
+      const uint32_t delta = dec->DecodeSymbol(&c_.scan_angle_rank[(bits_ >> 6) & 1]);
       scan_angle_ = static_cast<uint8_t>(delta + scan_angle_);
     }
     if (changed & 2) {
-      user_data_ = static_cast<uint8_t>(dec->DecodeSymbol(user_data_models_.At(user_data_)));
+      user_data_ = static_cast<uint8_t>(dec->DecodeSymbol(c_.user_data.At(user_data_)));
     }
     if (changed & 1) {
-      source_id_ = static_cast<uint16_t>(ic_source_id_.Decompress(dec, source_id_));
+      source_id_ = static_cast<uint16_t>(c_.ic_source_id.Decompress(dec, source_id_));
     }
   }
 
+  Point10Context c_;
   int32_t x_, y_, z_;
   uint16_t intensity_, source_id_;
   uint8_t bits_, class_, scan_angle_, user_data_;
-  std::array<uint16_t, 16> last_intensity_{};
-  std::array<int32_t, 8> last_height_{};
-  std::array<Median5, 16> x_median_, y_median_;
-  SymbolModel changed_values_{64};
-  SymbolModel scan_angle_rank_[2] = {SymbolModel(256), SymbolModel(256)};
-  LazyModels bit_byte_, classification_, user_data_models_;
-  IntegerDecompressor ic_intensity_{16, 4}, ic_source_id_{16}, ic_dx_{32, 2}, ic_dy_{32, 22},
-      ic_z_{32, 20};
+};
+
+// The inverse of Point10Decoder (LASzip LASwriteItemCompressed_POINT10_v2).
+class Point10Encoder {
+ public:
+  explicit Point10Encoder(const uint8_t* first) { std::memcpy(last_, first, 20); }
+
+  void Code(ArithmeticEncoder* enc, const uint8_t* item) {
+    const uint32_t n = (item[14] >> 3) & 7;
+    const uint32_t m = kNumberReturnMap[n][item[14] & 7];
+    const uint32_t l = kNumberReturnLevel[n][item[14] & 7];
+    const uint16_t intensity = LoadLE<uint16_t>(item + 12);
+    const uint16_t source_id = LoadLE<uint16_t>(item + 18);
+    const uint16_t last_source_id = LoadLE<uint16_t>(last_ + 18);
+    const uint32_t changed = (last_[14] != item[14] ? 32u : 0u) |
+                             (c_.last_intensity[m] != intensity ? 16u : 0u) |
+                             (last_[15] != item[15] ? 8u : 0u) | (last_[16] != item[16] ? 4u : 0u) |
+                             (last_[17] != item[17] ? 2u : 0u) |
+                             (last_source_id != source_id ? 1u : 0u);
+    enc->EncodeSymbol(&c_.changed_values, changed);
+    if (changed & 32) enc->EncodeSymbol(c_.bit_byte.At(last_[14]), item[14]);
+    if (changed & 16) {
+      c_.ic_intensity.Compress(enc, c_.last_intensity[m], intensity, m < 3 ? m : 3);
+      c_.last_intensity[m] = intensity;
+    }
+    if (changed & 8) enc->EncodeSymbol(c_.classification.At(last_[15]), item[15]);
+    if (changed & 4) {
+      enc->EncodeSymbol(&c_.scan_angle_rank[(item[14] >> 6) & 1],
+                        static_cast<uint8_t>(item[16] - last_[16]));
+    }
+    if (changed & 2) enc->EncodeSymbol(c_.user_data.At(last_[17]), item[17]);
+    if (changed & 1) c_.ic_source_id.Compress(enc, last_source_id, source_id);
+    const uint32_t single = n == 1;
+    const int32_t dx = SubWrapping(LoadLE<int32_t>(item), LoadLE<int32_t>(last_));
+    c_.ic_dx.Compress(enc, c_.x_median[m].Get(), dx, single);
+    c_.x_median[m].Add(dx);
+    const int32_t dy = SubWrapping(LoadLE<int32_t>(item + 4), LoadLE<int32_t>(last_ + 4));
+    c_.ic_dy.Compress(enc, c_.y_median[m].Get(), dy, DyContext(single, c_.ic_dx.k()));
+    c_.y_median[m].Add(dy);
+    const int32_t z = LoadLE<int32_t>(item + 8);
+    c_.ic_z.Compress(enc, c_.last_height[l], z, ZContext(single, c_.ic_dx.k(), c_.ic_dy.k()));
+    c_.last_height[l] = z;
+    std::memcpy(last_, item, 20);
+  }
+
+ private:
+  Point10Context c_;
+  uint8_t last_[20];
 };
 
 // ---- GPSTIME11 v2: up to four interleaved time sequences, each with its last difference ----
@@ -143,49 +214,58 @@ constexpr uint32_t kGpsMultiUnchanged = kGpsMulti - kGpsMultiMinus + 1;  // 511
 constexpr uint32_t kGpsMultiCodeFull = kGpsMulti - kGpsMultiMinus + 2;   // 512
 constexpr uint32_t kGpsMultiTotal = kGpsMulti - kGpsMultiMinus + 6;      // 516
 
+// The GPSTIME11 models and sequences, for both directions.
+struct GpsTime11Context {
+  explicit GpsTime11Context(const uint8_t* first) {
+    g.time[0] = LoadLE<uint64_t>(first);
+    ic_gps_time.Init();
+  }
+  GpsSequences g;
+  SymbolModel multi{kGpsMultiTotal}, zero_diff{6};
+  IntegerCoder ic_gps_time{32, 9};
+};
+
 class GpsTime11Decoder {
  public:
-  explicit GpsTime11Decoder(const uint8_t* first) {
-    time_[0] = LoadLE<uint64_t>(first);
-    ic_gps_time_.Init();
-  }
+  explicit GpsTime11Decoder(const uint8_t* first) : c_(first) {}
 
-  void Decode(ArithmeticDecoder* dec, uint8_t* out) {
+  void Code(ArithmeticDecoder* dec, uint8_t* out) {
     // A switch to another sequence decodes that sequence's value next; an encoder switches only
     // to a sequence it can code, so a second switch in a row means corrupt data.
     for (int switches = 0; !DecodeStep(dec); ++switches) {
       if (switches == 3) throw LazError("GPSTIME11: corrupt data (repeated sequence switches)");
     }
-    StoreLE<uint64_t>(out, time_[last_]);
+    StoreLE<uint64_t>(out, c_.g.time[c_.g.last]);
   }
 
  private:
   // Returns false when the symbol switched sequences (the value follows).
   bool DecodeStep(ArithmeticDecoder* dec) {
-    if (last_diff_[last_] == 0) {
-      const uint32_t multi = dec->DecodeSymbol(&zero_diff_);
+    GpsSequences& g = c_.g;
+    if (g.diff[g.last] == 0) {
+      const uint32_t multi = dec->DecodeSymbol(&c_.zero_diff);
       if (multi == 1) {
-        last_diff_[last_] = ic_gps_time_.Decompress(dec, 0, 0);
-        Advance(last_diff_[last_]);
-        extreme_count_[last_] = 0;
+        g.diff[g.last] = c_.ic_gps_time.Decompress(dec, 0, 0);
+        Advance(g.diff[g.last]);
+        g.extreme_count[g.last] = 0;
       } else if (multi == 2) {
         StartSequence(dec);
       } else if (multi > 2) {
-        last_ = (last_ + multi - 2) & 3;
+        g.last = (g.last + multi - 2) & 3;
         return false;
       }
       return true;
     }
-    const uint32_t multi = dec->DecodeSymbol(&multi_);
+    const uint32_t multi = dec->DecodeSymbol(&c_.multi);
     if (multi == 1) {
-      Advance(ic_gps_time_.Decompress(dec, last_diff_[last_], 1));
-      extreme_count_[last_] = 0;
+      Advance(c_.ic_gps_time.Decompress(dec, g.diff[g.last], 1));
+      g.extreme_count[g.last] = 0;
     } else if (multi < kGpsMultiUnchanged) {
       Advance(DecodeMultipleDiff(dec, multi));
     } else if (multi == kGpsMultiCodeFull) {
       StartSequence(dec);
     } else if (multi > kGpsMultiCodeFull) {
-      last_ = (last_ + multi - kGpsMultiCodeFull) & 3;
+      g.last = (g.last + multi - kGpsMultiCodeFull) & 3;
       return false;
     }
     return true;
@@ -193,118 +273,108 @@ class GpsTime11Decoder {
 
   // A difference predicted as a multiple of the last one (multi != 1, < kGpsMultiUnchanged).
   int32_t DecodeMultipleDiff(ArithmeticDecoder* dec, uint32_t multi) {
-    const int32_t last = last_diff_[last_];
+    GpsSequences& g = c_.g;
+    IntegerCoder& ic = c_.ic_gps_time;
+    const int32_t last = g.diff[g.last];
     int32_t diff;
     bool extreme = false;
     if (multi == 0) {
-      diff = ic_gps_time_.Decompress(dec, 0, 7);
+      diff = ic.Decompress(dec, 0, 7);
       extreme = true;
     } else if (multi < kGpsMulti) {
-      diff = ic_gps_time_.Decompress(dec, MulWrapping(static_cast<int32_t>(multi), last),
-                                     multi < 10 ? 2 : 3);
+      diff = ic.Decompress(dec, MulWrapping(static_cast<int32_t>(multi), last), multi < 10 ? 2 : 3);
     } else if (multi == kGpsMulti) {
-      diff = ic_gps_time_.Decompress(dec, MulWrapping(kGpsMulti, last), 4);
+      diff = ic.Decompress(dec, MulWrapping(kGpsMulti, last), 4);
       extreme = true;
     } else {
       const int32_t negative = static_cast<int32_t>(kGpsMulti) - static_cast<int32_t>(multi);
       if (negative > kGpsMultiMinus) {
-        diff = ic_gps_time_.Decompress(dec, MulWrapping(negative, last), 5);
+        diff = ic.Decompress(dec, MulWrapping(negative, last), 5);
       } else {
-        diff = ic_gps_time_.Decompress(dec, MulWrapping(kGpsMultiMinus, last), 6);
+        diff = ic.Decompress(dec, MulWrapping(kGpsMultiMinus, last), 6);
         extreme = true;
       }
     }
     // Repeated extreme multipliers: the sequence's step changed; adopt the new difference.
-    if (extreme && ++extreme_count_[last_] > 3) {
-      last_diff_[last_] = diff;
-      extreme_count_[last_] = 0;
+    if (extreme && ++g.extreme_count[g.last] > 3) {
+      g.diff[g.last] = diff;
+      g.extreme_count[g.last] = 0;
     }
     return diff;
   }
 
   void Advance(int32_t diff) {
-    time_[last_] += static_cast<uint64_t>(static_cast<int64_t>(diff));
+    c_.g.time[c_.g.last] += static_cast<uint64_t>(static_cast<int64_t>(diff));
   }
 
   // A new sequence: the high 32 bits predicted from the current sequence's, the low ones raw.
   void StartSequence(ArithmeticDecoder* dec) {
-    next_ = (next_ + 1) & 3;
+    GpsSequences& g = c_.g;
+    g.next = (g.next + 1) & 3;
     const int32_t high =
-        ic_gps_time_.Decompress(dec, static_cast<int32_t>(time_[last_] >> 32), 8);
-    time_[next_] = static_cast<uint64_t>(static_cast<uint32_t>(high)) << 32 | dec->ReadInt();
-    last_ = next_;
-    last_diff_[last_] = 0;
-    extreme_count_[last_] = 0;
+        c_.ic_gps_time.Decompress(dec, static_cast<int32_t>(g.time[g.last] >> 32), 8);
+    g.time[g.next] = static_cast<uint64_t>(static_cast<uint32_t>(high)) << 32 | dec->ReadInt();
+    g.last = g.next;
+    g.diff[g.last] = 0;
+    g.extreme_count[g.last] = 0;
   }
 
-  uint32_t last_ = 0, next_ = 0;
-  std::array<uint64_t, 4> time_{};  // the doubles' bit patterns
-  std::array<int32_t, 4> last_diff_{};
-  std::array<int32_t, 4> extreme_count_{};
-  SymbolModel multi_{kGpsMultiTotal}, zero_diff_{6};
-  IntegerDecompressor ic_gps_time_{32, 9};
+  GpsTime11Context c_;
 };
 
-// ---- RGB12 v2: low and high bytes of red coded against the last, green and blue against red ----
-
-inline uint8_t ClampU8(int32_t v) { return v <= 0 ? 0 : v >= 255 ? 255 : static_cast<uint8_t>(v); }
-
-class Rgb12Decoder {
+class GpsTime11Encoder {
  public:
-  explicit Rgb12Decoder(const uint8_t* first) {
-    for (int c = 0; c < 3; ++c) last_[c] = LoadLE<uint16_t>(first + 2 * c);
-  }
-
-  void Decode(ArithmeticDecoder* dec, uint8_t* out) {
-    const uint32_t sym = dec->DecodeSymbol(&byte_used_);
-    uint16_t rgb[3];
-    rgb[0] = Byte(dec, sym & 1, 0, last_[0] & 0xFF, 0);  // two statements: decoding order
-    rgb[0] |= Byte(dec, sym & 2, 1, last_[0] >> 8, 0) << 8;
-    if (sym & 64) {
-      int32_t diff = (rgb[0] & 0xFF) - (last_[0] & 0xFF);
-      rgb[1] = Byte(dec, sym & 4, 2, last_[1] & 0xFF, ClampU8(diff + (last_[1] & 0xFF)));
-      diff = (diff + (rgb[1] & 0xFF) - (last_[1] & 0xFF)) / 2;
-      rgb[2] = Byte(dec, sym & 16, 4, last_[2] & 0xFF, ClampU8(diff + (last_[2] & 0xFF)));
-      diff = (rgb[0] >> 8) - (last_[0] >> 8);
-      rgb[1] |= Byte(dec, sym & 8, 3, last_[1] >> 8, ClampU8(diff + (last_[1] >> 8))) << 8;
-      diff = (diff + (rgb[1] >> 8) - (last_[1] >> 8)) / 2;
-      rgb[2] |= Byte(dec, sym & 32, 5, last_[2] >> 8, ClampU8(diff + (last_[2] >> 8))) << 8;
-    } else {
-      rgb[1] = rgb[2] = rgb[0];  // grey
-    }
-    for (int c = 0; c < 3; ++c) {
-      last_[c] = rgb[c];
-      StoreLE<uint16_t>(out + 2 * c, rgb[c]);
-    }
+  explicit GpsTime11Encoder(const uint8_t* first) : c_(first) {}
+  void Code(ArithmeticEncoder* enc, const uint8_t* item) {
+    EncodeGpsTime(enc, {&c_.zero_diff, &c_.multi, &c_.ic_gps_time, true}, LoadLE<uint64_t>(item),
+                  &c_.g);
   }
 
  private:
-  // One byte: when `coded`, the prediction plus a corrector from model `model` (the prediction
-  // of red is its last value, that of green and blue the clamped red-corrected one); else kept.
-  uint16_t Byte(ArithmeticDecoder* dec, uint32_t coded, int model, uint32_t kept,
-                uint32_t prediction) {
-    if (!coded) return static_cast<uint16_t>(kept);
-    if (model < 2) prediction = kept;
-    return static_cast<uint8_t>(dec->DecodeSymbol(&diff_[model]) + prediction);
+  GpsTime11Context c_;
+};
+
+// ---- RGB12 v2 (laz_color.h): red against the last colour, green and blue against red ----
+
+class Rgb12Coder {
+ public:
+  explicit Rgb12Coder(const uint8_t* first) {
+    for (int c = 0; c < 3; ++c) last_[c] = LoadLE<uint16_t>(first + 2 * c);
+  }
+  void Code(ArithmeticDecoder* dec, uint8_t* out) {
+    uint16_t rgb[3];
+    DecodeRgb(dec, &models_, last_, rgb);
+    for (int c = 0; c < 3; ++c) StoreLE<uint16_t>(out + 2 * c, last_[c] = rgb[c]);
+  }
+  void Code(ArithmeticEncoder* enc, const uint8_t* item) {
+    uint16_t rgb[3];
+    for (int c = 0; c < 3; ++c) rgb[c] = LoadLE<uint16_t>(item + 2 * c);
+    EncodeRgb(enc, &models_, last_, rgb);
+    std::copy(rgb, rgb + 3, last_);
   }
 
+ private:
   uint16_t last_[3];
-  SymbolModel byte_used_{128};
-  SymbolModel diff_[6] = {SymbolModel(256), SymbolModel(256), SymbolModel(256),
-                          SymbolModel(256), SymbolModel(256), SymbolModel(256)};
+  RgbModels models_;
 };
 
 // ---- BYTE v2: each extra byte coded against the same byte of the last record ----
 
-class ByteDecoder {
+class ByteCoder {
  public:
-  ByteDecoder(const uint8_t* first, size_t count)
+  ByteCoder(const uint8_t* first, size_t count)
       : last_(first, first + count), models_(count, SymbolModel(256)) {}
 
-  void Decode(ArithmeticDecoder* dec, uint8_t* out) {
+  void Code(ArithmeticDecoder* dec, uint8_t* out) {
     for (size_t i = 0; i < last_.size(); ++i) {
       last_[i] = static_cast<uint8_t>(last_[i] + dec->DecodeSymbol(&models_[i]));
       out[i] = last_[i];
+    }
+  }
+  void Code(ArithmeticEncoder* enc, const uint8_t* item) {
+    for (size_t i = 0; i < last_.size(); ++i) {
+      enc->EncodeSymbol(&models_[i], static_cast<uint8_t>(item[i] - last_[i]));
+      last_[i] = item[i];
     }
   }
 
@@ -358,6 +428,30 @@ Layout LayoutOf(const std::vector<Item>& items) {
                  " needed bytes past the chunk's " + std::to_string(size) + " bytes");
 }
 
+// A chunk's item coders (decoders or encoders), made from its first record.
+template <class Point, class Gps, bool kGps, bool kRgb, bool kBytes>
+struct ChunkItems {
+  ChunkItems(const Layout& layout, const uint8_t* first) : l(layout), point(first) {
+    if (kGps) gps = std::make_unique<Gps>(first + l.gps);
+    if (kRgb) rgb = std::make_unique<Rgb12Coder>(first + l.rgb);
+    if (kBytes) bytes = std::make_unique<ByteCoder>(first + l.bytes, l.byte_count);
+  }
+  // Decodes into (ArithmeticDecoder, uint8_t*) or encodes from (ArithmeticEncoder, const
+  // uint8_t*) the next record, item by item.
+  template <class Coder, class Byte>
+  void Code(Coder* coder, Byte* record) {
+    point.Code(coder, record);
+    if constexpr (kGps) gps->Code(coder, record + l.gps);
+    if constexpr (kRgb) rgb->Code(coder, record + l.rgb);
+    if constexpr (kBytes) bytes->Code(coder, record + l.bytes);
+  }
+  const Layout& l;
+  Point point;
+  std::unique_ptr<Gps> gps;
+  std::unique_ptr<Rgb12Coder> rgb;
+  std::unique_ptr<ByteCoder> bytes;
+};
+
 // Decoders created once per chunk; the item set is a template parameter, so the per-point loop
 // has no branches on the item types.
 template <bool kGps, bool kRgb, bool kBytes>
@@ -365,45 +459,70 @@ void DecodeChunk(const Layout& l, const uint8_t* data, size_t size, uint32_t poi
                  uint8_t* out) {
   std::memcpy(out, data, l.length);
   if (points == 1) return;
-  Point10Decoder point(out);
-  std::unique_ptr<GpsTime11Decoder> gps;
-  std::unique_ptr<Rgb12Decoder> rgb;
-  std::unique_ptr<ByteDecoder> bytes;
-  if (kGps) gps = std::make_unique<GpsTime11Decoder>(out + l.gps);
-  if (kRgb) rgb = std::make_unique<Rgb12Decoder>(out + l.rgb);
-  if (kBytes) bytes = std::make_unique<ByteDecoder>(out + l.bytes, l.byte_count);
+  ChunkItems<Point10Decoder, GpsTime11Decoder, kGps, kRgb, kBytes> items(l, out);
   ArithmeticDecoder dec;
   dec.Init(data + l.length, data + size);
   uint8_t* record = out;
   for (uint32_t i = 1; i < points; ++i) {
     record += l.length;
-    point.Decode(&dec, record);
-    if constexpr (kGps) gps->Decode(&dec, record + l.gps);
-    if constexpr (kRgb) rgb->Decode(&dec, record + l.rgb);
-    if constexpr (kBytes) bytes->Decode(&dec, record + l.bytes);
+    items.Code(&dec, record);
     if ((i & 4095) == 0 && dec.overrun()) ThrowEndsEarly(size, i);  // stop early on truncation
   }
   if (dec.overrun()) ThrowEndsEarly(size, points - 1);
 }
 
+// The inverse of DecodeChunk (LASzip LASwritePoint with the pointwise items): the first record
+// raw, then one stream coding the others; a chunk of one point still ends its (empty) stream.
+template <bool kGps, bool kRgb, bool kBytes>
+void EncodeChunk(const Layout& l, const uint8_t* records, uint32_t points,
+                 std::vector<uint8_t>* out) {
+  out->insert(out->end(), records, records + l.length);
+  ChunkItems<Point10Encoder, GpsTime11Encoder, kGps, kRgb, kBytes> items(l, records);
+  ArithmeticEncoder enc;
+  for (uint32_t i = 1; i < points; ++i) items.Code(&enc, records + i * l.length);
+  enc.Done();
+  out->insert(out->end(), enc.bytes().begin(), enc.bytes().end());
+}
+
+// Calls f(gps, rgb, bytes) with std::bool_constant tags of the items present: the chunk coders
+// are instantiated per item set.
+template <class F>
+void WithItems(const Layout& l, F&& f) {
+  using Y = std::true_type;
+  using N = std::false_type;
+  switch ((l.gps >= 0 ? 4 : 0) | (l.rgb >= 0 ? 2 : 0) | (l.bytes >= 0 ? 1 : 0)) {
+    case 0: return f(N{}, N{}, N{});
+    case 1: return f(N{}, N{}, Y{});
+    case 2: return f(N{}, Y{}, N{});
+    case 3: return f(N{}, Y{}, Y{});
+    case 4: return f(Y{}, N{}, N{});
+    case 5: return f(Y{}, N{}, Y{});
+    case 6: return f(Y{}, Y{}, N{});
+    default: return f(Y{}, Y{}, Y{});
+  }
+}
+
 }  // namespace
+
+void EncodePointwiseChunk(const std::vector<Item>& items, const uint8_t* records, uint32_t points,
+                          std::vector<uint8_t>* out) {
+  const Layout l = LayoutOf(items);
+  if (points == 0) return;
+  WithItems(l, [&](auto gps, auto rgb, auto bytes) {
+    EncodeChunk<decltype(gps)::value, decltype(rgb)::value, decltype(bytes)::value>(l, records,
+                                                                                   points, out);
+  });
+}
 
 void DecodePointwiseChunk(const std::vector<Item>& items, const uint8_t* data, size_t size,
                           uint32_t points, uint8_t* out) {
   const Layout l = LayoutOf(items);
   if (points == 0) return;
   if (size < l.length) ThrowEndsEarly(size, 0);
-  const int variant = (l.gps >= 0 ? 4 : 0) | (l.rgb >= 0 ? 2 : 0) | (l.bytes >= 0 ? 1 : 0);
-  switch (variant) {
-    case 0: return DecodeChunk<false, false, false>(l, data, size, points, out);
-    case 1: return DecodeChunk<false, false, true>(l, data, size, points, out);
-    case 2: return DecodeChunk<false, true, false>(l, data, size, points, out);
-    case 3: return DecodeChunk<false, true, true>(l, data, size, points, out);
-    case 4: return DecodeChunk<true, false, false>(l, data, size, points, out);
-    case 5: return DecodeChunk<true, false, true>(l, data, size, points, out);
-    case 6: return DecodeChunk<true, true, false>(l, data, size, points, out);
-    default: return DecodeChunk<true, true, true>(l, data, size, points, out);
-  }
+  WithItems(l, [&](auto gps, auto rgb, auto bytes) {
+    DecodeChunk<decltype(gps)::value, decltype(rgb)::value, decltype(bytes)::value>(l, data, size,
+                                                                                   points, out);
+  });
 }
 
 }  // namespace candi::io::laz

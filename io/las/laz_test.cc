@@ -15,6 +15,7 @@
 #include "io/point_io.h"
 #include "tests/util/input_error.h"
 #include "tests/util/las_bytes.h"
+#include "tests/util/laz_records.h"
 #include "tests/util/read_in_chunks.h"
 #include "tests/util/test_util.h"
 
@@ -24,6 +25,8 @@ namespace {
 using ::candi::testing::GetLE;
 using ::candi::testing::InputErrorMessage;
 using ::candi::testing::LasPointRecords;
+using ::candi::testing::LaszipVlrOf;
+using ::candi::testing::LazRecords;
 using ::candi::testing::PutLE;
 using ::candi::testing::ReadBytes;
 using ::candi::testing::ReadInChunks;
@@ -33,29 +36,6 @@ using ::candi::testing::WriteBytes;
 
 std::string DataPath(const std::string& name) { return SourceDir() + "/tests/data/laz/" + name; }
 
-// The decoded records of a LAZ file, through the chunk table and chunk decoders.
-std::string LazRecords(const std::string& path) {
-  BinaryFile file(path);
-  LasHeader header = ReadLasHeader(&file);
-  header.point_format &= 0x3F;
-  laz::Vlr vlr;
-  for (const LasVlr& v : ReadLasVlrs(&file, header)) {
-    if (v.user_id == "laszip encoded") vlr = laz::ParseVlr(v.data);
-  }
-  const uint64_t count = LasPointCount(header);
-  LazPointData data(&file, vlr,
-                    ReadLazChunkTable(file, vlr, header.offset_to_point_data, count,
-                                      header.record_length),
-                    header.record_length);
-  std::string records;
-  for (uint64_t done = 0; done < count;) {
-    size_t n = 0;
-    const uint8_t* r = data.Records(done, count, &n);
-    records.append(reinterpret_cast<const char*>(r), n * header.record_length);
-    done += n;
-  }
-  return records;
-}
 
 PointCloud ReadWith(const std::string& path, size_t read_size) {
   return ReadInChunks(*OpenPointReader(path), read_size);
@@ -134,7 +114,7 @@ TEST(LazArith, ShortInputOverrunsWithinBounds) {
   EXPECT_FALSE(decoder.overrun());
   EXPECT_EQ(decoder.consumed(), 4u);
   laz::SymbolModel small(5), large(2048);
-  laz::IntegerDecompressor ic(32, 3);
+  laz::IntegerCoder ic(32, 3);
   ic.Init();
   for (int i = 0; i < 200; ++i) {
     EXPECT_LT(decoder.DecodeSymbol(&small), 5u);
