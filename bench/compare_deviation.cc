@@ -321,7 +321,7 @@ int RunCompareBench(const CompareBenchOptions& a) {
   }
   std::printf("\nEnd to end: reading both files, the distances, writing the compared cloud with its field (candi "
               "also writes its summary, histogram and report). Distances: CloudCompare's printed times of its "
-              "distance step (its octree built before); candi's CompareToCloud (kd-tree build included).\n");
+              "distance step (its octree built before); candi's CompareToCloud (its point tree's build included).\n");
   return 0;
 }
 

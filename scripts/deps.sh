@@ -45,8 +45,37 @@ for p in "${packages[@]}"; do
     missing+=("$p")
   fi
 done
+# Independent readers of candi's LAZ and COPC in tests: npm's laz-perf and copc under node
+# (Debian's nodejs and npm where the machine has no node and npm of its own).
+if [[ ${1:-} != fuzz ]]; then
+  command -v node >/dev/null || missing+=(nodejs)
+  command -v npm >/dev/null || missing+=(npm)
+fi
+
+# The npm packages of tests/node/package.json into .cache/node (tests find them there). Best
+# effort: without the registry the node tests skip, saying so.
+node_packages() {
+  [[ ${1:-} == fuzz ]] && return 0
+  local root dir
+  root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+  dir="$root/.cache/node"
+  if cmp -s "$root/tests/node/package.json" "$dir/package.json" && [[ -d $dir/node_modules ]]; then
+    return 0
+  fi
+  mkdir -p "$dir"
+  cp "$root/tests/node/package.json" "$dir/package.json"
+  if ! command -v npm >/dev/null ||
+     ! timeout 600 npm install --prefix "$dir" --no-audit --no-fund --silent >/dev/null 2>&1; then
+    rm -f "$dir/package.json"
+    echo "deps: npm could not install tests/node/package.json's packages; the node reader tests will skip" >&2
+    return 0
+  fi
+  echo "deps: npm packages of tests/node/package.json in .cache/node" >&2
+}
+
 if [[ ${#missing[@]} -eq 0 ]]; then
   echo "deps: all ${#packages[@]} packages present" >&2
+  node_packages "${1:-}"
   exit 0
 fi
 
@@ -61,3 +90,4 @@ start=$(date +%s)
 "${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get -qq -y --no-install-recommends \
   -o DPkg::Lock::Timeout=600 install "${missing[@]}" >/dev/null
 echo "deps: installed in $(( $(date +%s) - start )) s" >&2
+node_packages "${1:-}"

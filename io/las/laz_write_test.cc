@@ -577,12 +577,11 @@ TEST(LazWrite, ConvertWritesLazWithTheCrsRecords) {
 
 // An independent reader: npm's laz-perf (WASM) under node decodes candi's LAZ of every format,
 // with extra bytes and several chunks, to the records of the LAS twin. Skipped, saying so, where
-// node or laz-perf is absent (`npm install laz-perf@0.0.7`, then NODE_PATH=.../node_modules).
+// node or laz-perf is absent (scripts/deps.sh installs them).
 TEST(LazWrite, LazPerfReadsCandisLaz) {
-  if (std::system("node -e \"require('laz-perf')\" > /dev/null 2>&1") != 0) {
-    GTEST_SKIP() << "node with npm's laz-perf is absent (npm install laz-perf@0.0.7 and set "
-                    "NODE_PATH to its node_modules); candi's LAZ is not checked by laz-perf";
-  }
+  std::string why;
+  const std::string node = util::NodeWith("laz-perf", &why);
+  if (node.empty()) GTEST_SKIP() << why << ": candi's LAZ is not checked by laz-perf";
   const std::string script = util::SourceDir() + "/tests/node/laz_perf_records.js";
   for (int format : kFormats) {
     SCOPED_TRACE("point format " + std::to_string(format));
@@ -591,7 +590,7 @@ TEST(LazWrite, LazPerfReadsCandisLaz) {
     WritePointCloud(dir.File("a.las"), cloud, OptionsFor(format));
     WritePointCloud(dir.File("b.laz"), cloud, OptionsFor(format));
     const std::string command =
-        "node '" + script + "' '" + dir.File("b.laz") + "' '" + dir.File("b.bin") + "'";
+        node + " '" + script + "' '" + dir.File("b.laz") + "' '" + dir.File("b.bin") + "'";
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
     EXPECT_TRUE(ReadBytes(dir.File("b.bin")) == LasPointRecords(ReadBytes(dir.File("a.las"))));
   }

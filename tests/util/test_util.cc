@@ -21,6 +21,20 @@ std::string SharedDataPath(const std::string& relative) {
   return FileExists(path) ? path : "";
 }
 
+std::string NodeWith(const std::string& package, std::string* why) {
+  const std::string node = "NODE_PATH='" + SourceDir() + "/.cache/node/node_modules' node";
+  if (std::system("command -v node > /dev/null 2>&1") != 0) {
+    *why = "node is not installed (scripts/deps.sh installs Debian's nodejs)";
+    return "";
+  }
+  if (std::system((node + " -e \"require('" + package + "')\" > /dev/null 2>&1").c_str()) != 0) {
+    *why = "npm's " + package + " is not in .cache/node (scripts/deps.sh installs tests/node/package.json; it " +
+           "needs the npm registry)";
+    return "";
+  }
+  return node;
+}
+
 TempDir::TempDir() {
   const char* tmp = std::getenv("TMPDIR");
   std::string pattern = std::string(tmp && *tmp ? tmp : "/tmp") + "/candi-test-XXXXXX";

@@ -12,6 +12,10 @@ namespace candi::testing {
 std::string SourceDir();
 // ../shared/data/<relative> beside the repository, or "" when it is absent.
 std::string SharedDataPath(const std::string& relative);
+// The shell command that runs node with the npm packages scripts/deps.sh installs for the tests
+// (tests/node/package.json, in .cache/node), or "" with *why set when node or `package` is
+// absent (the test then skips, saying why).
+std::string NodeWith(const std::string& package, std::string* why);
 
 // A fresh directory under $TMPDIR, removed with its contents on destruction.
 class TempDir {
