@@ -1,0 +1,143 @@
+#include "io/las/copc_octree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+
+#include "core/binary_file.h"
+#include "core/parallel.h"
+
+namespace candi::io {
+
+namespace {
+
+constexpr int kCellBits = 7;  // 128 = 2^7 cells a side
+static_assert(1 << kCellBits == kCopcCellsPerAxis);
+
+struct Split {
+  std::vector<uint64_t> kept;
+  std::array<std::vector<uint64_t>, 8> children;  // octant bit 0: x, 1: y, 2: z
+};
+
+struct CellEntry {
+  uint32_t cell;
+  double distance;  // squared, in cells, to the cell's centre
+  uint32_t position;  // in the node's point list (its input order)
+};
+
+// The cube's positions of the points: (world - cube min) / cube width, in [0, 1].
+std::vector<Eigen::Vector3d> CubePositions(const uint8_t* records, size_t n, size_t length,
+                                           const Eigen::Vector3d& scale,
+                                           const Eigen::Vector3d& offset, CopcOctree* tree) {
+  std::vector<Eigen::Vector3d> world(n);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* p = records + i * length;
+    for (int k = 0; k < 3; ++k) world[i][k] = LoadLE<int32_t>(p + 4 * k) * scale[k] + offset[k];
+    lo = lo.cwiseMin(world[i]);
+    hi = hi.cwiseMax(world[i]);
+  }
+  if (n == 0) lo = hi = Eigen::Vector3d::Zero();
+  tree->center = 0.5 * (lo + hi);
+  tree->halfsize = 0.5 * (hi - lo).maxCoeff();
+  if (!(tree->halfsize > 0.0)) tree->halfsize = scale.cwiseAbs().maxCoeff();
+  tree->spacing = 2.0 * tree->halfsize / kCopcCellsPerAxis;
+  const Eigen::Vector3d min = tree->center.array() - tree->halfsize;
+  const double width = 2.0 * tree->halfsize;
+  ParallelFor(size_t{0}, n, [&](size_t i) { world[i] = (world[i] - min) / width; });
+  return world;
+}
+
+// One node: one point a cell kept, the others to their child octants.
+Split SplitNode(const CopcKey& key, const std::vector<uint64_t>& points,
+                const std::vector<Eigen::Vector3d>& t, bool keep_all) {
+  Split s;
+  if (keep_all) {
+    s.kept = points;
+    return s;
+  }
+  const int level = key.level + kCellBits;
+  const double factor = std::ldexp(1.0, level);
+  const int64_t last = (int64_t{1} << level) - 1;
+  const int64_t base[3] = {int64_t{key.x} << kCellBits, int64_t{key.y} << kCellBits,
+                           int64_t{key.z} << kCellBits};
+  std::vector<CellEntry> entries(points.size());
+  std::vector<uint8_t> octant(points.size());
+  for (size_t j = 0; j < points.size(); ++j) {
+    uint32_t cell = 0, oct = 0;
+    double d = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double u = t[points[j]][k] * factor;
+      const int64_t g = std::clamp(static_cast<int64_t>(std::floor(u)), int64_t{0}, last);
+      const int64_t local = g - base[k];  // in [0, 128)
+      cell = cell << kCellBits | static_cast<uint32_t>(local);
+      oct |= static_cast<uint32_t>(local >> (kCellBits - 1)) << k;
+      d += (u - static_cast<double>(g) - 0.5) * (u - static_cast<double>(g) - 0.5);
+    }
+    entries[j] = {cell, d, static_cast<uint32_t>(j)};
+    octant[j] = static_cast<uint8_t>(oct);
+  }
+  std::sort(entries.begin(), entries.end(), [](const CellEntry& a, const CellEntry& b) {
+    return std::tie(a.cell, a.distance, a.position) < std::tie(b.cell, b.distance, b.position);
+  });
+  std::vector<uint8_t> kept(points.size(), 0);
+  for (size_t e = 0; e < entries.size(); ++e) {
+    if (e == 0 || entries[e].cell != entries[e - 1].cell) kept[entries[e].position] = 1;
+  }
+  for (size_t j = 0; j < points.size(); ++j) {
+    (kept[j] ? s.kept : s.children[octant[j]]).push_back(points[j]);
+  }
+  return s;
+}
+
+CopcKey ChildKey(const CopcKey& key, int octant) {
+  return {key.level + 1, 2 * key.x + (octant & 1), 2 * key.y + ((octant >> 1) & 1),
+          2 * key.z + ((octant >> 2) & 1)};
+}
+
+}  // namespace
+
+Eigen::Vector3d CopcOctree::NodeMin(const CopcKey& key) const {
+  const double w = NodeWidth(key);
+  return (center.array() - halfsize).matrix() + w * Eigen::Vector3d(key.x, key.y, key.z);
+}
+
+double CopcOctree::NodeWidth(const CopcKey& key) const {
+  return std::ldexp(2.0 * halfsize, -key.level);
+}
+
+CopcOctree BuildCopcOctree(const uint8_t* records, size_t n, size_t record_length,
+                           const Eigen::Vector3d& scale, const Eigen::Vector3d& offset) {
+  CopcOctree tree;
+  const std::vector<Eigen::Vector3d> t =
+      CubePositions(records, n, record_length, scale, offset, &tree);
+  if (n == 0) return tree;
+  const double min_scale = scale.cwiseAbs().minCoeff();
+  std::vector<CopcNode> level(1);
+  level[0].points.resize(n);
+  for (size_t i = 0; i < n; ++i) level[0].points[i] = i;
+  while (!level.empty()) {
+    // Cells narrower than a LAS unit: only duplicates share one; keep them all here.
+    const double cell = std::ldexp(tree.spacing, -level[0].key.level);
+    const bool keep_all = cell < min_scale || level[0].key.level + kCellBits >= 62;
+    std::vector<Split> splits(level.size());
+    ParallelFor(size_t{0}, level.size(), [&](size_t j) {
+      splits[j] = SplitNode(level[j].key, level[j].points, t, keep_all);
+    });
+    std::vector<CopcNode> next;
+    for (size_t j = 0; j < level.size(); ++j) {
+      tree.nodes.push_back({level[j].key, std::move(splits[j].kept)});
+      for (int o = 0; o < 8; ++o) {
+        if (splits[j].children[o].empty()) continue;
+        next.push_back({ChildKey(level[j].key, o), std::move(splits[j].children[o])});
+      }
+    }
+    std::sort(next.begin(), next.end(), [](const CopcNode& a, const CopcNode& b) {
+      return std::tie(a.key.x, a.key.y, a.key.z) < std::tie(b.key.x, b.key.y, b.key.z);
+    });
+    level = std::move(next);
+  }
+  return tree;
+}
+
+}  // namespace candi::io
