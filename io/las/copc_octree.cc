@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <tuple>
 
 #include "core/binary_file.h"
@@ -49,10 +51,11 @@ std::vector<Eigen::Vector3d> CubePositions(const uint8_t* records, size_t n, siz
 }
 
 // One node: one point a cell kept, the others to their child octants.
-Split SplitNode(const CopcKey& key, const std::vector<uint64_t>& points,
-                const std::vector<Eigen::Vector3d>& t, bool keep_all) {
+Split SplitNode(const CopcOctreeOptions& options, const CopcKey& key,
+                const std::vector<uint64_t>& points, const std::vector<Eigen::Vector3d>& t,
+                bool keep_all) {
   Split s;
-  if (keep_all) {
+  if (keep_all || points.size() < static_cast<size_t>(options.min_subtree_points)) {
     s.kept = points;
     return s;
   }
@@ -84,8 +87,11 @@ Split SplitNode(const CopcKey& key, const std::vector<uint64_t>& points,
   for (size_t e = 0; e < entries.size(); ++e) {
     if (e == 0 || entries[e].cell != entries[e - 1].cell) kept[entries[e].position] = 1;
   }
+  std::array<size_t, 8> sizes{};
+  for (size_t j = 0; j < points.size(); ++j) sizes[octant[j]] += !kept[j];
   for (size_t j = 0; j < points.size(); ++j) {
-    (kept[j] ? s.kept : s.children[octant[j]]).push_back(points[j]);
+    const bool small = sizes[octant[j]] < static_cast<size_t>(options.min_octant_points);
+    (kept[j] || small ? s.kept : s.children[octant[j]]).push_back(points[j]);
   }
   return s;
 }
@@ -106,8 +112,21 @@ double CopcOctree::NodeWidth(const CopcKey& key) const {
   return std::ldexp(2.0 * halfsize, -key.level);
 }
 
-CopcOctree BuildCopcOctree(const uint8_t* records, size_t n, size_t record_length,
-                           const Eigen::Vector3d& scale, const Eigen::Vector3d& offset) {
+void CopcOctreeOptions::Check() const {
+  if (min_subtree_points < 0) {
+    throw std::invalid_argument("CopcOctreeOptions::min_subtree_points = " +
+                                std::to_string(min_subtree_points) + "; must be >= 0");
+  }
+  if (min_octant_points < 0) {
+    throw std::invalid_argument("CopcOctreeOptions::min_octant_points = " +
+                                std::to_string(min_octant_points) + "; must be >= 0");
+  }
+}
+
+CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
+                           size_t record_length, const Eigen::Vector3d& scale,
+                           const Eigen::Vector3d& offset) {
+  options.Check();
   CopcOctree tree;
   const std::vector<Eigen::Vector3d> t =
       CubePositions(records, n, record_length, scale, offset, &tree);
@@ -122,7 +141,7 @@ CopcOctree BuildCopcOctree(const uint8_t* records, size_t n, size_t record_lengt
     const bool keep_all = cell < min_scale || level[0].key.level + kCellBits >= 62;
     std::vector<Split> splits(level.size());
     ParallelFor(size_t{0}, level.size(), [&](size_t j) {
-      splits[j] = SplitNode(level[j].key, level[j].points, t, keep_all);
+      splits[j] = SplitNode(options, level[j].key, level[j].points, t, keep_all);
     });
     std::vector<CopcNode> next;
     for (size_t j = 0; j < level.size(); ++j) {

@@ -9,6 +9,11 @@
 // 128 being the root's (COPC info "spacing"; untwine and PDAL write the cube width over their
 // cell count, 128). A node whose cells are narrower than the smallest LAS scale keeps all its
 // points (only exact duplicates can share a cell there), so the depth is bounded.
+// Small nodes are avoided as untwine avoids them (bu/Processor.cpp: MinimumPoints 100,
+// MinimumTotalPoints 1500): a node reached by fewer than min_subtree_points points keeps them all,
+// and a child octant that would get fewer than min_octant_points stays in its parent. (Each LAZ
+// chunk costs its coder's set-up: a scan with far jumps made 9,000 nodes of ~6 points of 60,000
+// points without this.) A node's points in octants that have a child node are one a cell.
 //
 // Positions are the records' integer X, Y, Z (LAS units, world = X * scale + offset): a point
 // belongs to the cell floor(t * 2^L) at level L, t = (world - cube min) / cube width, clamped to
@@ -51,9 +56,18 @@ struct CopcOctree {
   double NodeWidth(const CopcKey& key) const;
 };
 
+struct CopcOctreeOptions {
+  // A node reached by fewer points keeps them all (no children). >= 0; 0: never.
+  int min_subtree_points = 1500;
+  // A child octant of fewer points is kept in its parent. >= 0; 0: never.
+  int min_octant_points = 100;
+  void Check() const;
+};
+
 // Builds the octree of n LAS records (record_length bytes each, X, Y, Z int32 at bytes 0, 4, 8)
 // with the header's scale and offset.
-CopcOctree BuildCopcOctree(const uint8_t* records, size_t n, size_t record_length,
-                           const Eigen::Vector3d& scale, const Eigen::Vector3d& offset);
+CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
+                           size_t record_length, const Eigen::Vector3d& scale,
+                           const Eigen::Vector3d& offset);
 
 }  // namespace candi::io

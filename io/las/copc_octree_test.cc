@@ -10,6 +10,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <stdexcept>
 #include <tuple>
 #include <vector>
 
@@ -21,6 +22,8 @@ namespace {
 constexpr size_t kLength = 30;  // format 6
 const Eigen::Vector3d kScale = Eigen::Vector3d::Constant(0.001);
 const Eigen::Vector3d kOffset(500000.0, 4500000.0, 100.0);
+// The grid alone: no small nodes folded into their parents.
+const CopcOctreeOptions kGridOnly{0, 0};
 
 // A clustered cloud: a wavy 60 m x 40 m floor, a dense 1 m cube, and 500 copies of one point.
 std::vector<uint8_t> ClusteredRecords(size_t n, uint32_t seed) {
@@ -59,7 +62,7 @@ std::tuple<int, int, int, int> Tuple(const CopcKey& k) { return {k.level, k.x, k
 TEST(CopcOctree, EveryPointOnceInsideItsNodeOnePerCell) {
   const size_t n = 200000;
   const std::vector<uint8_t> records = ClusteredRecords(n, 3);
-  const CopcOctree tree = BuildCopcOctree(records.data(), n, kLength, kScale, kOffset);
+  const CopcOctree tree = BuildCopcOctree(kGridOnly, records.data(), n, kLength, kScale, kOffset);
   EXPECT_NEAR(tree.halfsize, 30.0, 0.01);  // the floor's 60 m
   EXPECT_DOUBLE_EQ(tree.spacing, 2.0 * tree.halfsize / 128);
   std::vector<int> seen(n, 0);
@@ -109,7 +112,7 @@ TEST(CopcOctree, KeepsThePointNearestTheCellCentre) {
   const int32_t xs[3] = {100, 450, 128000};  // 0.1 m, 0.45 m, 128 m
   for (int i = 0; i < 3; ++i) StoreLE<int32_t>(records.data() + i * kLength, xs[i]);
   const CopcOctree tree =
-      BuildCopcOctree(records.data(), 3, kLength, kScale, Eigen::Vector3d::Zero());
+      BuildCopcOctree(kGridOnly, records.data(), 3, kLength, kScale, Eigen::Vector3d::Zero());
   ASSERT_EQ(tree.nodes.size(), 2u);
   EXPECT_EQ(tree.nodes[0].points, (std::vector<uint64_t>{1, 2}));
   EXPECT_EQ(tree.nodes[1].points, (std::vector<uint64_t>{0}));
@@ -121,8 +124,9 @@ TEST(CopcOctree, SameTreeOnOneAndTwoThreads) {
   const std::vector<uint8_t> records = ClusteredRecords(n, 9);
   CopcOctree a, b;
   tbb::task_arena one(1), two(2);
-  one.execute([&] { a = BuildCopcOctree(records.data(), n, kLength, kScale, kOffset); });
-  two.execute([&] { b = BuildCopcOctree(records.data(), n, kLength, kScale, kOffset); });
+  const CopcOctreeOptions defaults;
+  one.execute([&] { a = BuildCopcOctree(defaults, records.data(), n, kLength, kScale, kOffset); });
+  two.execute([&] { b = BuildCopcOctree(defaults, records.data(), n, kLength, kScale, kOffset); });
   ASSERT_EQ(a.nodes.size(), b.nodes.size());
   for (size_t j = 0; j < a.nodes.size(); ++j) {
     EXPECT_TRUE(a.nodes[j].key == b.nodes[j].key);
@@ -130,10 +134,48 @@ TEST(CopcOctree, SameTreeOnOneAndTwoThreads) {
   }
 }
 
+TEST(CopcOctree, SmallNodesStayInTheirParentsAsInUntwine) {
+  const size_t n = 200000;
+  const std::vector<uint8_t> records = ClusteredRecords(n, 3);
+  const CopcOctreeOptions defaults;
+  const CopcOctree grid = BuildCopcOctree(kGridOnly, records.data(), n, kLength, kScale, kOffset);
+  const CopcOctree tree = BuildCopcOctree(defaults, records.data(), n, kLength, kScale, kOffset);
+  std::map<std::tuple<int, int, int, int>, uint64_t> subtree;  // points at or below a node
+  std::vector<int> seen(n, 0);
+  for (auto it = tree.nodes.rbegin(); it != tree.nodes.rend(); ++it) {
+    for (uint64_t i : it->points) ++seen[i];
+    subtree[Tuple(it->key)] += it->points.size();
+    if (it->key.level > 0) {
+      const CopcKey parent{it->key.level - 1, it->key.x / 2, it->key.y / 2, it->key.z / 2};
+      subtree[Tuple(parent)] += subtree[Tuple(it->key)];
+    }
+  }
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(seen[i], 1) << "point " << i;
+  for (const CopcNode& node : tree.nodes) {
+    if (node.key.level == 0) continue;
+    EXPECT_GE(subtree[Tuple(node.key)], 100u) << "a node of fewer than min_octant_points";
+    const CopcKey parent{node.key.level - 1, node.key.x / 2, node.key.y / 2, node.key.z / 2};
+    EXPECT_GE(subtree[Tuple(parent)], 1500u) << "children under fewer than min_subtree_points";
+  }
+  EXPECT_LT(tree.nodes.size(), grid.nodes.size());
+  std::printf("%zu nodes with untwine's minimums, %zu with the grid alone\n", tree.nodes.size(),
+              grid.nodes.size());
+}
+
+TEST(CopcOctreeOptions, DefaultsPassAndNegativeMinimumsAreRefused) {
+  EXPECT_NO_THROW(CopcOctreeOptions().Check());
+  CopcOctreeOptions o;
+  o.min_subtree_points = -1;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = {};
+  o.min_octant_points = -5;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+}
+
 TEST(CopcOctree, EmptyAndSinglePoint) {
-  EXPECT_TRUE(BuildCopcOctree(nullptr, 0, kLength, kScale, kOffset).nodes.empty());
+  EXPECT_TRUE(BuildCopcOctree({}, nullptr, 0, kLength, kScale, kOffset).nodes.empty());
   std::vector<uint8_t> one(kLength, 0);
-  const CopcOctree tree = BuildCopcOctree(one.data(), 1, kLength, kScale, kOffset);
+  const CopcOctree tree = BuildCopcOctree({}, one.data(), 1, kLength, kScale, kOffset);
   ASSERT_EQ(tree.nodes.size(), 1u);
   EXPECT_GT(tree.halfsize, 0.0);
 }

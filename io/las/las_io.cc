@@ -860,7 +860,7 @@ void LasWriter::WriteCopcPointData() {
   const size_t length = header_.record_length;
   const size_t n = copc_records_.size() / length;
   const CopcOctree tree =
-      BuildCopcOctree(copc_records_.data(), n, length, header_.scale, header_.offset);
+      BuildCopcOctree({}, copc_records_.data(), n, length, header_.scale, header_.offset);
   const laz::Vlr vlr = laz::ParseVlr(vlrs_.back().data);
   const CopcPointData data = WriteCopcChunks(
       tree, copc_records_.data(), length, vlr, file_->Tell(),
