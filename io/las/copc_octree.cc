@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "core/binary_file.h"
+#include "core/check.h"
 #include "core/parallel.h"
 
 namespace candi::io {
@@ -21,11 +22,10 @@ struct Split {
   std::array<std::vector<uint64_t>, 8> children;  // octant bit 0: x, 1: y, 2: z
 };
 
-struct CellEntry {
-  uint32_t cell;
-  double distance;  // squared, in cells, to the cell's centre
-  uint32_t position;  // in the node's point list (its input order)
-};
+// Nodes of more points than this are split through a table of every cell (O(n), parallel cell
+// location); smaller ones sort their (cell, position) keys.
+constexpr size_t kLargeNodePoints = size_t{1} << 16;
+constexpr uint32_t kNone = 0xFFFFFFFFu;
 
 // The cube's positions of the points: (world - cube min) / cube width, in [0, 1].
 std::vector<Eigen::Vector3d> CubePositions(const uint8_t* records, size_t n, size_t length,
@@ -64,32 +64,59 @@ Split SplitNode(const CopcOctreeOptions& options, const CopcKey& key,
   const int64_t last = (int64_t{1} << level) - 1;
   const int64_t base[3] = {int64_t{key.x} << kCellBits, int64_t{key.y} << kCellBits,
                            int64_t{key.z} << kCellBits};
-  std::vector<CellEntry> entries(points.size());
-  std::vector<uint8_t> octant(points.size());
-  for (size_t j = 0; j < points.size(); ++j) {
-    uint32_t cell = 0, oct = 0;
+  // Per point: its cell (21 bits) above its position in the node (32 bits), its squared distance
+  // to the cell's centre in cells, its child octant.
+  const size_t n = points.size();
+  CANDI_CHECK(n < kNone) << "COPC node of " << n << " points";
+  std::vector<uint64_t> keys(n);
+  std::vector<double> distance(n);
+  std::vector<uint8_t> octant(n);
+  auto locate = [&](size_t j) {
+    uint64_t cell = 0;
+    uint32_t oct = 0;
     double d = 0.0;
     for (int k = 0; k < 3; ++k) {
       const double u = t[points[j]][k] * factor;
       const int64_t g = std::clamp(static_cast<int64_t>(std::floor(u)), int64_t{0}, last);
       const int64_t local = g - base[k];  // in [0, 128)
-      cell = cell << kCellBits | static_cast<uint32_t>(local);
+      cell = cell << kCellBits | static_cast<uint64_t>(local);
       oct |= static_cast<uint32_t>(local >> (kCellBits - 1)) << k;
-      d += (u - static_cast<double>(g) - 0.5) * (u - static_cast<double>(g) - 0.5);
+      const double e = u - static_cast<double>(g) - 0.5;
+      d += e * e;
     }
-    entries[j] = {cell, d, static_cast<uint32_t>(j)};
+    keys[j] = cell << 32 | j;
+    distance[j] = d;
     octant[j] = static_cast<uint8_t>(oct);
-  }
-  std::sort(entries.begin(), entries.end(), [](const CellEntry& a, const CellEntry& b) {
-    return std::tie(a.cell, a.distance, a.position) < std::tie(b.cell, b.distance, b.position);
-  });
-  std::vector<uint8_t> kept(points.size(), 0);
-  for (size_t e = 0; e < entries.size(); ++e) {
-    if (e == 0 || entries[e].cell != entries[e - 1].cell) kept[entries[e].position] = 1;
+  };
+  std::vector<uint8_t> kept(n, 0);
+  if (n > kLargeNodePoints) {
+    // One slot a cell (8 MiB): the best point so far, scanning in input order.
+    ParallelFor(size_t{0}, n, locate);
+    std::vector<uint32_t> best(size_t{1} << (3 * kCellBits), kNone);
+    for (size_t j = 0; j < n; ++j) {
+      uint32_t& b = best[keys[j] >> 32];
+      if (b == kNone || distance[j] < distance[b]) b = static_cast<uint32_t>(j);
+    }
+    for (uint32_t b : best) {
+      if (b != kNone) kept[b] = 1;
+    }
+  } else {
+    for (size_t j = 0; j < n; ++j) locate(j);
+    std::sort(keys.begin(), keys.end());
+    // In each cell's run (positions ascending), the nearest to the centre, the first on a tie.
+    for (size_t e = 0; e < n;) {
+      const uint64_t cell = keys[e] >> 32;
+      size_t best = keys[e] & 0xFFFFFFFFu;
+      for (++e; e < n && keys[e] >> 32 == cell; ++e) {
+        const size_t j = keys[e] & 0xFFFFFFFFu;
+        if (distance[j] < distance[best]) best = j;
+      }
+      kept[best] = 1;
+    }
   }
   std::array<size_t, 8> sizes{};
-  for (size_t j = 0; j < points.size(); ++j) sizes[octant[j]] += !kept[j];
-  for (size_t j = 0; j < points.size(); ++j) {
+  for (size_t j = 0; j < n; ++j) sizes[octant[j]] += !kept[j];
+  for (size_t j = 0; j < n; ++j) {
     const bool small = sizes[octant[j]] < static_cast<size_t>(options.min_octant_points);
     (kept[j] || small ? s.kept : s.children[octant[j]]).push_back(points[j]);
   }
