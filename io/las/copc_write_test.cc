@@ -259,6 +259,12 @@ void ExpectRecords(const TempDir& dir, const CopcFile& f, const std::string& cop
   WritePointCloud(dir.File("back.las"), ReadPointCloud(copc));
   EXPECT_TRUE(Sorted(LasPointRecords(ReadBytes(dir.File("back.las"))), length) == expected)
       << "COPC -> LAS";
+  // The LAS file does not claim to be COPC: the source's copc records are not carried over.
+  BinaryFile back(dir.File("back.las"));
+  const LasHeader header = ReadLasHeader(&back);
+  for (const std::vector<LasVlr>& records : {ReadLasVlrs(&back, header), ReadLasEvlrs(&back, header)}) {
+    for (const LasVlr& v : records) EXPECT_NE(v.user_id, kCopcUserId);
+  }
 }
 
 TEST(CopcWrite, LegacyFormatsBecome6And7AsPdalDoes) {

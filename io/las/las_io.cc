@@ -648,7 +648,9 @@ void LasWriter::SplitVlrs() {
   const bool v14 = header_.version_minor >= 4;
   for (const LasVlr& vlr : spec_.meta.las.vlrs) {
     if (IsLasExtraBytesVlr(vlr)) continue;  // replaced by this file's own
-    if (copc_ && vlr.user_id == kCopcUserId) continue;  // the source's octree, replaced
+    // A COPC source's octree describes its own point data: replaced in COPC, dropped otherwise
+    // (a stale info VLR first would make readers take the file for COPC).
+    if (vlr.user_id == kCopcUserId) continue;
     LasVlr copy = vlr;
     const bool fits = vlr.data.size() <= 65535;
     copy.extended = v14 && (vlr.extended || !fits);
