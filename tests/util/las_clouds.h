@@ -3,9 +3,14 @@
 // extra-bytes fields, with the write options that keep its records exact.
 #pragma once
 
+#include <tbb/task_arena.h>
+
+#include <array>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "core/binary_file.h"
@@ -13,6 +18,8 @@
 #include "io/las/las_header.h"
 #include "io/las/las_io.h"
 #include "io/point_file.h"
+#include "io/point_io.h"
+#include "tests/util/test_util.h"
 
 namespace candi::testing {
 
@@ -165,6 +172,35 @@ inline io::PointWriteOptions OptionsFor(int format) {
   options.las_scale = Eigen::Vector3d::Constant(0.001);
   options.las_offset = Eigen::Vector3d(500000.0, 4500000.0, 0.0);
   return options;
+}
+
+// The bytes of `cloud` written to dir/one<ext> on one thread and to dir/two<ext> on two, with
+// the creation day and year (bytes 90-93) zeroed: the runs may straddle midnight.
+inline std::array<std::string, 2> WrittenOnOneAndTwoThreads(const TempDir& dir,
+                                                           const std::string& ext,
+                                                           const PointCloud& cloud,
+                                                           const io::PointWriteOptions& options) {
+  std::array<std::string, 2> bytes;
+  for (int threads : {1, 2}) {
+    const std::string path = dir.File((threads == 1 ? "one" : "two") + ext);
+    tbb::task_arena(threads).execute([&] { io::WritePointCloud(path, cloud, options); });
+    bytes[threads - 1] = ReadBytes(path);
+    bytes[threads - 1].replace(90, 4, 4, '\0');
+  }
+  return bytes;
+}
+
+// True when a writer of dir/name destroyed after Write() and before Close() (an exception, an
+// interrupt) leaves nothing in dir.
+inline bool InterruptedWriteLeavesNothing(const TempDir& dir, const std::string& name,
+                                          const PointCloud& cloud,
+                                          const io::PointWriteOptions& options) {
+  {
+    auto writer = io::OpenPointWriter(
+        dir.File(name), {cloud.schema, cloud.frame, cloud.meta, cloud.size()}, options);
+    writer->Write(cloud);
+  }
+  return std::filesystem::is_empty(dir.path());
 }
 
 }  // namespace candi::testing
