@@ -85,8 +85,8 @@ std::vector<CopcEntry> ParseCopcHierarchy(const std::string& page) {
   return entries;
 }
 
-CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records,
-                              size_t record_length, const laz::Vlr& vlr, uint64_t first_chunk,
+CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
+                              const laz::Vlr& vlr, uint64_t first_chunk,
                               const std::function<void(const uint8_t*, size_t)>& sink) {
   CANDI_CHECK(vlr.compressor == laz::kLayeredChunked &&
               record_length == static_cast<size_t>(vlr.record_length()))
@@ -105,8 +105,8 @@ CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records,
                     record_length);
       }
       chunks[j].clear();
-      laz::EncodeLayeredChunk(vlr.items, gathered.data(),
-                              static_cast<uint32_t>(node.points.size()), &chunks[j]);
+      laz::EncodeLayeredChunk(vlr.items, gathered.data(), static_cast<uint32_t>(node.points.size()),
+                              &chunks[j]);
     });
     for (size_t j = 0; j < count; ++j) {
       const CopcNode& node = tree.nodes[first + j];

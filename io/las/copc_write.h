@@ -31,8 +31,8 @@ struct CopcInfo {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // of the octree's cube, world
   double halfsize = 0.0;                             // half the cube's width
   double spacing = 0.0;                              // root node's point spacing
-  uint64_t root_hier_offset = 0;  // file offset of the root hierarchy page
-  uint64_t root_hier_size = 0;    // its bytes
+  uint64_t root_hier_offset = 0;                     // file offset of the root hierarchy page
+  uint64_t root_hier_size = 0;                       // its bytes
   double gpstime_minimum = 0.0, gpstime_maximum = 0.0;
 };
 std::string EncodeCopcInfo(const CopcInfo& info);  // 160 bytes, the reserved ones zero
@@ -40,12 +40,12 @@ CopcInfo ParseCopcInfo(const std::string& data);   // CANDI_CHECK: 160 bytes
 
 struct CopcEntry {
   CopcKey key;
-  uint64_t offset = 0;     // file offset of the node's chunk (of a child page when points = -1)
-  int32_t bytes = 0;       // its size
-  int32_t points = 0;      // points in the chunk; -1: a child hierarchy page
+  uint64_t offset = 0;  // file offset of the node's chunk (of a child page when points = -1)
+  int32_t bytes = 0;    // its size
+  int32_t points = 0;   // points in the chunk; -1: a child hierarchy page
 };
 std::string EncodeCopcHierarchy(const std::vector<CopcEntry>& entries);  // 32 bytes an entry
-std::vector<CopcEntry> ParseCopcHierarchy(const std::string& page);    // CANDI_CHECK: k * 32
+std::vector<CopcEntry> ParseCopcHierarchy(const std::string& page);      // CANDI_CHECK: k * 32
 
 struct CopcPointData {
   std::vector<CopcEntry> entries;    // one a node, in tree.nodes' order
@@ -54,8 +54,8 @@ struct CopcPointData {
 // Compresses each node's records (gathered from `records`, record_length bytes each) into one
 // chunk with the items of `vlr` (layered), handing the chunks in node order to `sink`; the
 // first chunk starts at file offset `first_chunk`.
-CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records,
-                              size_t record_length, const laz::Vlr& vlr, uint64_t first_chunk,
+CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
+                              const laz::Vlr& vlr, uint64_t first_chunk,
                               const std::function<void(const uint8_t*, size_t)>& sink);
 
 }  // namespace candi::io

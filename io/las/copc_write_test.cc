@@ -131,12 +131,14 @@ CopcFile RoundTrip(const TempDir& dir, const PointCloud& cloud, int format) {
   const std::vector<std::string> source =
       Sorted(LasPointRecords(ReadBytes(dir.File("a.las"))), f.header.record_length);
   EXPECT_TRUE(Sorted(AllNodeRecords(f, InOrder(f.entries.size())), f.header.record_length) ==
-              source) << "the nodes' records";
+              source)
+      << "the nodes' records";
   // candi's LAS reader reads it as a LAZ file (through the chunk table).
   EXPECT_TRUE(Sorted(util::LazRecords(dir.File("b.copc.laz")), f.header.record_length) == source);
   WritePointCloud(dir.File("c.las"), ReadPointCloud(dir.File("b.copc.laz")));
   EXPECT_TRUE(Sorted(LasPointRecords(ReadBytes(dir.File("c.las"))), f.header.record_length) ==
-              source) << "COPC -> LAS";
+              source)
+      << "COPC -> LAS";
   return f;
 }
 
@@ -194,14 +196,16 @@ TEST(CopcWrite, EveryNodeInsideItsCubeOnePointACellSpacingHalvingPerLevel) {
     std::set<std::tuple<int64_t, int64_t, int64_t>> cells;
     for (size_t at = 0; at < records.size(); at += h.record_length) {
       Eigen::Vector3d w;
-      for (int k = 0; k < 3; ++k) w[k] = util::GetLE<int32_t>(records, at + 4 * k) * h.scale[k] + h.offset[k];
+      for (int k = 0; k < 3; ++k)
+        w[k] = util::GetLE<int32_t>(records, at + 4 * k) * h.scale[k] + h.offset[k];
       for (int k = 0; k < 3; ++k) {
         ASSERT_GE(w[k], lo[k] - 1e-6) << "level " << e.key.level;
         ASSERT_LE(w[k], lo[k] + width + 1e-6) << "level " << e.key.level;
       }
       // A point within 1 um of a cell's face may be on either side of it (rounding): skipped.
       const Eigen::Vector3d u = (w - lo) / cell;
-      const Eigen::Vector3d a = (u.array() - 1e-6 / cell).floor(), b = (u.array() + 1e-6 / cell).floor();
+      const Eigen::Vector3d a = (u.array() - 1e-6 / cell).floor(),
+                            b = (u.array() + 1e-6 / cell).floor();
       if (a != b) continue;
       const Eigen::Vector3d c = a.array().max(0.0).min(127.0);
       // Points of octants without a child node may have been kept as a small octant: only the
@@ -215,10 +219,11 @@ TEST(CopcWrite, EveryNodeInsideItsCubeOnePointACellSpacingHalvingPerLevel) {
     }
   }
   const double bytes = static_cast<double>(f.bytes.size());
-  std::printf("floor of %zu points: %zu nodes, depth %d, root spacing %.4f m, COPC %.2f bytes/point "
-              "(LAS %.1f)\n",
-              n, f.entries.size(), depth, f.info.spacing, bytes / n,
-              static_cast<double>(ReadBytes(dir.File("a.las")).size()) / n);
+  std::printf(
+      "floor of %zu points: %zu nodes, depth %d, root spacing %.4f m, COPC %.2f bytes/point "
+      "(LAS %.1f)\n",
+      n, f.entries.size(), depth, f.info.spacing, bytes / n,
+      static_cast<double>(ReadBytes(dir.File("a.las")).size()) / n);
   EXPECT_GE(depth, 2);
   EXPECT_GT(checked, n / 10) << "points checked one a cell";
 }
@@ -227,8 +232,7 @@ TEST(CopcWrite, ChunksReadInAnyOrderGiveTheSamePoints) {
   TempDir dir;
   const CopcFile f = RoundTrip(dir, FloorCloud(50000, 5), 7);
   std::vector<size_t> order = InOrder(f.entries.size());
-  const std::vector<std::string> forward =
-      Sorted(AllNodeRecords(f, order), f.header.record_length);
+  const std::vector<std::string> forward = Sorted(AllNodeRecords(f, order), f.header.record_length);
   std::reverse(order.begin(), order.end());
   EXPECT_TRUE(Sorted(AllNodeRecords(f, order), f.header.record_length) == forward);
   std::shuffle(order.begin(), order.end(), std::mt19937(3));
@@ -261,7 +265,8 @@ void ExpectRecords(const TempDir& dir, const CopcFile& f, const std::string& cop
   // The LAS file does not claim to be COPC: the source's copc records are not carried over.
   BinaryFile back(dir.File("back.las"));
   const LasHeader header = ReadLasHeader(&back);
-  for (const std::vector<LasVlr>& records : {ReadLasVlrs(&back, header), ReadLasEvlrs(&back, header)}) {
+  for (const std::vector<LasVlr>& records :
+       {ReadLasVlrs(&back, header), ReadLasEvlrs(&back, header)}) {
     for (const LasVlr& v : records) EXPECT_NE(v.user_id, kCopcUserId);
   }
 }
@@ -270,8 +275,7 @@ TEST(CopcWrite, LegacyFormatsBecome6And7AsPdalDoes) {
   for (int format : {0, 1, 2, 3}) {
     SCOPED_TRACE("point format " + std::to_string(format));
     TempDir dir;
-    WritePointCloud(dir.File("a.las"), RandomCloud(format, 20000, 40 + format),
-                    OptionsFor(format));
+    WritePointCloud(dir.File("a.las"), RandomCloud(format, 20000, 40 + format), OptionsFor(format));
     ConvertPointFile({}, dir.File("a.las"), dir.File("b.copc.laz"));
     const CopcFile f = ReadCopc(dir.File("b.copc.laz"));
     const int copc_format = format >= 2 ? 7 : 6;
@@ -319,7 +323,8 @@ TEST(CopcWrite, CopcJsReadsCandisCopc) {
   for (int format : {6, 7, 8}) {
     SCOPED_TRACE("point format " + std::to_string(format));
     TempDir dir;
-    PointCloud cloud = format == 7 ? FloorCloud(80000, 21) : RandomCloud(format, 30001, 50 + format);
+    PointCloud cloud =
+        format == 7 ? FloorCloud(80000, 21) : RandomCloud(format, 30001, 50 + format);
     WritePointCloud(dir.File("a.las"), cloud, OptionsFor(format));
     ConvertPointFile({}, dir.File("a.las"), dir.File("b.copc.laz"));
     const CopcFile f = ReadCopc(dir.File("b.copc.laz"));
@@ -367,9 +372,8 @@ TEST(CopcWrite, InfoAndHierarchyRecordsRoundTrip) {
   EXPECT_EQ(back.center, info.center);
   EXPECT_EQ(back.root_hier_offset, info.root_hier_offset);
   EXPECT_EQ(back.gpstime_maximum, info.gpstime_maximum);
-  const std::vector<CopcEntry> entries = {{{0, 0, 0, 0}, 1000, 50, 7},
-                                          {{3, 7, 1, 2}, 1050, 0, 0},
-                                          {{1, 1, 0, 1}, 99, 32, -1}};
+  const std::vector<CopcEntry> entries = {
+      {{0, 0, 0, 0}, 1000, 50, 7}, {{3, 7, 1, 2}, 1050, 0, 0}, {{1, 1, 0, 1}, 99, 32, -1}};
   const std::string page = EncodeCopcHierarchy(entries);
   ASSERT_EQ(page.size(), 96u);
   const std::vector<CopcEntry> parsed = ParseCopcHierarchy(page);

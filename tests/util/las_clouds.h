@@ -177,9 +177,9 @@ inline io::PointWriteOptions OptionsFor(int format) {
 // The bytes of `cloud` written to dir/one<ext> on one thread and to dir/two<ext> on two, with
 // the creation day and year (bytes 90-93) zeroed: the runs may straddle midnight.
 inline std::array<std::string, 2> WrittenOnOneAndTwoThreads(const TempDir& dir,
-                                                           const std::string& ext,
-                                                           const PointCloud& cloud,
-                                                           const io::PointWriteOptions& options) {
+                                                            const std::string& ext,
+                                                            const PointCloud& cloud,
+                                                            const io::PointWriteOptions& options) {
   std::array<std::string, 2> bytes;
   for (int threads : {1, 2}) {
     const std::string path = dir.File((threads == 1 ? "one" : "two") + ext);
