@@ -195,5 +195,22 @@ TEST(Cli, RealFilesReportTheirCounts) {
   EXPECT_EQ(RunCandi("info " + dxf).code, 2);
 }
 
+TEST(Cli, ConvertToALazNameWritesLaz) {
+  CANDI_REQUIRE_SHARED_DATA(autzen, "las/autzen_trim.las");
+  TempDir dir;
+  Result r = RunCandi("-q convert " + autzen + " " + dir.File("a.laz"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = RunCandi("info " + dir.File("a.laz"));
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("LAZ: LAS 1.2 point format 3, LASzip 3.4r3, pointwise chunked"),
+            std::string::npos)
+      << r.output;
+  r = RunCandi("-q info --json " + dir.File("a.laz"));
+  EXPECT_EQ(nlohmann::json::parse(r.out)["points"], 110000);
+  r = RunCandi("-q convert " + autzen + " /proc/candi_cli_test.laz");  // nowhere to write
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_FALSE(FileExists("/proc/candi_cli_test.laz"));
+}
+
 }  // namespace
 }  // namespace candi::testing

@@ -220,6 +220,42 @@ TEST(LazChunk, ArbitraryBytesRoundTrip) {
   }
 }
 
+TEST(LazChunkWriter, PiecesAndBatchesDoNotChangeTheBytes) {
+  // 10 chunks (two batches of LazChunkWriter::kBatchChunks = 8, the last chunk short), added at
+  // once or in odd pieces: the same chunks, each the chunk encoder's bytes for its records.
+  const uint32_t n = 8 * 50000 + 50000 + 123;
+  const std::vector<uint8_t> records = ScanLikeRecords(1, 2, n, 9);
+  const laz::Vlr vlr = laz::WriterVlr(1, 2, 50000);
+  const size_t length = vlr.record_length();
+  auto write = [&](size_t piece) {
+    std::vector<uint8_t> out;
+    LazChunkWriter writer(vlr, length, [&](const uint8_t* data, size_t size) {
+      out.insert(out.end(), data, data + size);
+    });
+    for (size_t first = 0; first < n; first += piece) {
+      writer.Add(records.data() + first * length, std::min<size_t>(piece, n - first));
+    }
+    const std::vector<uint8_t> table = writer.Finish();
+    out.insert(out.end(), table.begin(), table.end());
+    return out;
+  };
+  const std::vector<uint8_t> whole = write(n);
+  EXPECT_TRUE(write(777) == whole);
+  EXPECT_TRUE(write(50000) == whole);
+  std::vector<uint8_t> expected;
+  std::vector<uint32_t> sizes;
+  for (uint32_t first = 0; first < n; first += 50000) {
+    const uint32_t count = std::min<uint32_t>(50000, n - first);
+    const std::vector<uint8_t> chunk = EncodeChunk(vlr, records.data() + first * length, count);
+    expected.insert(expected.end(), chunk.begin(), chunk.end());
+    sizes.push_back(static_cast<uint32_t>(chunk.size()));
+  }
+  EXPECT_EQ(sizes.size(), 10u);
+  const std::vector<uint8_t> table = EncodeLazChunkTable(sizes);
+  expected.insert(expected.end(), table.begin(), table.end());
+  EXPECT_TRUE(whole == expected);
+}
+
 // ---- Chunks of files written by LASzip, re-encoded ----
 
 struct ReencodeResult {
