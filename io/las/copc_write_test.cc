@@ -285,6 +285,35 @@ TEST(CopcWrite, LegacyFormatsBecome6And7AsPdalDoes) {
   }
 }
 
+// The COPC's CRS against its source's: the same WKT, or for GeoTIFF keys ("EPSG:n[+v]") the WKT
+// of that code, with no GeoTIFF record left (LAS 1.4 formats 6-8 state the CRS as WKT only).
+void ExpectSameCrs(const std::string& crs, const std::string& copc_crs, const CopcFile& f) {
+  if (crs.rfind("EPSG:", 0) != 0) {
+    EXPECT_EQ(copc_crs, crs);
+    return;
+  }
+  const std::string code = crs.substr(5, crs.find_first_not_of("0123456789", 5) - 5);
+  EXPECT_NE(copc_crs.find("\"EPSG\",\"" + code + "\""), std::string::npos)
+      << crs << " -> " << copc_crs;
+  for (const LasVlr& v : f.vlrs) {
+    EXPECT_FALSE(v.user_id == "LASF_Projection" && v.record_id >= 34735 && v.record_id <= 34737);
+  }
+  EXPECT_TRUE(f.header.global_encoding & 0x10) << "the WKT bit";
+}
+
+TEST(CopcWrite, GeoTiffKeysBecomeWkt) {
+  // 1815.las states NAD83(2011) / Texas Centric Lambert + NAVD88 in GeoTIFF keys.
+  TempDir dir;
+  const std::string source = util::SourceDir() + "/tests/data/laz/1815.las";
+  ConvertPointFile({}, source, dir.File("b.copc.laz"));
+  const CopcFile f = ReadCopc(dir.File("b.copc.laz"));
+  ExpectCopcLayout(f, 6);  // from format 1
+  const std::string crs = OpenPointReader(source)->info().meta.crs;
+  ASSERT_EQ(crs.rfind("EPSG:", 0), 0u) << crs;
+  ExpectSameCrs(crs, OpenPointReader(dir.File("b.copc.laz"))->info().meta.crs, f);
+  ExpectRecords(dir, f, dir.File("b.copc.laz"), RecordsAsFormat(dir, source, 6));
+}
+
 TEST(CopcWrite, SharedLasFilesKeepEveryRecordAndTheirCrs) {
   for (const char* name :
        {"las/simple.las", "las/autzen_trim.las", "las/simple1_4.las", "las/1_4_w_evlr.las"}) {
@@ -297,8 +326,11 @@ TEST(CopcWrite, SharedLasFilesKeepEveryRecordAndTheirCrs) {
     ExpectCopcLayout(f, format);
     // Formats 6-8 keep their records; 0-3 are those of candi's LAS 1.4 rewrite as 6 or 7.
     ExpectRecords(dir, f, dir.File("b.copc.laz"), RecordsAsFormat(dir, path, format));
-    EXPECT_EQ(OpenPointReader(dir.File("b.copc.laz"))->info().meta.crs,
-              OpenPointReader(path)->info().meta.crs);
+    // The CRS, as WKT: GeoTIFF keys ("EPSG:n") become the WKT of that code.
+    const std::string crs = OpenPointReader(path)->info().meta.crs;
+    const std::string copc_crs = OpenPointReader(dir.File("b.copc.laz"))->info().meta.crs;
+    ExpectSameCrs(crs, copc_crs, f);
+    std::printf("%s: CRS %s\n", name, crs.substr(0, 40).c_str());
     std::printf("%s: %llu points, %zu nodes\n", name,
                 static_cast<unsigned long long>(LasPointCount(f.header)), f.entries.size());
   }

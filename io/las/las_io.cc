@@ -433,6 +433,11 @@ LasFormatChoice ChooseLasFormat(const PointWriteSpec& spec, const PointWriteOpti
 
 // ---- Writer ----
 
+// A GeoTIFF-key projection record (LASF_Projection 34735-34737).
+bool IsGeoTiffKeyRecord(const LasVlr& vlr) {
+  return vlr.user_id == "LASF_Projection" && vlr.record_id >= 34735 && vlr.record_id <= 34737;
+}
+
 // The offset of the chunk table at the start of the point data, then the table.
 void WriteChunkTable(AtomicFile* file, uint64_t point_data, const std::vector<uint8_t>& table) {
   uint8_t offset[8];
@@ -651,6 +656,8 @@ void LasWriter::SplitVlrs() {
     // A COPC source's octree describes its own point data: replaced in COPC, dropped otherwise
     // (a stale info VLR first would make readers take the file for COPC).
     if (vlr.user_id == kCopcUserId) continue;
+    // COPC is LAS 1.4 format 6-8, whose CRS is WKT only: GeoTIFF keys give way to AddCrsVlr's.
+    if (copc_ && IsGeoTiffKeyRecord(vlr)) continue;
     LasVlr copy = vlr;
     const bool fits = vlr.data.size() <= 65535;
     copy.extended = v14 && (vlr.extended || !fits);
@@ -689,7 +696,18 @@ void LasWriter::SplitVlrs() {
 // into the LAS file as a WKT record; records kept from a LAS source already state it.
 void LasWriter::AddCrsVlr() {
   const std::string& crs = spec_.meta.crs;
-  if (crs.empty() || HasLasCrsRecord(spec_.meta.las.vlrs)) return;
+  const bool stated = copc_ ? HasLasCrsRecord(vlrs_) || HasLasCrsRecord(evlrs_)
+                            : HasLasCrsRecord(spec_.meta.las.vlrs);
+  if (stated) return;
+  if (crs.empty()) {
+    const bool dropped = copc_ && std::any_of(spec_.meta.las.vlrs.begin(),
+                                              spec_.meta.las.vlrs.end(), IsGeoTiffKeyRecord);
+    if (dropped) {
+      LogWarning(path_ + ": the source's GeoTIFF keys name no CRS PROJ knows; the COPC file, "
+                         "which states its CRS as WKT, states none");
+    }
+    return;
+  }
   std::string wkt;
   try {
     wkt = CrsAsWkt1(crs, path_);
