@@ -8,9 +8,10 @@
 // >= 3 M points/s a core): the Autzen points (real lidar, format 3) written 10 times and the
 // synthetic cloud once, as .laz on 1 and 2 threads; the label gives the bytes a point against
 // LAS, and the encoder alone compresses LAS records into chunks. Set CANDI_BENCH_POINTS to change
-// the size.
+// the size. COPC writing (issue 38): the same clouds as .copc.laz, with the octree's size.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -21,6 +22,7 @@
 
 #include "core/binary_file.h"
 #include "core/rng.h"
+#include "io/las/copc_write.h"
 #include "io/las/las_header.h"
 #include "io/las/laz_chunks.h"
 #include "io/las/laz_format.h"
@@ -134,9 +136,11 @@ void BM_ReadLaz(benchmark::State& state) {
                  description.substr(0, description.find(',')) + "]");
 }
 
-// range(0) = 0: ../shared/data/las/autzen_trim.las written 10 times; 1: the synthetic double
-// cloud (LAS format 3 with colour) once. range(1): threads.
-void BM_WriteLaz(benchmark::State& state) {
+// Writes the cloud of range(0) (0: ../shared/data/las/autzen_trim.las, 10 times; 1: the
+// synthetic double cloud, once) to Dir()/write<ext> on range(1) threads; the label gives the
+// bytes a point against LAS, and `tree` of the file when set.
+void WriteBench(benchmark::State& state, const std::string& ext, const char* name,
+                std::string (*tree)(const std::string&)) {
   PointCloud autzen;
   const bool real = state.range(0) == 0;
   if (real) {
@@ -150,19 +154,24 @@ void BM_WriteLaz(benchmark::State& state) {
   const PointCloud& cloud = real ? autzen : Cloud(ScalarType::kFloat64);
   const int repeat = real ? 10 : 1;
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(1));
-  const std::string laz = Dir() + "/write.laz", las = Dir() + "/write.las";
+  const std::string out = Dir() + "/write" + ext, las = Dir() + "/write.las";
   for (auto _ : state) {
-    for (int r = 0; r < repeat; ++r) io::WritePointCloud(laz, cloud);
+    for (int r = 0; r < repeat; ++r) io::WritePointCloud(out, cloud);
   }
   state.SetItemsProcessed(state.iterations() * repeat * cloud.size());
   io::WritePointCloud(las, cloud);
   const double n = static_cast<double>(cloud.size());
-  char label[160];
-  std::snprintf(label, sizeof label, "%s, %d thread(s): LAZ %.2f bytes/point, LAS %.2f",
-                real ? "autzen_trim" : "synthetic", static_cast<int>(state.range(1)),
-                std::filesystem::file_size(laz) / n, std::filesystem::file_size(las) / n);
+  char label[200];
+  std::snprintf(label, sizeof label, "%s, %d thread(s): %s %.2f bytes/point, LAS %.2f%s%s",
+                real ? "autzen_trim" : "synthetic", static_cast<int>(state.range(1)), name,
+                std::filesystem::file_size(out) / n, std::filesystem::file_size(las) / n,
+                tree ? "; " : "", tree ? tree(out).c_str() : "");
   state.SetLabel(label);
 }
+
+// range(0) = 0: ../shared/data/las/autzen_trim.las written 10 times; 1: the synthetic double
+// cloud (LAS format 3 with colour) once. range(1): threads.
+void BM_WriteLaz(benchmark::State& state) { WriteBench(state, ".laz", "LAZ", nullptr); }
 
 // The encoder alone: LAS records (read from a LAS file's bytes) compressed into LAZ chunks, the
 // chunks dropped. range(0) = 0: autzen_trim.las (format 3, pointwise v2) 10 times; 1: the
@@ -207,6 +216,24 @@ void BM_CompressLaz(benchmark::State& state) {
   state.SetLabel(label);
 }
 
+// The nodes and depth of a COPC file's hierarchy (its root page holds every node).
+std::string CopcTree(const std::string& path) {
+  BinaryFile file(path);
+  const io::LasHeader header = io::ReadLasHeader(&file);
+  const io::CopcInfo info = io::ParseCopcInfo(io::ReadLasVlrs(&file, header).front().data);
+  std::string page(info.root_hier_size, '\0');
+  file.ReadAt(info.root_hier_offset, page.data(), page.size());
+  int depth = 0;
+  const std::vector<io::CopcEntry> entries = io::ParseCopcHierarchy(page);
+  for (const io::CopcEntry& e : entries) depth = std::max(depth, e.key.level);
+  return std::to_string(entries.size()) + " nodes, depth " + std::to_string(depth);
+}
+
+// COPC writing (issue 38, target >= 5 M points/s on 2 cores for 10^8 points): range(0) = 0: the
+// Autzen points written 10 times; 1: the synthetic cloud (uniform in 100 x 100 x 30 m, format 7)
+// once, as .copc.laz. range(1): threads. The label gives bytes a point against LAS, and the tree.
+void BM_WriteCopc(benchmark::State& state) { WriteBench(state, ".copc.laz", "COPC", CopcTree); }
+
 BENCHMARK(BM_Write)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(5)->ReportAggregatesOnly(true)->Iterations(1);
 BENCHMARK(BM_Read)->ArgsProduct({{0, 1, 2, 3, 4}, {0}})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime()
@@ -216,6 +243,8 @@ BENCHMARK(BM_ReadLaz)->ArgsProduct({{0, 1}, {1, 2}, {0, 1}})->Unit(benchmark::kM
 BENCHMARK(BM_CompressLaz)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(3)->ReportAggregatesOnly(true)->Iterations(1);
 BENCHMARK(BM_WriteLaz)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime()
+    ->Repetitions(3)->ReportAggregatesOnly(true)->Iterations(1);
+BENCHMARK(BM_WriteCopc)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime()
     ->Repetitions(3)->ReportAggregatesOnly(true)->Iterations(1);
 
 }  // namespace

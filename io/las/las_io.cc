@@ -18,6 +18,8 @@
 #include "io/las/las_columns.h"
 #include "io/las/las_crs.h"
 #include "io/las/las_header.h"
+#include "io/las/copc_octree.h"
+#include "io/las/copc_write.h"
 #include "io/las/laz_chunks.h"
 #include "io/las/laz_format.h"
 
@@ -431,6 +433,19 @@ LasFormatChoice ChooseLasFormat(const PointWriteSpec& spec, const PointWriteOpti
 
 // ---- Writer ----
 
+// A GeoTIFF-key projection record (LASF_Projection 34735-34737).
+bool IsGeoTiffKeyRecord(const LasVlr& vlr) {
+  return vlr.user_id == "LASF_Projection" && vlr.record_id >= 34735 && vlr.record_id <= 34737;
+}
+
+// The offset of the chunk table at the start of the point data, then the table.
+void WriteChunkTable(AtomicFile* file, uint64_t point_data, const std::vector<uint8_t>& table) {
+  uint8_t offset[8];
+  StoreLE<uint64_t>(offset, file->Tell());
+  file->Write(table.data(), table.size());
+  file->WriteAt(point_data, offset, 8);
+}
+
 class LasWriter : public PointWriter {
  public:
   LasWriter(const std::string& path, const PointWriteSpec& spec, const PointWriteOptions& options);
@@ -451,6 +466,8 @@ class LasWriter : public PointWriter {
   [[noreturn]] void ThrowOutOfRange(const PointCloud& chunk, size_t i) const;
   void CountReturns(const uint8_t* records, size_t n);
   Box3d WrittenBounds() const;
+  void WriteLazPointData();
+  void WriteCopcPointData();
 
   std::string path_;
   PointWriteSpec spec_;
@@ -464,6 +481,9 @@ class LasWriter : public PointWriter {
   std::array<int32_t, 3> min_, max_;
   std::array<uint64_t, 15> by_return_{};
   std::vector<uint8_t> buffer_;
+  // COPC (a .copc.laz name): every record is held until Close() builds the octree.
+  bool copc_ = false;
+  std::vector<uint8_t> copc_records_;
   std::unique_ptr<AtomicFile> file_;  // created last: a rejected spec creates nothing
   // LAZ (a .laz name): the records go through the chunk writer; the point data starts with the
   // chunk table's offset, patched by Close().
@@ -472,20 +492,30 @@ class LasWriter : public PointWriter {
   bool failed_ = false, closed_ = false;
 };
 
-bool IsLazPath(const std::string& path) {
-  if (path.size() < 4) return false;
-  std::string ext = path.substr(path.size() - 4);
+bool EndsWith(const std::string& path, const std::string& suffix) {
+  if (path.size() < suffix.size()) return false;
+  std::string ext = path.substr(path.size() - suffix.size());
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext == ".laz";
+  return ext == suffix;
+}
+
+bool IsLazPath(const std::string& path) { return EndsWith(path, ".laz"); }
+
+// COPC holds LAS 1.4 formats 6-8 only; 0-3 become 6 or 7 as PDAL's writers.copc converts them.
+LasFormatChoice CopcChoice(LasFormatChoice c) {
+  c.version_minor = 4;
+  if (c.format < 6) c.format = c.format >= 2 ? 7 : 6;
+  return c;
 }
 
 LasWriter::LasWriter(const std::string& path, const PointWriteSpec& spec,
                      const PointWriteOptions& options)
-    : path_(path), spec_(spec), compressed_(IsLazPath(path)) {
+    : path_(path), spec_(spec), copc_(EndsWith(path, ".copc.laz")), compressed_(IsLazPath(path)) {
   min_.fill(std::numeric_limits<int32_t>::max());
   max_.fill(std::numeric_limits<int32_t>::min());
-  InitHeader(ChooseLasFormat(spec, options), options);
+  const LasFormatChoice choice = ChooseLasFormat(spec, options);
+  InitHeader(copc_ ? CopcChoice(choice) : choice, options);
   BuildColumns();
   SplitVlrs();
   file_ = std::make_unique<AtomicFile>(path);
@@ -623,6 +653,11 @@ void LasWriter::SplitVlrs() {
   const bool v14 = header_.version_minor >= 4;
   for (const LasVlr& vlr : spec_.meta.las.vlrs) {
     if (IsLasExtraBytesVlr(vlr)) continue;  // replaced by this file's own
+    // A COPC source's octree describes its own point data: replaced in COPC, dropped otherwise
+    // (a stale info VLR first would make readers take the file for COPC).
+    if (vlr.user_id == kCopcUserId) continue;
+    // COPC is LAS 1.4 format 6-8, whose CRS is WKT only: GeoTIFF keys give way to AddCrsVlr's.
+    if (copc_ && IsGeoTiffKeyRecord(vlr)) continue;
     LasVlr copy = vlr;
     const bool fits = vlr.data.size() <= 65535;
     copy.extended = v14 && (vlr.extended || !fits);
@@ -641,11 +676,16 @@ void LasWriter::SplitVlrs() {
     vlrs_.push_back({"LASF_Spec", 4, "Extra Bytes", EncodeLasExtraBytes(extra_), false});
   }
   AddCrsVlr();
+  if (copc_) {  // the info VLR first, as COPC requires; Close() fills it in
+    vlrs_.insert(vlrs_.begin(),
+                 LasVlr{kCopcUserId, kCopcInfoRecord, "COPC info", EncodeCopcInfo({}), false});
+  }
   if (compressed_) {  // last, as LASzip writes it
     const laz::Vlr vlr = laz::WriterVlr(header_.point_format,
                                         header_.record_length - layout_.record_size,
-                                        kLazChunkPoints);
+                                        copc_ ? laz::kVariableChunkSize : kLazChunkPoints);
     vlrs_.push_back({"laszip encoded", 22204, "laszip", laz::EncodeVlr(vlr), false});
+    if (copc_) return;  // Close() compresses the octree's nodes
     laz_ = std::make_unique<LazChunkWriter>(
         vlr, header_.record_length,
         [this](const uint8_t* data, size_t size) { file_->Write(data, size); });
@@ -656,7 +696,18 @@ void LasWriter::SplitVlrs() {
 // into the LAS file as a WKT record; records kept from a LAS source already state it.
 void LasWriter::AddCrsVlr() {
   const std::string& crs = spec_.meta.crs;
-  if (crs.empty() || HasLasCrsRecord(spec_.meta.las.vlrs)) return;
+  const bool stated = copc_ ? HasLasCrsRecord(vlrs_) || HasLasCrsRecord(evlrs_)
+                            : HasLasCrsRecord(spec_.meta.las.vlrs);
+  if (stated) return;
+  if (crs.empty()) {
+    const bool dropped = copc_ && std::any_of(spec_.meta.las.vlrs.begin(),
+                                              spec_.meta.las.vlrs.end(), IsGeoTiffKeyRecord);
+    if (dropped) {
+      LogWarning(path_ + ": the source's GeoTIFF keys name no CRS PROJ knows; the COPC file, "
+                         "which states its CRS as WKT, states none");
+    }
+    return;
+  }
   std::string wkt;
   try {
     wkt = CrsAsWkt1(crs, path_);
@@ -686,6 +737,9 @@ void LasWriter::WriteHeaderAndVlrs() {
   }
   header_.number_of_vlrs = static_cast<uint32_t>(vlrs_.size());
   header_.offset_to_point_data = static_cast<uint32_t>(point_offset);
+  if (spec_.count != kUnknownCount && copc_) {
+    copc_records_.reserve(spec_.count * header_.record_length);
+  }
   if (spec_.count != kUnknownCount && !compressed_) {
     file_->Reserve(point_offset + spec_.count * header_.record_length);
   }
@@ -721,7 +775,9 @@ void LasWriter::Write(const PointCloud& chunk) {
   for (size_t first = 0; first < n; first += kBlockRecords) {
     const size_t block = std::min(kBlockRecords, n - first);
     EncodeBlock(chunk, first, block, buffer_.data());
-    if (laz_) {
+    if (copc_) {
+      copc_records_.insert(copc_records_.end(), buffer_.data(), buffer_.data() + block * length);
+    } else if (laz_) {
       laz_->Add(buffer_.data(), block);
     } else {
       file_->Write(buffer_.data(), block * length);
@@ -799,12 +855,10 @@ void LasWriter::Close() {
                          "; write LAS 1.4");
   }
   header_.bounds = WrittenBounds();
-  if (laz_) {
-    const std::vector<uint8_t> table = laz_->Finish();
-    uint8_t offset[8];
-    StoreLE<uint64_t>(offset, file_->Tell());
-    file_->Write(table.data(), table.size());
-    file_->WriteAt(header_.offset_to_point_data, offset, 8);
+  if (copc_) {
+    WriteCopcPointData();
+  } else if (laz_) {
+    WriteLazPointData();
   }
   if (!evlrs_.empty()) {
     header_.start_of_first_evlr = file_->Tell();
@@ -814,6 +868,42 @@ void LasWriter::Close() {
   const std::string header = EncodedHeader();
   file_->WriteAt(0, header.data(), header.size());
   file_->Commit();
+}
+
+void LasWriter::WriteLazPointData() {
+  WriteChunkTable(file_.get(), header_.offset_to_point_data, laz_->Finish());
+}
+
+// The octree's nodes as chunks, the chunk table, then the hierarchy as the first EVLR (one page)
+// and the info VLR completed in place.
+void LasWriter::WriteCopcPointData() {
+  const size_t length = header_.record_length;
+  const size_t n = copc_records_.size() / length;
+  const CopcOctree tree =
+      BuildCopcOctree({}, copc_records_.data(), n, length, header_.scale, header_.offset);
+  const laz::Vlr vlr = laz::ParseVlr(vlrs_.back().data);
+  const CopcPointData data = WriteCopcChunks(
+      tree, copc_records_.data(), length, vlr, file_->Tell(),
+      [this](const uint8_t* bytes, size_t size) { file_->Write(bytes, size); });
+  WriteChunkTable(file_.get(), header_.offset_to_point_data, data.chunk_table);
+  CopcInfo info;
+  info.center = tree.center;
+  info.halfsize = tree.halfsize;
+  info.spacing = tree.spacing;
+  const std::string page = EncodeCopcHierarchy(data.entries);
+  info.root_hier_offset = file_->Tell() + 60;  // the EVLRs start here, the hierarchy first
+  info.root_hier_size = page.size();
+  for (size_t i = 0; i < n; ++i) {
+    double t;
+    std::memcpy(&t, copc_records_.data() + i * length + layout_.gps_offset, 8);
+    info.gpstime_minimum = i == 0 ? t : std::min(info.gpstime_minimum, t);
+    info.gpstime_maximum = i == 0 ? t : std::max(info.gpstime_maximum, t);
+  }
+  const std::string encoded = EncodeCopcInfo(info);
+  file_->WriteAt(header_.header_size + 54, encoded.data(), encoded.size());
+  evlrs_.insert(evlrs_.begin(),
+                LasVlr{kCopcUserId, kCopcHierarchyRecord, "EPT hierarchy", page, true});
+  std::vector<uint8_t>().swap(copc_records_);
 }
 
 }  // namespace

@@ -18,6 +18,12 @@
 // Writing to a .laz name writes LAZ as LASzip 3.4 does (point-format bit 7, the laszip VLR last,
 // 50,000-point chunks with the chunk table, compressed in parallel; io/las/laz_chunks.h), with
 // the same header, VLRs and records as the LAS file the name .las would give.
+// A name ending in .copc.laz writes COPC 1.0 (https://copc.io): LAS 1.4 with point format 6-8
+// (formats 0-3 become 6 or 7, as PDAL's writers.copc does), the "copc" info VLR first, the octree
+// of io/las/copc_octree.h with each node one variable-size layered LAZ chunk, and the hierarchy
+// EVLR (io/las/copc_write.h); the source's "copc" records are dropped, and GeoTIFF-key CRS
+// records give way to a WKT record of the CRS they name (formats 6-8 allow only WKT). Its
+// records are held in memory until Close() (record_length bytes a point).
 //
 // Reading: the whole header, VLRs and EVLRs are parsed and validated at open (a truncated file,
 // bad signature, unsupported point format, short record length or zero scale throws InputError

@@ -227,7 +227,10 @@ void LazPointData::DecodeRun(size_t first, size_t count) {
 
 // ---- Writing ----
 
-std::vector<uint8_t> EncodeLazChunkTable(const std::vector<uint32_t>& chunk_bytes) {
+std::vector<uint8_t> EncodeLazChunkTable(const std::vector<uint32_t>& chunk_bytes,
+                                         const std::vector<uint32_t>& chunk_points) {
+  CANDI_CHECK(chunk_points.empty() || chunk_points.size() == chunk_bytes.size())
+      << chunk_points.size() << " chunk point counts for " << chunk_bytes.size() << " chunks";
   std::vector<uint8_t> table(8, 0);
   StoreLE<uint32_t>(table.data() + 4, static_cast<uint32_t>(chunk_bytes.size()));
   if (chunk_bytes.empty()) return table;
@@ -235,6 +238,10 @@ std::vector<uint8_t> EncodeLazChunkTable(const std::vector<uint32_t>& chunk_byte
   laz::IntegerCoder ic(32, 2);
   ic.Init();
   for (size_t i = 0; i < chunk_bytes.size(); ++i) {
+    if (!chunk_points.empty()) {
+      ic.Compress(&encoder, static_cast<int32_t>(i ? chunk_points[i - 1] : 0),
+                  static_cast<int32_t>(chunk_points[i]), 0);
+    }
     ic.Compress(&encoder, static_cast<int32_t>(i ? chunk_bytes[i - 1] : 0),
                 static_cast<int32_t>(chunk_bytes[i]), 1);
   }

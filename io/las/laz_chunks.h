@@ -90,8 +90,10 @@ class LazChunkWriter {
   std::vector<uint32_t> chunk_bytes_;
 };
 
-// The chunk table for fixed-size chunks of the given byte sizes: u32 version 0, u32 count, then
-// the sizes coded on one arithmetic stream (the inverse of the reader's decoding).
-std::vector<uint8_t> EncodeLazChunkTable(const std::vector<uint32_t>& chunk_bytes);
+// The chunk table for chunks of the given byte sizes: u32 version 0, u32 count, then the sizes
+// coded on one arithmetic stream (the inverse of the reader's decoding). Variable-size chunks
+// (COPC): chunk_points gives each chunk's point count, coded before its size.
+std::vector<uint8_t> EncodeLazChunkTable(const std::vector<uint32_t>& chunk_bytes,
+                                         const std::vector<uint32_t>& chunk_points = {});
 
 }  // namespace candi::io

@@ -5,7 +5,6 @@
 // threads, an empty cloud, and no partial file on a failed write.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
-#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -27,6 +26,7 @@
 #include "io/las/laz_format.h"
 #include "io/point_io.h"
 #include "tests/util/las_bytes.h"
+#include "tests/util/las_clouds.h"
 #include "tests/util/laz_records.h"
 #include "tests/util/test_util.h"
 
@@ -35,6 +35,9 @@ namespace {
 
 namespace util = ::candi::testing;
 using util::LasPointRecords;
+using util::OptionsFor;
+using util::RandomCloud;
+using util::ScanLikeRecords;
 using util::LazRecords;
 using util::ReadBytes;
 using util::TempDir;
@@ -178,77 +181,6 @@ std::vector<uint8_t> DecodeChunk(const laz::Vlr& vlr, const std::vector<uint8_t>
   return out;
 }
 
-void Put16(uint8_t* p, uint32_t v) { StoreLE<uint16_t>(p, static_cast<uint16_t>(v)); }
-
-// LAS records of `format` with `extra` extra bytes that look like a scan: a random walk with
-// jumps, pulses of 1-5 returns sharing a GPS time, slowly changing attributes, grey and coloured
-// points, scanner channels switching now and then.
-std::vector<uint8_t> ScanLikeRecords(int format, int extra, size_t n, uint32_t seed) {
-  const LasFormatLayout layout = LasLayoutOf(format);
-  const size_t length = layout.record_size + extra;
-  std::vector<uint8_t> records(n * length, 0);
-  std::mt19937 rng(seed);
-  auto chance = [&](int percent) { return static_cast<int>(rng() % 100) < percent; };
-  int32_t x = 1000, y = -2000, z = 300;
-  double time = 245000.0;
-  uint32_t returns = 1, ret = 1, intensity = 500, cls = 2, user = 0, source = 7, channel = 0;
-  int angle = 0;
-  uint16_t rgb[4] = {1000, 2000, 3000, 4000};
-  for (size_t i = 0; i < n; ++i) {
-    uint8_t* p = records.data() + i * length;
-    x += static_cast<int32_t>(rng() % 21) - 10 + (chance(1) ? static_cast<int32_t>(rng()) : 0);
-    y += static_cast<int32_t>(rng() % 11) - 5;
-    z += static_cast<int32_t>(rng() % 41) - 20;
-    if (ret >= returns) {  // a new pulse
-      returns = 1 + rng() % (chance(20) ? 5 : 1);
-      ret = 1;
-      time += chance(2) ? 1.0e4 * (rng() % 100) : 1.0e-5 * (1 + rng() % 3);
-      if (chance(1)) time = -time;
-    } else {
-      ++ret;
-    }
-    if (chance(30)) intensity = (intensity + rng() % 200) & 0xFFFF;
-    if (chance(5)) cls = rng() % (format >= 6 ? 256 : 32);
-    if (chance(3)) user = rng() % 256;
-    if (chance(1)) source = rng() % 65536;
-    if (chance(10)) angle = static_cast<int>(rng() % 181) - 90;
-    if (chance(2)) channel = rng() % 4;
-    StoreLE<int32_t>(p, x);
-    StoreLE<int32_t>(p + 4, y);
-    StoreLE<int32_t>(p + 8, z);
-    Put16(p + 12, intensity);
-    const uint32_t flags = chance(5) ? rng() % 16 : 0;
-    const uint32_t dir = rng() % 2, edge = chance(1) ? 1 : 0;
-    if (format < 6) {
-      p[14] = static_cast<uint8_t>(ret | returns << 3 | dir << 6 | edge << 7);
-      p[15] = static_cast<uint8_t>(cls | (flags & 7) << 5);
-      p[16] = static_cast<uint8_t>(static_cast<int8_t>(angle));
-      p[17] = static_cast<uint8_t>(user);
-      Put16(p + 18, source);
-    } else {
-      p[14] = static_cast<uint8_t>(ret | returns << 4);
-      p[15] = static_cast<uint8_t>(flags | channel << 4 | dir << 6 | edge << 7);
-      p[16] = static_cast<uint8_t>(cls);
-      p[17] = static_cast<uint8_t>(user);
-      Put16(p + 18, static_cast<uint32_t>(angle * 150));
-      Put16(p + 20, source);
-    }
-    double t = time;
-    if (layout.gps_offset >= 0) std::memcpy(p + layout.gps_offset, &t, 8);
-    if (layout.color_offset >= 0) {
-      if (chance(20)) {
-        for (uint16_t& c : rgb) c = static_cast<uint16_t>(c + rng() % 512 - 256);
-      }
-      const bool grey = chance(10);
-      for (int c = 0; c < 3; ++c) Put16(p + layout.color_offset + 2 * c, grey ? rgb[0] : rgb[c]);
-      if (format == 8) Put16(p + layout.color_offset + 6, rgb[3]);
-    }
-    for (int e = 0; e < extra; ++e) {
-      p[layout.record_size + e] = static_cast<uint8_t>(e == 0 ? i : chance(10) ? rng() : 3 * e);
-    }
-  }
-  return records;
-}
 
 const int kFormats[] = {0, 1, 2, 3, 6, 7, 8};
 
@@ -397,85 +329,6 @@ TEST(LazChunk, SharedAutzenChunksAreReencodedByteForByte) {
 
 // ---- Files ----
 
-// A cloud of `n` points with every LAS attribute of `format` (from ScanLikeRecords through the
-// LAS reader) and two extra-bytes fields.
-PointCloud RandomCloud(const TempDir& dir, int format, size_t n, uint32_t seed) {
-  const LasFormatLayout layout = LasLayoutOf(format);
-  PointCloud cloud;
-  PointSchema schema;
-  schema.colors = layout.color_offset >= 0;
-  using namespace las_field;
-  schema.scalars = {{kIntensity, ScalarType::kFloat32},
-                    {kReturnNumber, ScalarType::kFloat32},
-                    {kNumberOfReturns, ScalarType::kFloat32},
-                    {kScanDirection, ScalarType::kFloat32},
-                    {kEdgeOfFlightLine, ScalarType::kFloat32},
-                    {kClassification, ScalarType::kFloat32},
-                    {kClassFlags, ScalarType::kFloat32},
-                    {kUserData, ScalarType::kFloat32},
-                    {kPointSourceId, ScalarType::kFloat32},
-                    {format >= 6 ? kScanAngle : kScanAngleRank, ScalarType::kFloat32}};
-  if (layout.gps_offset >= 0) schema.scalars.push_back({kGpsTime, ScalarType::kFloat64});
-  if (format >= 6) schema.scalars.push_back({kScannerChannel, ScalarType::kFloat32});
-  if (format == 8) schema.scalars.push_back({kNir, ScalarType::kFloat32});
-  schema.scalars.push_back({"confidence", ScalarType::kFloat32});
-  schema.scalars.push_back({"range_m", ScalarType::kFloat64});
-  cloud.SetSchema(schema);
-  cloud.frame.origin = Eigen::Vector3d(500000.0, 4500000.0, 0.0);
-  cloud.Resize(n);
-  // Attribute values from scan-like records, decoded by the writer's inverse: written by hand.
-  const std::vector<uint8_t> records = ScanLikeRecords(format, 0, n, seed);
-  const size_t length = layout.record_size;
-  std::mt19937 rng(seed);
-  for (size_t i = 0; i < n; ++i) {
-    const uint8_t* p = records.data() + i * length;
-    const Eigen::Vector3d world(500000.0 + 0.001 * LoadLE<int32_t>(p),
-                                4500000.0 + 0.001 * LoadLE<int32_t>(p + 4),
-                                0.001 * LoadLE<int32_t>(p + 8));
-    cloud.positions[i] = cloud.frame.ToLocal(world);
-    auto set = [&](const char* name, double v) { cloud.FindScalar(name)->Set(i, v); };
-    set(kIntensity, LoadLE<uint16_t>(p + 12));
-    const bool ext = format >= 6;
-    set(kReturnNumber, ext ? p[14] & 15 : p[14] & 7);
-    set(kNumberOfReturns, ext ? p[14] >> 4 : (p[14] >> 3) & 7);
-    set(kScanDirection, ext ? (p[15] >> 6) & 1 : (p[14] >> 6) & 1);
-    set(kEdgeOfFlightLine, ext ? p[15] >> 7 : p[14] >> 7);
-    set(kClassification, ext ? p[16] : p[15] & 31);
-    set(kClassFlags, ext ? p[15] & 15 : p[15] >> 5);
-    set(kUserData, p[17]);
-    set(kPointSourceId, LoadLE<uint16_t>(p + (ext ? 20 : 18)));
-    if (ext) {
-      set(kScanAngle, static_cast<int16_t>(LoadLE<uint16_t>(p + 18)));
-      set(kScannerChannel, (p[15] >> 4) & 3);
-    } else {
-      set(kScanAngleRank, static_cast<int8_t>(p[16]));
-    }
-    if (layout.gps_offset >= 0) {
-      double t;
-      std::memcpy(&t, p + layout.gps_offset, 8);
-      set(kGpsTime, t);
-    }
-    if (layout.color_offset >= 0) {
-      const uint8_t* c = p + layout.color_offset;
-      cloud.colors[i] =
-          Rgb8{static_cast<uint8_t>(c[1]), static_cast<uint8_t>(c[3]), static_cast<uint8_t>(c[5])};
-    }
-    if (format == 8) set(kNir, LoadLE<uint16_t>(p + layout.color_offset + 6));
-    set("confidence", (rng() % 1000) * 0.001);
-    set("range_m", 10.0 + (rng() % 100000) * 1e-4);
-  }
-  (void)dir;
-  return cloud;
-}
-
-PointWriteOptions OptionsFor(int format) {
-  PointWriteOptions options;
-  options.las_point_format = format;
-  options.las_version_minor = format >= 6 ? 4 : 2;
-  options.las_scale = Eigen::Vector3d::Constant(0.001);
-  options.las_offset = Eigen::Vector3d(500000.0, 4500000.0, 0.0);
-  return options;
-}
 
 // The header of a file as its LAS twin would have it: no LAZ bit, the laszip VLR and the chunk
 // table's offset not counted.
@@ -500,7 +353,7 @@ TEST(LazWrite, LasToLazToLasIsBitForBitForEveryFormat) {
   for (int format : kFormats) {
     SCOPED_TRACE("point format " + std::to_string(format));
     TempDir dir;
-    const PointCloud cloud = RandomCloud(dir, format, 120001, 1000 + format);
+    const PointCloud cloud = RandomCloud(format, 120001, 1000 + format);
     WritePointCloud(dir.File("a.las"), cloud, OptionsFor(format));
     const std::string a = ReadBytes(dir.File("a.las"));
     ASSERT_EQ(static_cast<int>(a[104]), format);
@@ -586,7 +439,7 @@ TEST(LazWrite, LazPerfReadsCandisLaz) {
   for (int format : kFormats) {
     SCOPED_TRACE("point format " + std::to_string(format));
     TempDir dir;
-    const PointCloud cloud = RandomCloud(dir, format, 60001, 77 + format);
+    const PointCloud cloud = RandomCloud(format, 60001, 77 + format);
     WritePointCloud(dir.File("a.las"), cloud, OptionsFor(format));
     WritePointCloud(dir.File("b.laz"), cloud, OptionsFor(format));
     const std::string command =
@@ -598,20 +451,15 @@ TEST(LazWrite, LazPerfReadsCandisLaz) {
 
 TEST(LazWrite, SameBytesOnOneAndTwoThreads) {
   TempDir dir;
-  const PointCloud cloud = RandomCloud(dir, 3, 450000, 5);  // 9 chunks: two batches
-  tbb::task_arena one(1), two(2);
-  one.execute([&] { WritePointCloud(dir.File("one.laz"), cloud, OptionsFor(3)); });
-  two.execute([&] { WritePointCloud(dir.File("two.laz"), cloud, OptionsFor(3)); });
-  std::string a = ReadBytes(dir.File("one.laz")), b = ReadBytes(dir.File("two.laz"));
-  a.replace(90, 4, 4, '\0');  // the creation day and year: the runs may straddle midnight
-  b.replace(90, 4, 4, '\0');
-  EXPECT_TRUE(a == b);
+  const PointCloud cloud = RandomCloud(3, 450000, 5);  // 9 chunks: two batches
+  const auto bytes = util::WrittenOnOneAndTwoThreads(dir, ".laz", cloud, OptionsFor(3));
+  EXPECT_TRUE(bytes[0] == bytes[1]);
 }
 
 TEST(LazWrite, EmptyCloud) {
   TempDir dir;
   for (int format : {0, 7}) {
-    const PointCloud cloud = RandomCloud(dir, format, 0, 1);
+    const PointCloud cloud = RandomCloud(format, 0, 1);
     const std::string path = dir.File("empty" + std::to_string(format) + ".laz");
     WritePointCloud(path, cloud, OptionsFor(format));
     const PointCloud back = ReadPointCloud(path);
@@ -627,7 +475,7 @@ TEST(LazWrite, EmptyCloud) {
 
 TEST(LazWrite, ReadOnlyFolderLeavesNoFile) {
   TempDir dir;
-  const PointCloud cloud = RandomCloud(dir, 1, 1000, 2);
+  const PointCloud cloud = RandomCloud(1, 1000, 2);
   if (geteuid() == 0) {
     // root writes into a folder of mode 0555; /proc refuses new files to everyone.
     EXPECT_THROW(WritePointCloud("/proc/candi_laz_write_test.laz", cloud, OptionsFor(1)),
@@ -646,14 +494,8 @@ TEST(LazWrite, ReadOnlyFolderLeavesNoFile) {
 TEST(LazWrite, InterruptedWriteLeavesNoPartialFile) {
   // A writer destroyed before Close() (an exception, an interrupt) removes its temporary file.
   TempDir dir;
-  const PointCloud cloud = RandomCloud(dir, 6, 60000, 4);
-  {
-    auto writer = OpenPointWriter(
-        dir.File("cut.laz"), {cloud.schema, cloud.frame, cloud.meta, cloud.size()}, OptionsFor(6));
-    writer->Write(cloud);
-  }
-  EXPECT_FALSE(util::FileExists(dir.File("cut.laz")));
-  EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+  EXPECT_TRUE(util::InterruptedWriteLeavesNothing(dir, "cut.laz", RandomCloud(6, 60000, 4),
+                                                  OptionsFor(6)));
 }
 
 }  // namespace

@@ -1,0 +1,73 @@
+// The octree of a COPC file (https://copc.io, COPC 1.0): which points each node (voxel) holds.
+//
+// The cube: centred on the points' bounds, halfsize = half the largest extent (or the largest
+// scale when every point is at one place). Node (d, x, y, z) is the cube's cell at level d,
+// width 2 * halfsize / 2^d, x, y, z in [0, 2^d). Each node lays a grid of 128^3 cells over
+// itself (untwine's CellCount) and keeps one point a cell: the one nearest to the cell's centre,
+// the earlier in input order on a tie; the others go to the child octant holding them. So the
+// points a node keeps are at most one per cell of width spacing / 2^d, spacing = 2 * halfsize /
+// 128 being the root's (COPC info "spacing"; untwine and PDAL write the cube width over their
+// cell count, 128). A node whose cells are narrower than the smallest LAS scale keeps all its
+// points (only exact duplicates can share a cell there), so the depth is bounded.
+// Small nodes are avoided as untwine avoids them (bu/Processor.cpp: MinimumPoints 100,
+// MinimumTotalPoints 1500): a node reached by fewer than min_subtree_points points keeps them all,
+// and a child octant that would get fewer than min_octant_points stays in its parent. (Each LAZ
+// chunk costs its coder's set-up: a scan with far jumps made 9,000 nodes of ~6 points of 60,000
+// points without this.) A node's points in octants that have a child node are one a cell.
+//
+// Positions are the records' integer X, Y, Z (LAS units, world = X * scale + offset): a point
+// belongs to the cell floor(t * 2^L) at level L, t = (world - cube min) / cube width, clamped to
+// [0, 2^L - 1], the same rule at every level, so a point of node (d, x) lies in a child
+// (d + 1, 2x or 2x + 1). Deterministic: the nodes and their points do not depend on the thread
+// count (the nodes of a level are processed in parallel, each on its own).
+// Memory: ~5 words a point. Thread-safety: a pure function.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace candi::io {
+
+inline constexpr int kCopcCellsPerAxis = 128;
+
+struct CopcKey {
+  int32_t level = 0, x = 0, y = 0, z = 0;
+  bool operator==(const CopcKey& o) const {
+    return level == o.level && x == o.x && y == o.y && z == o.z;
+  }
+};
+
+struct CopcNode {
+  CopcKey key;
+  std::vector<uint64_t> points;  // indices of the records it holds, ascending
+};
+
+struct CopcOctree {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // world, metres (LAS units)
+  double halfsize = 0.0;                             // half the cube's width
+  double spacing = 0.0;                              // root cell width: 2 * halfsize / 128
+  std::vector<CopcNode> nodes;  // level by level, each level ordered by (x, y, z); none empty
+  // World bounds of a node's cube.
+  Eigen::Vector3d NodeMin(const CopcKey& key) const;
+  double NodeWidth(const CopcKey& key) const;
+};
+
+struct CopcOctreeOptions {
+  // A node reached by fewer points keeps them all (no children). >= 0; 0: never.
+  int min_subtree_points = 1500;
+  // A child octant of fewer points is kept in its parent. >= 0; 0: never.
+  int min_octant_points = 100;
+  void Check() const;
+};
+
+// Builds the octree of n LAS records (record_length bytes each, X, Y, Z int32 at bytes 0, 4, 8)
+// with the header's scale and offset.
+CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
+                           size_t record_length, const Eigen::Vector3d& scale,
+                           const Eigen::Vector3d& offset);
+
+}  // namespace candi::io

@@ -1,0 +1,184 @@
+// The COPC octree on records made in code: every point in exactly one node, each node's points
+// inside its cube and at most one a cell of its grid (the spacing halving per level), children
+// under their parents, duplicates kept together, the same tree on one and two threads.
+#include "io/las/copc_octree.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <tuple>
+#include <vector>
+
+#include "core/binary_file.h"
+
+namespace candi::io {
+namespace {
+
+constexpr size_t kLength = 30;  // format 6
+const Eigen::Vector3d kScale = Eigen::Vector3d::Constant(0.001);
+const Eigen::Vector3d kOffset(500000.0, 4500000.0, 100.0);
+// The grid alone: no small nodes folded into their parents.
+const CopcOctreeOptions kGridOnly{0, 0};
+
+// A clustered cloud: a wavy 60 m x 40 m floor, a dense 1 m cube, and 500 copies of one point.
+std::vector<uint8_t> ClusteredRecords(size_t n, uint32_t seed) {
+  std::vector<uint8_t> records(n * kLength, 0);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (size_t i = 0; i < n; ++i) {
+    Eigen::Vector3d p;
+    if (i % 10 == 0) {
+      p = Eigen::Vector3d(20.0 + u(rng), 10.0 + u(rng), 3.0 + u(rng));
+    } else if (i < 500) {
+      p = Eigen::Vector3d(7.25, 8.5, 1.125);
+    } else {
+      const double x = 60.0 * u(rng), y = 40.0 * u(rng);
+      p = Eigen::Vector3d(x, y, std::sin(0.3 * x) + 0.5 * std::cos(0.2 * y));
+    }
+    for (int k = 0; k < 3; ++k) {
+      StoreLE<int32_t>(records.data() + i * kLength + 4 * k,
+                       static_cast<int32_t>(std::lround(p[k] / kScale[k])));
+    }
+    records[i * kLength + 12] = static_cast<uint8_t>(i);
+  }
+  return records;
+}
+
+Eigen::Vector3d World(const std::vector<uint8_t>& records, uint64_t i) {
+  Eigen::Vector3d w;
+  for (int k = 0; k < 3; ++k) {
+    w[k] = LoadLE<int32_t>(records.data() + i * kLength + 4 * k) * kScale[k] + kOffset[k];
+  }
+  return w;
+}
+
+std::tuple<int, int, int, int> Tuple(const CopcKey& k) { return {k.level, k.x, k.y, k.z}; }
+
+TEST(CopcOctree, EveryPointOnceInsideItsNodeOnePerCell) {
+  const size_t n = 200000;
+  const std::vector<uint8_t> records = ClusteredRecords(n, 3);
+  const CopcOctree tree = BuildCopcOctree(kGridOnly, records.data(), n, kLength, kScale, kOffset);
+  EXPECT_NEAR(tree.halfsize, 30.0, 0.01);  // the floor's 60 m
+  EXPECT_DOUBLE_EQ(tree.spacing, 2.0 * tree.halfsize / 128);
+  std::vector<int> seen(n, 0);
+  std::set<std::tuple<int, int, int, int>> keys;
+  int depth = 0;
+  for (const CopcNode& node : tree.nodes) {
+    ASSERT_FALSE(node.points.empty());
+    EXPECT_TRUE(keys.insert(Tuple(node.key)).second) << "a key twice";
+    if (node.key.level > 0) {
+      const CopcKey parent{node.key.level - 1, node.key.x / 2, node.key.y / 2, node.key.z / 2};
+      EXPECT_TRUE(keys.count(Tuple(parent))) << "a node before its parent, or without one";
+    }
+    depth = std::max(depth, node.key.level);
+    const Eigen::Vector3d lo = tree.NodeMin(node.key);
+    const double width = tree.NodeWidth(node.key), cell = tree.spacing / (1 << node.key.level);
+    const double tolerance = 1e-9 * tree.halfsize;
+    std::set<std::tuple<int64_t, int64_t, int64_t>> cells;
+    for (uint64_t i : node.points) {
+      ++seen[i];
+      const Eigen::Vector3d w = World(records, i);
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_GE(w[k], lo[k] - tolerance);
+        ASSERT_LE(w[k], lo[k] + width + tolerance);
+      }
+      // The node's grid: one point a cell (cells wider than a LAS unit; the deepest node holds
+      // the 500 duplicates together).
+      // A point within 1 um of a cell's face may be on either side of it (rounding): skipped.
+      const Eigen::Vector3d u = (w - lo) / cell;
+      const Eigen::Vector3d a = (u.array() - 1e-6 / cell).floor();
+      const bool on_face = a != (u.array() + 1e-6 / cell).floor().matrix();
+      if (cell >= kScale.minCoeff() && !on_face) {
+        const Eigen::Vector3d c = a.array().max(0.0).min(127.0);
+        EXPECT_TRUE(cells.insert({int64_t(c.x()), int64_t(c.y()), int64_t(c.z())}).second)
+            << "two points in a cell of node level " << node.key.level;
+      }
+    }
+  }
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(seen[i], 1) << "point " << i;
+  EXPECT_GT(depth, 3);
+  EXPECT_LT(depth, 20);
+  std::printf("%zu points: %zu nodes, depth %d\n", n, tree.nodes.size(), depth);
+}
+
+TEST(CopcOctree, KeepsThePointNearestTheCellCentre) {
+  // Two points in the root's first cell (width 1 m: a 128 m cube): the nearer the centre stays.
+  std::vector<uint8_t> records(3 * kLength, 0);
+  const int32_t xs[3] = {100, 450, 128000};  // 0.1 m, 0.45 m, 128 m
+  for (int i = 0; i < 3; ++i) StoreLE<int32_t>(records.data() + i * kLength, xs[i]);
+  const CopcOctree tree =
+      BuildCopcOctree(kGridOnly, records.data(), 3, kLength, kScale, Eigen::Vector3d::Zero());
+  ASSERT_EQ(tree.nodes.size(), 2u);
+  EXPECT_EQ(tree.nodes[0].points, (std::vector<uint64_t>{1, 2}));
+  EXPECT_EQ(tree.nodes[1].points, (std::vector<uint64_t>{0}));
+  EXPECT_EQ(Tuple(tree.nodes[1].key), std::make_tuple(1, 0, 1, 1));  // y, z: the cube's middle
+}
+
+TEST(CopcOctree, SameTreeOnOneAndTwoThreads) {
+  const size_t n = 100000;
+  const std::vector<uint8_t> records = ClusteredRecords(n, 9);
+  CopcOctree a, b;
+  tbb::task_arena one(1), two(2);
+  const CopcOctreeOptions defaults;
+  one.execute([&] { a = BuildCopcOctree(defaults, records.data(), n, kLength, kScale, kOffset); });
+  two.execute([&] { b = BuildCopcOctree(defaults, records.data(), n, kLength, kScale, kOffset); });
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  for (size_t j = 0; j < a.nodes.size(); ++j) {
+    EXPECT_TRUE(a.nodes[j].key == b.nodes[j].key);
+    EXPECT_EQ(a.nodes[j].points, b.nodes[j].points);
+  }
+}
+
+TEST(CopcOctree, SmallNodesStayInTheirParentsAsInUntwine) {
+  const size_t n = 200000;
+  const std::vector<uint8_t> records = ClusteredRecords(n, 3);
+  const CopcOctreeOptions defaults;
+  const CopcOctree grid = BuildCopcOctree(kGridOnly, records.data(), n, kLength, kScale, kOffset);
+  const CopcOctree tree = BuildCopcOctree(defaults, records.data(), n, kLength, kScale, kOffset);
+  std::map<std::tuple<int, int, int, int>, uint64_t> subtree;  // points at or below a node
+  std::vector<int> seen(n, 0);
+  for (auto it = tree.nodes.rbegin(); it != tree.nodes.rend(); ++it) {
+    for (uint64_t i : it->points) ++seen[i];
+    subtree[Tuple(it->key)] += it->points.size();
+    if (it->key.level > 0) {
+      const CopcKey parent{it->key.level - 1, it->key.x / 2, it->key.y / 2, it->key.z / 2};
+      subtree[Tuple(parent)] += subtree[Tuple(it->key)];
+    }
+  }
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(seen[i], 1) << "point " << i;
+  for (const CopcNode& node : tree.nodes) {
+    if (node.key.level == 0) continue;
+    EXPECT_GE(subtree[Tuple(node.key)], 100u) << "a node of fewer than min_octant_points";
+    const CopcKey parent{node.key.level - 1, node.key.x / 2, node.key.y / 2, node.key.z / 2};
+    EXPECT_GE(subtree[Tuple(parent)], 1500u) << "children under fewer than min_subtree_points";
+  }
+  EXPECT_LT(tree.nodes.size(), grid.nodes.size());
+  std::printf("%zu nodes with untwine's minimums, %zu with the grid alone\n", tree.nodes.size(),
+              grid.nodes.size());
+}
+
+TEST(CopcOctreeOptions, DefaultsPassAndNegativeMinimumsAreRefused) {
+  EXPECT_NO_THROW(CopcOctreeOptions().Check());
+  CopcOctreeOptions o;
+  o.min_subtree_points = -1;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = {};
+  o.min_octant_points = -5;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+}
+
+TEST(CopcOctree, EmptyAndSinglePoint) {
+  EXPECT_TRUE(BuildCopcOctree({}, nullptr, 0, kLength, kScale, kOffset).nodes.empty());
+  std::vector<uint8_t> one(kLength, 0);
+  const CopcOctree tree = BuildCopcOctree({}, one.data(), 1, kLength, kScale, kOffset);
+  ASSERT_EQ(tree.nodes.size(), 1u);
+  EXPECT_GT(tree.halfsize, 0.0);
+}
+
+}  // namespace
+}  // namespace candi::io

@@ -1,0 +1,128 @@
+#include "io/las/copc_write.h"
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+
+#include "core/binary_file.h"
+#include "core/check.h"
+#include "core/parallel.h"
+#include "io/las/laz_chunks.h"
+
+namespace candi::io {
+
+namespace {
+
+constexpr size_t kCopcInfoBytes = 160;
+constexpr size_t kEntryBytes = 32;
+// Nodes compressed together: enough to keep two cores busy, few enough to bound the chunks held.
+constexpr size_t kBatchNodes = 64;
+
+void PutF64(std::string* out, size_t at, double v) {
+  StoreLE<double>(reinterpret_cast<uint8_t*>(out->data()) + at, v);
+}
+double GetF64(const std::string& in, size_t at) {
+  return LoadLE<double>(reinterpret_cast<const uint8_t*>(in.data()) + at);
+}
+
+}  // namespace
+
+std::string EncodeCopcInfo(const CopcInfo& info) {
+  std::string out(kCopcInfoBytes, '\0');
+  for (int k = 0; k < 3; ++k) PutF64(&out, 8 * k, info.center[k]);
+  PutF64(&out, 24, info.halfsize);
+  PutF64(&out, 32, info.spacing);
+  uint8_t* p = reinterpret_cast<uint8_t*>(out.data());
+  StoreLE<uint64_t>(p + 40, info.root_hier_offset);
+  StoreLE<uint64_t>(p + 48, info.root_hier_size);
+  PutF64(&out, 56, info.gpstime_minimum);
+  PutF64(&out, 64, info.gpstime_maximum);
+  return out;  // 72-159: reserved, zero
+}
+
+CopcInfo ParseCopcInfo(const std::string& data) {
+  CANDI_CHECK_EQ(data.size(), kCopcInfoBytes) << "COPC info VLR";
+  CopcInfo info;
+  for (int k = 0; k < 3; ++k) info.center[k] = GetF64(data, 8 * k);
+  info.halfsize = GetF64(data, 24);
+  info.spacing = GetF64(data, 32);
+  const uint8_t* p = reinterpret_cast<const uint8_t*>(data.data());
+  info.root_hier_offset = LoadLE<uint64_t>(p + 40);
+  info.root_hier_size = LoadLE<uint64_t>(p + 48);
+  info.gpstime_minimum = GetF64(data, 56);
+  info.gpstime_maximum = GetF64(data, 64);
+  return info;
+}
+
+std::string EncodeCopcHierarchy(const std::vector<CopcEntry>& entries) {
+  std::string out(entries.size() * kEntryBytes, '\0');
+  uint8_t* p = reinterpret_cast<uint8_t*>(out.data());
+  for (const CopcEntry& e : entries) {
+    StoreLE<int32_t>(p, e.key.level);
+    StoreLE<int32_t>(p + 4, e.key.x);
+    StoreLE<int32_t>(p + 8, e.key.y);
+    StoreLE<int32_t>(p + 12, e.key.z);
+    StoreLE<uint64_t>(p + 16, e.offset);
+    StoreLE<int32_t>(p + 24, e.bytes);
+    StoreLE<int32_t>(p + 28, e.points);
+    p += kEntryBytes;
+  }
+  return out;
+}
+
+std::vector<CopcEntry> ParseCopcHierarchy(const std::string& page) {
+  CANDI_CHECK(page.size() % kEntryBytes == 0) << "COPC hierarchy page of " << page.size();
+  std::vector<CopcEntry> entries(page.size() / kEntryBytes);
+  const uint8_t* p = reinterpret_cast<const uint8_t*>(page.data());
+  for (CopcEntry& e : entries) {
+    e.key = {LoadLE<int32_t>(p), LoadLE<int32_t>(p + 4), LoadLE<int32_t>(p + 8),
+             LoadLE<int32_t>(p + 12)};
+    e.offset = LoadLE<uint64_t>(p + 16);
+    e.bytes = LoadLE<int32_t>(p + 24);
+    e.points = LoadLE<int32_t>(p + 28);
+    p += kEntryBytes;
+  }
+  return entries;
+}
+
+CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
+                              const laz::Vlr& vlr, uint64_t first_chunk,
+                              const std::function<void(const uint8_t*, size_t)>& sink) {
+  CANDI_CHECK(vlr.compressor == laz::kLayeredChunked &&
+              record_length == static_cast<size_t>(vlr.record_length()))
+      << "COPC chunks are layered, with the record's items";
+  CopcPointData data;
+  std::vector<uint32_t> bytes, points;
+  uint64_t offset = first_chunk;
+  std::vector<std::vector<uint8_t>> chunks(kBatchNodes);
+  for (size_t first = 0; first < tree.nodes.size(); first += kBatchNodes) {
+    const size_t count = std::min(kBatchNodes, tree.nodes.size() - first);
+    ParallelFor(size_t{0}, count, [&](size_t j) {
+      const CopcNode& node = tree.nodes[first + j];
+      std::vector<uint8_t> gathered(node.points.size() * record_length);
+      for (size_t i = 0; i < node.points.size(); ++i) {
+        std::memcpy(gathered.data() + i * record_length, records + node.points[i] * record_length,
+                    record_length);
+      }
+      chunks[j].clear();
+      laz::EncodeLayeredChunk(vlr.items, gathered.data(), static_cast<uint32_t>(node.points.size()),
+                              &chunks[j]);
+    });
+    for (size_t j = 0; j < count; ++j) {
+      const CopcNode& node = tree.nodes[first + j];
+      CANDI_CHECK(chunks[j].size() <= size_t{std::numeric_limits<int32_t>::max()} &&
+                  node.points.size() <= size_t{std::numeric_limits<int32_t>::max()})
+          << "COPC node of " << node.points.size() << " points, " << chunks[j].size() << " bytes";
+      sink(chunks[j].data(), chunks[j].size());
+      data.entries.push_back({node.key, offset, static_cast<int32_t>(chunks[j].size()),
+                              static_cast<int32_t>(node.points.size())});
+      bytes.push_back(static_cast<uint32_t>(chunks[j].size()));
+      points.push_back(static_cast<uint32_t>(node.points.size()));
+      offset += chunks[j].size();
+    }
+  }
+  data.chunk_table = EncodeLazChunkTable(bytes, points);
+  return data;
+}
+
+}  // namespace candi::io

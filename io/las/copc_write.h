@@ -1,0 +1,61 @@
+// COPC 1.0 (https://copc.io) records and point data: the "copc" info VLR (record 1, 160 bytes),
+// the EPT hierarchy EVLR (record 1000, 32-byte entries), and the octree's nodes as one LAZ chunk
+// each (layered, variable-size chunks, io/las/copc_octree.h).
+//
+// Internal to the LAS writer (io/las/las_io.cc), which writes a COPC file for a name ending in
+// ".copc.laz": LAS 1.4, point format 6-8, the info VLR first, the laszip VLR with variable
+// chunks, the point data (the chunk table's offset, the nodes' chunks level by level, the chunk
+// table with per-chunk point counts), then the hierarchy EVLR (one page holding every node) and
+// the EVLRs kept from the source.
+// Failure: the Parse* functions (for tests and tools) CANDI_CHECK the payload sizes; a chunk the
+// encoder refuses is a CANDI_CHECK (the writer built the records). Thread-safety: pure
+// functions; WriteCopcChunks compresses in parallel with the same bytes on any thread count.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "io/las/copc_octree.h"
+#include "io/las/laz_format.h"
+
+namespace candi::io {
+
+inline constexpr const char* kCopcUserId = "copc";
+inline constexpr uint16_t kCopcInfoRecord = 1;
+inline constexpr uint16_t kCopcHierarchyRecord = 1000;
+
+struct CopcInfo {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // of the octree's cube, world
+  double halfsize = 0.0;                             // half the cube's width
+  double spacing = 0.0;                              // root node's point spacing
+  uint64_t root_hier_offset = 0;                     // file offset of the root hierarchy page
+  uint64_t root_hier_size = 0;                       // its bytes
+  double gpstime_minimum = 0.0, gpstime_maximum = 0.0;
+};
+std::string EncodeCopcInfo(const CopcInfo& info);  // 160 bytes, the reserved ones zero
+CopcInfo ParseCopcInfo(const std::string& data);   // CANDI_CHECK: 160 bytes
+
+struct CopcEntry {
+  CopcKey key;
+  uint64_t offset = 0;  // file offset of the node's chunk (of a child page when points = -1)
+  int32_t bytes = 0;    // its size
+  int32_t points = 0;   // points in the chunk; -1: a child hierarchy page
+};
+std::string EncodeCopcHierarchy(const std::vector<CopcEntry>& entries);  // 32 bytes an entry
+std::vector<CopcEntry> ParseCopcHierarchy(const std::string& page);      // CANDI_CHECK: k * 32
+
+struct CopcPointData {
+  std::vector<CopcEntry> entries;    // one a node, in tree.nodes' order
+  std::vector<uint8_t> chunk_table;  // LASzip's, variable chunks
+};
+// Compresses each node's records (gathered from `records`, record_length bytes each) into one
+// chunk with the items of `vlr` (layered), handing the chunks in node order to `sink`; the
+// first chunk starts at file offset `first_chunk`.
+CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
+                              const laz::Vlr& vlr, uint64_t first_chunk,
+                              const std::function<void(const uint8_t*, size_t)>& sink);
+
+}  // namespace candi::io
