@@ -345,12 +345,11 @@ double JsonNumber(const std::string& json, const std::string& key) {
 // An independent reader: npm's copc (copc.js, decoding with laz-perf's WASM build) under node
 // reads candi's COPC: the header's count and format, the info VLR, the hierarchy, and every
 // node's points equal to the source's records. Skipped, saying so, where node or copc is absent
-// (scripts/node_test_deps.sh installs it; then NODE_PATH=.../node_modules).
+// (scripts/deps.sh installs them).
 TEST(CopcWrite, CopcJsReadsCandisCopc) {
-  if (std::system("node -e \"require('copc')\" > /dev/null 2>&1") != 0) {
-    GTEST_SKIP() << "node with npm's copc is absent (scripts/node_test_deps.sh, then set "
-                    "NODE_PATH to its node_modules); candi's COPC is not checked by copc.js";
-  }
+  std::string why;
+  const std::string node = util::NodeWith("copc", &why);
+  if (node.empty()) GTEST_SKIP() << why << ": candi's COPC is not checked by copc.js";
   const std::string script = util::SourceDir() + "/tests/node/copc_records.js";
   for (int format : {6, 7, 8}) {
     SCOPED_TRACE("point format " + std::to_string(format));
@@ -360,7 +359,7 @@ TEST(CopcWrite, CopcJsReadsCandisCopc) {
     WritePointCloud(dir.File("a.las"), cloud, OptionsFor(format));
     ConvertPointFile({}, dir.File("a.las"), dir.File("b.copc.laz"));
     const CopcFile f = ReadCopc(dir.File("b.copc.laz"));
-    const std::string command = "node '" + script + "' '" + dir.File("b.copc.laz") + "' '" +
+    const std::string command = node + " '" + script + "' '" + dir.File("b.copc.laz") + "' '" +
                                 dir.File("b.bin") + "' > '" + dir.File("b.json") + "'";
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
     const std::string json = ReadBytes(dir.File("b.json"));
