@@ -64,26 +64,36 @@ inline uint32_t Morton30(const Eigen::Vector3f& p, const Eigen::Vector3f& lo, co
   return Spread3(cell[0]) << 2 | Spread3(cell[1]) << 1 | Spread3(cell[2]);
 }
 
-// Indices 0..n-1 ordered by `codes` (30 bits; stable): an LSD radix sort of (code, index) pairs
-// packed in 64 bits, three 10-bit passes. Each pass counts the digits of consecutive parts of
-// the input in parallel, then scatters each part after the same digits of the parts before it:
-// the serial sort's result, on any thread count.
-std::vector<uint32_t> SortByCode(const UninitVector<uint32_t>& codes) {
-  const size_t n = codes.size();
+// A point while the splat cloud is built.
+struct PointRecord {
+  uint32_t code;   // Morton30 in the render frame's bounds
+  uint32_t index;  // in the input (the ensemble hash's)
+  Eigen::Vector3f position;
+  Rgb8 color;
+  uint16_t multiplicity;
+};
+
+// Sorts the records by code (30 bits), stably: an LSD radix sort, three 10-bit passes that move
+// the records themselves (no gathers from random places afterwards). Each pass counts the digits
+// of consecutive parts of the input in parallel, then scatters each part after the same digits
+// of the parts before it: the serial sort's result, on any thread count.
+void SortByCode(UninitVector<PointRecord>* records) {
+  const size_t n = records->size();
   constexpr int kBits = 10;
   constexpr size_t kDigits = size_t{1} << kBits;
   const size_t parts = std::clamp<size_t>(n / 65536, 1, 64);
   const size_t per_part = (n + parts - 1) / parts;
-  UninitVector<uint64_t> a(n), b(n);
-  ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) a[i] = uint64_t{codes[i]} << 32 | i;
-  });
+  UninitVector<PointRecord> other(n);
+  UninitVector<PointRecord>* from = records;
+  UninitVector<PointRecord>* to = &other;
   std::vector<uint64_t> offset(parts * kDigits);
-  for (int shift = 32; shift < 62; shift += kBits) {
+  for (int shift = 0; shift < 30; shift += kBits) {
     std::fill(offset.begin(), offset.end(), 0);
+    const PointRecord* in = from->data();
+    PointRecord* out = to->data();
     ParallelFor(size_t{0}, parts, [&](size_t p) {
       uint64_t* count = offset.data() + p * kDigits;
-      for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) ++count[(a[i] >> shift) & (kDigits - 1)];
+      for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) ++count[(in[i].code >> shift) & (kDigits - 1)];
     });
     uint64_t at = 0;
     for (size_t d = 0; d < kDigits; ++d) {
@@ -95,27 +105,11 @@ std::vector<uint32_t> SortByCode(const UninitVector<uint32_t>& codes) {
     }
     ParallelFor(size_t{0}, parts, [&](size_t p) {
       uint64_t* fill = offset.data() + p * kDigits;
-      for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) b[fill[(a[i] >> shift) & (kDigits - 1)]++] = a[i];
+      for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) out[fill[(in[i].code >> shift) & (kDigits - 1)]++] = in[i];
     });
-    a.swap(b);
+    std::swap(from, to);
   }
-  UninitVector<uint64_t>().swap(b);
-  std::vector<uint32_t> order(n);
-  ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) order[i] = static_cast<uint32_t>(a[i]);
-  });
-  return order;
-}
-
-// v[order[k]] for k = 0..n-1.
-template <typename V>
-V Permuted(V* v, const std::vector<uint32_t>& order) {
-  V out(order.size());
-  ParallelFor(tbb::blocked_range<size_t>(0, order.size(), 65536), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k < r.end(); ++k) out[k] = (*v)[order[k]];
-  });
-  V().swap(*v);
-  return out;
+  if (from != records) records->swap(*from);  // (three passes: the result is in `other`)
 }
 
 struct Located {
@@ -156,11 +150,16 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   out.source_points = located.total;
   const size_t n = located.total;
 
-  // Positions in the render frame, colours and multiplicities (in parallel); NaN is an error
-  // naming the first bad point whatever the thread count.
-  UninitVector<Eigen::Vector3f> local(n);
-  UninitVector<Rgb8> color(n);
-  UninitVector<uint16_t> multiplicity(n);
+  for (size_t k = 0; k < located.sources.size(); ++k) {
+    const Source& s = located.sources[k];
+    if (!s.cloud->empty()) out.bounds.Extend(local_bounds[k].Translated(s.shift));
+  }
+  // Each point as a record: its Morton code, input index, position in the render frame, colour
+  // and multiplicity (in parallel); NaN is an error naming the first bad point whatever the
+  // thread count.
+  UninitVector<PointRecord> records(n);
+  const Eigen::Vector3f lo = out.bounds.min.cast<float>();
+  const Eigen::Vector3f inv_cell = (1024.0 / out.bounds.Extent().array().max(1e-9)).matrix().cast<float>();
   const double cap = std::min(options.repeat_level, 65535);  // more copies than ensembles add nothing
   std::atomic<uint64_t> first_bad{std::numeric_limits<uint64_t>::max()};
   for (const Source& s : located.sources) {
@@ -173,13 +172,15 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
           uint64_t bad = first_bad.load();
           while (s.first + i < bad && !first_bad.compare_exchange_weak(bad, s.first + i)) {}
         }
-        local[s.first + i] = p.cast<float>();
-        color[s.first + i] = c.schema.colors ? c.colors[i] : options.default_color;
+        PointRecord& rec = records[s.first + i];
+        rec.position = p.cast<float>();
+        rec.code = Morton30(rec.position, lo, inv_cell);
+        rec.index = static_cast<uint32_t>(s.first + i);
+        rec.color = c.schema.colors ? c.colors[i] : options.default_color;
+        rec.multiplicity = 1;
         if (weights) {
           const double m = s.multiplicity->Get(i);
-          multiplicity[s.first + i] = static_cast<uint16_t>(std::isfinite(m) ? std::clamp(std::round(m), 0.0, cap) : 0.0);
-        } else {
-          multiplicity[s.first + i] = 1;
+          rec.multiplicity = static_cast<uint16_t>(std::isfinite(m) ? std::clamp(std::round(m), 0.0, cap) : 0.0);
         }
       }
     });
@@ -188,24 +189,10 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
     throw InputError("point " + std::to_string(first_bad.load()) + " of the render input has a NaN or "
                      "infinite coordinate");
   }
-  for (size_t k = 0; k < located.sources.size(); ++k) {
-    const Source& s = located.sources[k];
-    if (!s.cloud->empty()) out.bounds.Extend(local_bounds[k].Translated(s.shift));
-  }
   if (progress) progress(n / 4, n);
-  UninitVector<uint32_t> codes(n);
-  const Eigen::Vector3f lo = out.bounds.min.cast<float>();
-  const Eigen::Vector3f inv_cell = (1024.0 / out.bounds.Extent().array().max(1e-9)).matrix().cast<float>();
-  ParallelFor(tbb::blocked_range<size_t>(0, n, 65536), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) codes[i] = Morton30(local[i], lo, inv_cell);
-  });
-  // From here on, points are numbered in Morton order (rank k); order[k] is the input index,
-  // which the ensemble hash uses.
-  const std::vector<uint32_t> order = SortByCode(codes);
-  UninitVector<uint32_t>().swap(codes);
-  local = Permuted(&local, order);
-  color = Permuted(&color, order);
-  multiplicity = Permuted(&multiplicity, order);
+  // From here on, points are numbered in Morton order (rank k); records[k].index is the input
+  // index, which the ensemble hash uses.
+  SortByCode(&records);
   if (progress) progress(n / 2, n);
 
   // Copies per ensemble (a counting sort); within an ensemble, Morton order. The Morton ranks
@@ -221,12 +208,12 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   auto for_each_copy = [&](size_t c, bool counting, auto&& f) {
     const size_t end = std::min(n, (c + 1) * per_chunk);
     for (size_t k = c * per_chunk; k < end; ++k) {
-      const int m = multiplicity[k];
+      const int m = records[k].multiplicity;
       if (m == 1) {
-        if (counting) single[k] = static_cast<uint32_t>(EnsembleOf(options.seed, order[k], L));
+        if (counting) single[k] = static_cast<uint32_t>(EnsembleOf(options.seed, records[k].index, L));
         f(static_cast<int>(single[k]), k);
       } else {
-        ForEachEnsemble(options.seed, order[k], m, L, [&](int e) { f(e, k); });
+        ForEachEnsemble(options.seed, records[k].index, m, L, [&](int e) { f(e, k); });
       }
     }
   };
@@ -245,13 +232,20 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
     start[e + 1] = at;
   }
   const uint64_t copies = start[L];
-  std::vector<uint32_t, DefaultInitAllocator<uint32_t>> source(copies);  // Morton rank of each copy
+  // Each copy's position and colour, in copy order (the quantization then reads them in order).
+  UninitVector<Eigen::Vector3f> copy_position(copies);
+  UninitVector<Rgb8> copy_color(copies);
   ParallelFor(size_t{0}, chunks, [&](size_t c) {
     uint64_t* fill = offset.data() + c * L;
-    for_each_copy(c, false, [&](int e, size_t k) { source[fill[e]++] = static_cast<uint32_t>(k); });
+    for_each_copy(c, false, [&](int e, size_t k) {
+      const uint64_t at = fill[e]++;
+      copy_position[at] = records[k].position;
+      copy_color[at] = records[k].color;
+    });
   });
   std::vector<uint64_t>().swap(offset);
   UninitVector<uint32_t>().swap(single);
+  UninitVector<PointRecord>().swap(records);
 
   // Blocks: cut each ensemble, quantize each block on its own bounding box.
   out.ensemble_blocks.assign(L + 1, 0);
@@ -276,7 +270,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
                    std::numeric_limits<float>::max()};
     float hi[3] = {-lo[0], -lo[1], -lo[2]};
     for (uint64_t c = block.begin; c < block.begin + block.count; ++c) {
-      const Eigen::Vector3f& p = local[source[c]];
+      const Eigen::Vector3f& p = copy_position[c];
       for (int a = 0; a < 3; ++a) {
         lo[a] = std::min(lo[a], p[a]);
         hi[a] = std::max(hi[a], p[a]);
@@ -290,7 +284,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
       inv[a] = block.step[a] > 0 ? 1.0f / block.step[a] : 0.0f;
     }
     for (uint64_t c = block.begin; c < block.begin + block.count; ++c) {
-      const Eigen::Vector3f& p = local[source[c]];
+      const Eigen::Vector3f& p = copy_position[c];
       // (p - lo) * inv is in [0, 65535] up to rounding: round half up by truncation.
       const auto q = [&](int a) {
         return static_cast<uint16_t>(std::min((p[a] - lo[a]) * inv[a] + 0.5f, 65535.0f));
@@ -298,7 +292,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
       out.qx[c] = q(0);
       out.qy[c] = q(1);
       out.qz[c] = q(2);
-      out.colors[c] = PackColor(color[source[c]]);
+      out.colors[c] = PackColor(copy_color[c]);
     }
   });
   if (progress) progress(n, n);
