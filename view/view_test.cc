@@ -674,7 +674,7 @@ TEST(ViewerSource, PointFilesColouredByAFieldCarryTheLegend) {
   EXPECT_TRUE(nlohmann::json::parse(PickReply(7, {w})).at("hits")[0].at("value").is_null());
   std::error_code ec;
   std::filesystem::remove_all(source.temporary_dir, ec);
-  // A file without the field names it (found before a temporary folder is made).
+  // A file without the field names it (and the temporary folder is removed).
   colour_by.field = "lod95";
   try {
     PackViewerSource({file}, "", render::Orientation(), nullptr, colour_by);
