@@ -1,11 +1,14 @@
 #include "render/splat_cloud.h"
 
+#include <sys/mman.h>
 #include <tbb/blocked_range.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <new>
 #include <stdexcept>
 
 #include "core/check.h"
@@ -18,6 +21,19 @@ void SplatCloudOptions::Check() const {
   CANDI_CHECK_OPTION(block_size == 0 || (block_size >= 64 && block_size <= 65536), block_size,
                      "0 (automatic) or in [64, 65536]");
 }
+
+void* AllocateLargeArray(size_t bytes) {
+  constexpr size_t kHugePage = size_t{2} << 20;
+  const size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
+  void* p = std::aligned_alloc(kHugePage, rounded);
+  if (p == nullptr) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+  madvise(p, rounded, MADV_HUGEPAGE);  // advice: refused or ignored, the memory is the same
+#endif
+  return p;
+}
+
+void FreeLargeArray(void* p) { std::free(p); }
 
 size_t SplatCloud::MemoryBytes() const {
   return (qx.capacity() + qy.capacity() + qz.capacity()) * sizeof(uint16_t) +
@@ -73,10 +89,25 @@ struct PointRecord {
   uint16_t multiplicity;
 };
 
-// Sorts the records by code (30 bits), stably: an LSD radix sort, three 10-bit passes that move
-// the records themselves (no gathers from random places afterwards). Each pass counts the digits
-// of consecutive parts of the input in parallel, then scatters each part after the same digits
-// of the parts before it: the serial sort's result, on any thread count.
+// Stable counting scatter of in[begin, end) into out[begin, end) by the 10-bit digit at `shift`.
+void ScatterByDigit(const PointRecord* in, PointRecord* out, size_t begin, size_t end, int shift) {
+  uint32_t count[1024] = {};
+  for (size_t i = begin; i < end; ++i) ++count[(in[i].code >> shift) & 1023u];
+  size_t at = begin;
+  for (uint32_t& c : count) {
+    const uint32_t k = c;
+    c = static_cast<uint32_t>(at - begin);
+    at += k;
+  }
+  for (size_t i = begin; i < end; ++i) out[begin + count[(in[i].code >> shift) & 1023u]++] = in[i];
+}
+
+// Sorts the records by code (30 bits), stably. First a counting scatter on the top 10 bits: each
+// pass counts the digits of consecutive parts of the input in parallel, then scatters each part
+// after the same digits of the parts before it (the serial result on any thread count). Then each
+// of the 1,024 buckets, small enough for the cache, is sorted on its own by two LSD passes over
+// the low 20 bits, buckets in parallel. A stable partition followed by stable sorts of its parts
+// is the stable sort (the order of a full LSD sort), with one pass over memory instead of three.
 void SortByCode(UninitVector<PointRecord>* records) {
   const size_t n = records->size();
   constexpr int kBits = 10;
@@ -84,32 +115,36 @@ void SortByCode(UninitVector<PointRecord>* records) {
   const size_t parts = std::clamp<size_t>(n / 65536, 1, 64);
   const size_t per_part = (n + parts - 1) / parts;
   UninitVector<PointRecord> other(n);
-  UninitVector<PointRecord>* from = records;
-  UninitVector<PointRecord>* to = &other;
-  std::vector<uint64_t> offset(parts * kDigits);
-  for (int shift = 0; shift < 30; shift += kBits) {
-    std::fill(offset.begin(), offset.end(), 0);
-    const PointRecord* in = from->data();
-    PointRecord* out = to->data();
-    ParallelFor(size_t{0}, parts, [&](size_t p) {
-      uint64_t* count = offset.data() + p * kDigits;
-      for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) ++count[(in[i].code >> shift) & (kDigits - 1)];
-    });
-    uint64_t at = 0;
-    for (size_t d = 0; d < kDigits; ++d) {
-      for (size_t p = 0; p < parts; ++p) {
-        const uint64_t c = offset[p * kDigits + d];
-        offset[p * kDigits + d] = at;
-        at += c;
-      }
+  std::vector<uint64_t> offset(parts * kDigits, 0);
+  const PointRecord* in = records->data();
+  PointRecord* out = other.data();
+  constexpr int kTop = 20;
+  ParallelFor(size_t{0}, parts, [&](size_t p) {
+    uint64_t* count = offset.data() + p * kDigits;
+    for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) ++count[in[i].code >> kTop];
+  });
+  std::vector<uint64_t> bucket(kDigits + 1, 0);
+  uint64_t at = 0;
+  for (size_t d = 0; d < kDigits; ++d) {
+    bucket[d] = at;
+    for (size_t p = 0; p < parts; ++p) {
+      const uint64_t c = offset[p * kDigits + d];
+      offset[p * kDigits + d] = at;
+      at += c;
     }
-    ParallelFor(size_t{0}, parts, [&](size_t p) {
-      uint64_t* fill = offset.data() + p * kDigits;
-      for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) out[fill[(in[i].code >> shift) & (kDigits - 1)]++] = in[i];
-    });
-    std::swap(from, to);
   }
-  if (from != records) records->swap(*from);  // (three passes: the result is in `other`)
+  bucket[kDigits] = at;
+  ParallelFor(size_t{0}, parts, [&](size_t p) {
+    uint64_t* fill = offset.data() + p * kDigits;
+    for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) out[fill[in[i].code >> kTop]++] = in[i];
+  });
+  // Each bucket: digit 0 from `other` into `records`, digit 1 back into `other`.
+  PointRecord* a = records->data();
+  ParallelFor(size_t{0}, kDigits, [&](size_t d) {
+    ScatterByDigit(out, a, bucket[d], bucket[d + 1], 0);
+    ScatterByDigit(a, out, bucket[d], bucket[d + 1], kBits);
+  });
+  records->swap(other);
 }
 
 struct Located {
