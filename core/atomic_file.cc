@@ -1,10 +1,12 @@
 #include "core/atomic_file.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -72,6 +74,17 @@ void AtomicFile::Write(const void* data, size_t size) {
   if (size == 0) return;
   if (std::fwrite(data, 1, size, file_) != size) Fail("write failed", errno);
   written_ += size;
+  // For tests (tests/fault_test.cc): CANDI_TEST_INTERRUPT_AT_BYTE=<n> interrupts the process, as
+  // a user's Ctrl-C would, once a file being written holds n bytes: mid-write, at a point that no
+  // timing decides. The interrupt handler's thread ends the process; this one waits for it.
+  static const uint64_t interrupt_at = [] {
+    const char* text = std::getenv("CANDI_TEST_INTERRUPT_AT_BYTE");
+    return text != nullptr ? std::strtoull(text, nullptr, 10) : uint64_t{0};
+  }();
+  if (interrupt_at > 0 && written_ >= interrupt_at) {
+    kill(getpid(), SIGINT);
+    for (;;) pause();
+  }
 }
 
 void AtomicFile::Reserve(uint64_t bytes) {

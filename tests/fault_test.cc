@@ -6,12 +6,14 @@
 //   - a full disk (a 1 MiB tmpfs, when the tests may mount one: root) and a file-size limit
 //     (RLIMIT_FSIZE, any user; writes fail with EFBIG the way they do with ENOSPC);
 //   - COLMAP killed (SIGKILL) in the middle of a stage of `candi sfm`;
-//   - SIGINT during `candi build`, then `candi build --resume` finishing the same archive.
+//   - SIGINT during `candi build`, then `candi build --resume` finishing the same archive;
+//   - LAZ and COPC writes on a full disk, into a folder that refuses files, and interrupted.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/mount.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -328,6 +330,88 @@ TEST(Fault, AnInterruptedBuildLeavesFinishedFilesAndResumes) {
   EXPECT_FALSE(Contains(again_err, "layer hill (foundation): resumed")) << again_err;
   EXPECT_FALSE(Contains(again_err, "view v0: resumed")) << again_err;
   EXPECT_EQ(io::ReadPointCloud(dir.File("out/layers/hill.ply")).size(), 21000u);
+}
+
+
+// LAZ and COPC (issue 38) go through the same temporary file as every writer: a full disk, a
+// read-only folder and an interrupt mid-write leave the earlier output under the target name and
+// no temporary. (The COPC writer holds the points until Close(), so its writes all come last.)
+TEST(Fault, LazAndCopcOnAFullDiskOrInterruptedKeepTheEarlierOutput) {
+  TempDir dir;
+  WriteCloud(dir.File("in.ply"), 600000, 7);  // ~3 MB of LAZ: more than the 1 MiB limit
+  for (const std::string name : {"out.laz", "out.copc.laz"}) {
+    SCOPED_TRACE(name);
+    const std::string out = dir.File(name);
+    WriteBytes(out, "an earlier output\n");
+    const auto [code, err] = RunToEnd({"convert", dir.File("in.ply"), out}, LogDir(dir), {}, LimitFileSize);
+    EXPECT_EQ(code, 2) << err;
+    EXPECT_TRUE(Contains(err, out)) << err;
+    EXPECT_TRUE(Contains(err, "write failed: File too large")) << err;
+    EXPECT_TRUE(Contains(err, "the destination is unchanged")) << err;
+    EXPECT_TRUE(ReadBytes(out) == "an earlier output\n");
+    EXPECT_TRUE(Temporaries(dir.path()).empty());
+
+    // Interrupted (SIGINT through the real handler) once 300,000 bytes are written.
+    Process p({"convert", dir.File("in.ply"), out}, LogDir(dir), {"CANDI_TEST_INTERRUPT_AT_BYTE=300000"});
+    const int status = p.Wait();
+    const std::string interrupted = p.Stderr();
+    ASSERT_TRUE(WIFSIGNALED(status)) << "the write ended before the interrupt: " << interrupted;
+    EXPECT_EQ(WTERMSIG(status), SIGINT);
+    EXPECT_TRUE(Contains(interrupted, "interrupted by SIGINT")) << interrupted;
+    EXPECT_TRUE(ReadBytes(out) == "an earlier output\n");
+    EXPECT_TRUE(Temporaries(dir.path()).empty());
+
+    // Unlimited, the same command writes the file in full.
+    const auto [ok, ok_err] = RunToEnd({"convert", dir.File("in.ply"), out}, LogDir(dir));
+    ASSERT_EQ(ok, 0) << ok_err;
+    EXPECT_GT(fs::file_size(out), size_t{1} << 20);
+    EXPECT_EQ(io::ReadPointCloud(out).size(), 600000u);
+  }
+
+  // A real full disk (a 1 MiB tmpfs) where the tests may mount one.
+  const std::string disk = dir.File("disk");
+  fs::create_directories(disk);
+  if (mount("candi-test", disk.c_str(), "tmpfs", 0, "size=1m") != 0) {
+    GTEST_SKIP() << "cannot mount a small tmpfs here (" << std::strerror(errno)
+                 << "; needs root): the file-size limit above stood in for a full disk";
+  }
+  struct Unmount {
+    std::string path;
+    ~Unmount() { umount2(path.c_str(), MNT_DETACH); }
+  } unmount{disk};
+  for (const std::string name : {"out.laz", "out.copc.laz"}) {
+    SCOPED_TRACE(name);
+    const std::string out = disk + "/" + name;
+    WriteBytes(out, "an earlier output\n");
+    const auto [code, err] = RunToEnd({"convert", dir.File("in.ply"), out}, LogDir(dir));
+    EXPECT_EQ(code, 2) << err;
+    EXPECT_TRUE(Contains(err, out)) << err;
+    EXPECT_TRUE(Contains(err, "No space left on device")) << err;
+    EXPECT_TRUE(ReadBytes(out) == "an earlier output\n");
+    EXPECT_TRUE(Temporaries(disk).empty());
+  }
+}
+
+TEST(Fault, LazAndCopcIntoAFolderThatRefusesFilesAreRefusedByName) {
+  TempDir dir;
+  WriteCloud(dir.File("in.ply"), 1000, 8);
+  // root may write into a folder of mode 0555; /proc refuses new files to everyone.
+  const std::string folder = geteuid() == 0 ? std::string("/proc") : dir.File("locked");
+  if (geteuid() != 0) {
+    fs::create_directories(folder);
+    chmod(folder.c_str(), 0555);
+  }
+  for (const std::string name : {"candi_fault_test.laz", "candi_fault_test.copc.laz"}) {
+    const std::string out = folder + "/" + name;
+    const auto [code, err] = RunToEnd({"convert", dir.File("in.ply"), out}, LogDir(dir));
+    EXPECT_EQ(code, 2) << err;
+    EXPECT_TRUE(Contains(err, out) || Contains(err, folder)) << err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  if (geteuid() != 0) {
+    chmod(folder.c_str(), 0755);
+    EXPECT_TRUE(fs::is_empty(folder));
+  }
 }
 
 }  // namespace
