@@ -154,19 +154,26 @@ TEST(Fault, AReadErrorMidFileIsReportedAndTheOutputKept) {
   EXPECT_EQ(io::ReadPointCloud(dir.File("out.ply")).size(), 200000u);
 }
 
+// A 1 MiB tmpfs mounted on `path` (created) while it lives, where the tests may mount one (root).
+struct SmallDisk {
+  explicit SmallDisk(const std::string& p) : path(p) {
+    fs::create_directories(path);
+    mounted = mount("candi-test", path.c_str(), "tmpfs", 0, "size=1m") == 0;
+    if (!mounted) why = std::string("cannot mount a small tmpfs here (") + std::strerror(errno) + "; needs root)";
+  }
+  ~SmallDisk() {
+    if (mounted) umount2(path.c_str(), MNT_DETACH);
+  }
+  std::string path, why;
+  bool mounted = false;
+};
+
 TEST(Fault, AFullDiskIsReportedAndTheOutputKept) {
   TempDir dir;
   WriteCloud(dir.File("in.ply"), 200000, 2);  // ~3 MB: more than the disk holds
-  const std::string disk = dir.File("disk");
-  fs::create_directories(disk);
-  if (mount("candi-test", disk.c_str(), "tmpfs", 0, "size=1m") != 0) {
-    GTEST_SKIP() << "cannot mount a small tmpfs here (" << std::strerror(errno)
-                 << "; needs root): the file-size-limit test covers write failures";
-  }
-  struct Unmount {
-    std::string path;
-    ~Unmount() { umount2(path.c_str(), MNT_DETACH); }
-  } unmount{disk};
+  const SmallDisk small(dir.File("disk"));
+  if (!small.mounted) GTEST_SKIP() << small.why << ": the file-size-limit test covers write failures";
+  const std::string& disk = small.path;
   WriteBytes(disk + "/out.ply", "an earlier output\n");
   const auto [code, err] = RunToEnd({"convert", dir.File("in.ply"), disk + "/out.ply"}, LogDir(dir));
   EXPECT_EQ(code, 2) << err;
@@ -369,16 +376,9 @@ TEST(Fault, LazAndCopcOnAFullDiskOrInterruptedKeepTheEarlierOutput) {
   }
 
   // A real full disk (a 1 MiB tmpfs) where the tests may mount one.
-  const std::string disk = dir.File("disk");
-  fs::create_directories(disk);
-  if (mount("candi-test", disk.c_str(), "tmpfs", 0, "size=1m") != 0) {
-    GTEST_SKIP() << "cannot mount a small tmpfs here (" << std::strerror(errno)
-                 << "; needs root): the file-size limit above stood in for a full disk";
-  }
-  struct Unmount {
-    std::string path;
-    ~Unmount() { umount2(path.c_str(), MNT_DETACH); }
-  } unmount{disk};
+  const SmallDisk small(dir.File("disk"));
+  if (!small.mounted) GTEST_SKIP() << small.why << ": the file-size limit above stood in for a full disk";
+  const std::string& disk = small.path;
   for (const std::string name : {"out.laz", "out.copc.laz"}) {
     SCOPED_TRACE(name);
     const std::string out = disk + "/" + name;
