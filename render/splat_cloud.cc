@@ -147,6 +147,144 @@ void SortByCode(UninitVector<PointRecord>* records) {
   records->swap(other);
 }
 
+// The records of points drawn once (their `index` holding their ensemble, not their input
+// index), put in copy order: grouped by ensemble, within an ensemble by code, ties in input
+// order. A stable counting scatter by ensemble (parts counted and scattered in parallel, each
+// after the same ensembles of the parts before it, so any thread count gives the serial result),
+// then each ensemble, in parallel, by three stable 10-bit passes over its code: the order the
+// Morton sort followed by the counting sort by ensemble gives, without the passes over every
+// point between them. start[e] is where ensemble e begins (start[L]: the total).
+void GroupByEnsembleThenCode(UninitVector<PointRecord>* records, int L, std::vector<uint64_t>* start) {
+  const size_t n = records->size();
+  const size_t parts = std::clamp<size_t>(n / 65536, 1, std::max<size_t>(1, (size_t{1} << 22) / L));
+  const size_t per_part = (n + parts - 1) / parts;
+  std::vector<uint64_t> offset(parts * static_cast<size_t>(L), 0);
+  UninitVector<PointRecord> other(n);
+  const PointRecord* in = records->data();
+  ParallelFor(size_t{0}, parts, [&](size_t p) {
+    uint64_t* count = offset.data() + p * L;
+    for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) ++count[in[i].index];
+  });
+  start->assign(L + 1, 0);
+  uint64_t at = 0;
+  for (int e = 0; e < L; ++e) {
+    (*start)[e] = at;
+    for (size_t p = 0; p < parts; ++p) {
+      const uint64_t c = offset[p * L + e];
+      offset[p * L + e] = at;
+      at += c;
+    }
+  }
+  (*start)[L] = at;
+  PointRecord* grouped = other.data();
+  ParallelFor(size_t{0}, parts, [&](size_t p) {
+    uint64_t* fill = offset.data() + p * L;
+    for (size_t i = p * per_part; i < std::min(n, (p + 1) * per_part); ++i) grouped[fill[in[i].index]++] = in[i];
+  });
+  PointRecord* a = records->data();
+  ParallelFor(size_t{0}, static_cast<size_t>(L), [&](size_t e) {
+    const size_t begin = (*start)[e], end = (*start)[e + 1];
+    ScatterByDigit(grouped, a, begin, end, 0);
+    ScatterByDigit(a, grouped, begin, end, 10);
+    ScatterByDigit(grouped, a, begin, end, 20);
+  });
+}
+
+// Each copy's position and colour, in copy order.
+struct Copies {
+  UninitVector<Eigen::Vector3f> position;
+  UninitVector<Rgb8> color;
+};
+
+// The copies of records in Morton order (records[k].index: the input index; multiplicity m: m
+// ensembles, ForEachEnsemble) per ensemble (a counting sort); within an ensemble, Morton order.
+// The Morton ranks are cut into chunks counted and filled in parallel: chunk c's copies of
+// ensemble e go after those of chunks 0..c-1, so the result does not depend on the thread count.
+// The chunk count is capped so that the chunks x L counters stay small for large L.
+Copies CopiesByEnsemble(uint64_t seed, int L, const UninitVector<PointRecord>& records, std::vector<uint64_t>* start) {
+  const size_t n = records.size();
+  const size_t chunks = std::clamp<size_t>(n / 65536, 1, std::max<size_t>(1, (size_t{1} << 22) / L));
+  const size_t per_chunk = (n + chunks - 1) / chunks;
+  std::vector<uint64_t> offset(chunks * static_cast<size_t>(L), 0);  // counts, then fill positions
+  // A point drawn once has its ensemble hashed on the count and kept for the fill.
+  UninitVector<uint32_t> single(n);
+  auto for_each_copy = [&](size_t c, bool counting, auto&& f) {
+    const size_t end = std::min(n, (c + 1) * per_chunk);
+    for (size_t k = c * per_chunk; k < end; ++k) {
+      const int m = records[k].multiplicity;
+      if (m == 1) {
+        if (counting) single[k] = static_cast<uint32_t>(EnsembleOf(seed, records[k].index, L));
+        f(static_cast<int>(single[k]), k);
+      } else {
+        ForEachEnsemble(seed, records[k].index, m, L, [&](int e) { f(e, k); });
+      }
+    }
+  };
+  ParallelFor(size_t{0}, chunks, [&](size_t c) {
+    uint64_t* count = offset.data() + c * L;
+    for_each_copy(c, true, [&](int e, size_t) { ++count[e]; });
+  });
+  start->assign(L + 1, 0);
+  for (int e = 0; e < L; ++e) {
+    uint64_t at = (*start)[e];
+    for (size_t c = 0; c < chunks; ++c) {
+      const uint64_t count = offset[c * L + e];
+      offset[c * L + e] = at;
+      at += count;
+    }
+    (*start)[e + 1] = at;
+  }
+  Copies copies;
+  copies.position.resize((*start)[L]);
+  copies.color.resize((*start)[L]);
+  ParallelFor(size_t{0}, chunks, [&](size_t c) {
+    uint64_t* fill = offset.data() + c * L;
+    for_each_copy(c, false, [&](int e, size_t k) {
+      const uint64_t at = fill[e]++;
+      copies.position[at] = records[k].position;
+      copies.color[at] = records[k].color;
+    });
+  });
+  return copies;
+}
+
+// Quantizes each of out->blocks on its own bounding box: copy c's position_of(c) and colour_of(c)
+// into out's arrays.
+template <typename PositionOf, typename ColourOf>
+void Quantize(const PositionOf& position_of, const ColourOf& colour_of, SplatCloud* out) {
+  ParallelFor(size_t{0}, out->blocks.size(), [&](size_t k) {
+    SplatBlock& block = out->blocks[k];
+    float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+                   std::numeric_limits<float>::max()};
+    float hi[3] = {-lo[0], -lo[1], -lo[2]};
+    for (uint64_t c = block.begin; c < block.begin + block.count; ++c) {
+      const Eigen::Vector3f& p = position_of(c);
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], p[a]);
+        hi[a] = std::max(hi[a], p[a]);
+      }
+    }
+    float inv[3];
+    for (int a = 0; a < 3; ++a) {
+      block.origin[a] = block.lo[a] = lo[a];
+      block.hi[a] = hi[a];
+      block.step[a] = (hi[a] - lo[a]) / 65535.0f;
+      inv[a] = block.step[a] > 0 ? 1.0f / block.step[a] : 0.0f;
+    }
+    for (uint64_t c = block.begin; c < block.begin + block.count; ++c) {
+      const Eigen::Vector3f& p = position_of(c);
+      // (p - lo) * inv is in [0, 65535] up to rounding: round half up by truncation.
+      const auto q = [&](int a) {
+        return static_cast<uint16_t>(std::min((p[a] - lo[a]) * inv[a] + 0.5f, 65535.0f));
+      };
+      out->qx[c] = q(0);
+      out->qy[c] = q(1);
+      out->qz[c] = q(2);
+      out->colors[c] = PackColor(colour_of(c));
+    }
+  });
+}
+
 struct Located {
   std::vector<Source> sources;
   uint64_t total = 0;
@@ -196,6 +334,13 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   const Eigen::Vector3f lo = out.bounds.min.cast<float>();
   const Eigen::Vector3f inv_cell = (1024.0 / out.bounds.Extent().array().max(1e-9)).matrix().cast<float>();
   const double cap = std::min(options.repeat_level, 65535);  // more copies than ensembles add nothing
+  const int L = options.repeat_level;
+  // Every point drawn once (no multiplicities): the records carry their ensembles and are put in
+  // copy order directly (GroupByEnsembleThenCode).
+  const bool single_copies =
+      L > 1 && std::none_of(located.sources.begin(), located.sources.end(), [&](const Source& s) {
+        return options.use_multiplicity && s.multiplicity != nullptr;
+      });
   std::atomic<uint64_t> first_bad{std::numeric_limits<uint64_t>::max()};
   for (const Source& s : located.sources) {
     const PointCloud& c = *s.cloud;
@@ -210,7 +355,8 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
         PointRecord& rec = records[s.first + i];
         rec.position = p.cast<float>();
         rec.code = Morton30(rec.position, lo, inv_cell);
-        rec.index = static_cast<uint32_t>(s.first + i);
+        rec.index = single_copies ? static_cast<uint32_t>(EnsembleOf(options.seed, s.first + i, L))
+                                  : static_cast<uint32_t>(s.first + i);
         rec.color = c.schema.colors ? c.colors[i] : options.default_color;
         rec.multiplicity = 1;
         if (weights) {
@@ -225,67 +371,22 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
                      "infinite coordinate");
   }
   if (progress) progress(n / 4, n);
-  // From here on, points are numbered in Morton order (rank k); records[k].index is the input
-  // index, which the ensemble hash uses.
-  SortByCode(&records);
+  std::vector<uint64_t> start;  // where each ensemble's copies begin
+  Copies copies;
+  if (single_copies) {
+    GroupByEnsembleThenCode(&records, L, &start);
+  } else {
+    SortByCode(&records);  // records[k].index stays the input index, which the ensemble hash uses
+    copies = CopiesByEnsemble(options.seed, L, records, &start);
+    UninitVector<PointRecord>().swap(records);
+  }
   if (progress) progress(n / 2, n);
 
-  // Copies per ensemble (a counting sort); within an ensemble, Morton order. The Morton ranks
-  // are cut into chunks counted and filled in parallel: chunk c's copies of ensemble e go after
-  // those of chunks 0..c-1, so the result does not depend on the thread count. The chunk count is
-  // capped so that the chunks x L counters stay small for large L.
-  const int L = options.repeat_level;
-  const size_t chunks = std::clamp<size_t>(n / 65536, 1, std::max<size_t>(1, (size_t{1} << 22) / L));
-  const size_t per_chunk = (n + chunks - 1) / chunks;
-  std::vector<uint64_t> offset(chunks * static_cast<size_t>(L), 0);  // counts, then fill positions
-  // A point drawn once has its ensemble hashed on the count and kept for the fill.
-  UninitVector<uint32_t> single(n);
-  auto for_each_copy = [&](size_t c, bool counting, auto&& f) {
-    const size_t end = std::min(n, (c + 1) * per_chunk);
-    for (size_t k = c * per_chunk; k < end; ++k) {
-      const int m = records[k].multiplicity;
-      if (m == 1) {
-        if (counting) single[k] = static_cast<uint32_t>(EnsembleOf(options.seed, records[k].index, L));
-        f(static_cast<int>(single[k]), k);
-      } else {
-        ForEachEnsemble(options.seed, records[k].index, m, L, [&](int e) { f(e, k); });
-      }
-    }
-  };
-  ParallelFor(size_t{0}, chunks, [&](size_t c) {
-    uint64_t* count = offset.data() + c * L;
-    for_each_copy(c, true, [&](int e, size_t) { ++count[e]; });
-  });
-  std::vector<uint64_t> start(L + 1, 0);
-  for (int e = 0; e < L; ++e) {
-    uint64_t at = start[e];
-    for (size_t c = 0; c < chunks; ++c) {
-      const uint64_t count = offset[c * L + e];
-      offset[c * L + e] = at;
-      at += count;
-    }
-    start[e + 1] = at;
-  }
-  const uint64_t copies = start[L];
-  // Each copy's position and colour, in copy order (the quantization then reads them in order).
-  UninitVector<Eigen::Vector3f> copy_position(copies);
-  UninitVector<Rgb8> copy_color(copies);
-  ParallelFor(size_t{0}, chunks, [&](size_t c) {
-    uint64_t* fill = offset.data() + c * L;
-    for_each_copy(c, false, [&](int e, size_t k) {
-      const uint64_t at = fill[e]++;
-      copy_position[at] = records[k].position;
-      copy_color[at] = records[k].color;
-    });
-  });
-  std::vector<uint64_t>().swap(offset);
-  UninitVector<uint32_t>().swap(single);
-  UninitVector<PointRecord>().swap(records);
-
   // Blocks: cut each ensemble, quantize each block on its own bounding box.
+  const uint64_t count = start[L];
   out.ensemble_blocks.assign(L + 1, 0);
   const uint64_t block_size =
-      options.block_size > 0 ? options.block_size : std::clamp<uint64_t>(copies / L / 1024, 64, 4096);
+      options.block_size > 0 ? options.block_size : std::clamp<uint64_t>(count / L / 1024, 64, 4096);
   for (int e = 0; e < L; ++e) {
     for (uint64_t b = start[e]; b < start[e + 1]; b += block_size) {
       SplatBlock block{};
@@ -295,41 +396,17 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
     }
     out.ensemble_blocks[e + 1] = out.blocks.size();
   }
-  out.qx.resize(copies);
-  out.qy.resize(copies);
-  out.qz.resize(copies);
-  out.colors.resize(copies);
-  ParallelFor(size_t{0}, out.blocks.size(), [&](size_t k) {
-    SplatBlock& block = out.blocks[k];
-    float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
-                   std::numeric_limits<float>::max()};
-    float hi[3] = {-lo[0], -lo[1], -lo[2]};
-    for (uint64_t c = block.begin; c < block.begin + block.count; ++c) {
-      const Eigen::Vector3f& p = copy_position[c];
-      for (int a = 0; a < 3; ++a) {
-        lo[a] = std::min(lo[a], p[a]);
-        hi[a] = std::max(hi[a], p[a]);
-      }
-    }
-    float inv[3];
-    for (int a = 0; a < 3; ++a) {
-      block.origin[a] = block.lo[a] = lo[a];
-      block.hi[a] = hi[a];
-      block.step[a] = (hi[a] - lo[a]) / 65535.0f;
-      inv[a] = block.step[a] > 0 ? 1.0f / block.step[a] : 0.0f;
-    }
-    for (uint64_t c = block.begin; c < block.begin + block.count; ++c) {
-      const Eigen::Vector3f& p = copy_position[c];
-      // (p - lo) * inv is in [0, 65535] up to rounding: round half up by truncation.
-      const auto q = [&](int a) {
-        return static_cast<uint16_t>(std::min((p[a] - lo[a]) * inv[a] + 0.5f, 65535.0f));
-      };
-      out.qx[c] = q(0);
-      out.qy[c] = q(1);
-      out.qz[c] = q(2);
-      out.colors[c] = PackColor(copy_color[c]);
-    }
-  });
+  out.qx.resize(count);
+  out.qy.resize(count);
+  out.qz.resize(count);
+  out.colors.resize(count);
+  if (single_copies) {
+    Quantize([&](uint64_t c) -> const Eigen::Vector3f& { return records[c].position; },
+             [&](uint64_t c) { return records[c].color; }, &out);
+  } else {
+    Quantize([&](uint64_t c) -> const Eigen::Vector3f& { return copies.position[c]; },
+             [&](uint64_t c) { return copies.color[c]; }, &out);
+  }
   if (progress) progress(n, n);
   return out;
 }
