@@ -123,7 +123,7 @@ RenderedImage RenderFilesInMemory(const RenderOptions& o, const std::vector<std:
   for (const std::string& in : files) {
     // Scalar fields are decoded only where the render uses one: the field coloured by, or the
     // points' multiplicities (render/splat_cloud.h). (LAS attributes cost more than positions.)
-    const PointSchema& schema = io::OpenPointReader(in, read)->info().schema;
+    const PointSchema schema = io::OpenPointReader(in, read)->info().schema;
     io::PointReadOptions file_read = read;
     file_read.scalar_fields = o.colour_by.active() || schema.ScalarIndex(render::kMultiplicityField) >= 0;
     clouds.push_back(io::ReadPointCloud(in, file_read));

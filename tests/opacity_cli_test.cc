@@ -59,6 +59,22 @@ TEST(OpacityCli, WritesTheMultiplicityFieldCommentAndSummary) {
   EXPECT_EQ(again.code, 0) << again.output;
 }
 
+// `candi render FILE` draws a point as often as the file's multiplicity field says: with every
+// multiplicity 0 nothing is drawn (and it says so); without the field every point is.
+TEST(OpacityCli, RenderDrawsAFilesPointsAsOftenAsItsMultiplicitiesSay) {
+  TempDir dir;
+  WritePlane(dir.File("plain.ply"));
+  PointCloud c = io::ReadPointCloud(dir.File("plain.ply"));
+  c.AddScalarField("spbr_multiplicity");  // zero-filled
+  io::WritePointCloud(dir.File("none.ply"), c);
+  const Result none = RunCandi("render " + dir.File("none.ply") + " -o " + dir.File("none.png") + " --size 64x48");
+  ASSERT_EQ(none.code, 0) << none.output;
+  EXPECT_NE(none.output.find("every point was removed"), std::string::npos) << none.output;
+  const Result plain = RunCandi("render " + dir.File("plain.ply") + " -o " + dir.File("plain.png") + " --size 64x48");
+  ASSERT_EQ(plain.code, 0) << plain.output;
+  EXPECT_EQ(plain.output.find("every point was removed"), std::string::npos) << plain.output;
+}
+
 TEST(OpacityCli, MissingInputIsExitTwoNamingIt) {
   TempDir dir;
   const Result r = RunCandi("opacity " + dir.File("nope.ply") + " " + dir.File("out.ply") + kGood);
