@@ -55,6 +55,11 @@ void AddDataset(Command& relief) {
   images.Needs(colmap);
   c.Option("--holdout", o.holdout, "Real photos: images kept out of training (names or stems, comma-separated)")
       .Delimiter(',');
+  c.Option("--holdout-region", o.holdout_region,
+           "Real photos: a surface kept out of training and scored in holdout/ (box:x0,y0,z0,x1,y1,z1 or "
+           "side:nx,ny,nz,offset, in the model's frame)");
+  c.Option("--holdout-margin", o.holdout_margin, "Real photos: pixels around the held-out surface also kept out")
+      .Range(0, 64);
   c.Option("--max-side", o.photo_pairs.max_side, "Real photos: longer side of a pair, pixels").Range(32, 16384);
   c.Run([&a] { return RunReliefDataset(a); });
   c.Footer("Examples: candi relief dataset scan.ply panels/ -o data --patch 128\n"

@@ -212,6 +212,10 @@ int RunReliefDataset(const ReliefDatasetArgs& a) {
                 s.views, s.held_out, o.colmap.c_str(), 100 * s.known_fraction, s.train, s.val, o.patches.patch,
                 o.patches.patch, a.output_dir.c_str());
     if (s.empty_views > 0) std::printf("%zu view(s) without any depth\n", s.empty_views);
+    if (!o.holdout_region.empty()) {
+      std::printf("held-out surface %s: %llu pixels with depth in %zu view(s) of holdout/, none in training\n",
+                  o.holdout_region.c_str(), static_cast<unsigned long long>(s.region_pixels), s.region_views);
+    }
     return kOk;
   }
   const pipeline::ReliefDatasetSummary s = pipeline::BuildReliefDataset(o, a.inputs, a.output_dir);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -102,6 +103,48 @@ std::set<uint32_t> HoldoutIds(const photogrammetry::ColmapModel& model, const st
   return ids;
 }
 
+// The pair with only its held-out region's pixels known (the photo whole).
+relief::PhotoPair RegionOnly(const relief::PhotoPair& pair) {
+  relief::PhotoPair out = pair;
+  for (size_t i = 0; i < out.mask.values().size(); ++i) {
+    if (out.region.values()[i] == 0) {
+      out.mask.values()[i] = 0;
+      out.depth.values()[i] = 0;
+    }
+  }
+  return out;
+}
+
+uint64_t KnownPixels(const relief::PhotoPair& pair) {
+  return static_cast<uint64_t>(std::count_if(pair.mask.values().begin(), pair.mask.values().end(),
+                                             [](uint8_t m) { return m != 0; }));
+}
+
+// The held-out region's pixels, widened by `margin` pixels (a square window), lose their depth
+// and their photo (flat grey): a training view shows nothing of the surface.
+void ExcludeRegion(int margin, relief::PhotoPair* pair) {
+  const int w = pair->mask.width(), h = pair->mask.height();
+  Image8 rows(w, h, 1, 0), out(w, h, 1, 0);
+  for (int y = 0; y < h; ++y) {  // widened along x, then along y
+    for (int x = 0; x < w; ++x) {
+      if (!pair->region.at(x, y)) continue;
+      for (int u = std::max(0, x - margin); u <= std::min(w - 1, x + margin); ++u) rows.at(u, y) = 1;
+    }
+  }
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (!rows.at(x, y)) continue;
+      for (int v = std::max(0, y - margin); v <= std::min(h - 1, y + margin); ++v) out.at(x, v) = 1;
+    }
+  }
+  for (size_t i = 0; i < out.values().size(); ++i) {
+    if (!out.values()[i]) continue;
+    pair->mask.values()[i] = 0;
+    pair->depth.values()[i] = 0;
+    pair->photo.values()[i] = 0.5f;
+  }
+}
+
 }  // namespace
 
 void ReliefDatasetOptions::Check() const {
@@ -110,6 +153,8 @@ void ReliefDatasetOptions::Check() const {
   CANDI_CHECK_OPTION_IN(val_fraction, 0, 0.9);
   patches.Check();
   photo_pairs.Check();
+  CANDI_CHECK_OPTION_IN(holdout_margin, 0, 64);
+  if (!holdout_region.empty()) relief::ParseSceneRegion(holdout_region);  // throws naming the text
 }
 
 ReliefDatasetSummary BuildReliefDataset(const ReliefDatasetOptions& a, const std::vector<std::string>& inputs_given,
@@ -150,6 +195,7 @@ PhotoDatasetSummary BuildPhotoDataset(const ReliefDatasetOptions& a, const std::
                                       const std::string& output_dir) {
   if (a.colmap.empty() || a.images.empty()) throw std::invalid_argument("--colmap and --images go together");
   if (clouds.empty()) throw std::invalid_argument("give the dense cloud(s) of the model as inputs");
+  a.Check();
   const relief::PhotoPairOptions& options = a.photo_pairs;
   options.Check();
   const relief::PatchOptions& patches = a.patches;
@@ -159,12 +205,28 @@ PhotoDatasetSummary BuildPhotoDataset(const ReliefDatasetOptions& a, const std::
   const std::set<uint32_t> held = HoldoutIds(model, a.holdout);
   if (held.size() == model.images.size()) throw std::invalid_argument("--holdout holds out every image");
 
+  std::optional<relief::SceneRegion> region;
+  if (!a.holdout_region.empty()) region = relief::ParseSceneRegion(a.holdout_region);
+
   std::vector<Eigen::Vector3d> points;
   for (const std::string& input : clouds) {
     const PointCloud cloud = io::ReadPointCloud(input);
     if (cloud.size() == 0) throw InputError(input, "", "no points");
     points.reserve(points.size() + cloud.size());
     for (size_t i = 0; i < cloud.size(); ++i) points.push_back(cloud.frame.ToWorld(cloud.positions[i]));
+  }
+  std::vector<uint8_t> in_region;
+  size_t region_points = 0;
+  if (region) {
+    in_region.resize(points.size());
+    for (size_t i = 0; i < points.size(); ++i) region_points += in_region[i] = region->Contains(points[i]);
+    if (region_points == 0 || region_points == points.size()) {
+      throw std::invalid_argument("--holdout-region '" + a.holdout_region + "' holds " +
+                                  (region_points == 0 ? "none" : "all") + " of the " + std::to_string(points.size()) +
+                                  " points: nothing would be " + (region_points == 0 ? "scored" : "trained on"));
+    }
+    LogInfo("held-out region " + a.holdout_region + ": " + std::to_string(region_points) + " of " +
+            std::to_string(points.size()) + " points");
   }
 
   std::error_code ec;
@@ -174,7 +236,8 @@ PhotoDatasetSummary BuildPhotoDataset(const ReliefDatasetOptions& a, const std::
   po.unit = "views";
   ConsoleProgress progress("relief dataset", po);
   std::vector<relief::PhotoPair> views;
-  size_t done = 0, masked_views = 0;
+  size_t done = 0, masked_views = 0, region_views = 0;
+  uint64_t region_pixels = 0;
   double known_sum = 0;
   for (const auto& [id, image] : model.images) {
     const auto camera = model.cameras.find(image.camera_id);
@@ -183,7 +246,7 @@ PhotoDatasetSummary BuildPhotoDataset(const ReliefDatasetOptions& a, const std::
     }
     const std::string photo_path = (fs::path(a.images) / image.name).string();
     relief::PhotoPair pair = relief::BuildPhotoPair(options, camera->second, image, relief::ReadPhoto(photo_path),
-                                                    photo_path, points);
+                                                    photo_path, points, region ? &in_region : nullptr);
     size_t known = 0;
     for (uint8_t m : pair.mask.values()) known += m != 0;
     const double fraction = static_cast<double>(known) / pair.mask.values().size();
@@ -193,8 +256,21 @@ PhotoDatasetSummary BuildPhotoDataset(const ReliefDatasetOptions& a, const std::
       ++masked_views;
     }
     const bool is_held = held.count(id) > 0;
-    relief::WritePhotoPair(output_dir + (is_held ? "/holdout" : "/views"), pair);
-    if (!is_held) views.push_back(std::move(pair));
+    if (region) {
+      const relief::PhotoPair scored = RegionOnly(pair);
+      const uint64_t pixels = KnownPixels(scored);
+      if (pixels > 0) relief::WritePhotoPair(output_dir + "/holdout", scored);
+      region_pixels += pixels;
+      if (pixels > 0) ++region_views;
+      if (!is_held) {
+        ExcludeRegion(a.holdout_margin, &pair);
+        relief::WritePhotoPair(output_dir + "/views", pair);
+        views.push_back(std::move(pair));
+      }
+    } else {
+      relief::WritePhotoPair(output_dir + (is_held ? "/holdout" : "/views"), pair);
+      if (!is_held) views.push_back(std::move(pair));
+    }
     progress.Update(++done, model.images.size());
   }
   progress.Finish();
@@ -215,10 +291,15 @@ PhotoDatasetSummary BuildPhotoDataset(const ReliefDatasetOptions& a, const std::
   WriteFileAtomic(output_dir + "/dataset.txt",
                   "pixels_per_m 0\nkind photos\npatch " + std::to_string(a.patches.patch) + "\ntrain " +
                       std::to_string(train.size()) + "\nval " + std::to_string(val.size()) + "\nviews " +
-                      std::to_string(views.size()) + "\nholdout " + std::to_string(held.size()) + "\n");
+                      std::to_string(views.size()) + "\nholdout " + std::to_string(held.size()) +
+                      (region ? "\nholdout_region " + a.holdout_region + "\nholdout_region_views " +
+                                    std::to_string(region_views) + "\nholdout_region_pixels " + std::to_string(region_pixels)
+                              : std::string()) + "\n");
   PhotoDatasetSummary s;
   s.views = model.images.size();
   s.held_out = held.size();
+  s.region_views = region_views;
+  s.region_pixels = region_pixels;
   s.known_fraction = known_sum / model.images.size();
   s.train = train.size();
   s.val = val.size();

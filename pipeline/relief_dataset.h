@@ -5,7 +5,8 @@
 // Scans and panels: OUT/train/ and OUT/val/ (one input: every 1/val_fraction-th patch validates;
 // several: the last val_fraction of them), OUT/dataset.txt (pixels_per_m, depth_m, patch, counts).
 // Real photos: the inputs are dense clouds in a COLMAP model's frame; OUT/views/ and OUT/holdout/
-// hold whole pairs (photo, depth, mask) of the training and held-out images, OUT/train/ and
+// hold whole pairs (photo, depth, mask) of the training and held-out images (with a held-out
+// region: every view's pixels of that surface, see holdout_region), OUT/train/ and
 // OUT/val/ the patches of the training views (the last val_fraction of them, by name, validate);
 // OUT/dataset.txt says "pixels_per_m 0" (photographs have no metric resolution: the model keeps
 // its own). Part of candi_pipeline_relief. Failures: std::invalid_argument for invalid options,
@@ -13,6 +14,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -29,6 +31,12 @@ struct ReliefDatasetOptions {
   // Real photographs: a COLMAP sparse model and its photos (the inputs are dense clouds in its frame).
   std::string colmap, images;
   std::vector<std::string> holdout;       // image names (or stems) kept out of training
+  // A surface kept out of training (relief::ParseSceneRegion's text; empty: none): in every
+  // training view the pixels whose nearest point lies in it, widened by holdout_margin pixels,
+  // lose their depth and their photo (a flat grey), and holdout/ gets every view with only
+  // those pixels (not widened) known: scores of a surface the network never saw.
+  std::string holdout_region;
+  int holdout_margin = 4;                 // pixels, [0, 64]
   relief::PhotoPairOptions photo_pairs;   // pair size (max_side), occlusion, depth normalisation
   void Check() const;
 };
@@ -43,6 +51,8 @@ ReliefDatasetSummary BuildReliefDataset(const ReliefDatasetOptions& options, con
 
 struct PhotoDatasetSummary {
   size_t views = 0, held_out = 0, train = 0, val = 0, empty_views = 0;
+  size_t region_views = 0;     // views with pixels of the held-out region (in holdout/)
+  uint64_t region_pixels = 0;  // known pixels of the held-out region, over holdout/
   double known_fraction = 0;  // of the views' pixels with a depth
 };
 

@@ -4,13 +4,20 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <limits>
+#include <stdexcept>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
+#include "core/text_format.h"
 #include "io/image/png_io.h"
 #include "io/point_io.h"
 #include "pipeline/relief_dataset.h"
+#include "reconstruction/photogrammetry/colmap_model.h"
+#include "reconstruction/relief/relief_photo_pairs.h"
 #include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 
@@ -106,6 +113,137 @@ TEST(ReliefInProcess, WritesTheDepthMapAndThePanelsPoints) {
   Box3d box;
   for (const Eigen::Vector3d& p : cloud.positions) box.Extend(p);
   EXPECT_NEAR(box.max.x(), 2.7, 0.05);  // the panel's width
+}
+
+// Per pixel of a view: whether its nearest point (camera depth as a float, the first of equal
+// ones, as the pairs' z-buffer keeps them) lies in the held-out region, from every point
+// projected as COLMAP projects it.
+struct NearestSide {
+  std::vector<float> depth;
+  std::vector<uint8_t> region;  // 1: the nearest point is the region's
+};
+NearestSide ProjectSides(const photogrammetry::ColmapCamera& cam, const photogrammetry::ColmapImage& image, int w,
+                         int h, const std::vector<Eigen::Vector3d>& points, const std::vector<uint8_t>& in_region) {
+  NearestSide n;
+  n.depth.assign(static_cast<size_t>(w) * h, std::numeric_limits<float>::infinity());
+  n.region.assign(n.depth.size(), 0);
+  const Eigen::Matrix3d r = image.cam_from_world_rotation.normalized().toRotationMatrix();
+  for (size_t i = 0; i < points.size(); ++i) {
+    const double z = (r * points[i] + image.cam_from_world_translation).z();
+    if (!(z > 0)) continue;
+    const Eigen::Vector2d uv = photogrammetry::ProjectToImage(cam, image, points[i]);
+    if (!uv.allFinite()) continue;
+    const double x = std::floor(uv.x() * w / cam.width), y = std::floor(uv.y() * h / cam.height);
+    if (x < 0 || y < 0 || x >= w || y >= h) continue;
+    const size_t at = static_cast<size_t>(y) * w + static_cast<size_t>(x);
+    if (static_cast<float>(z) < n.depth[at]) {
+      n.depth[at] = static_cast<float>(z);
+      n.region[at] = in_region[i];
+    }
+  }
+  return n;
+}
+
+// Issue 39's surface hold-out on the Sceaux photos: one side of the chateau is held out. No
+// training pixel (nor one within the margin) shows it, its photo pixels are grey, and the
+// held-out pairs know only pixels whose nearest point is on it.
+TEST(PhotoDatasetRegion, TheHeldOutSurfaceNeverReachesTrainingAndIsAllTheHoldoutScores) {
+  CANDI_REQUIRE_SHARED_DATA(model_dir, "colmap/sceaux_1600_sparse");
+  CANDI_REQUIRE_SHARED_DATA(photos, "photos/sceaux_castle");
+  CANDI_REQUIRE_SHARED_DATA(dense, "dense/sceaux_openmvs_dense.ply");
+  const PointCloud cloud = io::ReadPointCloud(dense);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> xs;
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    points.push_back(cloud.frame.ToWorld(cloud.positions[i]));
+    xs.push_back(points.back().x());
+  }
+  std::nth_element(xs.begin(), xs.begin() + xs.size() / 3, xs.end());
+  const double cut = xs[xs.size() / 3];  // a third of the points: x below it
+  TempDir dir;
+  ReliefDatasetOptions o;
+  o.colmap = model_dir;
+  o.images = photos;
+  o.photo_pairs.max_side = 128;
+  o.patches.patch = 64;
+  o.patches.stride = 32;
+  o.holdout_margin = 2;
+  o.holdout_region = "side:-1,0,0," + FormatDouble(-cut);
+  const relief::SceneRegion region = relief::ParseSceneRegion(o.holdout_region);
+  std::vector<uint8_t> in_region(points.size());
+  for (size_t i = 0; i < points.size(); ++i) in_region[i] = region.Contains(points[i]);
+  const PhotoDatasetSummary s = BuildPhotoDataset(o, {dense}, dir.File("pairs"));
+  ASSERT_GT(s.train, 0u);
+  ASSERT_GT(s.region_views, 2u);
+  EXPECT_EQ(s.held_out, 0u) << "no photo held out";
+
+  const photogrammetry::ColmapModel model = photogrammetry::ReadColmapModel(model_dir);
+  auto view_of = [&](const std::string& stem) -> const photogrammetry::ColmapImage& {
+    for (const auto& [id, image] : model.images) {
+      if (std::filesystem::path(image.name).stem().string() == stem) return image;
+    }
+    throw std::runtime_error("no image " + stem);
+  };
+  uint64_t train_known = 0, scored = 0;
+  for (const relief::PhotoPair& pair : relief::ReadPhotoPairs(dir.File("pairs/views"))) {
+    const photogrammetry::ColmapImage& image = view_of(pair.name);
+    const int w = pair.mask.width(), h = pair.mask.height();
+    const NearestSide n = ProjectSides(model.cameras.at(image.camera_id), image, w, h, points, in_region);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        if (!n.region[static_cast<size_t>(y) * w + x]) continue;  // the surface does not show here
+        // The surface shows: this pixel and those within the margin know nothing and are grey.
+        for (int v = std::max(0, y - 2); v <= std::min(h - 1, y + 2); ++v) {
+          for (int u = std::max(0, x - 2); u <= std::min(w - 1, x + 2); ++u) {
+            ASSERT_EQ(pair.mask.at(u, v), 0) << pair.name << " (" << u << ", " << v << ")";
+            ASSERT_NEAR(pair.photo.at(u, v), 0.5f, 1.01f / 255) << pair.name << " (" << u << ", " << v << ")";
+          }
+        }
+      }
+    }
+    for (uint8_t m : pair.mask.values()) train_known += m != 0;
+  }
+  for (const relief::PhotoPair& pair : relief::ReadPhotoPairs(dir.File("pairs/holdout"))) {
+    const photogrammetry::ColmapImage& image = view_of(pair.name);
+    const int w = pair.mask.width(), h = pair.mask.height();
+    const NearestSide n = ProjectSides(model.cameras.at(image.camera_id), image, w, h, points, in_region);
+    for (size_t i = 0; i < pair.mask.values().size(); ++i) {
+      if (pair.mask.values()[i] == 0) continue;
+      ++scored;
+      ASSERT_TRUE(n.region[i]) << pair.name << " pixel " << i << ": scored, but not the held-out surface";
+    }
+  }
+  EXPECT_EQ(scored, s.region_pixels);
+  EXPECT_GT(scored, 1000u);
+  EXPECT_GT(train_known, 5 * scored / 10) << "the rest of the chateau still trains";
+  // A region holding no point, or every point, is refused by name.
+  o.holdout_region = "box:0,0,0,1e-9,1e-9,1e-9";
+  try {
+    BuildPhotoDataset(o, {dense}, dir.File("none"));
+    ADD_FAILURE() << "an empty region was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("holds none of the"), std::string::npos) << e.what();
+  }
+  o.holdout_region = "side:0,0,1";
+  EXPECT_THROW(BuildPhotoDataset(o, {dense}, dir.File("bad")), std::invalid_argument);
+}
+
+TEST(SceneRegion, ParsesBoxesAndSidesAndNamesBadText) {
+  const relief::SceneRegion box = relief::ParseSceneRegion("box:1,2,3,0,0,0");
+  EXPECT_TRUE(box.Contains(Eigen::Vector3d(0.5, 1, 2.9)));
+  EXPECT_FALSE(box.Contains(Eigen::Vector3d(0.5, 2.1, 2.9)));
+  const relief::SceneRegion side = relief::ParseSceneRegion("side:0,0,2,1");
+  EXPECT_TRUE(side.Contains(Eigen::Vector3d(0, 0, 0.6)));
+  EXPECT_FALSE(side.Contains(Eigen::Vector3d(9, 9, 0.5)));
+  for (const char* bad : {"box:1,2,3", "cube:0,0,0,1,1,1", "side:0,0,0,1", "box:0,0,0,1,1,0", "side:1,x,0,0",
+                          "box:0,0,0,1,1,nan", "side"}) {
+    try {
+      relief::ParseSceneRegion(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

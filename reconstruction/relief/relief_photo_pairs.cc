@@ -34,6 +34,34 @@ double TextNumber(const io::PngText& text, const char* key) {
 
 }  // namespace
 
+SceneRegion ParseSceneRegion(const std::string& text) {
+  const auto fail = [&](const std::string& why) -> SceneRegion {
+    throw std::invalid_argument("region '" + text + "': " + why +
+                                " (box:x0,y0,z0,x1,y1,z1 or side:nx,ny,nz,offset, in the cloud's frame)");
+  };
+  const size_t colon = text.find(':');
+  if (colon == std::string::npos) return fail("no kind");
+  const std::string kind = text.substr(0, colon);
+  const std::vector<double> v = ParseNumbers(text.substr(colon + 1), ',', "region '" + text + "'");
+  SceneRegion r;
+  if (kind == "box") {
+    if (v.size() != 6) return fail("a box takes 6 numbers");
+    r.kind = SceneRegion::Kind::kBox;
+    r.lo = Eigen::Vector3d(v[0], v[1], v[2]).cwiseMin(Eigen::Vector3d(v[3], v[4], v[5]));
+    r.hi = Eigen::Vector3d(v[0], v[1], v[2]).cwiseMax(Eigen::Vector3d(v[3], v[4], v[5]));
+    if (!((r.hi - r.lo).array() > 0).all()) return fail("the box is empty");
+  } else if (kind == "side") {
+    if (v.size() != 4) return fail("a side takes 4 numbers");
+    r.kind = SceneRegion::Kind::kSide;
+    r.normal = Eigen::Vector3d(v[0], v[1], v[2]);
+    if (!(r.normal.norm() > 0)) return fail("the normal is zero");
+    r.offset = v[3];
+  } else {
+    return fail("unknown kind '" + kind + "'");
+  }
+  return r;
+}
+
 void PhotoPairOptions::Check() const {
   CANDI_CHECK_OPTION_IN(max_side, 32, 16384);
   CANDI_CHECK_OPTION_IN(occlusion_radius, 0, 16);
@@ -55,8 +83,10 @@ double CameraDepthOfLevel(double level, double near, double far) {
 
 PhotoPair BuildPhotoPair(const PhotoPairOptions& options, const photogrammetry::ColmapCamera& camera,
                          const photogrammetry::ColmapImage& image, const ImageF& photo,
-                         const std::string& photo_path, const std::vector<Eigen::Vector3d>& points) {
+                         const std::string& photo_path, const std::vector<Eigen::Vector3d>& points,
+                         const std::vector<uint8_t>* in_region) {
   options.Check();
+  CANDI_CHECK(in_region == nullptr || in_region->size() == points.size());
   CANDI_CHECK(camera.width > 0 && camera.height > 0) << "camera " << camera.camera_id << " has no size";
   if (photo.empty()) throw InputError(photo_path, "", "photo has no pixels");
   const double aspect_photo = static_cast<double>(photo.width()) / photo.height();
@@ -74,8 +104,10 @@ PhotoPair BuildPhotoPair(const PhotoPairOptions& options, const photogrammetry::
 
   // z-buffer of the nearest point per pixel.
   std::vector<float> z(static_cast<size_t>(w) * h, kNoDepth);
+  std::vector<uint8_t> nearest_in_region(in_region ? z.size() : 0, 0);
   const Eigen::Matrix3d r = image.cam_from_world_rotation.normalized().toRotationMatrix();
-  for (const Eigen::Vector3d& p : points) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
     if (!p.allFinite()) continue;
     const double depth = (r * p + image.cam_from_world_translation).z();
     if (!(depth > 0)) continue;
@@ -83,8 +115,11 @@ PhotoPair BuildPhotoPair(const PhotoPairOptions& options, const photogrammetry::
     if (!uv.allFinite()) continue;
     const double px = std::floor(uv.x() * sx), py = std::floor(uv.y() * sy);
     if (px < 0 || py < 0 || px >= w || py >= h) continue;
-    float& cell = z[static_cast<size_t>(py) * w + static_cast<size_t>(px)];
-    cell = std::min(cell, static_cast<float>(depth));
+    const size_t at = static_cast<size_t>(py) * w + static_cast<size_t>(px);
+    if (static_cast<float>(depth) < z[at]) {
+      z[at] = static_cast<float>(depth);
+      if (in_region) nearest_in_region[at] = (*in_region)[i] ? 255 : 0;
+    }
   }
 
   // Points hidden by a nearer neighbour: the surface behind showing through a sparse spot.
@@ -115,6 +150,10 @@ PhotoPair BuildPhotoPair(const PhotoPairOptions& options, const photogrammetry::
   pair.photo = Resample(photo, w, h);
   pair.depth = ImageF(w, h, 1, 0.0f);
   pair.mask = Image8(w, h, 1, 0);
+  if (in_region) {
+    pair.region = Image8(w, h, 1, 0);
+    std::copy(nearest_in_region.begin(), nearest_in_region.end(), pair.region.values().begin());
+  }
   std::vector<float> known;
   for (float d : visible) {
     if (d != kNoDepth) known.push_back(d);

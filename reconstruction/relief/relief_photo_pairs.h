@@ -22,6 +22,7 @@
 // and optionally <stem>_mask.png (8-bit, 0 = no data); all three the same size.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -47,7 +48,28 @@ struct PhotoPair {
   ImageF depth;      // levels; 0 where the mask is 0
   Image8 mask;       // 255 where the depth is known
   double near = 0, far = 0;  // camera depth of level 1 and level 255 (model units)
+  // 255 where the pixel's nearest point lies in a held-out region (BuildPhotoPair's in_region;
+  // empty without one). Not written by WritePhotoPair.
+  Image8 region;
 };
+
+// A part of the scene held out of training: a surface the network must never see, scored
+// afterwards as an unseen one. The points inside an axis-aligned box, or on the positive side of
+// a plane (normal . p > offset), in the cloud's frame (the COLMAP model's). Text forms:
+// "box:x0,y0,z0,x1,y1,z1" and "side:nx,ny,nz,offset"; ParseSceneRegion throws
+// std::invalid_argument quoting the text for anything else (an empty box, a zero normal, NaN).
+struct SceneRegion {
+  enum class Kind { kBox, kSide };
+  Kind kind = Kind::kBox;
+  Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();  // box
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitX();                            // side
+  double offset = 0;
+  bool Contains(const Eigen::Vector3d& p) const {
+    return kind == Kind::kBox ? (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()
+                              : normal.dot(p) > offset;
+  }
+};
+SceneRegion ParseSceneRegion(const std::string& text);
 
 // Level of camera depth z in a pair with this near/far, and back (see above).
 double LevelOfCameraDepth(double z, double near, double far);
@@ -59,9 +81,12 @@ double CameraDepthOfLevel(double level, double near, double far);
 // that its longer side is at most max_side. Throws InputError(photo_path) when the photo's aspect
 // differs from the camera's by more than 1 %, std::invalid_argument for an unsupported camera
 // model.
+// in_region (optional, one flag a point): pair.region marks the pixels whose nearest point is
+// flagged (also where the occlusion test then drops it).
 PhotoPair BuildPhotoPair(const PhotoPairOptions& options, const photogrammetry::ColmapCamera& camera,
                          const photogrammetry::ColmapImage& image, const ImageF& photo,
-                         const std::string& photo_path, const std::vector<Eigen::Vector3d>& points);
+                         const std::string& photo_path, const std::vector<Eigen::Vector3d>& points,
+                         const std::vector<uint8_t>* in_region = nullptr);
 
 // Writes the three files of a pair into dir (created if missing), each atomically.
 void WritePhotoPair(const std::string& dir, const PhotoPair& pair);
