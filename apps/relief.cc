@@ -138,7 +138,8 @@ void AddEval(Command& relief) {
   c.Option("--photo", a.photo, "Or: one photo ...");
   c.Option("--depth", a.depth, "... and its ground-truth depth PNG");
   c.Option("--pairs", a.pairs, "Or: a folder of <name>_photo.png + _depth.png [+ _mask.png] pairs (real photos: "
-           "`relief dataset --colmap`), scored as they are (no resampling)");
+           "`relief dataset --colmap`), scored as they are (no resampling); repeatable: each folder a held-out "
+           "part, scored alone, then the mean over the parts");
   c.Option("--level-per-pixel", a.surface.level_per_pixel, "Normals: one depth level in pixel widths (default: "
            "depth_m/255 over the panel's metres per pixel; 1 for --pairs)");
   c.Option("--normal-step", a.surface.normal_step, "Normals: differences over this many pixels each side (default 1; "
@@ -155,6 +156,8 @@ void AddEval(Command& relief) {
   c.Run([&a] { return RunReliefEval(a); });
   c.Footer("Examples: candi relief eval --model examples/relief/relief_model.pt --panels 4\n"
            "          candi relief eval --pairs pairs/holdout --model examples/relief/relief_model.pt "
+           "--model tuned.pt\n"
+           "          candi relief eval --pairs left/holdout --pairs centre/holdout --pairs right/holdout "
            "--model tuned.pt");
 }
 

@@ -60,7 +60,7 @@ struct ReliefEvalArgs {
   int panels = 4;
   relief::SynthOptions synth;         // the held-out series: width, seed (1000, apart from training's)
   std::string photo, depth;           // or: one photo and its ground-truth depth
-  std::string pairs;                  // or: a folder of photo pairs (relief_photo_pairs.h)
+  std::vector<std::string> pairs;     // or: folders of photo pairs (relief_photo_pairs.h), each a held-out part
   relief::SurfaceMetricOptions surface;  // normals and edges (level_per_pixel, normal_step: 0 = automatic)
   double light_azimuth = -1, light_elevation = -1;  // for SFS on a photo (default: its PNG text)
   double width_m = 2.7;

@@ -54,6 +54,47 @@ relief::EvalPanel PanelFromFiles(const ReliefEvalArgs& a) {
 
 }  // namespace
 
+namespace {
+
+// The metrics of each held-out part (a folder of photo pairs), then their mean, each part
+// weighing the same.
+int RunReliefEvalParts(const ReliefEvalArgs& a, const std::vector<relief::NamedModel>& named) {
+  relief::SurfaceMetricOptions surface = a.surface;
+  surface.level_per_pixel = a.surface.level_per_pixel > 0 ? a.surface.level_per_pixel : 1;
+  surface.normal_step = a.surface.normal_step > 0 ? a.surface.normal_step : 4;
+  surface.Check();
+  std::vector<std::vector<relief::MethodScore>> parts;
+  for (const std::string& dir : a.pairs) {
+    const std::vector<relief::EvalPanel> panels = relief::PhotoEvalPanels(dir);
+    ConsoleProgressOptions po;
+    po.unit = "panels";
+    ConsoleProgress progress("relief eval " + dir, po);
+    parts.push_back(relief::EvaluatePanels(panels, named, a.predict, surface, progress.Callback()));
+    progress.Finish();
+    std::printf("part %zu: %zu photo pairs of %s (%lld pixels scored)\n", parts.size(), panels.size(), dir.c_str(),
+                static_cast<long long>(parts.back().front().metrics.count));
+    std::printf("%s\n", relief::MetricsTableHeader().c_str());
+    for (const relief::MethodScore& s : parts.back()) std::printf("%s\n", relief::MetricsTableRow(s.name, s.metrics).c_str());
+    std::printf("%s\n", relief::SurfaceTableHeader().c_str());
+    for (const relief::MethodScore& s : parts.back()) {
+      std::printf("%s\n\n", relief::SurfaceTableRow(s.name, s.normals, s.edges).c_str());
+    }
+  }
+  const std::vector<relief::MethodScore> mean = relief::MeanOverParts(parts);
+  std::printf("mean over the %zu held-out parts (each part weighs the same)\n", parts.size());
+  std::printf("%s %8s\n", relief::MetricsTableHeader().c_str(), "seconds");
+  for (const relief::MethodScore& s : mean) std::printf("%s %8.2f\n", relief::MetricsTableRow(s.name, s.metrics).c_str(), s.seconds);
+  std::printf("%s\n", relief::SurfaceTableHeader().c_str());
+  for (const relief::MethodScore& s : mean) std::printf("%s\n", relief::SurfaceTableRow(s.name, s.normals, s.edges).c_str());
+  std::printf("* scale and offset fitted to the ground truth by least squares (an oracle the network does not get); "
+              "levels 1..255 span each photo's 2nd..98th percentile of camera depth; normals with one level = %.4g "
+              "pixel widths over %d px.\n",
+              surface.level_per_pixel, surface.normal_step);
+  return kOk;
+}
+
+}  // namespace
+
 int RunReliefEval(const ReliefEvalArgs& a) {
   const relief::PredictOptions& predict = a.predict;
   predict.Check();
@@ -73,9 +114,10 @@ int RunReliefEval(const ReliefEvalArgs& a) {
   relief::SurfaceMetricOptions surface = a.surface;
   double level_per_pixel = 1;  // pairs of photographs: levels are per photo, not metric
   std::string what;
+  if (a.pairs.size() > 1) return RunReliefEvalParts(a, named);
   if (!a.pairs.empty()) {
-    panels = relief::PhotoEvalPanels(a.pairs);
-    what = std::to_string(panels.size()) + " photo pairs of " + a.pairs;
+    panels = relief::PhotoEvalPanels(a.pairs.front());
+    what = std::to_string(panels.size()) + " photo pairs of " + a.pairs.front();
   } else if (a.photo.empty()) {
     synth.Check();
     panels = relief::SyntheticEvalPanels(synth, a.panels);

@@ -157,6 +157,24 @@ TEST_F(ReliefCli, RealPhotoPairsFineTuneScoreAndPredict) {
     EXPECT_NE(r.out.find(row), std::string::npos) << row << "\n" << r.out;
   }
 
+  // A surface held out (x > 0 of the chateau), then two held-out parts scored alone and averaged.
+  const std::string surface = dir_->File("surface");
+  r = RunCandi("relief dataset " + dense + " --colmap " + model + " --images " + photos +
+               " --max-side 128 --patch 64 --stride 32 --holdout-region side:1,0,0,0 -o " + surface);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.out.find("held-out surface side:1,0,0,0:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("none in training"), std::string::npos) << r.out;
+  r = RunCandi("relief dataset " + dense + " --colmap " + model + " --images " + photos +
+               " --holdout-region side:0,0,0,1 -o " + dir_->File("bad_region"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("side:0,0,0,1"), std::string::npos) << r.output;
+  r = RunCandi("relief eval --pairs " + pairs + "/holdout --pairs " + surface + "/holdout --model " +
+               dir_->File("tuned.pt") + " --tile 64 --overlap 16");
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* row : {"part 1: 2 photo pairs", "part 2: ", "mean over the 2 held-out parts", "tuned ("}) {
+    EXPECT_NE(r.out.find(row), std::string::npos) << row << "\n" << r.out;
+  }
+
   r = RunCandi("relief predict " + photos + "/100_7105.JPG --model " + dir_->File("tuned.pt") +
                " --width-m 0 --tile 64 --overlap 16 -o " + dir_->File("7105_depth.png"));
   ASSERT_EQ(r.code, 0) << r.output;

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <stdexcept>
 
 #include "core/check.h"
 #include "reconstruction/relief/relief_baselines.h"
@@ -123,6 +124,55 @@ std::string SurfaceTableHeader() {
   std::snprintf(line, sizeof(line), "%-26s %8s %8s %7s %7s %7s %8s %8s %8s", "method", "normal",
                 "median", "<11.25", "<22.5", "<30", "edge P", "edge R", "edge F1");
   return line;
+}
+
+std::vector<MethodScore> MeanOverParts(const std::vector<std::vector<MethodScore>>& parts) {
+  if (parts.empty()) throw std::invalid_argument("MeanOverParts: no parts");
+  std::vector<MethodScore> mean = parts.front();
+  for (size_t m = 0; m < mean.size(); ++m) {
+    MethodScore& out = mean[m];
+    out.metrics = DepthMetrics();
+    out.normals = NormalMetrics();
+    out.edges = EdgeMetrics();
+    out.seconds = 0;
+    int depth_parts = 0, normal_parts = 0, edge_parts = 0;
+    for (const std::vector<MethodScore>& part : parts) {
+      if (part.size() != mean.size() || part[m].name != out.name) {
+        throw std::invalid_argument("MeanOverParts: the parts score different methods");
+      }
+      const MethodScore& s = part[m];
+      out.seconds += s.seconds;
+      if (s.metrics.count > 0) {
+        ++depth_parts;
+        DepthMetrics& d = out.metrics;
+        d.delta1 += s.metrics.delta1, d.delta2 += s.metrics.delta2, d.delta3 += s.metrics.delta3;
+        d.rmse += s.metrics.rmse, d.rmse_log += s.metrics.rmse_log;
+        d.abs_rel += s.metrics.abs_rel, d.sq_rel += s.metrics.sq_rel;
+        d.count += s.metrics.count;
+      }
+      if (s.normals.count > 0) {
+        ++normal_parts;
+        NormalMetrics& n = out.normals;
+        n.mean_deg += s.normals.mean_deg, n.median_deg += s.normals.median_deg;
+        n.within_11 += s.normals.within_11, n.within_22 += s.normals.within_22, n.within_30 += s.normals.within_30;
+        n.count += s.normals.count;
+      }
+      if (s.edges.truth > 0) {
+        ++edge_parts;
+        EdgeMetrics& e = out.edges;
+        e.precision += s.edges.precision, e.recall += s.edges.recall, e.f1 += s.edges.f1;
+        e.predicted += s.edges.predicted, e.truth += s.edges.truth;
+      }
+    }
+    const auto divide = [](double* v, int k) { *v = k > 0 ? *v / k : 0.0; };
+    DepthMetrics& d = out.metrics;
+    for (double* v : {&d.delta1, &d.delta2, &d.delta3, &d.rmse, &d.rmse_log, &d.abs_rel, &d.sq_rel}) divide(v, depth_parts);
+    NormalMetrics& n = out.normals;
+    for (double* v : {&n.mean_deg, &n.median_deg, &n.within_11, &n.within_22, &n.within_30}) divide(v, normal_parts);
+    EdgeMetrics& e = out.edges;
+    for (double* v : {&e.precision, &e.recall, &e.f1}) divide(v, edge_parts);
+  }
+  return mean;
 }
 
 std::string SurfaceTableRow(const std::string& name, const NormalMetrics& n, const EdgeMetrics& e) {

@@ -53,6 +53,13 @@ std::vector<MethodScore> EvaluatePanels(const std::vector<EvalPanel>& panels,
                                         const SurfaceMetricOptions& surface = {},
                                         const ProgressCallback& progress = nullptr);
 
+// The scores of several held-out parts (each the same methods in the same order; at least one)
+// averaged with each part weighing the same (not each pixel: a small part counts as much as a
+// large one, as in leave-one-part-out protocols); counts and seconds are summed. Parts scored
+// on no pixel of a metric are left out of that metric's mean. Throws std::invalid_argument when
+// the parts' methods differ.
+std::vector<MethodScore> MeanOverParts(const std::vector<std::vector<MethodScore>>& parts);
+
 // BTS (DenseNet-161) on a visible panel, the paper's Table 2.
 DepthMetrics PaperBtsMetrics();
 

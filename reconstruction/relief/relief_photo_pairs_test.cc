@@ -165,6 +165,36 @@ TEST(PhotoPairs, ConstantGreyPhotosScoreFiniteBaselines) {
 
 // Depth noisy at the pixel scale (a checkerboard of 2x2-pixel cells, +-1 level, on a plane):
 // normals from neighbours read the noise, normals over 4 pixels read the plane.
+// Leave-one-part-out: each part weighs the same, a part without scored pixels is left out of a
+// metric's mean, and parts scoring other methods are refused.
+TEST(MeanOverParts, EachPartWeighsTheSame) {
+  auto score = [](const std::string& name, double delta1, int64_t count, double normal, int64_t normals) {
+    MethodScore s;
+    s.name = name;
+    s.metrics.delta1 = delta1;
+    s.metrics.rmse_log = 1 - delta1;
+    s.metrics.count = count;
+    s.normals.mean_deg = normal;
+    s.normals.count = normals;
+    s.seconds = 1;
+    return s;
+  };
+  const std::vector<std::vector<MethodScore>> parts = {
+      {score("a", 0.2, 1000000, 40, 10), score("net", 0.9, 1000000, 20, 10)},
+      {score("a", 0.6, 10, 0, 0), score("net", 0.5, 10, 30, 10)}};
+  const std::vector<MethodScore> mean = MeanOverParts(parts);
+  ASSERT_EQ(mean.size(), 2u);
+  EXPECT_EQ(mean[0].name, "a");
+  EXPECT_NEAR(mean[0].metrics.delta1, 0.4, 1e-12) << "not weighted by pixels";
+  EXPECT_NEAR(mean[0].metrics.rmse_log, 0.6, 1e-12);
+  EXPECT_EQ(mean[0].metrics.count, 1000010);
+  EXPECT_NEAR(mean[0].normals.mean_deg, 40, 1e-12) << "the part without normals is left out";
+  EXPECT_NEAR(mean[1].normals.mean_deg, 25, 1e-12);
+  EXPECT_EQ(mean[1].seconds, 2);
+  EXPECT_THROW(MeanOverParts({}), std::invalid_argument);
+  EXPECT_THROW(MeanOverParts({parts[0], {score("b", 0.1, 1, 0, 0), score("net", 0.1, 1, 0, 0)}}), std::invalid_argument);
+}
+
 TEST(SurfaceMetrics, NormalStepReadsTheSurfaceUnderPixelNoise) {
   ImageF plane(40, 40, 1), noisy(40, 40, 1);
   for (int y = 0; y < 40; ++y) {
