@@ -17,8 +17,10 @@ namespace {
 
 constexpr size_t kCopcInfoBytes = 160;
 constexpr size_t kEntryBytes = 32;
-// Nodes compressed together: enough to keep two cores busy, few enough to bound the chunks held.
-constexpr size_t kBatchNodes = 64;
+// Nodes compressed together: consecutive nodes up to this many points (or one larger node), so
+// that threads seldom wait for a batch's last node, and the chunks held stay bounded (~8 bytes a
+// point).
+constexpr size_t kBatchPoints = size_t{1} << 21;
 
 void PutF64(std::string* out, size_t at, double v) {
   StoreLE<double>(reinterpret_cast<uint8_t*>(out->data()) + at, v);
@@ -187,9 +189,13 @@ CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, si
   CopcPointData data;
   std::vector<uint32_t> bytes, points;
   uint64_t offset = first_chunk;
-  std::vector<std::vector<uint8_t>> chunks(kBatchNodes);
-  for (size_t first = 0; first < tree.nodes.size(); first += kBatchNodes) {
-    const size_t count = std::min(kBatchNodes, tree.nodes.size() - first);
+  std::vector<std::vector<uint8_t>> chunks;
+  for (size_t first = 0, count = 0; first < tree.nodes.size(); first += count) {
+    size_t points_in_batch = 0;
+    for (count = 0; first + count < tree.nodes.size() && points_in_batch < kBatchPoints; ++count) {
+      points_in_batch += tree.nodes[first + count].points.size();
+    }
+    if (chunks.size() < count) chunks.resize(count);
     ParallelFor(size_t{0}, count, [&](size_t j) {
       const CopcNode& node = tree.nodes[first + j];
       std::vector<uint8_t> gathered(node.points.size() * record_length);
