@@ -172,5 +172,7 @@ int main(int argc, char** argv) {
       }
     }
   }
+  std::error_code ignored;
+  fs::remove(dir, ignored);  // when empty
   return 0;
 }
