@@ -475,6 +475,46 @@ TEST(CopcWriteOptions, DefaultsPassAndBadPagesAreRefused) {
   EXPECT_THROW(options.Check(), std::invalid_argument);
 }
 
+// Every node of the complete octree below `key` down to `last_level`.
+void AddSubtree(const CopcKey& key, int last_level, std::vector<CopcEntry>* entries) {
+  entries->push_back({key, 1000 + 10 * entries->size(), 10, 1});
+  if (key.level == last_level) return;
+  for (int o = 0; o < 8; ++o) {
+    AddSubtree({key.level + 1, 2 * key.x + (o & 1), 2 * key.y + (o >> 1 & 1), 2 * key.z + (o >> 2)},
+               last_level, entries);
+  }
+}
+
+// Untwine's defaults: levels 0-4 in the root page; node (4, 0, 0, 0)'s subtree of 73 nodes
+// (down to level 6) in a page of its own, node (4, 1, 0, 0)'s of 9 (level 5) in the root page.
+TEST(CopcWrite, DefaultPagesCutDeepSubtreesOfMoreThan50Nodes) {
+  std::vector<CopcEntry> entries;
+  AddSubtree({0, 0, 0, 0}, 4, &entries);
+  ASSERT_EQ(entries.size(), 4681u);  // 1 + 8 + 64 + 512 + 4096
+  std::vector<CopcEntry> deep, shallow;
+  AddSubtree({4, 0, 0, 0}, 6, &deep);
+  AddSubtree({4, 1, 0, 0}, 5, &shallow);
+  entries.insert(entries.end(), deep.begin() + 1, deep.end());
+  entries.insert(entries.end(), shallow.begin() + 1, shallow.end());
+  std::shuffle(entries.begin(), entries.end(), std::mt19937(7));  // any order
+  const CopcHierarchy h = EncodeCopcHierarchyPages({}, entries, 0);
+  ASSERT_EQ(h.data.size(), 32u * (4681 + 8 + 73));
+  const std::vector<CopcEntry> root = ParseCopcHierarchy(h.data.substr(h.root_offset));
+  ASSERT_EQ(root.size(), 4689u);
+  EXPECT_TRUE((root[0].key == CopcKey{0, 0, 0, 0}));
+  int pointers = 0;
+  for (const CopcEntry& e : root) {
+    EXPECT_LE(e.key.level, 5);
+    if (e.points != -1) continue;
+    ++pointers;
+    EXPECT_TRUE((e.key == CopcKey{4, 0, 0, 0}));
+    const std::vector<CopcEntry> page = ParseCopcHierarchy(h.data.substr(e.offset, e.bytes));
+    EXPECT_EQ(page.size(), 73u);
+    EXPECT_TRUE((page[0].key == CopcKey{4, 0, 0, 0}) && page[0].points == 1);
+  }
+  EXPECT_EQ(pointers, 1);
+}
+
 // A root with two children, (1, 0, 0, 0) with a child: pages of one level, none small.
 TEST(CopcWrite, HierarchyPagesPointToTheirChildPages) {
   const std::vector<CopcEntry> entries = {{{0, 0, 0, 0}, 1000, 10, 5},
