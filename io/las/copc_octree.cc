@@ -211,6 +211,13 @@ Split SplitNode(const CopcOctreeOptions& options, const CopcKey& key,
   }
   std::array<size_t, 8> sizes{};
   for (size_t j = 0; j < n; ++j) sizes[octant[j]] += !kept[j];
+  size_t kept_size = n;  // each list allocated once, at its size
+  for (int o = 0; o < 8; ++o) {
+    if (sizes[o] < static_cast<size_t>(options.min_octant_points)) continue;
+    s.children[o].reserve(sizes[o]);
+    kept_size -= sizes[o];
+  }
+  s.kept.reserve(kept_size);
   for (size_t j = 0; j < n; ++j) {
     const bool small = sizes[octant[j]] < static_cast<size_t>(options.min_octant_points);
     (kept[j] || small ? s.kept : s.children[octant[j]]).push_back(points[j]);
