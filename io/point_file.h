@@ -101,6 +101,18 @@ class PointReader {
 enum class PlyEncoding { kBinaryLittleEndian, kBinaryBigEndian, kAscii };
 enum class PositionPrecision { kAuto, kFloat32, kFloat64 };
 
+// COPC (a *.copc.laz name, io/las/copc_write.h) writing options.
+struct CopcWriteOptions {
+  // The hierarchy's pages as untwine and PDAL cut them: a page holds its root node and this many
+  // levels below it; a node at that depth whose subtree has more than min_page_nodes nodes
+  // starts a child page (entry point count -1). 4 and 50 as untwine (LevelBreak,
+  // MinHierarchySize); page_levels >= 1, min_page_nodes >= 0 (1 and 0: a page a node with
+  // children one level down, for tests).
+  int page_levels = 4;
+  int min_page_nodes = 50;
+  void Check() const;
+};
+
 struct PointWriteOptions {
   PlyEncoding ply_encoding = PlyEncoding::kBinaryLittleEndian;
   // PLY/XYZ position precision. kAuto: double when the spec's frame has a shift or the schema's
@@ -113,6 +125,7 @@ struct PointWriteOptions {
   std::optional<Eigen::Vector3d> las_offset;  // default: meta.las.offset if present, else frame origin
   // XYZ/PTS: column spec as in PointReadOptions; empty = all of the schema (x,y,z[,r,g,b][,nx,ny,nz][,scalars]).
   std::string columns;
+  CopcWriteOptions copc;
   void Check() const;
 };
 

@@ -3,8 +3,8 @@
 // The cube: centred on the points' bounds, halfsize = half the largest extent (or the largest
 // scale when every point is at one place). Node (d, x, y, z) is the cube's cell at level d,
 // width 2 * halfsize / 2^d, x, y, z in [0, 2^d). Each node lays a grid of 128^3 cells over
-// itself (untwine's CellCount) and keeps one point a cell: the one nearest to the cell's centre,
-// the earlier in input order on a tie; the others go to the child octant holding them. So the
+// itself (untwine's CellCount) and keeps one point a cell: the one nearest to the cell's centre
+// (squared distance rounded to float), the earlier in input order on a tie; the others go to the child octant holding them. So the
 // points a node keeps are at most one per cell of width spacing / 2^d, spacing = 2 * halfsize /
 // 128 being the root's (COPC info "spacing"; untwine and PDAL write the cube width over their
 // cell count, 128). A node whose cells are narrower than the smallest LAS scale keeps all its
@@ -18,9 +18,11 @@
 // Positions are the records' integer X, Y, Z (LAS units, world = X * scale + offset): a point
 // belongs to the cell floor(t * 2^L) at level L, t = (world - cube min) / cube width, clamped to
 // [0, 2^L - 1], the same rule at every level, so a point of node (d, x) lies in a child
-// (d + 1, 2x or 2x + 1). Deterministic: the nodes and their points do not depend on the thread
-// count (the nodes of a level are processed in parallel, each on its own).
-// Memory: ~5 words a point. Thread-safety: a pure function.
+// (d + 1, 2x or 2x + 1); it is computed once, as floor(t * 2^62), of which each level's cell is
+// a shift. Deterministic: the nodes and their points do not depend on the thread count (the
+// nodes of a level are processed in parallel, each on its own; a large node's cells are chosen
+// by atomic minima of (distance, position)).
+// Memory: ~5 words a point, and 16 MiB a large node being split. Thread-safety: a pure function.
 #pragma once
 
 #include <array>

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <map>
+#include <tuple>
 
 #include "core/binary_file.h"
 #include "core/check.h"
@@ -15,8 +17,10 @@ namespace {
 
 constexpr size_t kCopcInfoBytes = 160;
 constexpr size_t kEntryBytes = 32;
-// Nodes compressed together: enough to keep two cores busy, few enough to bound the chunks held.
-constexpr size_t kBatchNodes = 64;
+// Nodes compressed together: consecutive nodes up to this many points (or one larger node), so
+// that threads seldom wait for a batch's last node, and the chunks held stay bounded (~8 bytes a
+// point).
+constexpr size_t kBatchPoints = size_t{1} << 21;
 
 void PutF64(std::string* out, size_t at, double v) {
   StoreLE<double>(reinterpret_cast<uint8_t*>(out->data()) + at, v);
@@ -85,6 +89,97 @@ std::vector<CopcEntry> ParseCopcHierarchy(const std::string& page) {
   return entries;
 }
 
+namespace {
+
+// The pages of one hierarchy, written depth first (untwine's CopcSupport::emitRoot).
+class PageWriter {
+ public:
+  PageWriter(const CopcWriteOptions& options, const std::vector<CopcEntry>& entries,
+             uint64_t payload_offset)
+      : options_(options), entries_(entries), base_(payload_offset), children_(entries.size()),
+        subtree_(entries.size(), 1) {}
+
+  CopcHierarchy Write() {
+    std::map<std::tuple<int, int, int, int>, size_t> index;
+    for (size_t j = 0; j < entries_.size(); ++j) {
+      const CopcKey& k = entries_[j].key;
+      CANDI_CHECK(index.emplace(std::make_tuple(k.level, k.x, k.y, k.z), j).second)
+          << "COPC node " << k.level << "-" << k.x << "-" << k.y << "-" << k.z << " twice";
+    }
+    std::vector<size_t> root;
+    // Deepest first, so a node's subtree is counted before its parent adds it.
+    for (auto it = index.rbegin(); it != index.rend(); ++it) {
+      const auto [level, x, y, z] = it->first;
+      if (level == 0) {
+        root.push_back(it->second);
+        continue;
+      }
+      const auto parent = index.find(std::make_tuple(level - 1, x / 2, y / 2, z / 2));
+      CANDI_CHECK(parent != index.end())
+          << "COPC node " << level << "-" << x << "-" << y << "-" << z << " without its parent";
+      children_[parent->second].push_back(it->second);
+      subtree_[parent->second] += subtree_[it->second];
+    }
+    CANDI_CHECK_EQ(root.size(), size_t{1}) << "COPC hierarchy roots";
+    for (std::vector<size_t>& c : children_) {
+      std::sort(c.begin(), c.end(), [&](size_t a, size_t b) { return Octant(a) < Octant(b); });
+    }
+    CopcHierarchy h;
+    const CopcEntry top = EmitPage(root[0]);
+    h.data = std::move(data_);
+    h.root_offset = top.offset - base_;
+    h.root_size = static_cast<uint64_t>(top.bytes);
+    return h;
+  }
+
+ private:
+  int Octant(size_t j) const {
+    const CopcKey& k = entries_[j].key;
+    return (k.x & 1) | (k.y & 1) << 1 | (k.z & 1) << 2;
+  }
+
+  // Writes the page of `root`'s subtree (its child pages first); its entry in the parent page.
+  CopcEntry EmitPage(size_t root) {
+    std::vector<CopcEntry> page{entries_[root]};
+    EmitChildren(root, entries_[root].key.level + options_.page_levels, &page);
+    const std::string bytes = EncodeCopcHierarchy(page);
+    CANDI_CHECK(bytes.size() <= size_t{std::numeric_limits<int32_t>::max()})
+        << "COPC hierarchy page of " << page.size() << " entries";
+    const CopcEntry entry{entries_[root].key, base_ + data_.size(),
+                          static_cast<int32_t>(bytes.size()), -1};
+    data_ += bytes;
+    return entry;
+  }
+
+  void EmitChildren(size_t parent, int stop_level, std::vector<CopcEntry>* page) {
+    for (size_t c : children_[parent]) {
+      if (entries_[c].key.level != stop_level || subtree_[c] <= options_.min_page_nodes) {
+        page->push_back(entries_[c]);
+        EmitChildren(c, stop_level, page);
+      } else {
+        page->push_back(EmitPage(c));
+      }
+    }
+  }
+
+  const CopcWriteOptions& options_;
+  const std::vector<CopcEntry>& entries_;
+  const uint64_t base_;
+  std::vector<std::vector<size_t>> children_;
+  std::vector<int64_t> subtree_;  // nodes in each node's subtree, itself included
+  std::string data_;
+};
+
+}  // namespace
+
+CopcHierarchy EncodeCopcHierarchyPages(const CopcWriteOptions& options,
+                                       const std::vector<CopcEntry>& entries,
+                                       uint64_t payload_offset) {
+  options.Check();
+  CANDI_CHECK(!entries.empty()) << "COPC hierarchy of no node";
+  return PageWriter(options, entries, payload_offset).Write();
+}
+
 CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
                               const laz::Vlr& vlr, uint64_t first_chunk,
                               const std::function<void(const uint8_t*, size_t)>& sink) {
@@ -94,9 +189,13 @@ CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, si
   CopcPointData data;
   std::vector<uint32_t> bytes, points;
   uint64_t offset = first_chunk;
-  std::vector<std::vector<uint8_t>> chunks(kBatchNodes);
-  for (size_t first = 0; first < tree.nodes.size(); first += kBatchNodes) {
-    const size_t count = std::min(kBatchNodes, tree.nodes.size() - first);
+  std::vector<std::vector<uint8_t>> chunks;
+  for (size_t first = 0, count = 0; first < tree.nodes.size(); first += count) {
+    size_t points_in_batch = 0;
+    for (count = 0; first + count < tree.nodes.size() && points_in_batch < kBatchPoints; ++count) {
+      points_in_batch += tree.nodes[first + count].points.size();
+    }
+    if (chunks.size() < count) chunks.resize(count);
     ParallelFor(size_t{0}, count, [&](size_t j) {
       const CopcNode& node = tree.nodes[first + j];
       std::vector<uint8_t> gathered(node.points.size() * record_length);

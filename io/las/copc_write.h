@@ -5,7 +5,7 @@
 // Internal to the LAS writer (io/las/las_io.cc), which writes a COPC file for a name ending in
 // ".copc.laz": LAS 1.4, point format 6-8, the info VLR first, the laszip VLR with variable
 // chunks, the point data (the chunk table's offset, the nodes' chunks level by level, the chunk
-// table with per-chunk point counts), then the hierarchy EVLR (one page holding every node) and
+// table with per-chunk point counts), then the hierarchy EVLR (its pages, the root page last) and
 // the EVLRs kept from the source.
 // Failure: the Parse* functions (for tests and tools) CANDI_CHECK the payload sizes; a chunk the
 // encoder refuses is a CANDI_CHECK (the writer built the records). Thread-safety: pure
@@ -20,6 +20,7 @@
 
 #include "io/las/copc_octree.h"
 #include "io/las/laz_format.h"
+#include "io/point_file.h"
 
 namespace candi::io {
 
@@ -46,6 +47,22 @@ struct CopcEntry {
 };
 std::string EncodeCopcHierarchy(const std::vector<CopcEntry>& entries);  // 32 bytes an entry
 std::vector<CopcEntry> ParseCopcHierarchy(const std::string& page);      // CANDI_CHECK: k * 32
+
+// The hierarchy EVLR's payload: the pages of `entries` (one a node, each node's parent among
+// them), cut as untwine and PDAL cut them (CopcWriteOptions, io/point_file.h): a page holds its
+// root and the nodes page_levels below it in depth-first order, children by octant; a node at
+// that depth whose subtree has more than min_page_nodes nodes gets a page of its own, and the
+// parent page's entry for it holds the page's file offset, its bytes and point count -1. Child
+// pages precede their parent's, so the root page is last. `payload_offset`: the file offset at
+// which the payload will be written. CANDI_CHECK: a node without its parent, no root.
+struct CopcHierarchy {
+  std::string data;          // the pages
+  uint64_t root_offset = 0;  // of the root page, from the payload's start
+  uint64_t root_size = 0;    // its bytes
+};
+CopcHierarchy EncodeCopcHierarchyPages(const CopcWriteOptions& options,
+                                       const std::vector<CopcEntry>& entries,
+                                       uint64_t payload_offset);
 
 struct CopcPointData {
   std::vector<CopcEntry> entries;    // one a node, in tree.nodes' order

@@ -45,9 +45,28 @@ struct CopcFile {
   std::vector<LasVlr> vlrs, evlrs;
   CopcInfo info;
   laz::Vlr laz;
-  std::vector<CopcEntry> entries;
+  std::vector<CopcEntry> entries;  // of every page
+  int pages = 0;
   std::string bytes;
 };
+
+// The node entries of the page at `offset` and of its child pages (entries of point count -1),
+// each page inside the hierarchy EVLR's payload, into f->entries; the pages into f->pages.
+void WalkPages(uint64_t offset, uint64_t size, CopcFile* f) {
+  const uint64_t payload = f->header.start_of_first_evlr + 60;
+  ASSERT_GE(offset, payload);
+  ASSERT_LE(offset + size, payload + f->evlrs[0].data.size()) << "a page outside the EVLR";
+  ++f->pages;
+  const std::vector<CopcEntry> page = ParseCopcHierarchy(f->bytes.substr(offset, size));
+  ASSERT_FALSE(page.empty());
+  for (const CopcEntry& e : page) {
+    if (e.points == -1) {
+      WalkPages(e.offset, static_cast<uint64_t>(e.bytes), f);
+    } else {
+      f->entries.push_back(e);
+    }
+  }
+}
 
 CopcFile ReadCopc(const std::string& path) {
   CopcFile f;
@@ -64,7 +83,9 @@ CopcFile ReadCopc(const std::string& path) {
   for (const LasVlr& v : f.vlrs) {
     if (v.user_id == "laszip encoded") f.laz = laz::ParseVlr(v.data);
   }
-  f.entries = ParseCopcHierarchy(f.bytes.substr(f.info.root_hier_offset, f.info.root_hier_size));
+  EXPECT_FALSE(f.evlrs.empty());
+  if (f.evlrs.empty()) return f;
+  WalkPages(f.info.root_hier_offset, f.info.root_hier_size, &f);
   return f;
 }
 
@@ -108,8 +129,9 @@ void ExpectCopcLayout(const CopcFile& f, int format) {
   ASSERT_FALSE(f.evlrs.empty());
   EXPECT_EQ(f.evlrs[0].user_id, kCopcUserId);
   EXPECT_EQ(f.evlrs[0].record_id, kCopcHierarchyRecord);
-  EXPECT_EQ(f.info.root_hier_offset, f.header.start_of_first_evlr + 60);
-  EXPECT_EQ(f.info.root_hier_size, f.evlrs[0].data.size());
+  // The root page is the hierarchy EVLR's last (child pages first, as untwine writes them).
+  EXPECT_EQ(f.info.root_hier_offset + f.info.root_hier_size,
+            f.header.start_of_first_evlr + 60 + f.evlrs[0].data.size());
   uint64_t sum = 0;
   for (const CopcEntry& e : f.entries) {
     EXPECT_GT(e.points, 0);
@@ -117,15 +139,21 @@ void ExpectCopcLayout(const CopcFile& f, int format) {
   }
   EXPECT_EQ(sum, LasPointCount(f.header));
   ASSERT_FALSE(f.entries.empty());
-  EXPECT_EQ(f.entries[0].key.level, 0);
+  // The root page starts with the root node; every node is reached once.
+  EXPECT_EQ(ParseCopcHierarchy(f.bytes.substr(f.info.root_hier_offset, 32))[0].key.level, 0);
+  std::set<std::tuple<int, int, int, int>> keys;
+  for (const CopcEntry& e : f.entries) {
+    EXPECT_TRUE(keys.insert({e.key.level, e.key.x, e.key.y, e.key.z}).second) << "a node twice";
+  }
   EXPECT_DOUBLE_EQ(f.info.spacing, 2.0 * f.info.halfsize / 128);
 }
 
 // Writes `cloud` as a.las (format `format`), converts it to b.copc.laz and checks the COPC's
 // records, and those of its LAS rewrite c.las, against a.las's as multisets.
-CopcFile RoundTrip(const TempDir& dir, const PointCloud& cloud, int format) {
+CopcFile RoundTrip(const TempDir& dir, const PointCloud& cloud, int format,
+                   const ConvertOptions& convert = {}) {
   WritePointCloud(dir.File("a.las"), cloud, OptionsFor(format));
-  ConvertPointFile({}, dir.File("a.las"), dir.File("b.copc.laz"));
+  ConvertPointFile(convert, dir.File("a.las"), dir.File("b.copc.laz"));
   CopcFile f = ReadCopc(dir.File("b.copc.laz"));
   ExpectCopcLayout(f, format);
   const std::vector<std::string> source =
@@ -171,14 +199,13 @@ PointCloud FloorCloud(size_t n, uint32_t seed) {
   return cloud;
 }
 
-TEST(CopcWrite, EveryNodeInsideItsCubeOnePointACellSpacingHalvingPerLevel) {
-  TempDir dir;
-  const size_t n = 300000;
-  const CopcFile f = RoundTrip(dir, FloorCloud(n, 11), 7);
+// Every node's parent is a node, its points lie inside its cube, and those of octants with a
+// child node lie one a cell of width spacing / 2^level. Returns the depth; *checked: the points
+// checked one a cell.
+int ExpectNodesInsideCubesOnePerCell(const CopcFile& f, size_t* checked) {
   const LasHeader& h = f.header;
-  EXPECT_NEAR(f.info.halfsize, 50.0, 0.01);
   int depth = 0;
-  size_t checked = 0;
+  *checked = 0;
   std::set<std::tuple<int, int, int, int>> keys, keys_all;
   for (const CopcEntry& e : f.entries) keys_all.insert({e.key.level, e.key.x, e.key.y, e.key.z});
   for (const CopcEntry& e : f.entries) {
@@ -199,8 +226,8 @@ TEST(CopcWrite, EveryNodeInsideItsCubeOnePointACellSpacingHalvingPerLevel) {
       for (int k = 0; k < 3; ++k)
         w[k] = util::GetLE<int32_t>(records, at + 4 * k) * h.scale[k] + h.offset[k];
       for (int k = 0; k < 3; ++k) {
-        ASSERT_GE(w[k], lo[k] - 1e-6) << "level " << e.key.level;
-        ASSERT_LE(w[k], lo[k] + width + 1e-6) << "level " << e.key.level;
+        EXPECT_GE(w[k], lo[k] - 1e-6) << "level " << e.key.level;
+        EXPECT_LE(w[k], lo[k] + width + 1e-6) << "level " << e.key.level;
       }
       // A point within 1 um of a cell's face may be on either side of it (rounding): skipped.
       const Eigen::Vector3d u = (w - lo) / cell;
@@ -213,11 +240,21 @@ TEST(CopcWrite, EveryNodeInsideItsCubeOnePointACellSpacingHalvingPerLevel) {
       const CopcKey child{e.key.level + 1, 2 * e.key.x + (c.x() >= 64), 2 * e.key.y + (c.y() >= 64),
                           2 * e.key.z + (c.z() >= 64)};
       if (!keys_all.count({child.level, child.x, child.y, child.z})) continue;
-      ++checked;
+      ++*checked;
       EXPECT_TRUE(cells.insert({int64_t(c.x()), int64_t(c.y()), int64_t(c.z())}).second)
           << "two points in one cell of width " << cell << " at level " << e.key.level;
     }
   }
+  return depth;
+}
+
+TEST(CopcWrite, EveryNodeInsideItsCubeOnePointACellSpacingHalvingPerLevel) {
+  TempDir dir;
+  const size_t n = 300000;
+  const CopcFile f = RoundTrip(dir, FloorCloud(n, 11), 7);
+  EXPECT_NEAR(f.info.halfsize, 50.0, 0.01);
+  size_t checked = 0;
+  const int depth = ExpectNodesInsideCubesOnePerCell(f, &checked);
   const double bytes = static_cast<double>(f.bytes.size());
   std::printf(
       "floor of %zu points: %zu nodes, depth %d, root spacing %.4f m, COPC %.2f bytes/point "
@@ -346,11 +383,30 @@ double JsonNumber(const std::string& json, const std::string& key) {
 // reads candi's COPC: the header's count and format, the info VLR, the hierarchy, and every
 // node's points equal to the source's records. Skipped, saying so, where node or copc is absent
 // (scripts/deps.sh installs them).
+// copc.js (under `node`) reads dir's b.copc.laz, written from a.las: the header's count and
+// format, every node through the hierarchy's pages, and the nodes' records equal to a.las's.
+void ExpectCopcJsReads(const std::string& node, const TempDir& dir, int format) {
+  const std::string script = util::SourceDir() + "/tests/node/copc_records.js";
+  const CopcFile f = ReadCopc(dir.File("b.copc.laz"));
+  const std::string command = node + " '" + script + "' '" + dir.File("b.copc.laz") + "' '" +
+                              dir.File("b.bin") + "' > '" + dir.File("b.json") + "'";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  const std::string json = ReadBytes(dir.File("b.json"));
+  const double count = static_cast<double>(LasPointCount(f.header));
+  EXPECT_EQ(JsonNumber(json, "count"), count) << json;
+  EXPECT_EQ(JsonNumber(json, "pointSum"), count) << json;
+  EXPECT_EQ(JsonNumber(json, "format"), format) << json;
+  EXPECT_EQ(JsonNumber(json, "nodes"), static_cast<double>(f.entries.size())) << json;
+  EXPECT_DOUBLE_EQ(JsonNumber(json, "spacing"), f.info.spacing) << json;
+  const size_t length = f.header.record_length;
+  EXPECT_TRUE(Sorted(ReadBytes(dir.File("b.bin")), length) ==
+              Sorted(LasPointRecords(ReadBytes(dir.File("a.las"))), length));
+}
+
 TEST(CopcWrite, CopcJsReadsCandisCopc) {
   std::string why;
   const std::string node = util::NodeWith("copc", &why);
   if (node.empty()) GTEST_SKIP() << why << ": candi's COPC is not checked by copc.js";
-  const std::string script = util::SourceDir() + "/tests/node/copc_records.js";
   for (int format : {6, 7, 8}) {
     SCOPED_TRACE("point format " + std::to_string(format));
     TempDir dir;
@@ -358,20 +414,136 @@ TEST(CopcWrite, CopcJsReadsCandisCopc) {
         format == 7 ? FloorCloud(80000, 21) : RandomCloud(format, 30001, 50 + format);
     WritePointCloud(dir.File("a.las"), cloud, OptionsFor(format));
     ConvertPointFile({}, dir.File("a.las"), dir.File("b.copc.laz"));
-    const CopcFile f = ReadCopc(dir.File("b.copc.laz"));
-    const std::string command = node + " '" + script + "' '" + dir.File("b.copc.laz") + "' '" +
-                                dir.File("b.bin") + "' > '" + dir.File("b.json") + "'";
-    ASSERT_EQ(std::system(command.c_str()), 0) << command;
-    const std::string json = ReadBytes(dir.File("b.json"));
-    EXPECT_EQ(JsonNumber(json, "count"), static_cast<double>(cloud.size())) << json;
-    EXPECT_EQ(JsonNumber(json, "pointSum"), static_cast<double>(cloud.size())) << json;
-    EXPECT_EQ(JsonNumber(json, "format"), format) << json;
-    EXPECT_EQ(JsonNumber(json, "nodes"), static_cast<double>(f.entries.size())) << json;
-    EXPECT_DOUBLE_EQ(JsonNumber(json, "spacing"), f.info.spacing) << json;
-    const size_t length = f.header.record_length;
-    EXPECT_TRUE(Sorted(ReadBytes(dir.File("b.bin")), length) ==
-                Sorted(LasPointRecords(ReadBytes(dir.File("a.las"))), length));
+    ExpectCopcJsReads(node, dir, format);
   }
+}
+
+// Pages forced small: every node reached through child pages (by this file's walk and by
+// copc.js), the counts summing to the header's, each node inside its cube one point a cell of
+// width spacing / 2^level, chunks decoded in a shuffled order giving the source's records; the
+// nodes and chunks those of the one-page file, only the hierarchy differs.
+TEST(CopcWrite, ChildHierarchyPagesReachEveryNode) {
+  std::string why;
+  const std::string node = util::NodeWith("copc", &why);
+  const size_t n = 150000;
+  for (const auto& [levels, min_nodes] : {std::pair{1, 0}, std::pair{2, 3}}) {
+    SCOPED_TRACE("page_levels " + std::to_string(levels) + ", min_page_nodes " +
+                 std::to_string(min_nodes));
+    TempDir dir;
+    ConvertOptions convert;
+    convert.write.copc.page_levels = levels;
+    convert.write.copc.min_page_nodes = min_nodes;
+    const CopcFile f = RoundTrip(dir, FloorCloud(n, 13), 7, convert);
+    if (levels == 1 && min_nodes == 0) {
+      EXPECT_EQ(static_cast<size_t>(f.pages), f.entries.size()) << "a page a node";
+    }
+    EXPECT_GT(f.pages, 1);
+    size_t checked = 0;
+    EXPECT_GE(ExpectNodesInsideCubesOnePerCell(f, &checked), 2);
+    EXPECT_GT(checked, n / 10);
+    std::vector<size_t> order = InOrder(f.entries.size());
+    std::shuffle(order.begin(), order.end(), std::mt19937(levels));
+    EXPECT_TRUE(Sorted(AllNodeRecords(f, order), f.header.record_length) ==
+                Sorted(LasPointRecords(ReadBytes(dir.File("a.las"))), f.header.record_length));
+    ConvertPointFile({}, dir.File("a.las"), dir.File("one.copc.laz"));
+    const CopcFile one = ReadCopc(dir.File("one.copc.laz"));
+    EXPECT_EQ(one.pages, 1);
+    auto entries = [](const CopcFile& g) {
+      std::set<std::tuple<int, int, int, int, uint64_t, int, int>> s;
+      for (const CopcEntry& e : g.entries)
+        s.insert({e.key.level, e.key.x, e.key.y, e.key.z, e.offset, e.bytes, e.points});
+      return s;
+    };
+    EXPECT_TRUE(entries(f) == entries(one));
+    std::printf("%zu points, pages of %d levels, %d nodes: %zu nodes in %d pages\n", n, levels,
+                min_nodes, f.entries.size(), f.pages);
+    if (node.empty()) {
+      std::printf("%s: the pages are not checked by copc.js\n", why.c_str());
+    } else {
+      ExpectCopcJsReads(node, dir, 7);
+    }
+  }
+}
+
+TEST(CopcWriteOptions, DefaultsPassAndBadPagesAreRefused) {
+  EXPECT_NO_THROW(CopcWriteOptions{}.Check());
+  CopcWriteOptions options;
+  options.page_levels = 0;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+  options = {};
+  options.min_page_nodes = -1;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+}
+
+// Every node of the complete octree below `key` down to `last_level`.
+void AddSubtree(const CopcKey& key, int last_level, std::vector<CopcEntry>* entries) {
+  entries->push_back({key, 1000 + 10 * entries->size(), 10, 1});
+  if (key.level == last_level) return;
+  for (int o = 0; o < 8; ++o) {
+    AddSubtree({key.level + 1, 2 * key.x + (o & 1), 2 * key.y + (o >> 1 & 1), 2 * key.z + (o >> 2)},
+               last_level, entries);
+  }
+}
+
+// Untwine's defaults: levels 0-4 in the root page; node (4, 0, 0, 0)'s subtree of 73 nodes
+// (down to level 6) in a page of its own, node (4, 1, 0, 0)'s of 9 (level 5) in the root page.
+TEST(CopcWrite, DefaultPagesCutDeepSubtreesOfMoreThan50Nodes) {
+  std::vector<CopcEntry> entries;
+  AddSubtree({0, 0, 0, 0}, 4, &entries);
+  ASSERT_EQ(entries.size(), 4681u);  // 1 + 8 + 64 + 512 + 4096
+  std::vector<CopcEntry> deep, shallow;
+  AddSubtree({4, 0, 0, 0}, 6, &deep);
+  AddSubtree({4, 1, 0, 0}, 5, &shallow);
+  entries.insert(entries.end(), deep.begin() + 1, deep.end());
+  entries.insert(entries.end(), shallow.begin() + 1, shallow.end());
+  std::shuffle(entries.begin(), entries.end(), std::mt19937(7));  // any order
+  const CopcHierarchy h = EncodeCopcHierarchyPages({}, entries, 0);
+  ASSERT_EQ(h.data.size(), 32u * (4681 + 8 + 73));
+  const std::vector<CopcEntry> root = ParseCopcHierarchy(h.data.substr(h.root_offset));
+  ASSERT_EQ(root.size(), 4689u);
+  EXPECT_TRUE((root[0].key == CopcKey{0, 0, 0, 0}));
+  int pointers = 0;
+  for (const CopcEntry& e : root) {
+    EXPECT_LE(e.key.level, 5);
+    if (e.points != -1) continue;
+    ++pointers;
+    EXPECT_TRUE((e.key == CopcKey{4, 0, 0, 0}));
+    const std::vector<CopcEntry> page = ParseCopcHierarchy(h.data.substr(e.offset, e.bytes));
+    EXPECT_EQ(page.size(), 73u);
+    EXPECT_TRUE((page[0].key == CopcKey{4, 0, 0, 0}) && page[0].points == 1);
+  }
+  EXPECT_EQ(pointers, 1);
+}
+
+// A root with two children, (1, 0, 0, 0) with a child: pages of one level, none small.
+TEST(CopcWrite, HierarchyPagesPointToTheirChildPages) {
+  const std::vector<CopcEntry> entries = {{{0, 0, 0, 0}, 1000, 10, 5},
+                                          {{1, 1, 0, 0}, 1010, 11, 6},
+                                          {{1, 0, 0, 0}, 1021, 12, 7},
+                                          {{2, 1, 1, 0}, 1033, 13, 8}};
+  CopcWriteOptions options;
+  options.page_levels = 1;
+  options.min_page_nodes = 0;
+  const uint64_t base = 5000;
+  const CopcHierarchy h = EncodeCopcHierarchyPages(options, entries, base);
+  ASSERT_EQ(h.data.size(), 32u * (4 + 3));  // four pages: every node, and 3 child-page entries
+  EXPECT_EQ(h.root_offset + h.root_size, h.data.size()) << "the root page last";
+  const std::vector<CopcEntry> root = ParseCopcHierarchy(h.data.substr(h.root_offset));
+  ASSERT_EQ(root.size(), 3u);
+  EXPECT_EQ(root[0].points, 5);
+  // Children by octant: (1, 0, 0, 0) first.
+  EXPECT_TRUE((root[1].key == CopcKey{1, 0, 0, 0}) && root[1].points == -1);
+  EXPECT_TRUE((root[2].key == CopcKey{1, 1, 0, 0}) && root[2].points == -1);
+  const std::vector<CopcEntry> page =
+      ParseCopcHierarchy(h.data.substr(root[1].offset - base, root[1].bytes));
+  ASSERT_EQ(page.size(), 2u);
+  EXPECT_EQ(page[0].points, 7);
+  EXPECT_EQ(page[0].offset, 1021u);
+  EXPECT_TRUE((page[1].key == CopcKey{2, 1, 1, 0}) && page[1].points == -1);
+  // One page when no subtree is large enough for its own.
+  options.min_page_nodes = 50;
+  EXPECT_EQ(EncodeCopcHierarchyPages(options, entries, base).data.size(), 32u * 4);
+  EXPECT_THROW(EncodeCopcHierarchyPages(options, {entries[1]}, base), std::exception);
 }
 
 TEST(CopcWrite, SameBytesOnOneAndTwoThreads) {

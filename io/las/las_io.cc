@@ -483,6 +483,7 @@ class LasWriter : public PointWriter {
   std::vector<uint8_t> buffer_;
   // COPC (a .copc.laz name): every record is held until Close() builds the octree.
   bool copc_ = false;
+  CopcWriteOptions copc_options_;
   std::vector<uint8_t> copc_records_;
   std::unique_ptr<AtomicFile> file_;  // created last: a rejected spec creates nothing
   // LAZ (a .laz name): the records go through the chunk writer; the point data starts with the
@@ -511,7 +512,11 @@ LasFormatChoice CopcChoice(LasFormatChoice c) {
 
 LasWriter::LasWriter(const std::string& path, const PointWriteSpec& spec,
                      const PointWriteOptions& options)
-    : path_(path), spec_(spec), copc_(EndsWith(path, ".copc.laz")), compressed_(IsLazPath(path)) {
+    : path_(path),
+      spec_(spec),
+      copc_(EndsWith(path, ".copc.laz")),
+      copc_options_(options.copc),
+      compressed_(IsLazPath(path)) {
   min_.fill(std::numeric_limits<int32_t>::max());
   max_.fill(std::numeric_limits<int32_t>::min());
   const LasFormatChoice choice = ChooseLasFormat(spec, options);
@@ -874,7 +879,7 @@ void LasWriter::WriteLazPointData() {
   WriteChunkTable(file_.get(), header_.offset_to_point_data, laz_->Finish());
 }
 
-// The octree's nodes as chunks, the chunk table, then the hierarchy as the first EVLR (one page)
+// The octree's nodes as chunks, the chunk table, then the hierarchy as the first EVLR (its pages)
 // and the info VLR completed in place.
 void LasWriter::WriteCopcPointData() {
   const size_t length = header_.record_length;
@@ -890,9 +895,11 @@ void LasWriter::WriteCopcPointData() {
   info.center = tree.center;
   info.halfsize = tree.halfsize;
   info.spacing = tree.spacing;
-  const std::string page = EncodeCopcHierarchy(data.entries);
-  info.root_hier_offset = file_->Tell() + 60;  // the EVLRs start here, the hierarchy first
-  info.root_hier_size = page.size();
+  // The EVLRs start here, the hierarchy first: its payload after the 60-byte EVLR header.
+  const uint64_t payload = file_->Tell() + 60;
+  CopcHierarchy hierarchy = EncodeCopcHierarchyPages(copc_options_, data.entries, payload);
+  info.root_hier_offset = payload + hierarchy.root_offset;
+  info.root_hier_size = hierarchy.root_size;
   for (size_t i = 0; i < n; ++i) {
     double t;
     std::memcpy(&t, copc_records_.data() + i * length + layout_.gps_offset, 8);
@@ -902,7 +909,8 @@ void LasWriter::WriteCopcPointData() {
   const std::string encoded = EncodeCopcInfo(info);
   file_->WriteAt(header_.header_size + 54, encoded.data(), encoded.size());
   evlrs_.insert(evlrs_.begin(),
-                LasVlr{kCopcUserId, kCopcHierarchyRecord, "EPT hierarchy", page, true});
+                LasVlr{kCopcUserId, kCopcHierarchyRecord, "EPT hierarchy",
+                       std::move(hierarchy.data), true});
   std::vector<uint8_t>().swap(copc_records_);
 }
 

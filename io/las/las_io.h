@@ -21,7 +21,7 @@
 // A name ending in .copc.laz writes COPC 1.0 (https://copc.io): LAS 1.4 with point format 6-8
 // (formats 0-3 become 6 or 7, as PDAL's writers.copc does), the "copc" info VLR first, the octree
 // of io/las/copc_octree.h with each node one variable-size layered LAZ chunk, and the hierarchy
-// EVLR (io/las/copc_write.h); the source's "copc" records are dropped, and GeoTIFF-key CRS
+// EVLR in pages as untwine cuts them (io/las/copc_write.h, PointWriteOptions::copc); the source's "copc" records are dropped, and GeoTIFF-key CRS
 // records give way to a WKT record of the CRS they name (formats 6-8 allow only WKT). Its
 // records are held in memory until Close() (record_length bytes a point).
 //

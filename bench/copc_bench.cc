@@ -1,0 +1,178 @@
+// Writing COPC (a .copc.laz name) against LAS and LAZ: seconds, M points/s, peak RSS and bytes a
+// point for a generated airborne scan (seeded: flight strips of zigzag scan lines over a wavy
+// terrain, 5.5 points/m^2, with colour, intensity and GPS time; LAS 1.2 format 3, COPC 1.4
+// format 7), streamed to the writer in chunks of 2^20 points as a conversion streams them.
+// Each case runs in a child process of its own, so its peak RSS (getrusage) is its own; the
+// seconds are those of the writer's Write and Close calls (the generation is not counted).
+//
+//   copc_bench [--points 1e6,1e7] [--threads 1,2] [--formats las,laz,copc.laz] [--dir DIR]
+//              [--keep]
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <tbb/global_control.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/rng.h"
+#include "io/las/las_io.h"
+#include "io/point_io.h"
+
+namespace {
+
+using namespace candi;
+namespace fs = std::filesystem;
+
+constexpr size_t kChunkPoints = size_t{1} << 20;
+constexpr int kScanLinePoints = 500;      // across a 300 m swath
+constexpr double kSwath = 300.0;          // m
+constexpr double kLineStep = 0.3;         // m between scan lines
+constexpr double kStripLength = 2000.0;   // m, then the next strip 250 m aside
+constexpr double kStripStep = 250.0;
+
+PointSchema ScanSchema() {
+  PointSchema s;
+  s.colors = true;
+  s.scalars = {{io::las_field::kIntensity, ScalarType::kFloat32},
+               {io::las_field::kGpsTime, ScalarType::kFloat64}};
+  return s;
+}
+
+// Points [first, first + n) of the scan: the i-th point's place depends on i alone, its noise on
+// the generator, which runs through the points in order.
+void ScanChunk(uint64_t first, size_t n, Rng* rng, PointCloud* c) {
+  c->Resize(n);
+  const uint64_t lines_per_strip = static_cast<uint64_t>(kStripLength / kLineStep);
+  for (size_t j = 0; j < n; ++j) {
+    const uint64_t i = first + j;
+    const uint64_t line = i / kScanLinePoints, strip = line / lines_per_strip;
+    const uint64_t in_line = i % kScanLinePoints;
+    const double across = (line % 2 ? kScanLinePoints - 1 - in_line : in_line) *
+                          (kSwath / kScanLinePoints);
+    const double along = static_cast<double>(line % lines_per_strip) * kLineStep;
+    const double x = strip * kStripStep + across + 0.05 * rng->Uniform(),
+                 y = (strip % 2 ? kStripLength - along : along) + 0.05 * rng->Uniform();
+    const double z = 12 * std::sin(x / 130) * std::cos(y / 170) + 3 * std::sin(x / 17 + y / 23) +
+                     0.03 * rng->Uniform();
+    c->positions[j] = Eigen::Vector3d(x, y, z);
+    const uint8_t g = static_cast<uint8_t>(std::clamp(128 + 8 * z, 0.0, 255.0));
+    c->colors[j] = {g, static_cast<uint8_t>(255 - g), static_cast<uint8_t>(rng->Uniform(60, 90))};
+    c->scalars[0].f32[j] = static_cast<float>(std::floor(rng->Uniform(200, 1200)));
+    c->scalars[1].f64[j] = 3.0e5 + 1e-5 * static_cast<double>(i);
+  }
+}
+
+double Seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Writes `points` points of the scan to `path` on `threads` threads; the writer's seconds.
+double WriteScan(const std::string& path, uint64_t points, int threads) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                            static_cast<size_t>(threads));
+  PointCloud chunk;
+  chunk.SetSchema(ScanSchema());
+  chunk.frame.origin = Eigen::Vector3d(416000, 9168000, 200);
+  io::PointWriteSpec spec;
+  spec.schema = chunk.schema;
+  spec.frame = chunk.frame;
+  spec.count = points;
+  io::PointWriteOptions options;
+  options.las_scale = Eigen::Vector3d::Constant(0.001);
+  Rng rng(1);
+  double seconds = 0.0;
+  auto t0 = std::chrono::steady_clock::now();
+  const std::unique_ptr<io::PointWriter> writer = io::OpenPointWriter(path, spec, options);
+  seconds += Seconds(t0);
+  for (uint64_t first = 0; first < points; first += kChunkPoints) {
+    ScanChunk(first, static_cast<size_t>(std::min<uint64_t>(kChunkPoints, points - first)), &rng,
+              &chunk);
+    t0 = std::chrono::steady_clock::now();
+    writer->Write(chunk);
+    seconds += Seconds(t0);
+  }
+  t0 = std::chrono::steady_clock::now();
+  writer->Close();
+  return seconds + Seconds(t0);
+}
+
+// One case in a child process: prints its row.
+void RunCase(const std::string& path, uint64_t points, int threads, bool keep) {
+  std::fflush(stdout);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const double s = WriteScan(path, points, threads);
+    struct rusage usage;
+    getrusage(RUSAGE_SELF, &usage);
+    const double bytes = static_cast<double>(fs::file_size(path));
+    const double n = static_cast<double>(points);
+    const std::string name = fs::path(path).filename().string();
+    std::printf("%-14s %12llu %4d %10.2f %10.2f %12.2f %12.2f\n",
+                name.substr(name.find('.') + 1).c_str(), static_cast<unsigned long long>(points),
+                threads, s, n * 1e-6 / s, usage.ru_maxrss / 1048576.0, bytes / n);
+    std::fflush(stdout);
+    if (!keep) fs::remove(path);
+    std::_Exit(0);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::printf("%s: the case failed (status %d)\n", path.c_str(), status);
+  }
+}
+
+std::vector<std::string> SplitList(const std::string& text) {
+  std::vector<std::string> out;
+  size_t at = 0;
+  while (at <= text.size()) {
+    const size_t comma = std::min(text.find(',', at), text.size());
+    out.push_back(text.substr(at, comma - at));
+    at = comma + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string points_text = "1e6,1e7", threads_text = "1,2", formats_text = "las,laz,copc.laz";
+  std::string dir = "candi-bench-copc";
+  bool keep = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (a == "--points" && has_value) points_text = argv[++i];
+    else if (a == "--threads" && has_value) threads_text = argv[++i];
+    else if (a == "--formats" && has_value) formats_text = argv[++i];
+    else if (a == "--dir" && has_value) dir = argv[++i];
+    else if (a == "--keep") keep = true;
+    else {
+      std::fprintf(stderr,
+                   "usage: copc_bench [--points 1e6,1e7] [--threads 1,2] "
+                   "[--formats las,laz,copc.laz] [--dir DIR] [--keep]\n");
+      return 2;
+    }
+  }
+  fs::create_directories(dir);
+  std::printf("copc_bench: a generated airborne scan written through io::OpenPointWriter\n");
+  std::printf("%-14s %12s %4s %10s %10s %12s %12s\n", "format", "points", "thr", "seconds",
+              "M pts/s", "peak RSS GiB", "bytes/point");
+  for (const std::string& p : SplitList(points_text)) {
+    const uint64_t points = static_cast<uint64_t>(std::stod(p));
+    for (const std::string& format : SplitList(formats_text)) {
+      for (const std::string& t : SplitList(threads_text)) {
+        RunCase(dir + "/scan." + format, points, std::stoi(t), keep);
+      }
+    }
+  }
+  std::error_code ignored;
+  fs::remove(dir, ignored);  // when empty
+  return 0;
+}
