@@ -4,6 +4,7 @@
 // (pipeline/demo_site.h; RunDemo in demo_command.cc, candi-relief only).
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -121,9 +122,12 @@ void AddPack(Command& root) {
 }
 
 int RunExportCopc(const pipeline::CopcExportOptions& o) {
-  ConsoleProgress progress("copc");
-  const std::vector<pipeline::CopcFile> files = pipeline::ExportCopc(o, progress.Callback());
-  progress.Finish();
+  std::optional<ConsoleProgress> progress;  // from the first point: no bar before an error
+  const std::vector<pipeline::CopcFile> files = pipeline::ExportCopc(o, [&](uint64_t done, uint64_t total) {
+    if (!progress) progress.emplace("copc");
+    progress->Update(done, total);
+  });
+  if (progress) progress->Finish();
   for (const pipeline::CopcFile& f : files) {
     std::printf("%s: %llu points (%s), %llu bytes\n", f.path.c_str(), static_cast<unsigned long long>(f.points),
                 f.layer.empty() ? "every layer, point source ID = layer index" : ("layer " + f.layer).c_str(),
