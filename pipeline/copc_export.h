@@ -35,8 +35,8 @@
 
 namespace candi::pipeline {
 
-inline constexpr double kCopcScale = 0.001;            // m, the LAS scale of every axis
-inline constexpr uint16_t kCopcLayersRecord = 1;       // the "candi" VLR naming the layers
+inline constexpr double kCopcScale = 0.001;       // m, the LAS scale of every axis
+inline constexpr uint16_t kCopcLayersRecord = 1;  // the "candi" VLR naming the layers
 
 // Which COPC files to write. The scene file's "copc" sets it for a build (default: none, since
 // writing them costs time); `candi export copc` sets `layers` by its flag and always writes the
@@ -49,17 +49,17 @@ struct CopcOptions {
 
 // A build's layers as written, and what the COPC files take from the build.
 struct CopcSource {
-  std::string name;                          // the scene's
-  std::string crs;                           // the scene's CRS (any string PROJ reads), or ""
+  std::string name;  // the scene's
+  std::string crs;   // the scene's CRS (any string PROJ reads), or ""
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the scene's frame origin, world, m
-  std::vector<std::string> layer_names;      // in scene order
-  std::vector<std::string> layer_files;      // layers/<name>.ply, paths as found
+  std::vector<std::string> layer_names;              // in scene order
+  std::vector<std::string> layer_files;              // layers/<name>.ply, paths as found
 };
 
 // One COPC file written.
 struct CopcFile {
-  std::string path;       // as written
-  std::string layer;      // the layer's name; "" for the whole scene
+  std::string path;   // as written
+  std::string layer;  // the layer's name; "" for the whole scene
   uint64_t points = 0;
   uint64_t bytes = 0;
 };
@@ -70,19 +70,21 @@ std::string SceneCopcName(const std::string& scene_name);
 // Writes what `options` asks: each layer beside its layer file (<name>.copc.laz in the same
 // folder) and the whole scene to `scene_file`. Returns the files, layers first, in scene order.
 std::vector<CopcFile> WriteCopc(const CopcOptions& options, const CopcSource& source,
-                                const std::string& scene_file, const ProgressCallback& progress = nullptr);
+                                const std::string& scene_file,
+                                const ProgressCallback& progress = nullptr);
 
 // A finished build's layers, from its archive.json.
 CopcSource ReadCopcSource(const std::string& build_dir);
 
 struct CopcExportOptions {
-  std::string build;       // a finished build's folder (archive.json, layers/)
-  std::string out;         // the whole scene's file; "" : <build>/copc/<scene>.copc.laz
+  std::string build;  // a finished build's folder (archive.json, layers/)
+  std::string out;    // the whole scene's file; "" : <build>/copc/<scene>.copc.laz
   CopcOptions copc{false, true};
   void Check() const;
 };
 
 // `candi export copc`: the COPC files of a finished build, from its layer files.
-std::vector<CopcFile> ExportCopc(const CopcExportOptions& options, const ProgressCallback& progress = nullptr);
+std::vector<CopcFile> ExportCopc(const CopcExportOptions& options,
+                                 const ProgressCallback& progress = nullptr);
 
 }  // namespace candi::pipeline

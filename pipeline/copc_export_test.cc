@@ -35,13 +35,14 @@ const Eigen::Vector3d kSite(416000, 9168000, 250);  // UTM 49S, near Borobudur
 // A point as the COPC files hold it: millimetres about the origin, colour, layer.
 using Quantized = std::tuple<int64_t, int64_t, int64_t, uint8_t, uint8_t, uint8_t, int>;
 
-std::vector<Quantized> QuantizedPoints(const PointCloud& c, const Eigen::Vector3d& origin, int layer) {
+std::vector<Quantized> QuantizedPoints(const PointCloud& c, const Eigen::Vector3d& origin,
+                                       int layer) {
   std::vector<Quantized> q;
   const ScalarField* id = c.FindScalar(io::las_field::kPointSourceId);
   for (size_t i = 0; i < c.size(); ++i) {
     const Eigen::Vector3d p = (c.WorldPosition(i) - origin) / kCopcScale;
-    q.emplace_back(std::llround(p.x()), std::llround(p.y()), std::llround(p.z()), c.colors[i].r, c.colors[i].g,
-                   c.colors[i].b, id ? static_cast<int>(id->Get(i)) : layer);
+    q.emplace_back(std::llround(p.x()), std::llround(p.y()), std::llround(p.z()), c.colors[i].r,
+                   c.colors[i].g, c.colors[i].b, id ? static_cast<int>(id->Get(i)) : layer);
   }
   std::sort(q.begin(), q.end());
   return q;
@@ -61,12 +62,19 @@ class CopcBuild : public ::testing::Test {
   }
 
   json SceneJson() const {
-    json j = {{"candi_scene", 1}, {"name", "site one"}, {"seed", 2}, {"crs", "EPSG:32749"},
+    json j = {{"candi_scene", 1},
+              {"name", "site one"},
+              {"seed", 2},
+              {"crs", "EPSG:32749"},
               {"render", {{"repeat_level", 2}, {"width", 32}, {"height", 24}}},
               {"copc", {{"layers", true}, {"scene", true}}}};
-    j["layers"] = json::array({{{"name", "ground"}, {"kind", "points"}, {"file", "ground.ply"}, {"crs", "scene"}},
-                               {{"name", "wall"}, {"kind", "points"}, {"file", "wall.ply"}, {"crs", "scene"},
-                                {"color", {20, 30, 250}}}});
+    j["layers"] = json::array(
+        {{{"name", "ground"}, {"kind", "points"}, {"file", "ground.ply"}, {"crs", "scene"}},
+         {{"name", "wall"},
+          {"kind", "points"},
+          {"file", "wall.ply"},
+          {"crs", "scene"},
+          {"color", {20, 30, 250}}}});
     return j;
   }
 
@@ -97,7 +105,8 @@ TEST(CopcOptions, DefaultsWriteNothingAndTheExportNeedsABuild) {
 
 TEST_F(CopcBuild, EveryLayerAndTheSceneReadBackAsTheLayerFiles) {
   const json a = BuildInto("out", 2);
-  const Eigen::Vector3d origin(416000, 9168000, 300);  // LocalFrame::Auto: the centre on a 100 m grid
+  const Eigen::Vector3d origin(416000, 9168000,
+                               300);  // LocalFrame::Auto: the centre on a 100 m grid
   ASSERT_EQ(a.at("frame").at("origin"), json::array({origin.x(), origin.y(), origin.z()}));
   const json& copc = a.at("copc");
   EXPECT_FALSE(copc.at("resumed").get<bool>());
@@ -118,7 +127,8 @@ TEST_F(CopcBuild, EveryLayerAndTheSceneReadBackAsTheLayerFiles) {
     EXPECT_EQ(back.meta.las.creation_year, 1970);
     EXPECT_TRUE(io::SameCrs(back.meta.crs, "EPSG:32749")) << back.meta.crs;
     const std::vector<Quantized> expected = QuantizedPoints(layer, origin, k);
-    EXPECT_EQ(QuantizedPoints(back, origin, -1), expected) << name;  // the layer's index as point source ID
+    EXPECT_EQ(QuantizedPoints(back, origin, -1), expected)
+        << name;  // the layer's index as point source ID
     all.insert(all.end(), expected.begin(), expected.end());
   }
   std::sort(all.begin(), all.end());
@@ -135,9 +145,11 @@ TEST_F(CopcBuild, EveryLayerAndTheSceneReadBackAsTheLayerFiles) {
   EXPECT_TRUE(timings.contains("copc"));
 }
 
-// Builds on 1 and 2 threads, the export of the build's layers and a resumed build: one set of bytes.
+// Builds on 1 and 2 threads, the export of the build's layers and a resumed build: one set of
+// bytes.
 TEST_F(CopcBuild, SameBytesFromEveryWay) {
-  const std::vector<std::string> files = {"layers/ground.copc.laz", "layers/wall.copc.laz", "copc/site_one.copc.laz"};
+  const std::vector<std::string> files = {"layers/ground.copc.laz", "layers/wall.copc.laz",
+                                          "copc/site_one.copc.laz"};
   BuildInto("two", 1);
   fs::rename(dir_.File("two"), dir_.File("one"));
   BuildInto("two", 2);
@@ -168,7 +180,8 @@ TEST_F(CopcBuild, SameBytesFromEveryWay) {
   const json a = BuildInto("two", 2, true);
   EXPECT_FALSE(a.at("copc").at("resumed").get<bool>());
   for (const std::string& f : files)
-    EXPECT_EQ(ReadFileToString(dir_.File("one/" + f)), ReadFileToString(dir_.File("two/" + f))) << f;
+    EXPECT_EQ(ReadFileToString(dir_.File("one/" + f)), ReadFileToString(dir_.File("two/" + f)))
+        << f;
   json one = json::parse(ReadFileToString(dir_.File("one/archive.json")));
   one["pack_resumed"] = true;  // the only difference
   EXPECT_EQ(one, a);
@@ -176,7 +189,8 @@ TEST_F(CopcBuild, SameBytesFromEveryWay) {
 
 TEST_F(CopcBuild, AFolderThatIsNotABuildIsNamed) {
   CopcExportOptions e;
-  auto expect_named = [&](const std::string& build, const std::string& named, const std::string& what) {
+  auto expect_named = [&](const std::string& build, const std::string& named,
+                          const std::string& what) {
     e.build = build;
     try {
       ExportCopc(e);
@@ -191,6 +205,13 @@ TEST_F(CopcBuild, AFolderThatIsNotABuildIsNamed) {
   expect_named(dir_.File("empty"), dir_.File("empty"), "no archive.json");
   testing::WriteBytes(dir_.File("empty/archive.json"), "{\"name\": \"x\"}");
   expect_named(dir_.File("empty"), dir_.File("empty/archive.json"), "no \"crs\"");
+  json bad = {{"name", "x"},
+              {"crs", nullptr},
+              {"frame", {{"origin", {0, 0, 0}}}},
+              {"layers", {{{"name", "../up"}, {"file", "layers/up.ply"}}}}};
+  testing::WriteBytes(dir_.File("empty/archive.json"), bad.dump());
+  expect_named(dir_.File("empty"), dir_.File("empty/archive.json"),
+               "/layers/0/name: not a layer name");
   BuildInto("out", 2);
   fs::remove(dir_.File("out/layers/wall.ply"));
   expect_named(dir_.File("out"), dir_.File("out/layers/wall.ply"), "missing");
@@ -220,8 +241,8 @@ TEST_F(CopcBuild, CopcJsReadsTheSceneFile) {
   const json a = BuildInto("out", 2);
   const std::string script = testing::SourceDir() + "/tests/node/copc_records.js";
   const std::string file = dir_.File("out/copc/site_one.copc.laz");
-  const std::string command =
-      node + " '" + script + "' '" + file + "' '" + dir_.File("records.bin") + "' > '" + dir_.File("out.json") + "'";
+  const std::string command = node + " '" + script + "' '" + file + "' '" +
+                              dir_.File("records.bin") + "' > '" + dir_.File("out.json") + "'";
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   const json r = json::parse(ReadFileToString(dir_.File("out.json")));
   EXPECT_EQ(r.at("count"), a.at("points"));
@@ -232,7 +253,8 @@ TEST_F(CopcBuild, CopcJsReadsTheSceneFile) {
   ASSERT_EQ(records.size(), a.at("points").get<size_t>() * 36);
   std::array<uint64_t, 2> per_layer{};
   for (size_t i = 0; i < records.size(); i += 36) {
-    const unsigned id = static_cast<uint8_t>(records[i + 20]) | static_cast<uint8_t>(records[i + 21]) << 8;
+    const unsigned id =
+        static_cast<uint8_t>(records[i + 20]) | static_cast<uint8_t>(records[i + 21]) << 8;
     ASSERT_LT(id, 2u);
     ++per_layer[id];
   }
