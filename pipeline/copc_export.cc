@@ -135,10 +135,9 @@ std::vector<CopcFile> WriteCopc(const CopcOptions& options, const CopcSource& so
     const std::string path =
         (fs::path(source.layer_files[k]).parent_path() / (source.layer_names[k] + ".copc.laz"))
             .string();
+    const io::PointWriteSpec spec{CopcSchema(), LocalFrame(), meta, readers[k]->info().count};
     std::unique_ptr<io::PointWriter> layer;
-    if (options.layers)
-      layer =
-          io::OpenPointWriter(path, {CopcSchema(), LocalFrame(), meta, readers[k]->info().count});
+    if (options.layers) layer = io::OpenPointWriter(path, spec);
     uint64_t points = 0;
     while (const size_t n = readers[k]->Read(kChunkPoints, &chunk)) {
       ToCopcChunk(chunk, static_cast<uint16_t>(k), &copc);
