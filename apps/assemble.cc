@@ -1,8 +1,10 @@
-// candi build, candi pack, candi demo: the integrated archive of a scene file (pipeline/build.h),
-// point files packed into a render archive (render/archive_pack.h), and the bundled example's site
-// built (pipeline/demo_site.h; RunDemo in demo_command.cc, candi-relief only).
+// candi build, candi pack, candi export, candi demo: the integrated archive of a scene file
+// (pipeline/build.h), point files packed into a render archive (render/archive_pack.h), a finished
+// build's layers as COPC (pipeline/copc_export.h), and the bundled example's site built
+// (pipeline/demo_site.h; RunDemo in demo_command.cc, candi-relief only).
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -10,6 +12,7 @@
 #include "core/progress.h"
 #include "core/text_format.h"
 #include "pipeline/build.h"
+#include "pipeline/copc_export.h"
 #include "pipeline/scene.h"
 #include "render/archive_pack.h"
 
@@ -118,6 +121,36 @@ void AddPack(Command& root) {
            "legend)");
 }
 
+int RunExportCopc(const pipeline::CopcExportOptions& o) {
+  std::optional<ConsoleProgress> progress;  // from the first point: no bar before an error
+  const std::vector<pipeline::CopcFile> files = pipeline::ExportCopc(o, [&](uint64_t done, uint64_t total) {
+    if (!progress) progress.emplace("copc");
+    progress->Update(done, total);
+  });
+  if (progress) progress->Finish();
+  for (const pipeline::CopcFile& f : files) {
+    std::printf("%s: %llu points (%s), %llu bytes\n", f.path.c_str(), static_cast<unsigned long long>(f.points),
+                f.layer.empty() ? "every layer, point source ID = layer index" : ("layer " + f.layer).c_str(),
+                static_cast<unsigned long long>(f.bytes));
+  }
+  return kOk;
+}
+
+void AddExport(Command& root) {
+  Command e = root.Add("export", "Write a finished build's layers in another format, without rebuilding");
+  e.RequireSubcommand();
+  pipeline::CopcExportOptions& o = root.Keep<pipeline::CopcExportOptions>();
+  Command c = e.Add("copc", "COPC (cloud-optimized LAZ) of a finished build, for Potree, QGIS and CloudCompare: "
+                            "every layer in one file, the layer as point source ID, and with --layers each layer "
+                            "beside its PLY (what a scene's \"copc\" makes candi build write)");
+  c.Option("build", o.build, "A finished build's folder (archive.json, layers/)").Required();
+  c.Option("-o,--out", o.out, "The whole scene's file (default: BUILD/copc/<scene>.copc.laz)");
+  c.Flag("--layers", o.copc.layers, "Also each layer as BUILD/layers/<name>.copc.laz");
+  c.Run([&o] { return RunExportCopc(o); });
+  c.Footer("Example: candi export copc borobudur_archive --layers   (then open "
+           "borobudur_archive/copc/borobudur.copc.laz in QGIS, or with Potree)");
+}
+
 }  // namespace
 
 void AddDemo(Command& root) {
@@ -138,6 +171,7 @@ void AddDemo(Command& root) {
 void AddAssembleCommands(Command& root) {
   AddBuild(root);
   AddPack(root);
+  AddExport(root);
 }
 
 }  // namespace candi::apps

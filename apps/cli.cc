@@ -31,7 +31,7 @@ const std::vector<std::pair<std::string, std::vector<std::string>>>& CommandGrou
   static const std::vector<std::pair<std::string, std::vector<std::string>>> groups = {
       {"Inspect and convert", {"info", "convert", "compare"}},
       {"Digitize", {"sfm", "dense", "georef", "register", "register-scans", "clean", "colorcorrect", "foundation", "relief"}},
-      {"Assemble", {"build", "pack"}},
+      {"Assemble", {"build", "pack", "export"}},
       {"Look", {"render", "view", "publish", "section"}},
       {"Other", {"opacity", "demo", "bench"}},
   };

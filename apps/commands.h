@@ -26,7 +26,7 @@ void AddInspectCommands(Command& root);   // info, convert, compare (inspect.cc)
 void AddDigitizeCommands(Command& root);  // sfm, dense, georef, register, register-scans, clean, colorcorrect, foundation,
                                           // relief (digitize.cc, relief.cc)
 void AddReliefCommands(Command& root);    // relief synth|dataset|train|predict|points|eval|place (relief.cc)
-void AddAssembleCommands(Command& root);  // build, pack (assemble.cc)
+void AddAssembleCommands(Command& root);  // build, pack, export (assemble.cc)
 void AddLookCommands(Command& root);      // render, view, publish, section, opacity (look.cc)
 // `candi --help` lists these three under "Other", after the groups above.
 void AddOpacity(Command& root);           // opacity (look.cc: SPBR opacity, by the renderer)

@@ -20,6 +20,7 @@
 #include "io/crs.h"
 #include "io/point_io.h"
 #include "pipeline/build_internal.h"
+#include "pipeline/copc_export.h"
 #include "pipeline/render.h"
 #include "render/archive.h"
 #include "render/archive_pack.h"
@@ -263,6 +264,56 @@ json RenderViews(const BuildOptions& options, const Scene& scene, const json& sc
   return views;
 }
 
+// 5. The COPC files the scene asks for (copc_export.h), from the layer files (key: the layers'
+// keys, the scene's "copc", name, CRS and origin). Returns archive.json's "copc" (null when none
+// is asked for); the seconds go to `timings`.
+json WriteSceneCopc(const Scene& scene, const json& scene_json, const fs::path& out, const Checkpoints& checkpoints,
+                    const Layers& layers, const LocalFrame& frame, const std::string& scene_crs, json* timings) {
+  if (!scene.copc.layers && !scene.copc.scene) return json();
+  const Eigen::Vector3d& o = frame.origin;
+  std::vector<std::string> parts = {"copc", scene_json["copc"].dump(), scene.name, scene_crs,
+                                    json::array({o.x(), o.y(), o.z()}).dump()};
+  parts.insert(parts.end(), layers.keys.begin(), layers.keys.end());
+  const std::string key = Key(parts);
+  CopcSource source{scene.name, scene_crs, frame.origin, {}, layers.files};
+  std::vector<fs::path> outputs;
+  for (const SceneLayer& l : scene.layers) {
+    source.layer_names.push_back(l.name);
+    if (scene.copc.layers) outputs.push_back(out / "layers" / (l.name + ".copc.laz"));
+  }
+  const std::string scene_file = SceneCopcName(scene.name);
+  if (scene.copc.scene) outputs.push_back(out / scene_file);
+  std::optional<json> checkpoint = checkpoints.Find("copc", key, outputs);
+  const bool resumed = checkpoint.has_value();
+  if (resumed) {
+    LogInfo("COPC: resumed");
+  } else {
+    const Stopwatch watch;
+    ConsoleProgress progress("copc");
+    const std::vector<CopcFile> files = WriteCopc(scene.copc, source, (out / scene_file).string(), progress.Callback());
+    progress.Finish();
+    json list = {{"layers", json::array()}};
+    for (const CopcFile& f : files) {
+      const json record = {{"path", fs::path(f.path).lexically_relative(out).generic_string()},
+                           {"points", f.points}, {"bytes", f.bytes}};
+      if (f.layer.empty()) {
+        list["scene"] = record;
+      } else {
+        list["layers"].push_back(record);
+        list["layers"].back()["name"] = f.layer;
+      }
+    }
+    checkpoint = {{"seconds", watch.Seconds()}, {"files", list}};
+    checkpoints.Save("copc", key, *checkpoint);
+  }
+  (*timings)["copc"] = checkpoint->at("seconds");
+  json copc = checkpoint->at("files");
+  copc["point_source_id"] = "the layer's index in \"layers\" (0-based); the files' \"candi\" VLR names them";
+  copc["scale_m"] = kCopcScale;
+  copc["resumed"] = resumed;
+  return copc;
+}
+
 json LayersJson(const Scene& scene, FileHashes& hashes, const Layers& layers, json* timings) {
   json out = json::array();
   for (size_t k = 0; k < scene.layers.size(); ++k) {
@@ -287,7 +338,8 @@ json LayersJson(const Scene& scene, FileHashes& hashes, const Layers& layers, js
 }
 
 json Provenance(const Scene& scene, const LocalFrame& frame, const std::string& scene_crs, uint64_t total,
-                const json& layers, bool pack_resumed, const json& views, const json& comparisons) {
+                const json& layers, bool pack_resumed, const json& views, const json& comparisons,
+                const json& copc) {
   json p = {{"candi_version", kVersion}, {"scene", {{"path", scene.path}, {"sha256", Sha256Hex(scene.text)}}},
           {"name", scene.name}, {"seed", scene.seed},
           {"frame", {{"origin", {frame.origin.x(), frame.origin.y(), frame.origin.z()}}}},
@@ -320,6 +372,7 @@ json Provenance(const Scene& scene, const LocalFrame& frame, const std::string& 
     p["annotations"] = list;
   }
   if (!comparisons.empty()) p["comparisons"] = comparisons;
+  if (!copc.is_null()) p["copc"] = copc;
   return p;
 }
 
@@ -356,8 +409,9 @@ BuildSummary Build(const BuildOptions& options, const Scene& scene) {
   std::string pack_key;
   const auto [pack_seconds, pack_resumed] = PackLayers(options, scene_json, out, checkpoints, layers, &pack_key);
   const json views = RenderViews(options, scene, scene_json, out, checkpoints, hashes, layers, pack_key, &timings);
+  const json copc = WriteSceneCopc(scene, scene_json, out, checkpoints, layers, frame, scene_crs, &timings);
 
-  // 5. MeshLab project, provenance.
+  // 6. MeshLab project, provenance.
   WriteMeshlab(scene, layers.clouds, (out / "meshlab").string());
   const json layers_json = LayersJson(scene, hashes, layers, &timings);
   BuildSummary summary;
@@ -368,7 +422,8 @@ BuildSummary Build(const BuildOptions& options, const Scene& scene) {
     summary.points += layers.clouds[k].size();
   }
   WriteFileAtomic((out / "archive.json").string(),
-                  Provenance(scene, frame, scene_crs, summary.points, layers_json, pack_resumed, views, comparisons).dump(2) + "\n");
+                  Provenance(scene, frame, scene_crs, summary.points, layers_json, pack_resumed, views, comparisons,
+                             copc).dump(2) + "\n");
   summary.frame = frame;
   summary.views = views.size();
   auto figure = [](const json& v) { return v.is_number() ? v.get<double>() : NAN; };

@@ -19,14 +19,20 @@
 //                          the compared layer's points (world) with their distances, and beside it
 //                          .compare.json, .histogram.svg and .report.md; archive.json lists each
 //                          with its headline figures
-//   timings.json           seconds per layer, the pack, each view, each comparison and in all
+//   layers/<name>.copc.laz, copc/<scene>.copc.laz
+//                          COPC for Potree, QGIS and CloudCompare, when the scene's "copc" asks
+//                          (pipeline/copc_export.h: the layer as point source ID, the scene's CRS
+//                          as WKT); archive.json's "copc" lists each with its points and bytes
+//   timings.json           seconds per layer, the pack, each view, each comparison, the COPC files
+//                          and in all
 // Intermediate files go to work/ (the stages' own outputs: the foundation's and the dense cloud's
 // points, relief depth maps and panel points, COLMAP's workspace). The layers pass from stage to
 // stage in memory; relief panels pass through their files (they may come from child processes).
 // Every file is written atomically.
 //
 // Resuming (options.resume): every finished stage that is worth keeping (a digitized foundation,
-// relief or photogrammetry layer; the render archive; each render; each comparison) leaves a
+// relief or photogrammetry layer; the render archive; each render; each comparison; the COPC
+// files, redone when one is missing) leaves a
 // checkpoint in work/checkpoints/<stage>.json holding a key: the SHA-256 of what the stage depends
 // on (candi's version, the scene's JSON for it, the seed, the bytes of every input file (a dense
 // workspace: its files' names, sizes and times; a comparison: the layer files it reads), the keys

@@ -477,8 +477,8 @@ Scene LoadScene(const std::string& path) {
     throw InputError(path, "", std::string("not valid JSON: ") + e.what());
   }
   const Node root(scene.path, j, "");
-  root.ExpectObject({"candi_scene", "name", "origin", "seed", "crs", "render", "views", "layers", "licence",
-                     "annotations", "comparisons"});
+  root.ExpectObject({"candi_scene", "name", "origin", "seed", "crs", "render", "copc", "views", "layers",
+                     "licence", "annotations", "comparisons"});
   if (!root.Has("candi_scene")) root.Fail("missing key \"candi_scene\" (the format version, 1)");
   if (root["candi_scene"].Integer(1, 1000) != 1) root["candi_scene"].Fail("this candi reads scene version 1");
   scene.name = root.Has("name") ? root["name"].String() : fs::path(path).stem().string();
@@ -504,6 +504,12 @@ Scene LoadScene(const std::string& path) {
       if (b.raw().is_number()) scene.brightness = std::to_string(b.Number(0, 1000));
       else if ((scene.brightness = b.String()) != "auto" && scene.brightness != "none") b.Fail("expected \"auto\", \"none\" or a gain");
     }
+  }
+  if (root.Has("copc")) {
+    const Node c = root["copc"];
+    c.ExpectObject({"layers", "scene"});
+    if (c.Has("layers")) scene.copc.layers = c["layers"].Bool();
+    if (c.Has("scene")) scene.copc.scene = c["scene"].Bool();
   }
   if (!root.Has("layers")) root.Fail("missing key \"layers\"");
   const Node layers = root["layers"];

@@ -15,6 +15,9 @@
 //                                            state the same CRS or none (mixing is an error).
 //   "render": {"repeat_level": 100, "width": 1024, "height": 768, "background": [r, g, b],
 //              "brightness": "auto" | "none" | gain},
+//   "copc": {"layers": false,                COPC for Potree, QGIS, CloudCompare (pipeline/copc_export.h):
+//            "scene": false},                each layer as layers/<name>.copc.laz, every layer in one
+//                                            copc/<name>.copc.laz (default: neither; writing costs time)
 //   "views": [{"name": "overview",           one PNG per view: renders/<name>.png
 //              "camera": "view.json" | {...},  a view as `candi render --save-view` writes (world
 //                                            coordinates); absent: the default view of the data
@@ -88,6 +91,7 @@
 #include "compare/report.h"
 #include "core/point_cloud.h"
 #include "core/transform.h"
+#include "pipeline/copc_export.h"
 
 namespace candi::pipeline {
 
@@ -178,6 +182,7 @@ struct Scene {
   int repeat_level = 100, width = 1024, height = 768;
   Rgb8 background{255, 255, 255};
   std::string brightness = "auto";
+  CopcOptions copc;   // the COPC files the build writes
   std::vector<SceneView> views;
   std::vector<SceneLayer> layers;
   std::string licence;                        // the archive's licence text, shown by published pages

@@ -177,6 +177,30 @@ TEST(BuildCli, StrayPointsOfTheReplacingLayerCutNoHole) {
 }
 
 // Each bad key, type, path and value: exit code 2 and the JSON path in the message.
+// A scene's "copc" makes candi build write COPC; candi export copc writes the same bytes from the
+// finished build and names a folder that is not one.
+TEST(BuildCli, CopcFromTheBuildAndFromTheExportAreTheSameBytes) {
+  TempDir dir;
+  WriteSurveyWall(dir.File("wall.ply"));
+  json scene = BaseScene();
+  scene["views"] = json::array();
+  scene["copc"] = {{"scene", true}};
+  WriteScene(dir.File("scene.json"), scene);
+  const Result b = RunCandi("-q build " + dir.File("scene.json") + " -o " + dir.File("out"));
+  ASSERT_EQ(b.code, 0) << b.output;
+  const Result e = RunCandi("-q export copc " + dir.File("out") + " --out " + dir.File("again.copc.laz"));
+  ASSERT_EQ(e.code, 0) << e.output;
+  EXPECT_NE(e.out.find("again.copc.laz: 83000 points (every layer"), std::string::npos) << e.out;
+  const std::string built = testing::ReadBytes(dir.File("out/copc/test.copc.laz"));
+  EXPECT_FALSE(built.empty());
+  EXPECT_EQ(testing::ReadBytes(dir.File("again.copc.laz")), built);
+  EXPECT_FALSE(std::filesystem::exists(dir.File("out/layers/wall.copc.laz")));  // not asked for
+  const Result bad = RunCandi("-q export copc " + dir.File("out/layers"));
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.output.find(dir.File("out/layers") + ": no archive.json"), std::string::npos) << bad.output;
+  EXPECT_EQ(RunCandi("export copc").code, 1);  // no folder
+}
+
 TEST(BuildCli, SceneErrorsNameTheJsonPathOfTheCulprit) {
   TempDir dir;
   WriteSurveyWall(dir.File("wall.ply"));

@@ -59,7 +59,7 @@ TEST(Cli, HelpGroupsTheCommandsAlongTheUsersPath) {
       {"Inspect and convert", {"info", "convert", "compare"}},
       {"Digitize",
        {"sfm", "dense", "georef", "register", "register-scans", "clean", "colorcorrect", "foundation", "relief"}},
-      {"Assemble", {"build", "pack"}},
+      {"Assemble", {"build", "pack", "export"}},
       {"Look", {"render", "view", "publish", "section"}},
       {"Other", {"opacity", "demo", "bench"}},
   };
