@@ -250,5 +250,60 @@ TEST(ParallelRead, TruncatedXyzGivesOneErrorAtTheLastLine) {
                      "(x,y,z,r,g,b), found 5");
 }
 
+// Text with everything the serial reader handles between points: comments, blank and blank-only
+// lines, CRLF, extra values, PTS section lines, and a last line without '\n'; `bad_line` (0:
+// none) holds a bad value.
+std::string MessyPts(size_t points, size_t bad_line) {
+  Rng rng(3838);
+  std::string text = "1000\n", line;
+  size_t lines = 1;
+  for (size_t i = 0; i < points;) {
+    const uint64_t kind = i == 0 ? 99 : rng.Below(100);  // a point first: it sets the columns
+    if (kind < 3) {
+      line = "# comment " + std::to_string(i);
+    } else if (kind < 5) {
+      line = kind == 3 ? "" : " \t ";
+    } else if (kind < 6) {
+      line = std::to_string(rng.Below(5000));  // a new section
+    } else {
+      line = std::to_string(rng.Uniform(-1e3, 1e3)) + " " + std::to_string(rng.Below(100000)) +
+             ".25 -" + std::to_string(rng.Below(999)) + " " + std::to_string(rng.Below(2000)) +
+             " " + std::to_string(rng.Below(256)) + "," + std::to_string(rng.Below(256)) + " " +
+             std::to_string(rng.Below(256)) + (kind < 8 ? " 42 extra" : "");
+      ++i;
+    }
+    if (++lines == bad_line) line = "1 2 x 4 5 6 7";
+    text += line + (rng.Below(4) == 0 ? "\r\n" : "\n");
+  }
+  text.pop_back();
+  return text;
+}
+
+// Read(1) parses a block of about one line a call: the reading line by line the blocks must
+// match, on 1 thread; against it, whole reads and odd chunks on 2 threads.
+TEST(ParallelRead, MessyPtsReadsAsLineByLine) {
+  TempDir dir;
+  const std::string path = dir.File("messy.pts");
+  WriteBytes(path, MessyPts(150000, 0));
+  ASSERT_GT(std::filesystem::file_size(path), uint64_t{4} << 20) << "fewer blocks than meant";
+  const PointCloud lines = ReadOn(1, path, 1);
+  ASSERT_EQ(lines.size(), 150000u);
+  EXPECT_TRUE(Bytes(lines) == Bytes(ReadAgreeing(path)));
+  EXPECT_TRUE(Bytes(lines) == Bytes(ReadOn(2, path, 4097)));
+}
+
+TEST(ParallelRead, MessyPtsErrorIsTheLineByLineOne) {
+  TempDir dir;
+  const std::string path = dir.File("bad.pts");
+  WriteBytes(path, MessyPts(100000, 76543));
+  size_t points_lines = 0, points = 0;
+  const std::string lines = ErrorOn(1, path, 1, &points_lines);
+  EXPECT_EQ(lines, path + ": line 76543, column 3: not a number: 'x'");
+  for (size_t chunk : {size_t{1} << 20, size_t{4097}}) {
+    EXPECT_EQ(ErrorOn(2, path, chunk, &points), lines) << "chunks of " << chunk;
+    EXPECT_EQ(points, points_lines / chunk * chunk) << "chunks of " << chunk;
+  }
+}
+
 }  // namespace
 }  // namespace candi::io

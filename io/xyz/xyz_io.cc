@@ -81,6 +81,7 @@ class XyzReader : public PointReader {
   void ParseBlock(const char* begin, const char* end, size_t limit, uint64_t first_line,
                   TextBlock* out) const;
   size_t Take(TextBlock* block, uint64_t base_line, PointCloud* chunk);
+  void Report(const LineNotes& notes, uint64_t shift);
   bool ParseLine(const char* p, const char* end, size_t n, PointCloud* chunk,
                  LineNotes* notes) const;
   const char* ParseValue(const Column& c, const char* p, const char* end, size_t k,
@@ -277,7 +278,12 @@ size_t XyzReader::ReadRegion(size_t max_points, PointCloud* chunk) {
     if (block.points.size() > need || (block.failed && block.points.size() < need)) {
       // Too many points (keep the first `need`), or an error to raise with its line number.
       block = TextBlock();
-      ParseBlock(text_ + cuts[b], text_ + cuts[b + 1], need, lines_, &block);
+      try {
+        ParseBlock(text_ + cuts[b], text_ + cuts[b + 1], need, lines_, &block);
+      } catch (const InputError&) {
+        Report(block.notes, 0);  // what the lines before the bad one would have logged
+        throw;
+      }
     }
     pos_ += block.bytes;
     const uint64_t base_line = lines_;
@@ -347,23 +353,36 @@ void XyzReader::ParseBlock(const char* begin, const char* end, size_t limit, uin
 // Appends a parsed block to *chunk and reports what it saw (its lines renumbered to follow
 // base_line). Returns its number of points.
 size_t XyzReader::Take(TextBlock* block, uint64_t base_line, PointCloud* chunk) {
-  const LineNotes& s = block->notes;
-  const uint64_t shift = base_line - block->first_line;  // modulo 2^64, like the sums below
-  if (s.extra_line != 0 && !warned_extra_) {
+  Report(block->notes, base_line - block->first_line);  // modulo 2^64
+  chunk->Append(block->points);
+  return block->points.size();
+}
+
+// Logs what a reading line by line would have logged at these lines (numbered + shift), once,
+// in line order.
+void XyzReader::Report(const LineNotes& s, uint64_t shift) {
+  auto extra = [&] {
+    if (s.extra_line == 0 || warned_extra_) return;
     warned_extra_ = true;
     LogWarning(path_ + ": line " + std::to_string(s.extra_line + shift) + " has " +
                std::to_string(s.extra_values) + " columns, the spec " + layout_.text + " has " +
                std::to_string(layout_.columns.size()) + "; extra columns ignored (not logged again)");
-  }
-  if (s.section_line != 0) {
+  };
+  auto section = [&] {
+    if (s.section_line == 0) return;
     if (!warned_sections_) {
       LogInfo(path_ + ": line " + std::to_string(s.section_line + shift) + ": a new PTS section");
     }
     warned_sections_ = true;
     declared_ = (declared_ == kUnknownCount ? 0 : declared_) + s.section_points;
+  };
+  if (s.extra_line != 0 && (s.section_line == 0 || s.extra_line < s.section_line)) {
+    extra();
+    section();
+  } else {
+    section();
+    extra();
   }
-  chunk->Append(block->points);
-  return block->points.size();
 }
 
 void XyzReader::Finish() {
