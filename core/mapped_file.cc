@@ -51,7 +51,9 @@ void MappedFile::ReadIntoMemory() {
   size_t used = 0;
   while (true) {
     if (used == memory_.size()) memory_.resize(std::max<size_t>(1 << 16, 2 * used));
-    const ssize_t got = read(fd_, memory_.data() + used, memory_.size() - used);
+    // In parts, so that a read error names a byte near where it happened.
+    const size_t part = std::min<size_t>(memory_.size() - used, size_t{8} << 20);
+    const ssize_t got = read(fd_, memory_.data() + used, part);
     if (got < 0 && errno == EINTR) continue;
     if (got < 0) {
       throw InputError(path_, "byte " + std::to_string(used),
