@@ -11,10 +11,11 @@
 // Failure: InputError naming the path for a file that cannot be opened, is a directory, cannot be
 // read, or is too large to address.
 //
-// A file that shrinks while it is mapped: touching a page past its new end raises SIGBUS, which
-// kills the process (POSIX gives no portable way to turn it into an error). CheckSize() makes the
-// common case (a file truncated or rewritten between two reads) an InputError instead: readers
-// call it before decoding a range. A file truncated during one decode still raises SIGBUS.
+// A file that shrinks while it is mapped, or a disk error under a mapped page: touching the page
+// raises SIGBUS, which kills the process (POSIX gives no portable way to turn it into an error).
+// CheckSize() makes the common case (a file truncated or rewritten between two reads) an
+// InputError instead: readers call it before decoding a range. A file truncated during one
+// decode, or a failing disk, still raises SIGBUS (a read() would have given "read error").
 //
 // Thread-safety: data() may be read from any number of threads; the object is immutable after
 // construction.
