@@ -20,8 +20,9 @@ MappedFile::MappedFile(const std::string& path) : path_(path) {
   fd_ = OpenForReading(path, &size_, &regular);
   if (size_ > std::numeric_limits<size_t>::max() / 2) {
     close(fd_);
-    throw InputError(path, "", "file of " + std::to_string(size_) +
-                                   " bytes is larger than this machine can address");
+    throw InputError(
+        path, "",
+        "file of " + std::to_string(size_) + " bytes is larger than this machine can address");
   }
   void* p = regular && size_ > 0
                 ? mmap(nullptr, static_cast<size_t>(size_), PROT_READ, MAP_PRIVATE, fd_, 0)

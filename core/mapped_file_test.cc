@@ -63,8 +63,9 @@ TEST(MappedFile, FileThatShrankIsAnErrorNamingThePath) {
     map.CheckSize(20000, "records");
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), path + ": byte 100: the file shrank from 50000 to 100 bytes "
-                                           "while it was read (needed 20000 bytes for records)");
+    EXPECT_EQ(std::string(e.what()), path +
+                                         ": byte 100: the file shrank from 50000 to 100 bytes "
+                                         "while it was read (needed 20000 bytes for records)");
   }
   map.CheckSize(100, "the rest");  // what is left is fine
 }

@@ -38,9 +38,12 @@ PointCloud Generated(size_t n, bool intensity) {
   c.Resize(n);
   Rng rng(38);
   for (size_t i = 0; i < n; ++i) {
-    c.positions[i] = Eigen::Vector3d(std::round(rng.Uniform(0, 3e5)), std::round(rng.Uniform(0, 3e5)),
-                                     std::round(rng.Uniform(-1e4, 1e4))) * 1e-3;
-    c.colors[i] = {static_cast<uint8_t>(i), static_cast<uint8_t>(i >> 8), static_cast<uint8_t>(i >> 16)};
+    c.positions[i] =
+        Eigen::Vector3d(std::round(rng.Uniform(0, 3e5)), std::round(rng.Uniform(0, 3e5)),
+                        std::round(rng.Uniform(-1e4, 1e4))) *
+        1e-3;
+    c.colors[i] = {static_cast<uint8_t>(i), static_cast<uint8_t>(i >> 8),
+                   static_cast<uint8_t>(i >> 16)};
     if (intensity) c.scalars[0].f32[i] = static_cast<float>(i % 1000) * 0.5f;
   }
   return c;

@@ -149,7 +149,8 @@ bool IsHeader(const std::vector<std::string_view>& tokens, const Layout* layout)
 // match the number of values on the first point line.
 std::optional<Layout> LayoutFromHeader(const std::string& header, size_t values) {
   if (header.empty()) return std::nullopt;
-  const std::vector<std::string_view> names = SplitLine(header.data(), header.data() + header.size());
+  const std::vector<std::string_view> names =
+      SplitLine(header.data(), header.data() + header.size());
   if (names.size() != values) return std::nullopt;
   std::string spec;
   for (std::string_view name : names) spec += (spec.empty() ? "" : ",") + std::string(name);
@@ -167,7 +168,8 @@ std::string HeaderLine(const std::vector<Column>& columns, const PointSchema& sc
     const Column& c = columns[k];
     line += k == 0 ? "" : " ";
     line += c.kind == Col::kScalar ? schema.scalars[c.scalar].name
-            : c.kind == Col::kSkip ? "_" : kColNames[static_cast<int>(c.kind)];
+            : c.kind == Col::kSkip ? "_"
+                                   : kColNames[static_cast<int>(c.kind)];
   }
   return line + "\n";
 }

@@ -61,7 +61,7 @@ struct TextBlock {
   uint64_t lines = 0;       // lines consumed
   size_t bytes = 0;         // bytes consumed
   LineNotes notes;
-  bool failed = false;      // a line after the consumed ones is bad
+  bool failed = false;  // a line after the consumed ones is bad
 };
 
 class XyzReader : public PointReader {
@@ -96,13 +96,13 @@ class XyzReader : public PointReader {
   const char* text_;  // map_'s bytes
   bool pts_;
   Layout layout_;
-  uint64_t pos_ = 0;                   // the first unread byte
-  uint64_t first_data_ = 0;            // the byte after the first point line
-  std::string last_line_;              // the last line when it lacks '\n' (a sentinel follows)
-  uint64_t lines_ = 0;                 // lines consumed
-  uint64_t line_ = 0;                  // opening: the number of the line being parsed
-  std::string pending_;                // the first point line, read while opening
-  std::string header_;                 // column names from a header or comment line, if any
+  uint64_t pos_ = 0;         // the first unread byte
+  uint64_t first_data_ = 0;  // the byte after the first point line
+  std::string last_line_;    // the last line when it lacks '\n' (a sentinel follows)
+  uint64_t lines_ = 0;       // lines consumed
+  uint64_t line_ = 0;        // opening: the number of the line being parsed
+  std::string pending_;      // the first point line, read while opening
+  std::string header_;       // column names from a header or comment line, if any
   uint64_t header_line_ = 0;
   uint64_t pending_line_ = 0;          // its number, 0 when there is none
   uint64_t declared_ = kUnknownCount;  // PTS: the count line(s)
@@ -256,13 +256,13 @@ size_t XyzReader::Read(size_t max_points, PointCloud* chunk) {
 size_t XyzReader::ReadRegion(size_t max_points, PointCloud* chunk) {
   const uint64_t read = points_read_ + chunk->size();  // the points after first_data_, about
   const uint64_t points = read > 0 && !pending_.empty() ? read - 1 : read;
-  const double per_point =
-      points > 0 && pos_ > first_data_ ? static_cast<double>(pos_ - first_data_) / points
-                                       : static_cast<double>(pending_.size() + 1);
+  const double per_point = points > 0 && pos_ > first_data_
+                               ? static_cast<double>(pos_ - first_data_) / points
+                               : static_cast<double>(pending_.size() + 1);
   const double want = std::min<double>(kRegion, 1.0625 * per_point * max_points + 4096);
   const std::vector<uint64_t> cuts = CutBlocks(static_cast<uint64_t>(want));
   map_.CheckSize(cuts.back(), "text lines");  // a file cut since opening: an error, not SIGBUS
-  map_.WillNeed(cuts.back(), cuts.back() - pos_);
+  map_.WillNeed(cuts.back(), cuts.back() - pos_);  // the next region, read while this one parses
   std::vector<TextBlock> blocks(cuts.size() - 1);
   ParallelFor(size_t{0}, blocks.size(), [&](size_t b) {
     try {  // the line numbers are not known yet: a bad block is parsed again in order
@@ -366,7 +366,8 @@ void XyzReader::Report(const LineNotes& s, uint64_t shift) {
     warned_extra_ = true;
     LogWarning(path_ + ": line " + std::to_string(s.extra_line + shift) + " has " +
                std::to_string(s.extra_values) + " columns, the spec " + layout_.text + " has " +
-               std::to_string(layout_.columns.size()) + "; extra columns ignored (not logged again)");
+               std::to_string(layout_.columns.size()) +
+               "; extra columns ignored (not logged again)");
   };
   auto section = [&] {
     if (s.section_line == 0) return;
@@ -426,7 +427,8 @@ inline const char* XyzReader::ParseValue(const Column& c, const char* p, const c
     case Col::kZ: {
       double& v = slot.position[static_cast<int>(c.kind)];
       q = ParseNumber(p, end, &v);
-      if (q != nullptr && !std::isfinite(v)) Fail(notes.line, k, p, end, "coordinate is not finite");
+      if (q != nullptr && !std::isfinite(v))
+        Fail(notes.line, k, p, end, "coordinate is not finite");
       break;
     }
     case Col::kR:
@@ -434,7 +436,8 @@ inline const char* XyzReader::ParseValue(const Column& c, const char* p, const c
     case Col::kB: {
       int v = -1;
       q = ParseNumber(p, end, &v);
-      if (q == nullptr || v < 0 || v > 255) Fail(notes.line, k, p, end, "colour is not an integer in 0..255");
+      if (q == nullptr || v < 0 || v > 255)
+        Fail(notes.line, k, p, end, "colour is not an integer in 0..255");
       Channel(*slot.color, c.kind) = static_cast<uint8_t>(v);
       break;
     }
@@ -463,19 +466,19 @@ bool XyzReader::ShortLine(const char* begin, const char* end, LineNotes* notes) 
     notes->section_points += count;
     return false;
   }
-  Fail(notes->line, "expected " + std::to_string(layout_.columns.size()) + " columns (" + layout_.text +
-       "), found " + std::to_string(tokens.size()));
+  Fail(notes->line, "expected " + std::to_string(layout_.columns.size()) + " columns (" +
+                        layout_.text + "), found " + std::to_string(tokens.size()));
 }
 
 void XyzReader::Fail(uint64_t line, const std::string& message) const {
   throw InputError(path_, "line " + std::to_string(line), message);
 }
 
-void XyzReader::Fail(uint64_t line, size_t column, const char* p, const char* end, const std::string& what) const {
+void XyzReader::Fail(uint64_t line, size_t column, const char* p, const char* end,
+                     const std::string& what) const {
   const char* q = p;
   while (q != end && !IsSeparator(*q) && q - p < 40) ++q;
-  throw InputError(path_,
-                   "line " + std::to_string(line) + ", column " + std::to_string(column + 1),
+  throw InputError(path_, "line " + std::to_string(line) + ", column " + std::to_string(column + 1),
                    what + ": '" + std::string(p, q) + "'");
 }
 
