@@ -180,19 +180,22 @@ TEST(ParallelRead, TruncatedPlyAndLasGiveOneError) {
 }
 
 // A file cut after opening: the records the map no longer holds are an error, not SIGBUS.
-TEST(ParallelRead, PlyCutAfterOpeningGivesAnError) {
+TEST(ParallelRead, FileCutAfterOpeningGivesAnError) {
   TempDir dir;
-  const std::string path = dir.File("c.ply");
-  WritePointCloud(path, Generated(kPoints, false));
-  auto reader = OpenPointReader(path);
-  std::filesystem::resize_file(path, 5000);
-  PointCloud chunk;
-  try {
-    reader->Read(kPoints, &chunk);
-    FAIL() << "no error";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(path + ": byte 5000: the file shrank"), std::string::npos)
-        << e.what();
+  for (const char* name : {"c.ply", "c.las", "c.xyz"}) {
+    const std::string path = dir.File(name);
+    WritePointCloud(path, Generated(kPoints, false));
+    auto reader = OpenPointReader(path);
+    std::filesystem::resize_file(path, 5000);
+    PointCloud chunk;
+    try {
+      reader->Read(kPoints, &chunk);
+      ADD_FAILURE() << name << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(path + ": byte 5000: the file shrank"),
+                std::string::npos)
+          << e.what();
+    }
   }
 }
 

@@ -260,8 +260,8 @@ size_t XyzReader::ReadRegion(size_t max_points, PointCloud* chunk) {
                                ? static_cast<double>(pos_ - first_data_) / points
                                : static_cast<double>(pending_.size() + 1);
   const double want = std::min<double>(kRegion, 1.0625 * per_point * max_points + 4096);
+  map_.CheckSize(map_.size(), "the text");  // a file cut since opening: an error, not SIGBUS
   const std::vector<uint64_t> cuts = CutBlocks(static_cast<uint64_t>(want));
-  map_.CheckSize(cuts.back(), "text lines");  // a file cut since opening: an error, not SIGBUS
   map_.WillNeed(cuts.back(), cuts.back() - pos_);  // the next region, read while this one parses
   std::vector<TextBlock> blocks(cuts.size() - 1);
   ParallelFor(size_t{0}, blocks.size(), [&](size_t b) {
