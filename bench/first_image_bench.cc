@@ -7,9 +7,12 @@
 //   draw        render::RenderSpbr at L = 100, 1024 x 768;
 //   end to end  pipeline::RenderPointFiles and the PNG written (what `candi render FILE` does);
 //   pack        render::PackFiles (what `candi pack FILE` does).
-// The files are generated once (a seeded terrain) in --dir and kept for later runs.
+// The files are generated once (a seeded terrain) in --dir and kept for later runs; a text XYZ
+// file of --xyz-points (default a tenth of --points) is read too. --read-only times the page cache
+// and the read alone.
 //
-//   first_image_bench [--points 2e7] [--runs 3] [--threads 1,2] [--dir candi-bench-first-image]
+//   first_image_bench [--points 2e7] [--xyz-points 2e6] [--runs 3] [--threads 1,2] [--read-only]
+//                     [--dir candi-bench-first-image]
 #include <fcntl.h>
 #include <tbb/global_control.h>
 #include <unistd.h>
@@ -102,47 +105,62 @@ std::vector<int> ParseThreads(const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  uint64_t points = 20000000;
+  uint64_t points = 20000000, xyz_points = 0;
+  bool read_only = false;
   int runs = 3;
   std::string threads_text = "1,2", dir = "candi-bench-first-image";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
     if (a == "--points" && has_value) points = static_cast<uint64_t>(std::stod(argv[++i]));
+    else if (a == "--xyz-points" && has_value) xyz_points = static_cast<uint64_t>(std::stod(argv[++i]));
+    else if (a == "--read-only") read_only = true;
     else if (a == "--runs" && has_value) runs = std::max(1, std::atoi(argv[++i]));
     else if (a == "--threads" && has_value) threads_text = argv[++i];
     else if (a == "--dir" && has_value) dir = argv[++i];
     else {
-      std::fprintf(stderr, "usage: first_image_bench [--points 2e7] [--runs 3] [--threads 1,2] [--dir DIR]\n");
+      std::fprintf(stderr, "usage: first_image_bench [--points 2e7] [--xyz-points 2e6] [--runs 3] [--threads 1,2] "
+                           "[--read-only] [--dir DIR]\n");
       return 2;
     }
   }
   fs::create_directories(dir);
   const std::string tag = std::to_string(points);
-  const std::vector<std::string> files = {dir + "/terrain-" + tag + ".ply", dir + "/terrain-" + tag + ".las"};
+  if (xyz_points == 0) xyz_points = points / 10;
+  const std::vector<std::string> files = {dir + "/terrain-" + tag + ".ply", dir + "/terrain-" + tag + ".las",
+                                          dir + "/terrain-" + std::to_string(xyz_points) + ".xyz"};
   for (const std::string& f : files) {
     if (fs::exists(f)) continue;
     std::fprintf(stderr, "writing %s\n", f.c_str());
-    io::WritePointCloud(f, Terrain(points, 1));
+    io::WritePointCloud(f, Terrain(fs::path(f).extension() == ".xyz" ? xyz_points : points, 1));
   }
 
   std::printf("first_image_bench: %llu points a file, median of %d run(s); M points/s in brackets\n\n",
               static_cast<unsigned long long>(points), runs);
   std::printf("%-28s %4s %17s %15s %15s %15s %17s %17s\n", "file", "thr", "page cache s", "read s", "prepare s",
               "draw s", "end to end s", "pack s");
-  const double m = static_cast<double>(points) * 1e-6;
-  auto cell = [m](double s) {
+  double m = 0;
+  auto cell = [&m](double s) {
     char text[32];
     std::snprintf(text, sizeof(text), "%.2f (%.1f)", s, m / s);
     return std::string(text);
   };
   for (const std::string& file : files) {
+    m = static_cast<double>(fs::path(file).extension() == ".xyz" ? xyz_points : points) * 1e-6;
     ReadBytes(file);  // into the page cache
     for (int t : ParseThreads(threads_text)) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(t));
       const double bytes_s = Timed(runs, [&] { ReadBytes(file); });
       PointCloud cloud;
       const double read_s = Timed(runs, [&] { cloud = io::ReadPointCloud(file); });
+      const double gb = static_cast<double>(fs::file_size(file)) * 1e-9;
+      char page[32];
+      std::snprintf(page, sizeof(page), "%.2f (%.1f GB/s)", bytes_s, gb / bytes_s);
+      if (read_only) {
+        std::printf("%-28s %4d %17s %15s\n", fs::path(file).filename().c_str(), t, page, cell(read_s).c_str());
+        std::fflush(stdout);
+        continue;
+      }
       render::SplatCloudOptions so;
       so.repeat_level = 100;
       render::SplatCloud splats;
@@ -162,9 +180,6 @@ int main(int argc, char** argv) {
         pipeline::WriteRender(o, pipeline::RenderPointFiles(o, {file}), out);
       });
       const double pack_s = Timed(runs, [&] { render::PackFiles(render::PackOptions(), {file}, "", dir + "/packed"); });
-      const double gb = static_cast<double>(fs::file_size(file)) * 1e-9;
-      char page[32];
-      std::snprintf(page, sizeof(page), "%.2f (%.1f GB/s)", bytes_s, gb / bytes_s);
       std::printf("%-28s %4d %17s %15s %15s %15s %17s %17s\n", fs::path(file).filename().c_str(), t, page,
                   cell(read_s).c_str(), cell(prepare_s).c_str(), cell(draw_s).c_str(), cell(end_s).c_str(),
                   cell(pack_s).c_str());

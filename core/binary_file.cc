@@ -11,20 +11,26 @@
 
 namespace candi {
 
-BinaryFile::BinaryFile(const std::string& path) : path_(path) {
-  fd_ = open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd_ < 0) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
+int OpenForReading(const std::string& path, uint64_t* size, bool* regular) {
+  const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
   struct stat st;
-  if (fstat(fd_, &st) != 0) {
+  if (fstat(fd, &st) != 0) {
     const int err = errno;
-    close(fd_);
+    close(fd);
     throw InputError(path, "", std::string("cannot stat: ") + std::strerror(err));
   }
   if (S_ISDIR(st.st_mode)) {
-    close(fd_);
+    close(fd);
     throw InputError(path, "", "is a directory, not a file");
   }
-  size_ = static_cast<uint64_t>(st.st_size);
+  *size = static_cast<uint64_t>(st.st_size);
+  if (regular) *regular = S_ISREG(st.st_mode);
+  return fd;
+}
+
+BinaryFile::BinaryFile(const std::string& path) : path_(path) {
+  fd_ = OpenForReading(path, &size_);
   posix_fadvise(fd_, 0, 0, POSIX_FADV_SEQUENTIAL);
 }
 

@@ -10,6 +10,11 @@
 
 namespace candi {
 
+// Opens `path` read-only (close-on-exec) and returns the descriptor, with the file's size in *size
+// and, when `regular` is given, whether it is a regular file. Throws InputError naming the path
+// when it cannot be opened or stat'ed, or is a directory.
+int OpenForReading(const std::string& path, uint64_t* size, bool* regular = nullptr);
+
 class BinaryFile {
  public:
   explicit BinaryFile(const std::string& path);

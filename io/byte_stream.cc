@@ -32,9 +32,12 @@ size_t ReadAtInParts(const BinaryFile& file, uint64_t offset, void* dst, size_t 
 }
 
 ByteStream::ByteStream(BinaryFile& file, size_t block_size)
-    : file_(file), block_size_(block_size), offset_(file.position()) {}
+    : file_(&file), block_size_(block_size), offset_(file.position()) {}
+
+ByteStream::ByteStream(const MappedFile& map, uint64_t offset) : map_(&map), offset_(offset) {}
 
 bool ByteStream::Ensure(size_t n) {
+  if (map_) return available() >= n;
   if (end_ - begin_ >= n) return true;
   // Move what is left to the front, grow if needed, then fill.
   const size_t left = end_ - begin_;
@@ -44,13 +47,13 @@ bool ByteStream::Ensure(size_t n) {
     end_ = left;
   }
   // No larger than the rest of the file: a small file does not get a block-sized buffer.
-  const size_t want = std::max<size_t>(n, std::min<uint64_t>(block_size_, left + file_.remaining()));
+  const size_t want = std::max<size_t>(n, std::min<uint64_t>(block_size_, left + file_->remaining()));
   if (buffer_.size() < want) buffer_.resize(want);
   while (end_ < n) {
-    const size_t want = static_cast<size_t>(std::min<uint64_t>(buffer_.size() - end_, file_.remaining()));
-    const uint64_t at = file_.position();
-    const size_t got = ReadAtInParts(file_, at, buffer_.data() + end_, want);
-    file_.Seek(at + got);
+    const size_t want = static_cast<size_t>(std::min<uint64_t>(buffer_.size() - end_, file_->remaining()));
+    const uint64_t at = file_->position();
+    const size_t got = ReadAtInParts(*file_, at, buffer_.data() + end_, want);
+    file_->Seek(at + got);
     if (got == 0) return false;
     end_ += got;
   }

@@ -2,7 +2,7 @@
 //
 // Values are separated by blanks (runs count as one) or by one ',' or ';' with optional blanks
 // around it. The parsers rely on a sentinel: every parsed line is followed by a byte that is no
-// digit, sign, '.' or 'e' ('\n' in a block buffer, '\0' after a std::string).
+// digit, sign, '.' or 'e' ('\n' in the mapped text, '\0' after a std::string).
 #pragma once
 
 #include <charconv>
@@ -55,8 +55,9 @@ inline std::vector<std::string_view> SplitLine(const char* p, const char* end) {
 inline bool IsDigit(char c) { return static_cast<unsigned char>(c - '0') < 10; }
 
 // The fast number parsers rely on a sentinel instead of checking the end at every character:
-// every parsed line is followed by a byte that is no digit, sign, '.' or 'e' ('\n' in the block
-// buffer, '\0' after a std::string), and every value within a line by a separator.
+// every parsed line is followed by a byte that is no digit, sign, '.' or 'e' ('\n' in the mapped
+// text, '\0' after a std::string: the file's last line is copied), and every value within a line
+// by a separator.
 
 // Exact decimal to double without std::from_chars (which libstdc++ 12 implements with strtod,
 // ~100 ns a value) in the common case. Clinger's fast path (W. D. Clinger, "How to read floating

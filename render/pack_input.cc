@@ -11,8 +11,8 @@
 
 #include "core/binary_file.h"
 #include "core/check.h"
+#include "core/mapped_file.h"
 #include "core/parallel.h"
-#include "io/byte_stream.h"
 
 namespace candi::render {
 
@@ -99,14 +99,13 @@ FloatBox BoxOfRecords(const io::PointRecordLayout& l, const uint8_t* records, si
 }  // namespace
 
 struct RecordFile::Impl {
-  explicit Impl(const std::string& path) : file(path) {}
-  BinaryFile file;
-  UninitVector<uint8_t> buffer;
+  explicit Impl(const std::string& path) : map(path) {}
+  MappedFile map;  // the records are used where the page cache holds them
 };
 
 RecordFile::RecordFile(const std::string& path, const io::PointRecordLayout& layout)
     : impl_(std::make_unique<Impl>(path)), layout_(layout) {
-  CheckHoldsRecords(path, layout_, impl_->file.size());
+  CheckHoldsRecords(path, layout_, impl_->map.size());
 }
 
 RecordFile::~RecordFile() = default;
@@ -115,46 +114,48 @@ size_t RecordFile::Next(size_t max_points, const uint8_t** records) {
   const size_t n = static_cast<size_t>(std::min<uint64_t>(max_points, layout_.count - next_));
   if (n == 0) return 0;
   const size_t bytes = n * layout_.stride;
-  impl_->buffer.resize(bytes);
   const uint64_t at = layout_.first_byte + next_ * layout_.stride;
-  if (io::ReadAtInParts(impl_->file, at, impl_->buffer.data(), bytes) != bytes) {
-    CheckHoldsRecords(impl_->file.path(), layout_, BinaryFile(impl_->file.path()).size());  // it shrank
-    throw InputError(impl_->file.path(), "byte " + std::to_string(at), "short read of point records");
+  const MappedFile& map = impl_->map;
+  try {
+    map.CheckSize(at + bytes, "point records");  // a file that shrank: an error, not SIGBUS
+  } catch (const InputError&) {
+    CheckHoldsRecords(map.path(), layout_, BinaryFile(map.path()).size());  // as the PLY reader says it
+    throw;
   }
+  map.WillNeed(at, bytes);
   next_ += n;
-  *records = impl_->buffer.data();
+  *records = map.data() + at;
   return n;
 }
 
 RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& l, const LocalFrame& frame) {
-  BinaryFile file(path);
+  const MappedFile map(path);
   RecordScan scan;
-  scan.bytes = file.size();
+  scan.bytes = map.size();
   CheckHoldsRecords(path, l, scan.bytes);
   const uint64_t end = l.first_byte + l.count * l.stride;
-  // HashFile's blocks, each read with the start of the record that crosses its end.
-  UninitVector<uint8_t> buffer(static_cast<size_t>(std::min<uint64_t>(kHashBlock + l.stride, scan.bytes)));
+  // HashFile's blocks, each with the start of the record that crosses its end.
   std::vector<uint64_t> hashes;
   FloatBox total;
   for (uint64_t at = 0; at < scan.bytes; at += kHashBlock) {
     const size_t block = static_cast<size_t>(std::min<uint64_t>(kHashBlock, scan.bytes - at));
     const size_t want = static_cast<size_t>(std::min<uint64_t>(kHashBlock + l.stride, scan.bytes - at));
-    if (io::ReadAtInParts(file, at, buffer.data(), want) != want) {
-      throw InputError(path, "byte " + std::to_string(at), "short read (did the file change?)");
-    }
+    map.CheckSize(at + want, "a block to hash");  // a file that shrank: an error, not SIGBUS
+    map.WillNeed(at + want, kHashBlock);
+    const uint8_t* bytes = map.data() + at;
     // The records that start in this block.
     auto first_at_or_after = [&](uint64_t byte) {
       return byte <= l.first_byte ? 0 : std::min<uint64_t>(l.count, (byte - l.first_byte + l.stride - 1) / l.stride);
     };
     const uint64_t r0 = first_at_or_after(at), r1 = first_at_or_after(std::min<uint64_t>(at + block, end));
     const size_t n = static_cast<size_t>(r1 - r0), parts = (n + kRecordBlock - 1) / kRecordBlock;
-    const uint8_t* records = buffer.data() + (l.first_byte + r0 * l.stride - at);
+    const uint8_t* records = bytes + (l.first_byte + r0 * l.stride - at);
     std::vector<FloatBox> boxes(parts);
     uint64_t hash = 0;
     // Task 0 hashes the block while the others take the bounds of its records.
     ParallelFor(size_t{0}, parts + 1, [&](size_t t) {
       if (t == 0) {
-        hash = ArchiveHash(buffer.data(), block);
+        hash = ArchiveHash(bytes, block);
         return;
       }
       const size_t a = (t - 1) * kRecordBlock;

@@ -13,6 +13,7 @@
 #include "core/binary_file.h"
 #include "core/check.h"
 #include "core/log.h"
+#include "core/mapped_file.h"
 #include "core/parallel.h"
 #include "io/crs.h"
 #include "io/las/las_columns.h"
@@ -51,6 +52,7 @@ class LasReader : public PointReader {
   void AddExtraColumns(const std::vector<LasExtraBytes>& extra);
   bool HasWideColors();
   bool HasWideColorsLaz();
+  const uint8_t* PointRecords(uint64_t first, size_t n) const;
   void DecodeRecords(const uint8_t* records, size_t n, size_t first, PointCloud* chunk) const;
   void DecodeBlock(const uint8_t* records, size_t n, size_t first, PointCloud* chunk) const;
 
@@ -60,7 +62,7 @@ class LasReader : public PointReader {
   LasFormatLayout layout_;
   std::vector<LasColumn> columns_;
   int color_shift_ = 8;
-  std::vector<uint8_t> buffer_;
+  std::unique_ptr<MappedFile> map_;  // uncompressed: the file, decoded in place
   // LAZ: point-format bits 6-7 set; the laszip VLR and the decoded chunks.
   bool compressed_ = false;
   laz::Vlr laz_;
@@ -84,6 +86,7 @@ LasReader::LasReader(const std::string& path, const PointReadOptions& options)
         header_.record_length);
   } else {
     CheckPointDataSize();
+    map_ = std::make_unique<MappedFile>(path);
   }
   for (LasVlr& evlr : ReadLasEvlrs(&file_, header_)) vlrs.push_back(std::move(evlr));
   BuildSchema(FillInfo(std::move(vlrs)));
@@ -240,13 +243,9 @@ bool LasReader::HasWideColors() {
   if (compressed_) return HasWideColorsLaz();
   const size_t length = header_.record_length;
   const size_t per_read = std::max<size_t>(1, kColorScanBytes / length);
-  std::vector<uint8_t> block;
   for (uint64_t done = 0; done < info_.count;) {
     const size_t n = static_cast<size_t>(std::min<uint64_t>(per_read, info_.count - done));
-    block.resize(n * length);
-    file_.Seek(header_.offset_to_point_data + done * length);
-    file_.ReadExact(block.data(), block.size(), "point records");
-    const uint8_t* p = block.data() + layout_.color_offset + 1;
+    const uint8_t* p = PointRecords(done, n) + layout_.color_offset + 1;
     uint8_t high = 0;
     for (size_t i = 0; i < n; ++i, p += length) high |= p[0] | p[2] | p[4];
     if (high != 0) return true;
@@ -286,14 +285,25 @@ size_t LasReader::Read(size_t max_points, PointCloud* chunk) {
       done += take;
     }
   } else {
-    const size_t length = header_.record_length;
-    buffer_.resize(n * length);
-    file_.Seek(header_.offset_to_point_data + points_read_ * length);
-    file_.ReadExact(buffer_.data(), buffer_.size(), "point records");
-    DecodeRecords(buffer_.data(), n, 0, chunk);
+    DecodeRecords(PointRecords(points_read_, n), n, 0, chunk);
   }
   points_read_ += n;
   return n;
+}
+
+// Uncompressed: records [first, first + n) in the map. CheckPointDataSize() saw them in the
+// file; CheckSize turns a file truncated since then into an error instead of SIGBUS.
+const uint8_t* LasReader::PointRecords(uint64_t first, size_t n) const {
+  const uint64_t begin = header_.offset_to_point_data + first * header_.record_length;
+  const uint64_t bytes = uint64_t{n} * header_.record_length;
+  if (begin + bytes > map_->size()) {
+    throw InputError(path_, "byte " + std::to_string(map_->size()),
+                     "unexpected end of file while reading point records (needed " +
+                         std::to_string(bytes) + " bytes at byte " + std::to_string(begin) + ")");
+  }
+  map_->CheckSize(begin + bytes, "point records");
+  map_->WillNeed(begin, bytes);
+  return map_->data() + begin;
 }
 
 // Blocks decode independently (each writes its own range of the chunk), so they run in

@@ -6,6 +6,7 @@
 // names below (all exact in float except gps_time, which is double). Colour: 16-bit values are
 // reduced to 8 bits (v >> 8) unless every value in the file fits in 8 bits (files that store
 // 8-bit colour in the 16-bit fields), detected from the data and recorded in meta.las.color_16bit.
+// Uncompressed records are read in place (core/mapped_file.h) and decoded in parallel blocks.
 // Extra bytes (LAS 1.4 "LASF_Spec" record 4) of numeric types become scalar fields; normals are
 // written and read as the extra-bytes fields "nx", "ny", "nz".
 //

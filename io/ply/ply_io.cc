@@ -9,6 +9,7 @@
 #include "core/binary_file.h"
 #include "core/check.h"
 #include "core/log.h"
+#include "core/mapped_file.h"
 #include "core/parallel.h"
 #include "io/byte_stream.h"
 #include "io/ply/ply_header.h"
@@ -223,6 +224,7 @@ class PlyReader : public PointReader {
   std::vector<Column> columns_;  // one per vertex property (lists: kSkip)
   size_t compact_stride_ = 0;
   bool swap_ = false;
+  std::unique_ptr<MappedFile> map_;  // binary: the file, read in place (stream_ reads from it)
   std::unique_ptr<ByteStream> stream_;
   std::vector<uint8_t> compact_;
   uint64_t line_ = 0;  // ASCII: the current line number
@@ -252,7 +254,13 @@ PlyReader::PlyReader(const std::string& path, const PointReadOptions& options)
     info_.frame = *sidecar;
   }
   line_ = header_.header_lines;
-  stream_ = std::make_unique<ByteStream>(file_);
+  if (header_.encoding == PlyEncoding::kAscii) {
+    stream_ = std::make_unique<ByteStream>(file_);  // lines of at most 1 MiB, in a buffer
+  } else {
+    // Binary records are decoded where the page cache holds them: no copy into a buffer.
+    map_ = std::make_unique<MappedFile>(path);
+    stream_ = std::make_unique<ByteStream>(*map_, std::min(file_.position(), map_->size()));
+  }
   for (int e = 0; e < vertex_element_; ++e) SkipElement(header_.elements[e]);
   SetRecordLayout();
 }
@@ -385,6 +393,8 @@ size_t PlyReader::ReadBinary(size_t n, PointCloud* chunk) {
            "file ends inside vertex " + std::to_string(points_read_ + stream_->available() / stride) +
                " of " + std::to_string(info_.count));
     }
+    map_->CheckSize(stream_->offset() + n * stride, "vertex records");  // SIGBUS otherwise
+    map_->WillNeed(stream_->offset(), n * stride);
     records = stream_->data();
   } else {
     stride = compact_stride_;

@@ -9,6 +9,8 @@
 // triangles. The shift is recorded as "comment candi_shift x y z" (and in the sidecar).
 // Writers emit double positions when the frame has a shift or the data is double, and write
 // scalar fields as "scalar_<Name>" plus "quality" for a field of that name.
+// Binary files are read in place (core/mapped_file.h): a Read() call's vertices are decoded in
+// parallel blocks straight from the page cache; ascii files through a buffer.
 #pragma once
 
 #include <memory>

@@ -12,199 +12,26 @@
 #include <vector>
 
 #include "core/atomic_file.h"
-#include "core/binary_file.h"
+#include "core/mapped_file.h"
+#include "core/parallel.h"
 #include "core/check.h"
 #include "core/log.h"
 #include "core/text_format.h"
 #include "io/shift_sidecar.h"
 #include "io/text_scan.h"
+#include "io/xyz/xyz_columns.h"
 
 namespace candi::io {
 namespace {
 
 using namespace text_scan;
+using namespace xyz;
 
-constexpr size_t kBlockSize = size_t{4} << 20;      // bytes read from the file at a time
+constexpr size_t kBlockSize = size_t{4} << 20;      // bytes the writer buffers
 constexpr size_t kMaxLineLength = size_t{1} << 20;  // longer lines are an error
 constexpr size_t kPtsCountWidth = 20;               // digits of the largest uint64_t
-
-// ---------------------------------------------------------------------------------------------
-// Column specs.
-
-enum class Col : uint8_t { kX, kY, kZ, kR, kG, kB, kNx, kNy, kNz, kScalar, kSkip };
-constexpr const char* kColNames[] = {"x", "y", "z", "r", "g", "b", "nx", "ny", "nz"};
-
-struct Column {
-  Col kind = Col::kSkip;
-  int scalar = -1;  // kScalar: index into the schema's scalar fields
-};
-
-struct Layout {
-  std::vector<Column> columns;
-  PointSchema schema;  // colours, normals and float scalar fields, as the columns say
-  std::string text;    // canonical spec, e.g. "x,y,z,r,g,b", for messages
-};
-
-std::string Trim(const std::string& s) {
-  const size_t b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return "";
-  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
-}
-
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-bool IsIdentifier(const std::string& s) {
-  auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
-  return !s.empty() && !std::isdigit(static_cast<unsigned char>(s[0])) &&
-         std::all_of(s.begin(), s.end(), word);
-}
-
-[[noreturn]] void BadSpec(const std::string& spec, const std::string& what) {
-  throw std::invalid_argument("column spec '" + spec + "': " + what);
-}
-
-// The kind of one spec entry; a scalar field's name goes to *name.
-Col EntryKind(const std::string& spec, const std::string& entry, std::string* name) {
-  static const std::pair<const char*, Col> kAliases[] = {
-      {"x", Col::kX},    {"y", Col::kY},      {"z", Col::kZ},     {"r", Col::kR},
-      {"red", Col::kR},  {"g", Col::kG},      {"green", Col::kG}, {"b", Col::kB},
-      {"blue", Col::kB}, {"nx", Col::kNx},    {"ny", Col::kNy},   {"nz", Col::kNz},
-      {"_", Col::kSkip}, {"skip", Col::kSkip}};
-  const std::string lower = Lower(entry);
-  for (const auto& [alias, kind] : kAliases) {
-    if (lower == alias) return kind;
-  }
-  if (lower == "i" || lower == "intensity") {
-    *name = "intensity";
-    return Col::kScalar;
-  }
-  if (!IsIdentifier(entry)) {
-    BadSpec(spec, "'" + entry +
-                      "' is not a column name (x y z, r g b, nx ny nz, i, _ or a field "
-                      "name of letters, digits and '_')");
-  }
-  *name = entry;
-  return Col::kScalar;
-}
-
-void CheckComplete(const std::string& spec, const int (&count)[9]) {
-  for (int k = 0; k < 3; ++k) {
-    if (count[k] == 0)
-      BadSpec(spec, std::string("no '") + kColNames[k] + "' column (x,y,z are required)");
-  }
-  for (int first : {3, 6}) {
-    const int n = count[first] + count[first + 1] + count[first + 2];
-    if (n != 0 && n != 3) {
-      const std::string group = first == 3 ? "r,g,b" : "nx,ny,nz";
-      BadSpec(spec, "incomplete " + group + " (all three or none)");
-    }
-  }
-}
-
-// Parses "x,y,z,r,g,b,..." (see PointReadOptions::columns). Throws std::invalid_argument naming
-// the offending entry.
-Layout ParseColumnSpec(const std::string& spec) {
-  Layout layout;
-  int count[9] = {};
-  for (size_t start = 0; start <= spec.size();) {
-    const size_t comma = std::min(spec.find(',', start), spec.size());
-    const std::string entry = Trim(spec.substr(start, comma - start));
-    start = comma + 1;
-    if (entry.empty()) BadSpec(spec, "empty entry");
-    std::string name;
-    Column column{EntryKind(spec, entry, &name)};
-    if (column.kind == Col::kScalar) {
-      if (layout.schema.ScalarIndex(name) >= 0) BadSpec(spec, "'" + entry + "' appears twice");
-      column.scalar = static_cast<int>(layout.schema.scalars.size());
-      layout.schema.scalars.push_back({name, ScalarType::kFloat32});
-    } else if (column.kind != Col::kSkip) {
-      name = kColNames[static_cast<int>(column.kind)];
-      if (count[static_cast<int>(column.kind)]++ > 0)
-        BadSpec(spec, "'" + entry + "' appears twice");
-    } else {
-      name = "_";
-    }
-    layout.columns.push_back(column);
-    layout.text += (layout.text.empty() ? "" : ",") + name;
-  }
-  CheckComplete(spec, count);
-  layout.schema.colors = count[3] > 0;
-  layout.schema.normals = count[6] > 0;
-  layout.schema.position_type = ScalarType::kFloat64;
-  return layout;
-}
-
-inline uint8_t& Channel(Rgb8& rgb, Col kind) {
-  return kind == Col::kR ? rgb.r : kind == Col::kG ? rgb.g : rgb.b;
-}
-inline uint8_t Channel(const Rgb8& rgb, Col kind) { return Channel(const_cast<Rgb8&>(rgb), kind); }
-
-// Columns 4-6 hold colours when they are integers in 0..255 and not an axis-aligned unit normal
-// such as "0 0 1" (which a colour almost never is: near-black).
-bool LooksLikeColor(const std::vector<std::string_view>& tokens) {
-  int sum_squares = 0;
-  for (size_t k = 3; k < 6; ++k) {
-    int v = -1;
-    if (!IsNumber(tokens[k], &v) || v < 0 || v > 255) return false;
-    sum_squares += v * v;
-  }
-  return sum_squares != 1;
-}
-
-std::string GuessColumns(const std::vector<std::string_view>& tokens) {
-  const size_t n = tokens.size();
-  const bool color = n >= 6 && LooksLikeColor(tokens);
-  if (n == 3) return "x,y,z";
-  if (n == 4) return "x,y,z,i";
-  if (n == 6) return color ? "x,y,z,r,g,b" : "x,y,z,nx,ny,nz";
-  if (n == 7) return "x,y,z,i,r,g,b";
-  if (n == 9) return color ? "x,y,z,r,g,b,nx,ny,nz" : "x,y,z,nx,ny,nz,r,g,b";
-  std::string spec = "x,y,z";
-  for (size_t k = 3; k < n; ++k) spec += ",c" + std::to_string(k);
-  return spec;
-}
-
-// A first line is a header when a value that would be read as a number is not one (with a spec,
-// skipped and extra columns may hold text).
-bool IsHeader(const std::vector<std::string_view>& tokens, const Layout* layout) {
-  for (size_t k = 0; k < tokens.size(); ++k) {
-    if (layout && (k >= layout->columns.size() || layout->columns[k].kind == Col::kSkip)) continue;
-    double v;
-    if (!IsNumber(tokens[k], &v)) return true;
-  }
-  return false;
-}
-
-// Column names in a header line ("//X,Y,Z,R,G,B,Intensity" as CloudCompare writes it, or
-// "x y z r g b" as candi does) as a layout, when they are valid names, include x, y, z, and
-// match the number of values on the first point line.
-std::optional<Layout> LayoutFromHeader(const std::string& header, size_t values) {
-  if (header.empty()) return std::nullopt;
-  const std::vector<std::string_view> names = SplitLine(header.data(), header.data() + header.size());
-  if (names.size() != values) return std::nullopt;
-  std::string spec;
-  for (std::string_view name : names) spec += (spec.empty() ? "" : ",") + std::string(name);
-  try {
-    return ParseColumnSpec(spec);
-  } catch (const std::invalid_argument&) {
-    return std::nullopt;  // not column names: an ordinary comment or title
-  }
-}
-
-// The header line candi writes: the column names, so the file reads back without a spec.
-std::string HeaderLine(const std::vector<Column>& columns, const PointSchema& schema) {
-  std::string line = "//";
-  for (size_t k = 0; k < columns.size(); ++k) {
-    const Column& c = columns[k];
-    line += k == 0 ? "" : " ";
-    line += c.kind == Col::kScalar ? schema.scalars[c.scalar].name
-            : c.kind == Col::kSkip ? "_" : kColNames[static_cast<int>(c.kind)];
-  }
-  return line + "\n";
-}
+constexpr uint64_t kTextBlock = uint64_t{1} << 20;  // text a thread parses at a time, about
+constexpr uint64_t kRegion = uint64_t{64} << 20;    // text one pass over the blocks covers, at most
 
 // ---------------------------------------------------------------------------------------------
 // Reader.
@@ -218,6 +45,25 @@ struct PointSlot {
   size_t n;  // index of the point in chunk
 };
 
+// What parsing a run of lines saw that the reader reports once, in file order.
+struct LineNotes {
+  uint64_t line = 0;            // the number of the line being parsed
+  uint64_t extra_line = 0;      // the first line with more values than the spec (0: none)
+  size_t extra_values = 0;      // its number of values
+  uint64_t section_line = 0;    // the first PTS section count line (0: none)
+  uint64_t section_points = 0;  // the sum of the section counts
+};
+
+// A run of lines parsed on its own (a block of the text, or the first point line).
+struct TextBlock {
+  PointCloud points;
+  uint64_t first_line = 0;  // the number given to the line before the run
+  uint64_t lines = 0;       // lines consumed
+  size_t bytes = 0;         // bytes consumed
+  LineNotes notes;
+  bool failed = false;  // a line after the consumed ones is bad
+};
+
 class XyzReader : public PointReader {
  public:
   XyzReader(const std::string& path, bool pts, std::optional<Layout> layout, bool scalar_fields);
@@ -226,30 +72,37 @@ class XyzReader : public PointReader {
  private:
   bool NextLine(const char** begin, const char** end);
   bool NextDataLine(const char** begin, const char** end);
-  void Refill();
   void ReadPtsCount(const char* begin, const char* end);
   std::vector<std::string_view> FirstPointLine(const Layout* layout, const char** begin,
                                                const char** end);
   void ChooseLayout(std::optional<Layout> layout, const std::vector<std::string_view>& tokens);
-  bool ParseLine(const char* p, const char* end, size_t n, PointCloud* chunk);
+  size_t ReadRegion(size_t max_points, PointCloud* chunk);
+  std::vector<uint64_t> CutBlocks(uint64_t bytes) const;
+  void ParseBlock(const char* begin, const char* end, size_t limit, uint64_t first_line,
+                  TextBlock* out) const;
+  size_t Take(TextBlock* block, uint64_t base_line, PointCloud* chunk);
+  void Report(const LineNotes& notes, uint64_t shift);
+  bool ParseLine(const char* p, const char* end, size_t n, PointCloud* chunk,
+                 LineNotes* notes) const;
   const char* ParseValue(const Column& c, const char* p, const char* end, size_t k,
-                         const PointSlot& slot);
-  bool ShortLine(const char* begin, const char* end);
+                         const PointSlot& slot, const LineNotes& notes) const;
+  bool ShortLine(const char* begin, const char* end, LineNotes* notes) const;
   void Finish();
-  [[noreturn]] void Fail(const std::string& message) const;
-  [[noreturn]] void Fail(size_t column, const char* p, const char* end,
+  [[noreturn]] void Fail(uint64_t line, const std::string& message) const;
+  [[noreturn]] void Fail(uint64_t line, size_t column, const char* p, const char* end,
                          const std::string& what) const;
 
-  BinaryFile file_;
+  MappedFile map_;
+  const char* text_;  // map_'s bytes
   bool pts_;
   Layout layout_;
-  std::vector<char> buffer_;
-  size_t begin_ = 0, end_ = 0;  // unread bytes of buffer_
-  bool eof_ = false;
-  uint64_t lines_ = 0;                 // lines taken from the buffer
-  uint64_t line_ = 0;                  // number of the line being parsed (1-based)
-  std::string pending_;                // the first point line, read while opening
-  std::string header_;                 // column names from a header or comment line, if any
+  uint64_t pos_ = 0;         // the first unread byte
+  uint64_t first_data_ = 0;  // the byte after the first point line
+  std::string last_line_;    // the last line when it lacks '\n' (a sentinel follows)
+  uint64_t lines_ = 0;       // lines consumed
+  uint64_t line_ = 0;        // opening: the number of the line being parsed
+  std::string pending_;      // the first point line, read while opening
+  std::string header_;       // column names from a header or comment line, if any
   uint64_t header_line_ = 0;
   uint64_t pending_line_ = 0;          // its number, 0 when there is none
   uint64_t declared_ = kUnknownCount;  // PTS: the count line(s)
@@ -258,8 +111,8 @@ class XyzReader : public PointReader {
 
 XyzReader::XyzReader(const std::string& path, bool pts, std::optional<Layout> layout,
                      bool scalar_fields)
-    : PointReader(path), file_(path), pts_(pts), buffer_(std::min<uint64_t>(kBlockSize + kMaxLineLength, file_.size()) + 2) {
-  if (file_.size() == 0) throw InputError(path, "byte 0", "empty file");
+    : PointReader(path), map_(path), text_(reinterpret_cast<const char*>(map_.data())), pts_(pts) {
+  if (map_.size() == 0) throw InputError(path, "byte 0", "empty file");
   info_.format = pts ? PointFormat::kPts : PointFormat::kXyz;
   if (std::optional<LocalFrame> frame = ReadShiftSidecar(path)) info_.frame = *frame;
   const char *b = nullptr, *e = nullptr;
@@ -268,6 +121,7 @@ XyzReader::XyzReader(const std::string& path, bool pts, std::optional<Layout> la
     pending_.assign(b, e);
     pending_line_ = line_;
   }
+  first_data_ = pos_;
   ChooseLayout(std::move(layout), tokens);
   if (!scalar_fields) {  // PointReadOptions::scalar_fields: geometry and colour only
     for (Column& c : layout_.columns) {
@@ -299,18 +153,17 @@ std::vector<std::string_view> XyzReader::FirstPointLine(const Layout* layout, co
     tokens = SplitLine(*b, *e);
   }
   if (std::memchr(*b, ',', *e - *b) != nullptr && std::memchr(*b, ';', *e - *b) != nullptr) {
-    Fail("mixes ',' and ';' separators; decimal commas are not supported (use '.')");
+    Fail(line_, "mixes ',' and ';' separators; decimal commas are not supported (use '.')");
   }
   return tokens;
 }
-
 void XyzReader::ReadPtsCount(const char* b, const char* e) {
   const std::vector<std::string_view> tokens = SplitLine(b, e);
   uint64_t count = 0;
   if (tokens.size() == 1 && IsNumber(tokens[0], &count)) {
     declared_ = count;
   } else if (tokens.size() == 1) {
-    Fail("expected the PTS point count, found '" + std::string(tokens[0]) + "'");
+    Fail(line_, "expected the PTS point count, found '" + std::string(tokens[0]) + "'");
   } else {
     LogWarning(path_ + ": line " + std::to_string(line_) +
                ": no PTS point-count line; reading the points directly");
@@ -326,7 +179,7 @@ void XyzReader::ChooseLayout(std::optional<Layout> layout,
     LogInfo(path_ + ": no points");
   } else {
     if (tokens.size() < 3) {
-      Fail(std::to_string(tokens.size()) + " column(s); at least x,y,z are needed");
+      Fail(line_, std::to_string(tokens.size()) + " column(s); at least x,y,z are needed");
     }
     if (std::optional<Layout> named = LayoutFromHeader(header_, tokens.size())) {
       layout_ = std::move(*named);
@@ -340,58 +193,37 @@ void XyzReader::ChooseLayout(std::optional<Layout> layout,
   }
 }
 
-void XyzReader::Refill() {
-  const size_t left = end_ - begin_;
-  std::memmove(buffer_.data(), buffer_.data() + begin_, left);
-  begin_ = 0;
-  end_ = left;
-  const size_t want = buffer_.size() - 1 - left;
-  const size_t got = file_.ReadSome(buffer_.data() + left, want);
-  end_ += got;
-  buffer_[end_] = '\n';  // the sentinel after a last line without '\n'
-  eof_ = got < want;
-}
-
-// The next line (without '\n'), from the block buffer; false at the end of the file.
+// Opening: the next line (without '\n'); false at the end of the file.
 bool XyzReader::NextLine(const char** begin, const char** end) {
-  while (true) {
-    const char* start = buffer_.data() + begin_;
-    const void* nl = std::memchr(start, '\n', end_ - begin_);
-    const char* stop = nl ? static_cast<const char*>(nl) : buffer_.data() + end_;
-    if (static_cast<size_t>(stop - start) > kMaxLineLength) {
-      line_ = lines_ + 1;
-      Fail("line longer than " + std::to_string(kMaxLineLength) + " bytes");
-    }
-    if (nl != nullptr || (eof_ && begin_ != end_)) {
-      *begin = start;
-      *end = stop;
-      begin_ = std::min<size_t>(stop - buffer_.data() + 1, end_);
-      ++lines_;
-      return true;
-    }
-    if (eof_) return false;
-    Refill();
+  const uint64_t size = map_.size();
+  if (pos_ >= size) return false;
+  const char* start = text_ + pos_;
+  const void* nl = std::memchr(start, '\n', size - pos_);
+  const char* stop = nl ? static_cast<const char*>(nl) : text_ + size;
+  if (static_cast<size_t>(stop - start) > kMaxLineLength) {
+    Fail(lines_ + 1, "line longer than " + std::to_string(kMaxLineLength) + " bytes");
   }
+  ++lines_;
+  pos_ = nl ? stop - text_ + 1 : size;
+  if (nl == nullptr) {  // the parsers need a sentinel after the line: a copy ends with '\0'
+    last_line_.assign(start, stop);
+    start = last_line_.data();
+    stop = start + last_line_.size();
+  }
+  *begin = start;
+  *end = stop;
+  return true;
 }
 
-// The next line that is neither empty nor a comment ('#' or '//').
+// Opening: the next line that is neither empty nor a comment ('#' or '//').
 bool XyzReader::NextDataLine(const char** begin, const char** end) {
-  if (pending_line_ != 0) {
-    *begin = pending_.data();
-    *end = pending_.data() + pending_.size();
-    line_ = pending_line_;
-    pending_line_ = 0;
-    return true;
-  }
   while (NextLine(begin, end)) {
     const char* p = SkipBlanks(*begin);
     if (p == *end) continue;
     if (*p == '#' || (*p == '/' && p + 1 != *end && p[1] == '/')) {
       // Before the first point, a comment may name the columns ("//x y z r g b intensity").
-      if (points_read_ == 0 && pending_.empty()) {
-        header_.assign(p + (*p == '#' ? 1 : 2), *end);
-        header_line_ = lines_;
-      }
+      header_.assign(p + (*p == '#' ? 1 : 2), *end);
+      header_line_ = lines_;
       continue;
     }
     line_ = lines_;
@@ -405,15 +237,153 @@ size_t XyzReader::Read(size_t max_points, PointCloud* chunk) {
   PrepareChunk(chunk);
   chunk->Clear();
   size_t n = 0;
-  const char *b = nullptr, *e = nullptr;
-  while (n < max_points && NextDataLine(&b, &e)) {
-    if (n == chunk->size()) chunk->Resize(std::min(max_points, std::max<size_t>(4096, 2 * n)));
-    if (ParseLine(b, e, n, chunk)) ++n;
+  if (pending_line_ != 0) {  // the first point line, read while opening
+    TextBlock first;
+    ParseBlock(pending_.data(), pending_.data() + pending_.size(), 1, pending_line_ - 1, &first);
+    n += Take(&first, pending_line_ - 1, chunk);
+    pending_line_ = 0;
   }
-  chunk->Resize(n);
+  while (n < max_points && pos_ < map_.size()) n += ReadRegion(max_points - n, chunk);
   points_read_ += n;
   if (n == 0) Finish();
   return n;
+}
+
+// Parses the text from pos_ in blocks, in parallel, and appends up to max_points points to
+// *chunk in file order. Each block starts at a line and is parsed on its own; what the blocks
+// saw is then taken in order, so points, errors (the first bad line) and notes are those of a
+// reading line by line, whatever the number of threads.
+size_t XyzReader::ReadRegion(size_t max_points, PointCloud* chunk) {
+  const uint64_t read = points_read_ + chunk->size();  // the points after first_data_, about
+  const uint64_t points = read > 0 && !pending_.empty() ? read - 1 : read;
+  const double per_point = points > 0 && pos_ > first_data_
+                               ? static_cast<double>(pos_ - first_data_) / points
+                               : static_cast<double>(pending_.size() + 1);
+  const double want = std::min<double>(kRegion, 1.0625 * per_point * max_points + 4096);
+  map_.CheckSize(map_.size(), "the text");  // a file cut since opening: an error, not SIGBUS
+  const std::vector<uint64_t> cuts = CutBlocks(static_cast<uint64_t>(want));
+  map_.WillNeed(cuts.back(), cuts.back() - pos_);  // the next region, read while this one parses
+  std::vector<TextBlock> blocks(cuts.size() - 1);
+  ParallelFor(size_t{0}, blocks.size(), [&](size_t b) {
+    try {  // the line numbers are not known yet: a bad block is parsed again in order
+      ParseBlock(text_ + cuts[b], text_ + cuts[b + 1], max_points, 0, &blocks[b]);
+    } catch (const InputError&) {
+      blocks[b].failed = true;
+    }
+  });
+  size_t n = 0;
+  for (size_t b = 0; b < blocks.size() && n < max_points; ++b) {
+    TextBlock& block = blocks[b];
+    const size_t need = max_points - n;
+    if (block.points.size() > need || (block.failed && block.points.size() < need)) {
+      // Too many points (keep the first `need`), or an error to raise with its line number.
+      block = TextBlock();
+      try {
+        ParseBlock(text_ + cuts[b], text_ + cuts[b + 1], need, lines_, &block);
+      } catch (const InputError&) {
+        Report(block.notes, 0);  // what the lines before the bad one would have logged
+        throw;
+      }
+    }
+    pos_ += block.bytes;
+    const uint64_t base_line = lines_;
+    lines_ += block.lines;
+    n += Take(&block, base_line, chunk);
+  }
+  return n;
+}
+
+// Block boundaries from pos_ covering about `bytes`: blocks of about kTextBlock, each ending
+// after a '\n' (the end of the line holding its nominal last byte) or at the end of the file. A
+// line too long to find the end of ends its block early; parsing reports it.
+std::vector<uint64_t> XyzReader::CutBlocks(uint64_t bytes) const {
+  const uint64_t size = map_.size(), stop = std::min(size, pos_ + std::max<uint64_t>(bytes, 1));
+  std::vector<uint64_t> cuts{pos_};
+  while (cuts.back() < stop) {
+    const uint64_t at = std::min(stop, cuts.back() + kTextBlock) - 1;  // nominal last byte
+    const uint64_t window = std::min<uint64_t>(size - at, kMaxLineLength + 2);
+    const void* nl = std::memchr(text_ + at, '\n', window);
+    cuts.push_back(nl ? static_cast<const char*>(nl) - text_ + 1 : at + window);
+  }
+  return cuts;
+}
+
+// Parses the lines of [begin, end) into out->points until `limit` points; the first line is
+// numbered first_line + 1. Throws InputError at a bad line (out then holds what came before).
+void XyzReader::ParseBlock(const char* begin, const char* end, size_t limit, uint64_t first_line,
+                           TextBlock* out) const {
+  PointCloud& cloud = out->points;
+  cloud.SetSchema(info_.schema);
+  cloud.frame = info_.frame;
+  out->first_line = first_line;
+  LineNotes& notes = out->notes;
+  notes.line = first_line;
+  std::string last;  // a last line without '\n', copied for the sentinel after it
+  size_t n = 0;
+  for (const char* p = begin; n < limit && p < end;) {
+    const void* nl = std::memchr(p, '\n', end - p);
+    const char *b = p, *e = nl ? static_cast<const char*>(nl) : end;
+    ++notes.line;
+    if (static_cast<size_t>(e - b) > kMaxLineLength) {
+      cloud.Resize(n);
+      Fail(notes.line, "line longer than " + std::to_string(kMaxLineLength) + " bytes");
+    }
+    p = nl ? e + 1 : end;
+    if (nl == nullptr) {
+      last.assign(b, e);
+      b = last.data();
+      e = b + last.size();
+    }
+    const char* q = SkipBlanks(b);
+    if (q != e && *q != '#' && !(*q == '/' && q + 1 != e && q[1] == '/')) {
+      if (n == cloud.size()) cloud.Resize(std::min(limit, std::max<size_t>(4096, 2 * n)));
+      try {
+        n += ParseLine(b, e, n, &cloud, &notes);
+      } catch (const InputError&) {
+        cloud.Resize(n);
+        throw;
+      }
+    }
+    out->lines = notes.line - first_line;
+    out->bytes = static_cast<size_t>(p - begin);
+  }
+  cloud.Resize(n);
+}
+
+// Appends a parsed block to *chunk and reports what it saw (its lines renumbered to follow
+// base_line). Returns its number of points.
+size_t XyzReader::Take(TextBlock* block, uint64_t base_line, PointCloud* chunk) {
+  Report(block->notes, base_line - block->first_line);  // modulo 2^64
+  chunk->Append(block->points);
+  return block->points.size();
+}
+
+// Logs what a reading line by line would have logged at these lines (numbered + shift), once,
+// in line order.
+void XyzReader::Report(const LineNotes& s, uint64_t shift) {
+  auto extra = [&] {
+    if (s.extra_line == 0 || warned_extra_) return;
+    warned_extra_ = true;
+    LogWarning(path_ + ": line " + std::to_string(s.extra_line + shift) + " has " +
+               std::to_string(s.extra_values) + " columns, the spec " + layout_.text + " has " +
+               std::to_string(layout_.columns.size()) +
+               "; extra columns ignored (not logged again)");
+  };
+  auto section = [&] {
+    if (s.section_line == 0) return;
+    if (!warned_sections_) {
+      LogInfo(path_ + ": line " + std::to_string(s.section_line + shift) + ": a new PTS section");
+    }
+    warned_sections_ = true;
+    declared_ = (declared_ == kUnknownCount ? 0 : declared_) + s.section_points;
+  };
+  if (s.extra_line != 0 && (s.section_line == 0 || s.extra_line < s.section_line)) {
+    extra();
+    section();
+  } else {
+    section();
+    extra();
+  }
 }
 
 void XyzReader::Finish() {
@@ -427,8 +397,9 @@ void XyzReader::Finish() {
 }
 
 // Parses one line into point n of *chunk. False when the line is not a point (a PTS section's
-// count line).
-bool XyzReader::ParseLine(const char* p, const char* end, size_t n, PointCloud* chunk) {
+// count line). Thread-safe: what is to be logged goes to *notes.
+bool XyzReader::ParseLine(const char* p, const char* end, size_t n, PointCloud* chunk,
+                          LineNotes* notes) const {
   const PointSlot slot{chunk->positions[n].data(),
                        layout_.schema.colors ? &chunk->colors[n] : nullptr,
                        layout_.schema.normals ? chunk->normals[n].data() : nullptr, chunk, n};
@@ -436,21 +407,19 @@ bool XyzReader::ParseLine(const char* p, const char* end, size_t n, PointCloud* 
   p = SkipBlanks(p);
   const size_t columns = layout_.columns.size();
   for (size_t k = 0; k < columns; ++k) {
-    if (p == end) return ShortLine(line, end);
-    if (IsComma(*p)) Fail(k, p, end, "empty value");
-    p = NextValue(ParseValue(layout_.columns[k], p, end, k, slot));
+    if (p == end) return ShortLine(line, end, notes);
+    if (IsComma(*p)) Fail(notes->line, k, p, end, "empty value");
+    p = NextValue(ParseValue(layout_.columns[k], p, end, k, slot, *notes));
   }
-  if (p != end && !warned_extra_) {
-    warned_extra_ = true;
-    LogWarning(path_ + ": line " + std::to_string(line_) + " has " +
-               std::to_string(SplitLine(line, end).size()) + " columns, the spec " + layout_.text +
-               " has " + std::to_string(columns) + "; extra columns ignored (not logged again)");
+  if (p != end && notes->extra_line == 0) {
+    notes->extra_line = notes->line;
+    notes->extra_values = SplitLine(line, end).size();
   }
   return true;
 }
 
 inline const char* XyzReader::ParseValue(const Column& c, const char* p, const char* end, size_t k,
-                                         const PointSlot& slot) {
+                                         const PointSlot& slot, const LineNotes& notes) const {
   const char* q = nullptr;
   switch (c.kind) {
     case Col::kX:
@@ -458,7 +427,8 @@ inline const char* XyzReader::ParseValue(const Column& c, const char* p, const c
     case Col::kZ: {
       double& v = slot.position[static_cast<int>(c.kind)];
       q = ParseNumber(p, end, &v);
-      if (q != nullptr && !std::isfinite(v)) Fail(k, p, end, "coordinate is not finite");
+      if (q != nullptr && !std::isfinite(v))
+        Fail(notes.line, k, p, end, "coordinate is not finite");
       break;
     }
     case Col::kR:
@@ -466,7 +436,8 @@ inline const char* XyzReader::ParseValue(const Column& c, const char* p, const c
     case Col::kB: {
       int v = -1;
       q = ParseNumber(p, end, &v);
-      if (q == nullptr || v < 0 || v > 255) Fail(k, p, end, "colour is not an integer in 0..255");
+      if (q == nullptr || v < 0 || v > 255)
+        Fail(notes.line, k, p, end, "colour is not an integer in 0..255");
       Channel(*slot.color, c.kind) = static_cast<uint8_t>(v);
       break;
     }
@@ -482,34 +453,32 @@ inline const char* XyzReader::ParseValue(const Column& c, const char* p, const c
       for (q = p; q != end && !IsSeparator(*q);) ++q;
       break;
   }
-  if (q == nullptr) Fail(k, p, end, "not a number");
+  if (q == nullptr) Fail(notes.line, k, p, end, "not a number");
   return q;
 }
 
 // A line with fewer values than the spec: an error, except a PTS section's count line.
-bool XyzReader::ShortLine(const char* begin, const char* end) {
+bool XyzReader::ShortLine(const char* begin, const char* end, LineNotes* notes) const {
   const std::vector<std::string_view> tokens = SplitLine(begin, end);
   uint64_t count = 0;
   if (pts_ && tokens.size() == 1 && IsNumber(tokens[0], &count)) {
-    if (!warned_sections_)
-      LogInfo(path_ + ": line " + std::to_string(line_) + ": a new PTS section");
-    warned_sections_ = true;
-    declared_ = (declared_ == kUnknownCount ? 0 : declared_) + count;
+    if (notes->section_line == 0) notes->section_line = notes->line;
+    notes->section_points += count;
     return false;
   }
-  Fail("expected " + std::to_string(layout_.columns.size()) + " columns (" + layout_.text +
-       "), found " + std::to_string(tokens.size()));
+  Fail(notes->line, "expected " + std::to_string(layout_.columns.size()) + " columns (" +
+                        layout_.text + "), found " + std::to_string(tokens.size()));
 }
 
-void XyzReader::Fail(const std::string& message) const {
-  throw InputError(path_, "line " + std::to_string(line_), message);
+void XyzReader::Fail(uint64_t line, const std::string& message) const {
+  throw InputError(path_, "line " + std::to_string(line), message);
 }
 
-void XyzReader::Fail(size_t column, const char* p, const char* end, const std::string& what) const {
+void XyzReader::Fail(uint64_t line, size_t column, const char* p, const char* end,
+                     const std::string& what) const {
   const char* q = p;
   while (q != end && !IsSeparator(*q) && q - p < 40) ++q;
-  throw InputError(path_,
-                   "line " + std::to_string(line_) + ", column " + std::to_string(column + 1),
+  throw InputError(path_, "line " + std::to_string(line) + ", column " + std::to_string(column + 1),
                    what + ": '" + std::string(p, q) + "'");
 }
 

@@ -16,7 +16,11 @@
 // Positions are double (schema.position_type = kFloat64), parsed exactly (std::from_chars
 // semantics); info().count is kUnknownCount (PTS: the count line) until the end, then the number
 // read. If a shift sidecar exists (ReadShiftSidecar), the file holds local coordinates and
-// info().frame is that shift; otherwise frame zero. The file is streamed in 4 MiB blocks.
+// info().frame is that shift; otherwise frame zero. The file is read in place (core/mapped_file.h):
+// a Read() call's text is cut into blocks of about 1 MiB at line ends, parsed in parallel and
+// taken in file order, so the points, the error (the first bad line) and the warnings (each
+// once) are those of a reading line by line, on any number of threads. The Read() call that
+// reaches a bad line throws; the points before it came in the earlier calls, as many as asked.
 // InputError ("<path>: line N[, column K]: ...") for: an empty file (0 bytes), fewer values than
 // the spec, non-finite or unparsable coordinates, unparsable normals or scalars, colours outside
 // 0..255, lines over 1 MiB. A file of only comments (or only a header) has zero points.

@@ -2,13 +2,17 @@
 // or a dropped network share does: tests/fault_test.cc runs candi with it.
 //
 // CANDI_FAULT_READ=<path suffix>:<offset>  every read()/pread() of a file whose path ends with
-// the suffix that reaches byte <offset> or beyond fails with EIO (bytes before it read normally).
+// the suffix that reaches byte <offset> or beyond fails with EIO (bytes before it read normally),
+// and mmap() of such a range fails with ENODEV, as on a filesystem that refuses mapping: the
+// readers that map files (core/mapped_file.h) then read them, and meet the failing read. (A real
+// I/O error under a mapping is a SIGBUS, which this library cannot simulate.)
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/types.h>
 #include <unistd.h>
 
@@ -58,4 +62,26 @@ ssize_t read(int fd, void* buf, size_t count) {
     return -1;
   }
   return real(fd, buf, count);
+}
+
+typedef void* (*MmapFn)(void*, size_t, int, int, int, off_t);
+
+static void* FaultyMmap(MmapFn* real, const char* name, void* addr, size_t length, int prot, int flags,
+                        int fd, off_t offset) {
+  if (*real == NULL) *real = (MmapFn)dlsym(RTLD_NEXT, name);
+  if (fd >= 0 && Faulty(fd, offset + (off_t)length)) {
+    errno = ENODEV;
+    return MAP_FAILED;
+  }
+  return (*real)(addr, length, prot, flags, fd, offset);
+}
+
+void* mmap(void* addr, size_t length, int prot, int flags, int fd, off_t offset) {
+  static MmapFn real = NULL;
+  return FaultyMmap(&real, "mmap", addr, length, prot, flags, fd, offset);
+}
+
+void* mmap64(void* addr, size_t length, int prot, int flags, int fd, off_t offset) {
+  static MmapFn real = NULL;
+  return FaultyMmap(&real, "mmap64", addr, length, prot, flags, fd, offset);
 }

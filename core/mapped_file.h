@@ -1,0 +1,60 @@
+// MappedFile: a whole file as read-only bytes in memory, for readers that decode records in
+// parallel straight from the page cache (io/ply, io/las, io/xyz) instead of copying them into a
+// buffer first.
+//
+// The file is mapped with mmap (PROT_READ, MAP_PRIVATE) and advised MADV_SEQUENTIAL and
+// MADV_WILLNEED, so the kernel reads ahead while threads decode. Where mmap is refused (a pipe or
+// FIFO, a character device, a filesystem without mmap, an empty file) the bytes are read into
+// memory instead; mapped() says which. The size is 64-bit; a file larger than the address space
+// is an error.
+//
+// Failure: InputError naming the path for a file that cannot be opened, is a directory, cannot be
+// read, or is too large to address.
+//
+// A file that shrinks while it is mapped, or a disk error under a mapped page: touching the page
+// raises SIGBUS, which kills the process (POSIX gives no portable way to turn it into an error).
+// CheckSize() makes the common case (a file truncated or rewritten between two reads) an
+// InputError instead: readers call it before decoding a range. A file truncated during one
+// decode, or a failing disk, still raises SIGBUS (a read() would have given "read error").
+//
+// Thread-safety: data() may be read from any number of threads; the object is immutable after
+// construction.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace candi {
+
+class MappedFile {
+ public:
+  explicit MappedFile(const std::string& path);
+  ~MappedFile();
+  MappedFile(const MappedFile&) = delete;
+  MappedFile& operator=(const MappedFile&) = delete;
+
+  const std::string& path() const { return path_; }
+  const uint8_t* data() const { return data_; }
+  uint64_t size() const { return size_; }
+  bool mapped() const { return mapped_; }  // false: the bytes were read into memory
+
+  // Throws InputError "<path>: byte <size now>: the file shrank to ... while it was read (needed
+  // <end> bytes for <what>)" when the file on disk is now shorter than `end` bytes; a file read
+  // into memory never shrinks.
+  void CheckSize(uint64_t end, const std::string& what) const;
+  // A hint that [offset, offset + n) is read soon (MADV_WILLNEED); nothing for a file in memory.
+  void WillNeed(uint64_t offset, uint64_t n) const;
+
+ private:
+  void ReadIntoMemory();
+
+  std::string path_;
+  int fd_ = -1;
+  const uint8_t* data_ = nullptr;
+  uint64_t size_ = 0;
+  bool mapped_ = false;
+  std::vector<uint8_t> memory_;  // the bytes when not mapped
+};
+
+}  // namespace candi
