@@ -13,6 +13,7 @@
 #include "apps/failure.h"
 #include "core/check.h"
 #include "core/interrupt.h"
+#include "core/mapped_file.h"
 
 
 namespace {
@@ -96,6 +97,8 @@ int main(int argc, char** argv) {
   if (!HasGroup(group)) return Exec(group == kPcl ? "candi-pcl" : "candi-relief", argv);
   // Before any thread starts: an interrupt removes unfinished outputs and stops child processes.
   candi::InstallInterruptHandler("candi");
+  // A mapped input cut short, or failing on disk, while it is read: an error, not a crash.
+  candi::InstallMappedFileFaultHandler();
   try {
     return RunCli(argc, argv);
   } catch (const ReportedFailure& e) {

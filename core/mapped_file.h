@@ -12,10 +12,13 @@
 // read, or is too large to address.
 //
 // A file that shrinks while it is mapped, or a disk error under a mapped page: touching the page
-// raises SIGBUS, which kills the process (POSIX gives no portable way to turn it into an error).
-// CheckSize() makes the common case (a file truncated or rewritten between two reads) an
-// InputError instead: readers call it before decoding a range. A file truncated during one
-// decode, or a failing disk, still raises SIGBUS (a read() would have given "read error").
+// raises SIGBUS (POSIX gives no portable way to turn it into an exception). CheckSize() makes the
+// common case (a file truncated or rewritten between two reads) an InputError instead: readers
+// call it before decoding a range. A file truncated during one decode, or a failing disk, still
+// raises SIGBUS; a program that calls InstallMappedFileFaultHandler() (candi's main does) then
+// ends with "<path>: byte <n>: the file was cut short or could not be read from the disk while
+// it was read" on stderr and exit status 2, like any bad input, instead of a crash. The outputs
+// it was writing are left as they were (temporaries beside them may remain).
 //
 // Thread-safety: data() may be read from any number of threads; the object is immutable after
 // construction.
@@ -54,7 +57,12 @@ class MappedFile {
   const uint8_t* data_ = nullptr;
   uint64_t size_ = 0;
   bool mapped_ = false;
+  int range_ = -1;               // its slot in the SIGBUS handler's table
   std::vector<uint8_t> memory_;  // the bytes when not mapped
 };
+
+// Installs the SIGBUS handler described above (idempotent). Faults outside every mapped file
+// keep the default action.
+void InstallMappedFileFaultHandler();
 
 }  // namespace candi

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstring>
 #include <filesystem>
@@ -68,6 +70,39 @@ TEST(MappedFile, FileThatShrankIsAnErrorNamingThePath) {
                                          "while it was read (needed 20000 bytes for records)");
   }
   map.CheckSize(100, "the rest");  // what is left is fine
+}
+
+// A mapped file cut short while it is read (after CheckSize could see it): with the handler the
+// process ends with status 2 and a message naming the file and the byte, not a crash. In a child
+// process, so that the fault is real.
+TEST(MappedFile, AFaultUnderTheMapIsAnErrorNamingTheFileAndByte) {
+  TempDir dir;
+  const std::string path = dir.File("cut.bin");
+  WriteBytes(path, std::string(5 * 4096, 'x'));
+  int err[2];
+  ASSERT_EQ(pipe(err), 0);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    dup2(err[1], 2);
+    InstallMappedFileFaultHandler();
+    const MappedFile map(path);
+    if (truncate(path.c_str(), 4096) != 0) _exit(5);
+    volatile uint8_t sink = map.data()[3 * 4096 + 7];  // a page past the new end
+    (void)sink;
+    _exit(0);
+  }
+  close(err[1]);
+  std::string message;
+  char buffer[512];
+  for (ssize_t got; (got = read(err[0], buffer, sizeof(buffer))) > 0;) message.append(buffer, static_cast<size_t>(got));
+  close(err[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status) << ": " << message;
+  EXPECT_EQ(WEXITSTATUS(status), 2) << message;
+  EXPECT_EQ(message, path + ": byte 12295: the file was cut short or could not be read from the disk while it was "
+                            "read; the outputs are as they were\n");
 }
 
 TEST(MappedFile, MissingFileAndDirectoryAreErrorsNamingThePath) {
