@@ -113,9 +113,12 @@ void AddRelief(Command& bench) {
   c.Option("--eval-panels", a.eval_panels, "Held-out panels").Range(1, 10000);
   c.Option("--seed", a.seed, "Seed of the training series");
   c.Option("--threads", a.threads, "libtorch threads").Range(1, 256);
-  c.Option("--pairs", a.pairs, "Real photos instead: a `relief dataset --colmap` folder; the model is fine-tuned on "
-           "train/ for each budget and scored on holdout/");
+  c.Option("--pairs", a.pairs, "Real photos instead, held-out photos: a `relief dataset --colmap --holdout` folder; the "
+           "model is fine-tuned on train/ for each budget and scored on holdout/");
+  c.Option("--parts", a.parts, "Real photos, unseen surfaces: a `relief dataset --holdout-region` folder per held-out "
+           "part (repeatable); each part is fine-tuned on its train/ and scored on its holdout/, then the mean");
   c.Option("--model", a.model, "Real photos: the model to fine-tune");
+  c.Flag("--relative", a.relative, "Real photos: fine-tune into a relative model (scale-and-shift-invariant loss)");
   c.Option("--finetune-seconds", a.finetune_seconds, "Real photos: fine-tuning budgets, s");
   c.Option("--edge-loss", a.edge_weight, "Weight of the edge term in the edge-guided rows (0: plain rows only)")
       .Range(0.0, 1000.0);
@@ -123,7 +126,8 @@ void AddRelief(Command& bench) {
   c.Run([&a] { return RunBenchRelief(a); });
   c.Footer("Examples: candi bench relief --widths 32,64 --seconds 60\n"
            "          candi bench relief --pairs pairs --model examples/relief/relief_model.pt "
-           "--finetune-seconds 60,240");
+           "--finetune-seconds 60,240\n"
+           "          candi bench relief --parts left --parts centre --parts right --finetune-seconds 180");
 }
 
 }  // namespace

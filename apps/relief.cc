@@ -71,7 +71,8 @@ void AddTrain(Command& relief) {
   ReliefTrainArgs& a = relief.Keep<ReliefTrainArgs>();
   relief::TrainOptions& o = a.train;
   Command c = relief.Add("train", "Train the BTS-style depth network (libtorch, CPU)");
-  c.Option("--data", a.data_dir, "Folder from `candi relief dataset`").Required();
+  c.Option("--data", a.data_dirs, "Folder from `candi relief dataset`; repeatable: the folders' pairs are trained "
+           "on together (e.g. synthetic panels and photo pairs cut to one patch size)").Required();
   c.Option("-o,--out", a.output, "Model file to write").Required();
   c.Option("--epochs", o.epochs, "Epochs").Range(1, 100000);
   c.Option("--batch", o.batch, "Batch size").Range(1, 4096);
@@ -88,6 +89,8 @@ void AddTrain(Command& relief) {
   for (const char* net : {"--growth", "--blocks", "--width"}) finetune.Excludes(c.Get(net));
   c.Option("--edge-loss", o.edge_weight, "Weight of the edge term (log-depth differences 1, 2, 4 pixels apart; 0: "
            "off)").Range(0.0, 1000.0);
+  c.Flag("--relative", a.relative, "Train (or fine-tune into) a relative model: the scale-and-shift-invariant loss; "
+         "scored after a least-squares scale and offset; predicts whole images");
   c.Option("--seed", o.seed, "Random seed (weights, order, augmentation)");
   c.Option("--threads", a.threads, "libtorch threads").Range(1, 256);
   c.Run([&a] { return RunReliefTrain(a); });

@@ -33,7 +33,9 @@ struct ReliefDatasetArgs {
 int RunReliefDataset(const ReliefDatasetArgs& args);
 
 struct ReliefTrainArgs {
-  std::string data_dir, output;
+  std::vector<std::string> data_dirs;  // `relief dataset` folders, trained on together (one pair size)
+  std::string output;
+  bool relative = false;            // a relative model: the scale-and-shift-invariant loss
   relief::TrainOptions train;       // epochs, batch, learning rates, time budget, checkpoint, edge term, seed
   relief::NetOptions net;           // growth, decoder width (the blocks: `blocks`)
   std::string blocks = "4,6,8,6";

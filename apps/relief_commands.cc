@@ -5,12 +5,15 @@
 //    photo/depth pair, or a folder of real-photo pairs;
 //  - train: one line per epoch (loss, learning rate, validation metrics) on stderr; the model and a
 //    checkpoint per epoch are written atomically.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "apps/arg_parse.h"
 #include "apps/commands.h"
@@ -86,7 +89,8 @@ int RunReliefEvalParts(const ReliefEvalArgs& a, const std::vector<relief::NamedM
   for (const relief::MethodScore& s : mean) std::printf("%s %8.2f\n", relief::MetricsTableRow(s.name, s.metrics).c_str(), s.seconds);
   std::printf("%s\n", relief::SurfaceTableHeader().c_str());
   for (const relief::MethodScore& s : mean) std::printf("%s\n", relief::SurfaceTableRow(s.name, s.normals, s.edges).c_str());
-  std::printf("* scale and offset fitted to the ground truth by least squares (an oracle the network does not get); "
+  std::printf("* scale and offset fitted to the ground truth by least squares (an oracle; a relative model is scored "
+              "with it, an absolute one without); "
               "levels 1..255 span each photo's 2nd..98th percentile of camera depth; normals with one level = %.4g "
               "pixel widths over %d px.\n",
               surface.level_per_pixel, surface.normal_step);
@@ -157,8 +161,8 @@ int RunReliefEval(const ReliefEvalArgs& a) {
               "(%lld pixels scored), "
               "angles in degrees; edges: depth steps of more than %.4g levels matched within %d px "
               "(%lld true edge pixels).\n"
-              "* scale and offset fitted to the ground truth by least squares (an oracle the network "
-              "does not get). The paper's row is its visible panel, not these panels.\n",
+              "* scale and offset fitted to the ground truth by least squares (an oracle; a relative model "
+              "is scored with it, an absolute one without). The paper's row is its visible panel, not these panels.\n",
               static_cast<long long>(scores.front().metrics.count), surface.level_per_pixel, surface.normal_step,
               static_cast<long long>(scores.front().normals.count), surface.edge_jump_levels,
               surface.edge_tolerance_px, static_cast<long long>(scores.front().edges.truth));
@@ -204,26 +208,45 @@ int RunReliefTrain(const ReliefTrainArgs& a) {
   if (o.checkpoint.empty()) o.checkpoint = a.output + ".ckpt";
   o.Check();
   relief::SetTorchThreads(a.threads);
-  const double ppm = DatasetPixelsPerM(a.data_dir);
-  const std::vector<relief::TrainingPair> train = relief::ReadPairs(a.data_dir + "/train");
-  const std::vector<relief::TrainingPair> val = relief::ReadPairs(a.data_dir + "/val");
-  if (train.empty()) throw InputError(a.data_dir + "/train", "", "no training pairs");
-  for (const auto* set : {&train, &val}) {
-    for (const relief::TrainingPair& p : *set) {
-      if (p.photo.width() != train[0].photo.width() || p.photo.height() != train[0].photo.height() ||
-          p.photo.width() % 32 != 0 || p.photo.height() % 32 != 0) {
-        throw InputError(a.data_dir, "", "pairs must share one size, a multiple of 32");
+  // The folders in order: pairs keep their folder's order, so the same folders give the same bytes.
+  double ppm = 0;
+  std::vector<relief::TrainingPair> train, val;
+  for (const std::string& dir : a.data_dirs) {
+    const double dir_ppm = DatasetPixelsPerM(dir);
+    if (dir_ppm > 0 && ppm > 0 && std::abs(dir_ppm - ppm) > 1e-9 * ppm) {
+      throw InputError(dir + "/dataset.txt", "", "pixels_per_m " + FormatDouble(dir_ppm) + " differs from " +
+                                                    FormatDouble(ppm) + " of an earlier --data folder");
+    }
+    if (dir_ppm > 0) ppm = dir_ppm;
+    std::vector<relief::TrainingPair> t = relief::ReadPairs(dir + "/train");
+    if (t.empty()) throw InputError(dir + "/train", "", "no training pairs");
+    std::vector<relief::TrainingPair> v = relief::ReadPairs(dir + "/val");
+    for (const auto* set : {&t, &v}) {
+      for (const relief::TrainingPair& p : *set) {
+        const relief::TrainingPair& first = train.empty() ? t[0] : train[0];
+        if (p.photo.width() != first.photo.width() || p.photo.height() != first.photo.height() ||
+            p.photo.width() % 32 != 0 || p.photo.height() % 32 != 0) {
+          throw InputError(dir, "", "pairs must share one size, a multiple of 32 (" + std::to_string(p.photo.width()) +
+                                        "x" + std::to_string(p.photo.height()) + " here, " +
+                                        std::to_string(first.photo.width()) + "x" +
+                                        std::to_string(first.photo.height()) + " first)");
+        }
       }
     }
+    std::move(t.begin(), t.end(), std::back_inserter(train));
+    std::move(v.begin(), v.end(), std::back_inserter(val));
   }
   // Fine-tuning starts from the given model's weights and architecture (the network options of
   // the command line do not apply) and keeps its resolution unless the data has one.
   relief::DepthModel model = a.finetune.empty() ? relief::DepthModel::Create(NetOptionsOf(a), a.train.seed)
                                                 : relief::DepthModel::Load(a.finetune);
   if (ppm > 0) model.set_pixels_per_m(ppm);
-  std::fprintf(stderr, "%s %lld parameters on %zu pairs (%zu validation), %d thread(s)\n",
+  if (a.relative) model.set_relative(true);
+  std::fprintf(stderr, "%s %lld parameters (%s) on %zu pairs (%zu validation), %d thread(s)\n",
                a.finetune.empty() ? "training" : ("fine-tuning " + a.finetune + ":").c_str(),
-               static_cast<long long>(model.ParameterCount()), train.size(), val.size(), a.threads);
+               static_cast<long long>(model.ParameterCount()),
+               model.options().relative ? "relative: scale-and-shift-invariant loss" : "absolute levels", train.size(),
+               val.size(), a.threads);
   const relief::TrainSummary s = relief::TrainDepthModel(o, train, val, &model, PrintEpoch);
   if (ppm > 0) model.set_pixels_per_m(ppm);
   model.Save(a.output);

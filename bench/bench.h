@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace candi::bench {
 
@@ -117,7 +118,9 @@ struct ReliefBenchOptions {
   int train_panels = 12, eval_panels = 3;
   uint64_t seed = 1;
   int threads = 1;                     // libtorch threads, [1, 256]
-  std::string pairs;                   // real photos: a `relief dataset --colmap` folder
+  std::string pairs;                   // real photos, held-out photos: a `relief dataset --colmap` folder
+  std::vector<std::string> parts;      // real photos, held-out surfaces: one folder per part (--holdout-region)
+  bool relative = false;               // fine-tune into a relative model
   std::string model = "examples/relief/relief_model.pt";
   std::string finetune_seconds = "60,240";
   double edge_weight = 1;              // [0, 1000]

@@ -52,22 +52,33 @@ void TimeFullPhoto(const relief::DepthModel& model, const relief::SynthPanel& pa
 
 }  // namespace
 
-// Real photos: the model as it is and fine-tuned for each budget (plain, and with the edge
-// term), scored on the held-out photo pairs beside the baselines.
-int BenchReliefPhotos(const ReliefBenchOptions& a) {
-  const std::vector<double> budgets = ParseNumbers(a.finetune_seconds, ',', "--finetune-seconds");
-  for (double b : budgets) {
-    if (!(b > 0)) throw std::invalid_argument("--finetune-seconds: budgets must be > 0");
-  }
-  const std::vector<relief::TrainingPair> train = relief::ReadPairs(a.pairs + "/train");
-  if (train.empty()) throw InputError(a.pairs + "/train", "", "no training pairs");
-  const auto panels = relief::PhotoEvalPanels(a.pairs + "/holdout");
+// One held-out part of a protocol: fine-tuning pairs and the panels scored.
+struct BenchPart {
+  std::string dir;
+  std::vector<relief::TrainingPair> train;
+  std::vector<relief::EvalPanel> panels;
+};
+
+BenchPart ReadBenchPart(const std::string& dir) {
+  BenchPart part;
+  part.dir = dir;
+  part.train = relief::ReadPairs(dir + "/train");
+  if (part.train.empty()) throw InputError(dir + "/train", "", "no training pairs");
+  part.panels = relief::PhotoEvalPanels(dir + "/holdout");
+  return part;
+}
+
+// One protocol's table: the model as it is and fine-tuned for each budget (plain, and with the
+// edge term) on each part's train/, scored on its holdout/ beside the baselines; with several
+// parts, the mean over the parts (each weighing the same).
+void BenchProtocol(const ReliefBenchOptions& a, const std::string& title, const std::vector<BenchPart>& parts,
+                   const std::vector<double>& budgets) {
   relief::SurfaceMetricOptions surface;  // levels are per photo: one level = one pixel width
   surface.normal_step = 4;                 // as `relief eval --pairs`: the dense cloud is noisy at 1 px
-  std::printf("Relief depth on real photos: %zu training patches of %s/train, %zu held-out photos of "
-              "%s/holdout, %d thread(s), fine-tuning %s (lr %.3g, seed %llu)\n", train.size(),
-              a.pairs.c_str(), panels.size(), a.pairs.c_str(), a.threads, a.model.c_str(),
-              a.learning_rate, static_cast<unsigned long long>(a.seed));
+  std::printf("\n%s\n", title.c_str());
+  for (const BenchPart& p : parts) {
+    std::printf("  %s: %zu fine-tuning patches, %zu held-out photos\n", p.dir.c_str(), p.train.size(), p.panels.size());
+  }
   std::printf("%-30s %9s %7s %8s %8s %8s %8s %7s %8s\n", "method", "tune s", "steps", "d<1.25",
               "RMSE", "RMSE_log", "normal", "<22.5", "edge F1");
   auto row = [](const std::string& name, double seconds, int64_t steps, const relief::MethodScore& s) {
@@ -76,36 +87,90 @@ int BenchReliefPhotos(const ReliefBenchOptions& a) {
                 s.normals.mean_deg, s.normals.within_22, s.edges.f1);
     std::fflush(stdout);
   };
-  // The fine-tuned models predict in tiles of their training patches (context matters on a
-  // photograph); the shipped one in the 128-pixel tiles it was trained on.
-  relief::PredictOptions tuned;
-  tuned.tiles.tile = train.front().photo.width();
-  tuned.tiles.overlap = tuned.tiles.tile / 4;
-  tuned.Check();
+  auto part_rows = [&](const std::vector<std::vector<relief::MethodScore>>& scores, double seconds, int64_t steps) {
+    if (scores.size() > 1) {
+      for (size_t k = 0; k < scores.size(); ++k) {
+        for (const auto& s : scores[k]) row("  " + s.name + " [" + std::to_string(k + 1) + "]", seconds, steps, s);
+      }
+    }
+    for (const auto& s : relief::MeanOverParts(scores)) row(s.name, seconds, steps, s);
+  };
   const relief::DepthModel base = relief::DepthModel::Load(a.model);
-  const auto first = relief::EvaluatePanels(panels, {{"as shipped", &base}}, {}, surface);
-  for (const auto& s : first) row(s.name, 0, 0, s);
+  std::vector<std::vector<relief::MethodScore>> first;
+  for (const BenchPart& p : parts) first.push_back(relief::EvaluatePanels(p.panels, {{"as shipped", &base}}, {}, surface));
+  part_rows(first, 0, 0);
+  if (a.relative && !base.options().relative) {
+    // The same weights read as a relative model: whole images, scored after the fit.
+    relief::DepthModel as_relative = relief::DepthModel::Load(a.model);
+    as_relative.set_relative(true);
+    std::vector<std::vector<relief::MethodScore>> rel;
+    for (const BenchPart& p : parts) {
+      rel.push_back(relief::EvaluatePanels(p.panels, {{"as shipped, read as relative", &as_relative}}, {}, surface));
+      rel.back().erase(rel.back().begin(), rel.back().end() - 1);
+    }
+    part_rows(rel, 0, 0);
+  }
   std::vector<double> weights = {0};
   if (a.edge_weight > 0) weights.push_back(a.edge_weight);
   for (double budget : budgets) {
     for (double w : weights) {
-      relief::DepthModel model = relief::DepthModel::Load(a.model);
-      relief::TrainOptions o;
-      o.epochs = 1000;
-      o.max_seconds = budget;
-      o.learning_rate = a.learning_rate;
-      o.end_learning_rate = a.learning_rate / 10;
-      o.edge_weight = w;
-      o.seed = a.seed;
-      const relief::TrainSummary summary = relief::TrainDepthModel(o, train, {}, &model);
-      const std::string name = w > 0 ? "fine-tuned, edge term " + FormatDouble(w) : "fine-tuned";
-      row(name, summary.seconds, summary.steps,
-          relief::EvaluatePanels(panels, {{name, &model}}, tuned, surface).back());
+      std::string name = w > 0 ? "fine-tuned, edge term " + FormatDouble(w) : "fine-tuned";
+      std::vector<std::vector<relief::MethodScore>> scores;
+      double seconds = 0;
+      int64_t steps = 0;
+      for (const BenchPart& p : parts) {
+        relief::DepthModel model = relief::DepthModel::Load(a.model);
+        if (a.relative) model.set_relative(true);
+        relief::TrainOptions o;
+        o.epochs = 1000;
+        o.max_seconds = budget;
+        o.learning_rate = a.learning_rate;
+        o.end_learning_rate = a.learning_rate / 10;
+        o.edge_weight = w;
+        o.seed = a.seed;
+        const relief::TrainSummary summary = relief::TrainDepthModel(o, p.train, {}, &model);
+        seconds += summary.seconds / parts.size();
+        steps += summary.steps;
+        // An absolute model predicts in tiles of its training patches (context matters on a
+        // photograph); a relative one whole images.
+        relief::PredictOptions tuned;
+        tuned.tiles.tile = p.train.front().photo.width();
+        tuned.tiles.overlap = tuned.tiles.tile / 4;
+        tuned.Check();
+        scores.push_back(relief::EvaluatePanels(p.panels, {{name, &model}}, tuned, surface));
+      }
+      // The baselines were rows already: only the model's row.
+      for (auto& part : scores) part.erase(part.begin(), part.end() - 1);
+      part_rows(scores, seconds, steps / static_cast<int64_t>(parts.size()));
     }
   }
+}
+
+// Real photos: the held-out photo protocol (--pairs) and the held-out surface one (--parts),
+// each its own table, so that the gap between a new viewpoint and a new surface shows.
+int BenchReliefPhotos(const ReliefBenchOptions& a) {
+  const std::vector<double> budgets = ParseNumbers(a.finetune_seconds, ',', "--finetune-seconds");
+  for (double b : budgets) {
+    if (!(b > 0)) throw std::invalid_argument("--finetune-seconds: budgets must be > 0");
+  }
+  std::printf("Relief depth on real photos: %d thread(s), fine-tuning %s%s (lr %.3g, seed %llu)\n", a.threads,
+              a.model.c_str(), a.relative ? " into a relative model" : "", a.learning_rate,
+              static_cast<unsigned long long>(a.seed));
+  if (!a.pairs.empty()) {
+    BenchProtocol(a, "Protocol: held-out photos (new viewpoints of the surfaces fine-tuned on)",
+                  {ReadBenchPart(a.pairs)}, budgets);
+  }
+  if (!a.parts.empty()) {
+    std::vector<BenchPart> parts;
+    for (const std::string& dir : a.parts) parts.push_back(ReadBenchPart(dir));
+    BenchProtocol(a, "Protocol: held-out surfaces (each part in turn masked out of fine-tuning, then scored alone; "
+                     "then the mean over the parts)", parts, budgets);
+  }
   std::printf("Levels 1..255 span each photo's 2nd..98th percentile of camera depth; normals with one "
-              "level = one pixel width, differences over 4 px; * = oracle scale and offset. The poly decay runs over 1000 "
-              "epochs, so a budget stops it early at a near-constant learning rate.\n");
+              "level = one pixel width, differences over 4 px; * = least-squares scale and offset fitted to the "
+              "ground truth (the baselines and relative models; absolute models are scored as they predict). "
+              "Fine-tuning seconds and steps are per part. The poly decay runs over 1000 epochs, so a budget "
+              "stops it early at a near-constant learning rate.\n");
   return 0;
 }
 
@@ -121,7 +186,7 @@ void ReliefBenchOptions::Check() const {
 int RunReliefBench(const ReliefBenchOptions& a) {
   a.Check();
   relief::SetTorchThreads(a.threads);
-  if (!a.pairs.empty()) return BenchReliefPhotos(a);
+  if (!a.pairs.empty() || !a.parts.empty()) return BenchReliefPhotos(a);
   if (!(a.seconds > 0)) throw std::invalid_argument("--seconds must be > 0");
   relief::SynthOptions synth;
   synth.seed = a.seed;

@@ -2,6 +2,7 @@
 // points -> eval, exit codes and messages for bad input, and `candi bench relief`.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -172,6 +173,42 @@ TEST_F(ReliefCli, RealPhotoPairsFineTuneScoreAndPredict) {
                dir_->File("tuned.pt") + " --tile 64 --overlap 16");
   ASSERT_EQ(r.code, 0) << r.output;
   for (const char* row : {"part 1: 2 photo pairs", "part 2: ", "mean over the 2 held-out parts", "tuned ("}) {
+    EXPECT_NE(r.out.find(row), std::string::npos) << row << "\n" << r.out;
+  }
+
+  // A relative model fine-tuned on two folders together (both 64 px patches): said on stderr,
+  // scored after the fit (its row marked *), and its prediction stretched to the full range.
+  r = RunCandi("relief train --data " + pairs + " --data " + surface + " --finetune " + dir_->File("m.pt") +
+               " --relative --out " + dir_->File("rel.pt") + " --epochs 1 --batch 4");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("relative: scale-and-shift-invariant loss"), std::string::npos) << r.output;
+  r = RunCandi("relief eval --pairs " + surface + "/holdout --model " + dir_->File("rel.pt"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.out.find("rel ("), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(" par.)*"), std::string::npos) << "a relative model's row is fitted\n" << r.out;
+  r = RunCandi("-q relief predict " + pairs + "/holdout/100_7105_photo.png --model " + dir_->File("rel.pt") +
+               " --width-m 0 -o " + dir_->File("rel_depth.png"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  {
+    const io::PngImage rel = io::ReadPng(dir_->File("rel_depth.png"));
+    const auto [lo, hi] = std::minmax_element(rel.image8.values().begin(), rel.image8.values().end());
+    EXPECT_LE(*lo, 1) << "stretched: the 2nd percentile is level 1";
+    EXPECT_GE(*hi, 254) << "and the 98th level 255";
+  }
+  // Folders of different patch sizes cannot be trained on together: the folder is named.
+  r = RunCandi("relief train --data " + pairs + " --data " + dir_->File("data") + " --out " + dir_->File("x.pt") +
+               " --epochs 1");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find(dir_->File("data")), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("share one size"), std::string::npos) << r.output;
+  EXPECT_FALSE(FileExists(dir_->File("x.pt")));
+
+  // Both protocols' tables: held-out photos, and held-out surfaces part by part with the mean.
+  r = RunCandi("bench relief --pairs " + pairs + " --parts " + surface + " --parts " + surface + " --model " +
+               dir_->File("m.pt") + " --finetune-seconds 1 --edge-loss 0 --relative");
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* row : {"Protocol: held-out photos", "Protocol: held-out surfaces", "as shipped, read as relative*",
+                          "  linear SFS, Pentland* [2]", "  fine-tuned* [1]", "\nfine-tuned*"}) {
     EXPECT_NE(r.out.find(row), std::string::npos) << row << "\n" << r.out;
   }
 

@@ -2,7 +2,8 @@
 //
 // Both return a *relative* height (arbitrary scale and offset, larger = nearer the viewer);
 // FitLevels maps it to depth levels with the least-squares scale and offset against the ground
-// truth (an oracle the network does not get: the most favourable reading of each baseline).
+// truth (an oracle an absolute network does not get: the most favourable reading of each
+// baseline; relative networks are scored with the same fit).
 //  - intensity as depth: the grey value itself is the height (brighter = nearer);
 //  - linear shape from shading (Pentland 1988, "Shape information from shading: a theory about
 //    human perception", via the FFT): with reflectance linearised in the surface gradient,

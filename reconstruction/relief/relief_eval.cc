@@ -64,7 +64,7 @@ std::vector<MethodScore> EvaluatePanels(const std::vector<EvalPanel>& panels,
   methods.emplace_back("linear SFS, Pentland*", surface);
   for (const NamedModel& m : models) {
     CANDI_CHECK(m.model != nullptr) << m.name;
-    methods.emplace_back(m.name, surface);
+    methods.emplace_back(m.model->options().relative ? m.name + "*" : m.name, surface);
   }
   auto score = [](Method* m, const ImageF& prediction, const EvalPanel& p, double seconds) {
     m->depth.Add(prediction, p.depth, p.mask);
@@ -90,7 +90,10 @@ std::vector<MethodScore> EvaluatePanels(const std::vector<EvalPanel>& panels,
       t0 = std::chrono::steady_clock::now();
       PredictOptions o = predict;
       o.photo_pixels_per_m = p.pixels_per_m;
+      o.stretch = false;
       prediction = models[k].model->Predict(o, p.photo);
+      // A relative model gets the baselines' least-squares scale and offset; an absolute one not.
+      if (models[k].model->options().relative) prediction = FitLevels(prediction, fit_truth);
       score(&methods[2 + k], prediction, p, Since(t0));
     }
     if (progress) progress(++done, panels.size());
@@ -114,14 +117,14 @@ DepthMetrics PaperBtsMetrics() {
 
 std::string MetricsTableHeader() {
   char line[160];
-  std::snprintf(line, sizeof(line), "%-26s %7s %7s %7s %8s %8s %8s %8s", "method", "d<1.25",
+  std::snprintf(line, sizeof(line), "%-28s %7s %7s %7s %8s %8s %8s %8s", "method", "d<1.25",
                 "d<1.25^2", "d<1.25^3", "RMSE", "RMSE_log", "abs_rel", "sq_rel");
   return line;
 }
 
 std::string SurfaceTableHeader() {
   char line[160];
-  std::snprintf(line, sizeof(line), "%-26s %8s %8s %7s %7s %7s %8s %8s %8s", "method", "normal",
+  std::snprintf(line, sizeof(line), "%-28s %8s %8s %7s %7s %7s %8s %8s %8s", "method", "normal",
                 "median", "<11.25", "<22.5", "<30", "edge P", "edge R", "edge F1");
   return line;
 }
@@ -177,7 +180,7 @@ std::vector<MethodScore> MeanOverParts(const std::vector<std::vector<MethodScore
 
 std::string SurfaceTableRow(const std::string& name, const NormalMetrics& n, const EdgeMetrics& e) {
   char line[200];
-  std::snprintf(line, sizeof(line), "%-26s %8.2f %8.2f %7.4f %7.4f %7.4f %8.4f %8.4f %8.4f",
+  std::snprintf(line, sizeof(line), "%-28s %8.2f %8.2f %7.4f %7.4f %7.4f %8.4f %8.4f %8.4f",
                 name.c_str(), n.mean_deg, n.median_deg, n.within_11, n.within_22, n.within_30,
                 e.precision, e.recall, e.f1);
   return line;
@@ -185,7 +188,7 @@ std::string SurfaceTableRow(const std::string& name, const NormalMetrics& n, con
 
 std::string MetricsTableRow(const std::string& name, const DepthMetrics& m) {
   char line[200];
-  std::snprintf(line, sizeof(line), "%-26s %7.4f %8.4f %8.4f %8.3f %8.4f %8.4f %8.4f", name.c_str(),
+  std::snprintf(line, sizeof(line), "%-28s %7.4f %8.4f %8.4f %8.3f %8.4f %8.4f %8.4f", name.c_str(),
                 m.delta1, m.delta2, m.delta3, m.rmse, m.rmse_log, m.abs_rel, m.sq_rel);
   return line;
 }

@@ -45,7 +45,8 @@ std::vector<EvalPanel> SyntheticEvalPanels(const SynthOptions& synth, int count)
 std::vector<EvalPanel> PhotoEvalPanels(const std::string& dir);
 
 // Scores intensity-as-depth and Pentland SFS (both with oracle scale and offset, see
-// relief_baselines.h) and each model (tiled prediction), in that order: the depth metrics, the
+// relief_baselines.h) and each model (tiled prediction; a relative model whole, unstretched,
+// then with the same oracle scale and offset, its name marked "*"), in that order: the depth metrics, the
 // normal and the edge metrics (relief_metrics.h, with `surface`), masks honoured.
 std::vector<MethodScore> EvaluatePanels(const std::vector<EvalPanel>& panels,
                                         const std::vector<NamedModel>& models,

@@ -1,7 +1,10 @@
 #include "reconstruction/relief/relief_net.h"
 
+#include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
@@ -123,6 +126,34 @@ torch::Tensor SilogLoss(const torch::Tensor& pred, const torch::Tensor& gt, cons
   return torch::sqrt(torch::clamp_min((d * d).mean() - 0.85 * d.mean().pow(2), 1e-12)) * 10.0;
 }
 
+torch::Tensor AlignScaleShift(const torch::Tensor& pred, const torch::Tensor& gt, const torch::Tensor& mask) {
+  const torch::Tensor m = mask.to(torch::kFloat);
+  const std::vector<int64_t> dims = {1, 2, 3};
+  const torch::Tensor n = m.sum(dims, true);
+  const torch::Tensor safe_n = torch::clamp_min(n, 1.0);
+  const torch::Tensor mean_p = (pred * m).sum(dims, true) / safe_n;
+  const torch::Tensor mean_g = (gt * m).sum(dims, true) / safe_n;
+  const torch::Tensor dp = (pred - mean_p) * m;
+  const torch::Tensor var = (dp * dp).sum(dims, true);
+  const torch::Tensor cov = (dp * (gt - mean_g)).sum(dims, true);
+  // A flat prediction has no scale to fit: 0, without dividing by (almost) 0.
+  const torch::Tensor ok = var > 1e-10 * safe_n;
+  const torch::Tensor a = torch::where(ok, cov / torch::where(ok, var, torch::ones_like(var)), torch::zeros_like(var));
+  return a * (pred - mean_p) + mean_g;
+}
+
+torch::Tensor ScaleShiftInvariantLoss(const torch::Tensor& pred, const torch::Tensor& gt, const torch::Tensor& mask) {
+  const torch::Tensor aligned = torch::clamp(AlignScaleShift(pred, gt, mask), kMinValidLevel, kMaxLevel);
+  const torch::Tensor m = mask.to(torch::kFloat);
+  const std::vector<int64_t> dims = {1, 2, 3};
+  const torch::Tensor n = m.sum(dims);
+  const torch::Tensor d = (torch::log(aligned) - torch::log(torch::clamp_min(gt, kMinValidLevel))) * m;
+  const torch::Tensor has = (n > 0).to(torch::kFloat);
+  // sqrt at 0 has an infinite derivative: a tiny floor keeps a perfect image's gradient finite.
+  const torch::Tensor rmse = torch::sqrt(torch::clamp_min((d * d).sum(dims) / torch::clamp_min(n, 1.0), 1e-12)) * has;
+  return rmse.sum() / torch::clamp_min(has.sum(), 1.0) * 10.0;
+}
+
 torch::Tensor PhotoBatch(const std::vector<const ImageF*>& photos) {
   CANDI_CHECK(!photos.empty());
   const int w = photos[0]->width(), h = photos[0]->height();
@@ -230,6 +261,8 @@ void WriteModelArchive(const DepthModel::Impl& impl, torch::serialize::OutputArc
   archive->write("decoder_width", torch::tensor(static_cast<int64_t>(o.decoder_width)));
   archive->write("max_depth", torch::tensor(o.max_depth, torch::kFloat64));
   archive->write("pixels_per_m", torch::tensor(impl.pixels_per_m, torch::kFloat64));
+  // Written only when set: an absolute model's file keeps the bytes it had before the key existed.
+  if (o.relative) archive->write("relative", torch::tensor(static_cast<int64_t>(1)));
   torch::serialize::OutputArchive net;
   impl.net->save(net);
   archive->write("net", net);
@@ -256,6 +289,8 @@ std::shared_ptr<DepthModel::Impl> ReadModelArchive(torch::serialize::InputArchiv
   o.decoder_width = static_cast<int>(t.item<int64_t>());
   t = ReadTensor(archive, "max_depth");
   o.max_depth = t.item<double>();
+  torch::Tensor relative;
+  o.relative = archive.try_read("relative", relative) && relative.item<int64_t>() != 0;
   auto impl = std::make_shared<DepthModel::Impl>(o);
   t = ReadTensor(archive, "pixels_per_m");
   impl->pixels_per_m = t.item<double>();
@@ -313,6 +348,8 @@ void DepthModel::set_pixels_per_m(double value) {
   impl_->pixels_per_m = value;
 }
 
+void DepthModel::set_relative(bool relative) { impl_->net->options.relative = relative; }
+
 ImageF DepthModel::PredictTile(const ImageF& tile) const {
   torch::NoGradGuard no_grad;
   impl_->net->eval();
@@ -334,9 +371,53 @@ ImageF DepthModel::Predict(const PredictOptions& options, const ImageF& photo,
     for (float& v : input.values()) v = std::isfinite(v) ? v : 0.5f;
     input = Resample(input, w, h);
   }
-  ImageF depth = PredictTiled(options.tiles, input,
-                              [this](const ImageF& tile) { return PredictTile(tile); }, progress);
+  ImageF depth;
+  if (impl_->net->options.relative) {
+    depth = PredictWhole(input);
+    if (progress) progress(1, 1);
+    if (options.stretch) depth = StretchRelative(depth);
+  } else {
+    depth = PredictTiled(options.tiles, input, [this](const ImageF& tile) { return PredictTile(tile); }, progress);
+  }
   return Resample(depth, photo.width(), photo.height());
+}
+
+ImageF DepthModel::PredictWhole(const ImageF& image) const {
+  const int w = image.width(), h = image.height();
+  const int pw = (w + 31) / 32 * 32, ph = (h + 31) / 32 * 32;
+  ImageF padded(pw, ph, 1);
+  for (int y = 0; y < ph; ++y) {
+    for (int x = 0; x < pw; ++x) padded.at(x, y) = image.at(std::min(x, w - 1), std::min(y, h - 1));
+  }
+  const ImageF out = PredictTile(padded);
+  ImageF depth(w, h, 1);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) depth.at(x, y) = out.at(x, y);
+  }
+  return depth;
+}
+
+ImageF StretchRelative(const ImageF& levels) {
+  std::vector<float> finite;
+  finite.reserve(levels.values().size());
+  for (float v : levels.values()) {
+    if (std::isfinite(v)) finite.push_back(v);
+  }
+  ImageF out = levels;
+  if (finite.empty()) return out;
+  auto at = [&finite](double q) {
+    const size_t k = std::min(finite.size() - 1, static_cast<size_t>(q * (finite.size() - 1) + 0.5));
+    std::nth_element(finite.begin(), finite.begin() + k, finite.end());
+    return static_cast<double>(finite[k]);
+  };
+  const double lo = at(0.02), hi = at(0.98);
+  // A flat prediction (no relief seen) becomes the middle level, not a division by zero.
+  const double scale = hi - lo > 1e-6 * std::max(1.0, std::abs(hi)) ? (kMaxLevel - kMinValidLevel) / (hi - lo) : 0.0;
+  for (float& v : out.values()) {
+    const double level = scale > 0 ? kMinValidLevel + (v - lo) * scale : kMaxLevel / 2;
+    v = std::isfinite(v) ? static_cast<float>(std::clamp(level, 0.0, kMaxLevel)) : v;
+  }
+  return out;
 }
 
 }  // namespace candi::relief

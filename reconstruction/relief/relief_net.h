@@ -29,6 +29,11 @@ struct NetOptions {
   std::vector<int> blocks = {4, 6, 8, 6};  // dense layers in each of the 4 blocks, each [1, 64]
   int decoder_width = 128;               // BTS "num_features" (512 in the paper), multiple of 16, [32, 1024]
   double max_depth = 255;                // scale of the sigmoid head, levels, > 0
+  // The head's levels are relative: right up to an unknown scale and offset per image (trained
+  // with the scale-and-shift-invariant loss, relief_train.h). Such a model predicts a whole image
+  // at once (tiles would each get their own scale), is scored after the least-squares scale and
+  // offset like the baselines, and its output is stretched for use (PredictOptions::stretch).
+  bool relative = false;
   void Check() const;                    // throws std::invalid_argument naming the field
 };
 
@@ -39,6 +44,10 @@ void SetTorchThreads(int threads);
 struct PredictOptions {
   TileOptions tiles;          // tile 128, overlap 32 (tile must be a multiple of 32)
   double photo_pixels_per_m = 0;  // the photo's resolution; 0 = the model's (no resampling)
+  // A relative model's levels stretched linearly so that their 2nd and 98th percentiles become
+  // levels 1 and 255 (the convention of photo pairs, relief_photo_pairs.h), clamped to [0, 255];
+  // false: as the network gives them (for scoring after a fit). No effect on absolute models.
+  bool stretch = true;
   void Check() const;
 };
 
@@ -57,13 +66,20 @@ class DepthModel {
   int64_t ParameterCount() const;
   double pixels_per_m() const;           // resolution of the training data, pixels per metre
   void set_pixels_per_m(double value);
+  // Makes the model relative (NetOptions::relative), e.g. before fine-tuning an absolute one
+  // with the scale-and-shift-invariant loss; the weights stay.
+  void set_relative(bool relative);
 
   // Depth levels of one tile (side a multiple of 32, one channel, grey [0, 1]); eval mode.
   ImageF PredictTile(const ImageF& tile) const;
   // A whole photo of any size: resampled to the model's resolution, predicted in overlapping
-  // tiles blended without seams, resampled back to the photo's size. NaN pixels read as 0.5.
+  // tiles blended without seams (a relative model: in one piece, edge-padded to a multiple of
+  // 32), resampled back to the photo's size. NaN pixels read as 0.5.
   ImageF Predict(const PredictOptions& options, const ImageF& photo,
                  const ProgressCallback& progress = nullptr) const;
+  // One image of any size in one piece (edge-padded to a multiple of 32, cropped back), at the
+  // model's resolution, not stretched.
+  ImageF PredictWhole(const ImageF& image) const;
 
   Impl& impl() const { return *impl_; }
 
@@ -71,5 +87,9 @@ class DepthModel {
   explicit DepthModel(std::shared_ptr<Impl> impl) : impl_(std::move(impl)) {}
   std::shared_ptr<Impl> impl_;
 };
+
+// Levels stretched linearly so that their 2nd and 98th percentiles become levels 1 and 255,
+// clamped to [0, 255]; a flat image becomes the middle level. Non-finite values stay.
+ImageF StretchRelative(const ImageF& levels);
 
 }  // namespace candi::relief

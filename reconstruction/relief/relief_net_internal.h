@@ -21,6 +21,19 @@ torch::Tensor PlaneFromRaw(const torch::Tensor& raw, double max_depth);
 // 10 sqrt(mean d^2 - 0.85 mean(d)^2), d = ln pred - ln gt. Zero (with gradient) when mask is empty.
 torch::Tensor SilogLoss(const torch::Tensor& pred, const torch::Tensor& gt, const torch::Tensor& mask);
 
+// pred moved by each image's least-squares scale and offset onto gt over its mask (bool) pixels,
+// as relief_baselines.h's FitLevels does for scoring (differentiable; centred sums, so float
+// stays exact enough for 10^5 pixels of 255 levels). An image without mask pixels, or a flat
+// prediction, gets scale 0 and offset the mean of gt (0 without pixels).
+torch::Tensor AlignScaleShift(const torch::Tensor& pred, const torch::Tensor& gt, const torch::Tensor& mask);
+
+// The scale-and-shift-invariant loss of a relative model (after MiDaS, Ranftl et al. 2020, here
+// with the least-squares alignment the scores use): pred aligned per image (AlignScaleShift),
+// clamped to [kMinValidLevel, kMaxLevel], then the RMSE of log levels over the mask, averaged
+// over the images that have mask pixels, x10 like the SI-log loss. The same for a pred + b, any
+// a != 0 and b: the fit takes the sign too.
+torch::Tensor ScaleShiftInvariantLoss(const torch::Tensor& pred, const torch::Tensor& gt, const torch::Tensor& mask);
+
 // Grey [0, 1] images (same size) to a B x 1 x H x W normalised input tensor.
 torch::Tensor PhotoBatch(const std::vector<const ImageF*>& photos);
 

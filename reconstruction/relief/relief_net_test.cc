@@ -1,6 +1,7 @@
 // Tests of the relief network (libtorch, really trained; tiny sizes so the suite stays fast).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "reconstruction/relief/relief_dataset.h"
@@ -88,6 +89,132 @@ TEST(SilogLoss, ZeroAtGroundTruthMaskedAndScaleInvariantPart) {
   EXPECT_NEAR(SilogLoss(pred, gt, mask).item<float>(), 0.0f, 1e-3);
   const torch::Tensor none = torch::zeros_like(gt, torch::kBool);
   EXPECT_EQ(SilogLoss(pred, gt, none).item<float>(), 0.0f);
+}
+
+// The scale-and-shift-invariant loss: zero for any a gt + b (a != 0), masked pixels ignored,
+// an image without known pixels left out, a flat prediction finite, and it grows with a
+// structural error that no scale and offset can undo.
+TEST(ScaleShiftInvariantLoss, InvariantToScaleAndOffsetAndMasked) {
+  torch::manual_seed(4);
+  const torch::Tensor gt = torch::rand({2, 1, 16, 16}) * 200 + 10;
+  const torch::Tensor all = torch::ones_like(gt, torch::kBool);
+  EXPECT_NEAR(ScaleShiftInvariantLoss(gt, gt, all).item<float>(), 0.0f, 2e-3);
+  EXPECT_NEAR(ScaleShiftInvariantLoss(gt * 0.01 - 3, gt, all).item<float>(), 0.0f, 2e-3);
+  EXPECT_NEAR(ScaleShiftInvariantLoss(1000 - gt * 7, gt, all).item<float>(), 0.0f, 2e-3);
+  // The alignment is exact at survey-like magnitudes: levels offset by 10^5.
+  EXPECT_NEAR(ScaleShiftInvariantLoss(gt + 1e5, gt, all).item<float>(), 0.0f, 0.05);
+  torch::Tensor pred = gt.clone();
+  pred.index_put_({0, 0, 3, 3}, 5000.0f);
+  torch::Tensor mask = all.clone();
+  mask.index_put_({0, 0, 3, 3}, false);
+  EXPECT_NEAR(ScaleShiftInvariantLoss(pred, gt, mask).item<float>(), 0.0f, 2e-3);
+  EXPECT_GT(ScaleShiftInvariantLoss(pred, gt, all).item<float>(), 0.1f);
+  // Image 1 without any known pixel: the loss is image 0's alone, not halved.
+  torch::Tensor half = all.clone();
+  half.index_put_({1}, false);
+  const torch::Tensor noisy = gt + torch::randn_like(gt) * 20;
+  const float both_img0 = ScaleShiftInvariantLoss(noisy.narrow(0, 0, 1), gt.narrow(0, 0, 1), all.narrow(0, 0, 1)).item<float>();
+  EXPECT_NEAR(ScaleShiftInvariantLoss(noisy, gt, half).item<float>(), both_img0, 1e-4);
+  EXPECT_EQ(ScaleShiftInvariantLoss(noisy, gt, torch::zeros_like(all)).item<float>(), 0.0f);
+  // A flat prediction: finite loss and finite gradient (the fit has no scale to take).
+  torch::Tensor flat = torch::full_like(gt, 77.0).requires_grad_(true);
+  const torch::Tensor l = ScaleShiftInvariantLoss(flat, gt, all);
+  l.backward();
+  EXPECT_TRUE(std::isfinite(l.item<float>()) && l.item<float>() > 0);
+  EXPECT_TRUE(torch::isfinite(flat.grad()).all().item<bool>());
+  // A structural error costs, whatever its scale.
+  const torch::Tensor flipped = torch::flip(gt, {3});
+  EXPECT_NEAR(ScaleShiftInvariantLoss(flipped * 3 + 1, gt, all).item<float>(),
+              ScaleShiftInvariantLoss(flipped, gt, all).item<float>(), 1e-3);
+  EXPECT_GT(ScaleShiftInvariantLoss(flipped, gt, all).item<float>(), 1.0f);
+}
+
+// A relative model: trained with the scale-and-shift-invariant loss to the byte on one thread,
+// saved and loaded as relative, predicting whole images; its stretched output spans the levels,
+// and an absolute model's file does not change by the new key.
+TEST(DepthModel, RelativeModelTrainsReproduciblyAndPredictsWholeImages) {
+  SetTorchThreads(1);
+  testing::TempDir dir;
+  DepthModel::Create(Tiny(), 21).Save(dir.File("base.pt"));
+  const std::vector<TrainingPair> train = Patches(6, 1);
+  auto tune = [&](const std::string& out, double* loss_before, double* loss_after) {
+    DepthModel m = DepthModel::Load(dir.File("base.pt"));
+    EXPECT_FALSE(m.options().relative);
+    m.set_relative(true);
+    if (loss_before) *loss_before = EvaluateLoss(m, train);
+    TrainOptions o;
+    o.epochs = 4;
+    o.batch = 2;
+    o.seed = 5;
+    o.edge_weight = 1;
+    TrainDepthModel(o, train, {}, &m);
+    if (loss_after) *loss_after = EvaluateLoss(m, train);
+    m.Save(dir.File(out));
+    return testing::ReadBytes(dir.File(out));
+  };
+  double before = 0, after = 0;
+  const std::string a = tune("a.pt", &before, &after), b = tune("b.pt", nullptr, nullptr);
+  EXPECT_EQ(a, b);
+  EXPECT_LT(after, before) << "the scale-and-shift-invariant loss falls";
+  const DepthModel rel = DepthModel::Load(dir.File("a.pt"));
+  EXPECT_TRUE(rel.options().relative);
+  // The absolute model's file is the same bytes after a load and save.
+  DepthModel::Load(dir.File("base.pt")).Save(dir.File("again.pt"));
+  EXPECT_EQ(testing::ReadBytes(dir.File("again.pt")), testing::ReadBytes(dir.File("base.pt")));
+  // Whole images: any size, equal to one pass over the edge-padded image, whatever the tiles say.
+  SynthOptions s;
+  s.width = 150;
+  s.seed = 31;
+  const ImageF photo = SynthesizePanel(s, 0).photo.photo;
+  PredictOptions raw;
+  raw.stretch = false;
+  raw.tiles.tile = 32;
+  raw.tiles.overlap = 8;
+  const ImageF whole = rel.Predict(raw, photo);
+  EXPECT_EQ(whole.values(), rel.PredictWhole(photo).values());
+  ImageF padded(160, ((photo.height() + 31) / 32) * 32, 1);
+  for (int y = 0; y < padded.height(); ++y) {
+    for (int x = 0; x < 160; ++x) padded.at(x, y) = photo.at(std::min(x, photo.width() - 1), std::min(y, photo.height() - 1));
+  }
+  const ImageF one = rel.PredictTile(padded);
+  for (int y = 0; y < photo.height(); y += 7) {
+    for (int x = 0; x < photo.width(); x += 7) ASSERT_EQ(whole.at(x, y), one.at(x, y)) << x << "," << y;
+  }
+  const ImageF stretched = rel.Predict(PredictOptions(), photo);
+  std::vector<float> v = stretched.values();
+  std::sort(v.begin(), v.end());
+  EXPECT_NEAR(v[static_cast<size_t>(0.02 * (v.size() - 1) + 0.5)], kMinValidLevel, 1e-3);
+  EXPECT_NEAR(v[static_cast<size_t>(0.98 * (v.size() - 1) + 0.5)], kMaxLevel, 1e-3);
+  EXPECT_GE(v.front(), 0.0f);
+  EXPECT_LE(v.back(), kMaxLevel);
+  // Hard photos: flat, saturated, tiny, with NaN: finite levels in range, the photo's size.
+  ImageF nan_photo(50, 40, 1, 0.5f);
+  nan_photo.at(3, 3) = NAN;
+  for (const ImageF& hard : {ImageF(70, 33, 1, 0.0f), ImageF(70, 33, 1, 1.0f), ImageF(20, 9, 1, 0.3f), nan_photo}) {
+    const ImageF d = rel.Predict(PredictOptions(), hard);
+    ASSERT_EQ(d.width(), hard.width());
+    ASSERT_EQ(d.height(), hard.height());
+    for (float level : d.values()) ASSERT_TRUE(std::isfinite(level) && level >= 0 && level <= kMaxLevel) << level;
+  }
+}
+
+TEST(StretchRelative, FlatAndNonFiniteImages) {
+  ImageF flat(10, 10, 1, 3.0f);
+  const ImageF flat_out = StretchRelative(flat);
+  for (float v : flat_out.values()) EXPECT_EQ(v, static_cast<float>(kMaxLevel / 2));
+  ImageF ramp(100, 1, 1);
+  for (int x = 0; x < 100; ++x) ramp.at(x, 0) = 1e6f + x * 0.5f;  // large values, fine steps
+  ramp.at(50, 0) = NAN;
+  const ImageF out = StretchRelative(ramp);
+  EXPECT_TRUE(std::isnan(out.at(50, 0)));
+  for (int x = 1; x < 100; ++x) {
+    if (x != 50 && x != 51) {
+      EXPECT_GE(out.at(x, 0), out.at(x - 1, 0)) << x;
+    }
+  }
+  EXPECT_EQ(out.at(0, 0), 0.0f);
+  EXPECT_EQ(out.at(99, 0), static_cast<float>(kMaxLevel));
+  EXPECT_TRUE(std::isnan(StretchRelative(ImageF(4, 4, 1, NAN)).values()[0]));
 }
 
 TEST(DepthModel, TrainingLowersTheLossAndSavedModelsReloadExactly) {

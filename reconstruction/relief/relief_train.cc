@@ -11,6 +11,7 @@
 #include "core/check.h"
 #include "core/log.h"
 #include "core/rng.h"
+#include "reconstruction/relief/relief_baselines.h"
 #include "reconstruction/relief/relief_image.h"
 #include "reconstruction/relief/relief_net_internal.h"
 
@@ -106,16 +107,30 @@ torch::Tensor EdgeLoss(const torch::Tensor& pred, const torch::Tensor& gt, const
   return sum / torch::clamp_min(count, 1.0) * 10.0;
 }
 
-torch::Tensor TrainingLoss(const TrainOptions& o, const torch::Tensor& pred, const torch::Tensor& gt) {
+// Absolute models: the SI-log loss. Relative ones: the scale-and-shift-invariant loss, and the
+// edge term on the aligned prediction (its log differences do not depend on the offset).
+torch::Tensor TrainingLoss(const TrainOptions& o, bool relative, const torch::Tensor& pred, const torch::Tensor& gt) {
   const torch::Tensor mask = gt >= kMinValidLevel;
+  if (relative) {
+    torch::Tensor loss = ScaleShiftInvariantLoss(pred, gt, mask);
+    if (o.edge_weight > 0) {
+      const torch::Tensor aligned = torch::clamp(AlignScaleShift(pred, gt, mask), kMinValidLevel, kMaxLevel);
+      loss = loss + o.edge_weight * EdgeLoss(aligned, gt, mask);
+    }
+    return loss;
+  }
   torch::Tensor loss = SilogLoss(pred, gt, mask);
   if (o.edge_weight > 0) loss = loss + o.edge_weight * EdgeLoss(pred, gt, mask);
   return loss;
 }
 
+// A relative model is scored after the least-squares scale and offset, as `relief eval` does.
 DepthMetrics Validate(const DepthModel& model, const std::vector<TrainingPair>& pairs) {
   DepthMetricsAccumulator acc;
-  for (const TrainingPair& p : pairs) acc.Add(model.PredictTile(p.photo), p.depth);
+  for (const TrainingPair& p : pairs) {
+    const ImageF prediction = model.PredictTile(p.photo);
+    acc.Add(model.options().relative ? FitLevels(prediction, p.depth) : prediction, p.depth);
+  }
   return acc.Result();
 }
 
@@ -139,7 +154,9 @@ double EvaluateLoss(const DepthModel& model, const std::vector<TrainingPair>& pa
   double sum = 0;
   for (const TrainingPair& p : pairs) {
     const torch::Tensor gt = DepthBatch({&p.depth});
-    sum += SilogLoss(model.impl().net->forward(PhotoBatch({&p.photo})), gt, gt >= kMinValidLevel).item<double>();
+    const torch::Tensor pred = model.impl().net->forward(PhotoBatch({&p.photo}));
+    sum += (model.options().relative ? ScaleShiftInvariantLoss(pred, gt, gt >= kMinValidLevel)
+                                     : SilogLoss(pred, gt, gt >= kMinValidLevel)).item<double>();
   }
   return pairs.empty() ? 0.0 : sum / pairs.size();
 }
@@ -180,7 +197,7 @@ TrainSummary TrainDepthModel(const TrainOptions& o, const std::vector<TrainingPa
       std::vector<const ImageF*> photos, depths;
       for (const TrainingPair& p : batch) photos.push_back(&p.photo), depths.push_back(&p.depth);
       const torch::Tensor gt = DepthBatch(depths);
-      const torch::Tensor loss = TrainingLoss(o, net->forward(PhotoBatch(photos)), gt);
+      const torch::Tensor loss = TrainingLoss(o, model->options().relative, net->forward(PhotoBatch(photos)), gt);
       opt.zero_grad();
       loss.backward();
       opt.step();

@@ -2,7 +2,10 @@
 //
 // Adam (lr -> end_lr by polynomial decay, power 0.9, as BTS), scale-invariant log loss with the
 // "no data" pixels masked (with edge_weight > 0 plus an edge term: the mean error of log-depth
-// differences 1, 2 and 4 pixels apart, edge guidance as a loss), the paper's augmentation drawn
+// differences 1, 2 and 4 pixels apart, edge guidance as a loss); a relative model
+// (NetOptions::relative) instead gets the scale-and-shift-invariant loss (each image's
+// prediction fitted to its ground truth by least squares first, then the RMSE of log levels),
+// and its edge term is taken on the fitted prediction, and its validation scored after the fit; the paper's augmentation drawn
 // per (seed, epoch, sample), batches in a seeded shuffled order. After each epoch: the validation
 // metrics (relief_metrics.h) and, with a checkpoint path, a checkpoint (weights, optimiser state,
 // epoch) written atomically; `resume` continues from it. Fine-tuning is training a loaded model
