@@ -6,7 +6,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string_view>
 #include <vector>
@@ -23,6 +25,16 @@
 
 namespace candi::io {
 namespace {
+
+// A file's column layout is a fact of the file: said once per process, however often a command
+// opens it (`candi render FILE` opens it to decide how to render, to peek at its schema, then to
+// read it).
+void LogLayoutOnce(const std::string& message) {
+  static std::mutex mutex;
+  static std::set<std::string> said;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (said.insert(message).second) LogInfo(message);
+}
 
 using namespace text_scan;
 using namespace xyz;
@@ -176,20 +188,20 @@ void XyzReader::ChooseLayout(std::optional<Layout> layout,
     layout_ = std::move(*layout);
   } else if (tokens.empty()) {
     layout_ = ParseColumnSpec(pts_ ? "x,y,z,i" : "x,y,z");
-    LogInfo(path_ + ": no points");
+    LogLayoutOnce(path_ + ": no points");
   } else {
     if (tokens.size() < 3) {
       Fail(line_, std::to_string(tokens.size()) + " column(s); at least x,y,z are needed");
     }
     if (std::optional<Layout> named = LayoutFromHeader(header_, tokens.size())) {
       layout_ = std::move(*named);
-      LogInfo(path_ + ": columns " + layout_.text + " from the header on line " +
-              std::to_string(header_line_));
+      LogLayoutOnce(path_ + ": columns " + layout_.text + " from the header on line " +
+                    std::to_string(header_line_));
       return;
     }
     layout_ = ParseColumnSpec(GuessColumns(tokens));
-    LogInfo(path_ + ": " + std::to_string(tokens.size()) + " columns, guessed " + layout_.text +
-            "; pass --columns to override");
+    LogLayoutOnce(path_ + ": " + std::to_string(tokens.size()) + " columns, guessed " + layout_.text +
+                  "; pass --columns to override");
   }
 }
 

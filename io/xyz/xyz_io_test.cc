@@ -259,6 +259,22 @@ TEST(XyzColumns, GuessIsLogged) {
       << logged;
 }
 
+// A command that opens one file several times (render: to choose a mode, to peek at the schema,
+// to read) says its columns once.
+TEST(XyzColumns, GuessIsLoggedOncePerFile) {
+  TempDir dir;
+  const std::string path = dir.File("twice.xyz");
+  testing::WriteBytes(path, "1 2 3 10 20 30 7\n4 5 6 1 2 3 8\n");
+  std::string logged;
+  LogSink old = SetLogSink([&](LogLevel, const std::string& m) { logged += m + "\n"; });
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(ReadPointCloud(path).size(), 2u);
+  SetLogSink(old);
+  const std::string line = "7 columns, guessed";
+  const size_t first = logged.find(line);
+  ASSERT_NE(first, std::string::npos) << logged;
+  EXPECT_EQ(logged.find(line, first + 1), std::string::npos) << "said once\n" << logged;
+}
+
 TEST(XyzColumns, ExplicitSpecWithSkipAliasesAndNames) {
   TempDir dir;
   const PointCloud cloud =
