@@ -59,6 +59,20 @@ TEST_F(ReliefCli, SynthDatasetAndTrainWriteTheirFiles) {
   EXPECT_NE(train_output_->find("val d1"), std::string::npos);
 }
 
+// Folders trained on together must agree on their resolution: the second one is named, with
+// both values, and no model is written.
+TEST_F(ReliefCli, TrainRefusesDataFoldersOfDifferentResolutions) {
+  const Result d = RunCandi("-q relief dataset " + dir_->File("panels") + " -o " + dir_->File("data_fine") +
+                            " --pixels-per-m " + std::to_string(2 * 192 / 2.7) + " --patch 32 --stride 16");
+  ASSERT_EQ(d.code, 0) << d.output;
+  const Result r = RunCandi("relief train --data " + dir_->File("data") + " --data " + dir_->File("data_fine") +
+                            " --out " + dir_->File("mixed.pt") + " --epochs 1 --growth 4 --blocks 1,1,2,1 --width 32");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find(dir_->File("data_fine") + "/dataset.txt"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("differs from"), std::string::npos) << r.output;
+  EXPECT_FALSE(FileExists(dir_->File("mixed.pt")));
+}
+
 TEST_F(ReliefCli, PredictPointsAndEvalOnAnyPhoto) {
   const std::string photo = dir_->File("panels/panel_0001_photo.png");
   const Result p = RunCandi("relief predict " + photo + " --model " + dir_->File("m.pt") + " -o " +
