@@ -54,17 +54,17 @@ struct PointReadOptions {
   void Check() const {}
 };
 
-// How a file stores its points when they are fixed-size little-endian records of 32-bit
-// coordinates: binary little-endian PLY whose vertices have float x, y, z, uchar colour (or none)
-// and no lists, and LAS (int32 X, Y, Z with the header's scale and offset, 16-bit colour). A
-// consumer that needs only positions and colours (the render archive packer) decodes such
-// records itself, in bulk, where Read() would widen every coordinate to a double. A record's
-// position in the reader's info().frame is (double(x), double(y), double(z)) for floats and
-// LasPositionDecoder(scale, offset) of the integers for LAS; its colour (red, green, blue) is the
-// bytes at rgb, or the 16-bit values there >> color_shift (default colour when rgb[0] < 0): what
-// Read() gives.
+// How a file stores its points when they are fixed-size little-endian records: binary
+// little-endian PLY whose vertices have float or double x, y, z (all three of one type), uchar
+// colour (or none) and no lists, and LAS (int32 X, Y, Z with the header's scale and offset, 16-bit
+// colour). A consumer that needs only positions and colours (the render archive packer, the
+// streaming renderer) decodes such records itself, in bulk and in parallel, where Read() would
+// copy every point into a chunk first. A record's position in the reader's info().frame is
+// (double(x), double(y), double(z)) for floats and doubles and LasPositionDecoder(scale, offset)
+// of the integers for LAS; its colour (red, green, blue) is the bytes at rgb, or the 16-bit values
+// there >> color_shift (default colour when rgb[0] < 0): what Read() gives.
 struct PointRecordLayout {
-  enum class Coordinates { kFloat32, kLasInt32 };
+  enum class Coordinates { kFloat32, kFloat64, kLasInt32 };
   Coordinates coordinates = Coordinates::kFloat32;
   uint64_t first_byte = 0;       // file offset of the first record
   size_t stride = 0;             // bytes a record

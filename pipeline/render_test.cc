@@ -76,6 +76,38 @@ TEST(RenderClouds, EqualsRenderingTheirFiles) {
   EXPECT_EQ(first, &cache.Get("a", sampling::OpacityOptions(), clouds[0]));
 }
 
+// Stream mode draws binary PLY and LAS from their records in place: the same image as through
+// the reader (a clip that keeps every point takes that path), on 1 and 2 threads. A file's
+// multiplicities are honoured (all 0: nothing drawn), and ignored when opaque, as in memory mode.
+TEST(RenderPointFiles, StreamModeReadsRecordsInPlaceAndHonoursMultiplicities) {
+  TempDir dir;
+  std::vector<std::string> files = WriteSheets(dir);  // double PLYs
+  io::PointWriteOptions las;
+  files.push_back(dir.File("sheet.las"));
+  io::WritePointCloud(files.back(), Sheets()[0], las);
+  RenderOptions o = Small();
+  o.mode = RenderMode::kStream;
+  const RenderedImage in_place = RenderPointFiles(o, files);
+  EXPECT_EQ(in_place.mode, "stream");
+  EXPECT_EQ(in_place.result.copies, 60000u);
+  RenderOptions through_reader = o;
+  through_reader.clip.planes.push_back({Eigen::Vector3d(0, 0, -1e9), Eigen::Vector3d::UnitZ()});  // keeps all
+  through_reader.threads = 1;
+  const RenderedImage read = RenderPointFiles(through_reader, files);
+  EXPECT_EQ(read.result.copies, 60000u);
+  EXPECT_TRUE(in_place.result.sums == read.result.sums) << "in place and through the reader differ";
+  o.threads = 2;
+  EXPECT_TRUE(RenderPointFiles(o, files).result.sums == in_place.result.sums);
+
+  PointCloud none = Sheets()[0];
+  none.AddScalarField(render::kMultiplicityField);  // every point's multiplicity 0
+  const std::string zero = dir.File("zero.ply");
+  io::WritePointCloud(zero, none);
+  EXPECT_EQ(RenderPointFiles(o, {zero}).result.copies, 0u);
+  o.opaque = true;
+  EXPECT_EQ(RenderPointFiles(o, {zero}).result.copies, 20000u);
+}
+
 TEST(RenderPointFiles, EmptyInputsAndBadFilesAreInputErrors) {
   TempDir dir;
   io::WritePointCloud(dir.File("empty.ply"), PointCloud());

@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
 #include "core/check.h"
 #include "core/parallel.h"
+#include "io/point_records.h"
 #include "render/splat_cloud.h"
 #include "render/splat_kernel.h"
 
@@ -26,13 +28,20 @@ namespace {
 
 // The points of one resident ensemble in the current chunk.
 struct Staged {
-  std::vector<float> x, y, z;
-  std::vector<uint32_t> color;
-  std::vector<uint64_t> index;  // stream index of each point (for the point-size draws)
+  UninitVector<float> x, y, z;
+  UninitVector<uint32_t> color;
+  UninitVector<uint64_t> index;  // stream index of each point (for the point-size draws)
   void Clear() {
     x.clear(), y.clear(), z.clear(), color.clear(), index.clear();
   }
+  void Resize(size_t n, bool indices) {
+    x.resize(n), y.resize(n), z.resize(n), color.resize(n);
+    if (indices) index.resize(n);
+  }
 };
+
+// Points are staged in parallel blocks of this many.
+constexpr size_t kStageBlock = size_t{1} << 14;
 
 struct ThreadSums {
   Accumulator sums;
@@ -53,6 +62,8 @@ struct SpbrStreamRenderer::Impl {
   uint64_t next_index = 0, copies = 0;
   std::vector<BandBuffer> buffers;  // resident ensembles [first, last)
   std::vector<Staged> staged;
+  UninitVector<uint32_t> slots;   // Stage: each point's resident ensemble (K: none)
+  std::vector<uint64_t> counts;   // Stage: per block and ensemble
   tbb::enumerable_thread_specific<ThreadSums> sums;
   std::unique_ptr<tbb::task_arena> arena;
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
@@ -86,7 +97,96 @@ struct SpbrStreamRenderer::Impl {
   void Run(F&& f) {
     if (arena) arena->execute(f); else f();
   }
+
+  // Stages points [0, n) of the stream from next_index on, one copy each, for the resident
+  // ensembles, by parallel blocks: decode(first, count, g) calls g(i, position, rgb) for points
+  // [first, first + count) in order (the position in the render frame). Each ensemble's points
+  // keep the stream's order, as a serial pass would stage them. Throws InputError for the first
+  // NaN or infinite position.
+  template <typename Decode>
+  void Stage(size_t n, Decode&& decode);
+  // Draws the staged points, ensembles in parallel.
+  void Draw();
 };
+
+template <typename Decode>
+void SpbrStreamRenderer::Impl::Stage(size_t n, Decode&& decode) {
+  const int L = options.repeat_level;
+  const size_t K = static_cast<size_t>(last - first), blocks = (n + kStageBlock - 1) / kStageBlock;
+  const bool indices = options.point_size != 1.0;
+  if (n == 0) return;
+  slots.resize(n);
+  counts.assign(blocks * (K + 1), 0);  // per block, points per resident ensemble and the rest
+  Run([&] {
+    ParallelFor(size_t{0}, blocks, [&](size_t b) {
+      uint64_t* count = counts.data() + b * (K + 1);
+      for (size_t i = b * kStageBlock; i < std::min(n, (b + 1) * kStageBlock); ++i) {
+        const int e = EnsembleOf(options.seed, next_index + i, L);
+        const uint32_t k = e >= first && e < last ? static_cast<uint32_t>(e - first) : static_cast<uint32_t>(K);
+        slots[i] = k;
+        ++count[k];
+      }
+    });
+  });
+  // Each block's first place in each ensemble.
+  for (size_t k = 0; k < K; ++k) {
+    uint64_t at = 0;
+    for (size_t b = 0; b < blocks; ++b) {
+      const uint64_t c = counts[b * (K + 1) + k];
+      counts[b * (K + 1) + k] = at;
+      at += c;
+    }
+    staged[k].Resize(at, indices);
+    copies += at;
+  }
+  std::vector<uint64_t> bad(blocks, std::numeric_limits<uint64_t>::max());
+  Run([&] {
+    ParallelFor(size_t{0}, blocks, [&](size_t b) {
+      uint64_t* at = counts.data() + b * (K + 1);
+      const size_t begin = b * kStageBlock, m = std::min(n, begin + kStageBlock) - begin;
+      bool finite = true;
+      decode(begin, m, [&](size_t i, const Eigen::Vector3d& p, uint32_t rgb) {
+        if (!p.allFinite()) {
+          if (finite) bad[b] = next_index + i;
+          finite = false;
+        }
+        const uint32_t k = slots[i];
+        if (k == K) return;
+        Staged& s = staged[k];
+        const uint64_t j = at[k]++;
+        s.x[j] = static_cast<float>(p.x());
+        s.y[j] = static_cast<float>(p.y());
+        s.z[j] = static_cast<float>(p.z());
+        s.color[j] = rgb;
+        if (indices) s.index[j] = next_index + i;
+      });
+    });
+  });
+  const uint64_t first_bad = *std::min_element(bad.begin(), bad.end());
+  if (first_bad != std::numeric_limits<uint64_t>::max()) {
+    throw InputError("point " + std::to_string(first_bad) + " of the render input has a NaN or infinite coordinate");
+  }
+  next_index += n;
+}
+
+void SpbrStreamRenderer::Impl::Draw() {
+  Run([&] {
+    ParallelFor(0, last - first, [&](int k) {
+      Staged& s = staged[k];
+      if (s.x.empty()) return;
+      if (options.point_size == 1.0) {
+        SplatPoints(transform, projection, s.x.data(), s.y.data(), s.z.data(), s.color.data(), s.x.size(),
+                    &buffers[k]);
+      } else {
+        // Draw point by point so each keeps its own stream index for the size draw.
+        for (size_t i = 0; i < s.x.size(); ++i) {
+          SplatPointsSized(transform, projection, &s.x[i], &s.y[i], &s.z[i], &s.color[i], 1,
+                           {options.point_size, options.seed, s.index[i]}, &buffers[k]);
+        }
+      }
+    });
+  });
+}
 
 SpbrStreamRenderer::SpbrStreamRenderer(const SpbrStreamOptions& options, const Camera& camera,
                                        const LocalFrame& frame) {
@@ -113,9 +213,12 @@ void SpbrStreamRenderer::BeginPass(int pass) {
   m.last = std::min(m.options.repeat_level, m.first + m.per_pass);
   m.next_index = 0;
   m.buffers.resize(m.last - m.first);
-  for (BandBuffer& b : m.buffers) {
-    if (b.width != m.camera.width || b.rows != m.camera.height) b.Reset(m.camera.width, m.camera.height);
-  }
+  m.Run([&] {
+    ParallelFor(size_t{0}, m.buffers.size(), [&](size_t k) {  // fresh pages: faulting them in is most of it
+      BandBuffer& b = m.buffers[k];
+      if (b.width != m.camera.width || b.rows != m.camera.height) b.Reset(m.camera.width, m.camera.height);
+    });
+  });
   m.staged.resize(m.last - m.first);
 }
 
@@ -124,15 +227,26 @@ void SpbrStreamRenderer::Add(const PointCloud& chunk) {
   CANDI_CHECK(m.pass >= 0) << "Add before BeginPass";
   const Eigen::Vector3d shift = chunk.frame.origin - m.frame.origin;
   const ScalarField* mult = m.options.use_multiplicity ? chunk.FindScalar(kMultiplicityField) : nullptr;
-  const int L = m.options.repeat_level;
+  const uint32_t fallback = PackColor(m.options.default_color);
   for (Staged& s : m.staged) s.Clear();
+  if (!mult) {
+    m.Stage(chunk.size(), [&](size_t first, size_t count, auto&& g) {
+      for (size_t i = first; i < first + count; ++i) {
+        g(i, chunk.positions[i] + shift, chunk.schema.colors ? PackColor(chunk.colors[i]) : fallback);
+      }
+    });
+    m.Draw();
+    return;
+  }
+  // Points with multiplicities: m copies in m ensembles, staged serially.
+  const int L = m.options.repeat_level;
   for (size_t i = 0; i < chunk.size(); ++i) {
     const uint64_t index = m.next_index + i;
     const Eigen::Vector3d p = chunk.positions[i] + shift;
     if (!p.allFinite()) {
       throw InputError("point " + std::to_string(index) + " of the render input has a NaN or infinite coordinate");
     }
-    const int copies = mult ? static_cast<int>(std::clamp(std::round(mult->Get(i)), 0.0, double(L))) : 1;
+    const int copies = static_cast<int>(std::clamp(std::round(mult->Get(i)), 0.0, double(L)));
     ForEachEnsemble(m.options.seed, index, copies, L, [&](int e) {
       if (e < m.first || e >= m.last) return;
       Staged& s = m.staged[e - m.first];
@@ -144,23 +258,22 @@ void SpbrStreamRenderer::Add(const PointCloud& chunk) {
     });
   }
   m.next_index += chunk.size();
-  m.Run([&] {
-    ParallelFor(0, m.last - m.first, [&](int k) {
-      Staged& s = m.staged[k];
-      if (s.x.empty()) return;
-      if (m.options.point_size == 1.0) {
-        SplatPoints(m.transform, m.projection, s.x.data(), s.y.data(), s.z.data(), s.color.data(),
-                    s.x.size(), &m.buffers[k]);
-      } else {
-        // Draw point by point so each keeps its own stream index for the size draw.
-        for (size_t i = 0; i < s.x.size(); ++i) {
-          SplatPointsSized(m.transform, m.projection, &s.x[i], &s.y[i], &s.z[i], &s.color[i], 1,
-                           {m.options.point_size, m.options.seed, s.index[i]}, &m.buffers[k]);
-        }
-      }
-    });
-  });
   for (const Staged& s : m.staged) m.copies += s.x.size();
+  m.Draw();
+}
+
+void SpbrStreamRenderer::AddRecords(const uint8_t* records, const io::PointRecordLayout& layout,
+                                    const Eigen::Vector3d& origin, size_t n) {
+  Impl& m = *impl_;
+  CANDI_CHECK(m.pass >= 0) << "AddRecords before BeginPass";
+  const Eigen::Vector3d shift = origin - m.frame.origin;
+  const uint32_t fallback = PackColor(m.options.default_color);
+  for (Staged& s : m.staged) s.Clear();
+  m.Stage(n, [&](size_t first, size_t count, auto&& g) {
+    io::ForEachRecord(layout, records + first * layout.stride, count, fallback,
+                      [&](size_t i, const Eigen::Vector3d& p, uint32_t rgb) { g(first + i, p + shift, rgb); });
+  });
+  m.Draw();
 }
 
 void SpbrStreamRenderer::EndPass() {

@@ -1,6 +1,8 @@
 // SPBR of points that stream through in chunks: the renderer holds frame buffers and a bounded
 // chunk, never the cloud.
 //
+// Points are staged for the resident ensembles by parallel blocks (each ensemble's points in the
+// stream's order), then each ensemble is drawn by one thread.
 // Ensembles are assigned exactly as in SplatCloud (a seeded hash of each point's index in the
 // stream, m copies in m distinct ensembles). A pass keeps K ensembles' z-buffers resident (K from
 // the memory budget: 8 bytes a pixel each) and the caller feeds every point once per pass; with
@@ -16,6 +18,7 @@
 
 #include "core/local_frame.h"
 #include "core/point_cloud.h"
+#include "io/point_file.h"
 #include "render/camera.h"
 #include "render/spbr.h"
 
@@ -42,6 +45,11 @@ class SpbrStreamRenderer {
   int ensembles_per_pass() const;
   void BeginPass(int pass);    // points are numbered from 0 again
   void Add(const PointCloud& chunk);  // throws InputError for NaN positions
+  // Adds n point records of `layout` at `records` (io/point_records.h: a file read in place),
+  // their positions in the frame whose origin is `origin` (the reader's info().frame): the same
+  // image as Add() of the chunks the reader gives, without them. Throws InputError for NaN.
+  void AddRecords(const uint8_t* records, const io::PointRecordLayout& layout, const Eigen::Vector3d& origin,
+                  size_t n);
   void EndPass();
   SpbrResult Finish();         // after the last EndPass
 

@@ -6,8 +6,11 @@
 #include <limits>
 
 #include "core/check.h"
+#include "core/mapped_file.h"
+#include "io/point_io.h"
 #include "render/splat_cloud.h"
 #include "render/synthetic_scene.h"
+#include "tests/util/test_util.h"
 
 namespace candi::render {
 namespace {
@@ -73,6 +76,84 @@ TEST(SpbrStream, SameImageForAnyChunkSizeThreadCountAndBudget) {
   EXPECT_FALSE(base.sums == other_seed.sums);
 }
 
+// The points with a multiplicity of one each: staged by the serial path for multiplicities,
+// point by point, where points without one are staged by parallel blocks.
+TEST(SpbrStream, ParallelStagingGivesTheSerialImage) {
+  const Scene s = MakeScene(70000);
+  Scene ones = s;
+  ones.cloud.AddScalarField(kMultiplicityField);
+  for (size_t i = 0; i < ones.cloud.size(); ++i) ones.cloud.FindScalar(kMultiplicityField)->Set(i, 1.0);
+  const SpbrResult serial = Stream(ones, 16, 5, 70000, 1, uint64_t{1} << 30);
+  for (int threads : {1, 2}) {
+    for (size_t chunk : {size_t{70000}, size_t{16385}, size_t{999}}) {
+      EXPECT_TRUE(Stream(s, 16, 5, chunk, threads, uint64_t{1} << 30).sums == serial.sums)
+          << threads << " threads, chunks of " << chunk;
+    }
+  }
+  EXPECT_TRUE(Stream(s, 16, 5, 4000, 2, 3 * kOneFrame).sums == serial.sums) << "6 passes";
+}
+
+// The image of a file's records read in place (AddRecords) is the image of its reader's chunks,
+// for float and double PLY and for LAS, on 1 and 2 threads, in one pass or several, with
+// one-pixel points and larger ones.
+TEST(SpbrStream, RecordsInPlaceGiveTheImageOfTheReadersChunks) {
+  candi::testing::TempDir dir;
+  Scene s = MakeScene(50000);
+  s.cloud.frame.origin += Eigen::Vector3d(416000, 9168000, 200);  // survey coordinates
+  s.frame.origin += Eigen::Vector3d(416000, 9168000, 200);
+  struct File {
+    std::string name;
+    io::PositionPrecision precision;
+    io::PointRecordLayout::Coordinates coordinates;
+  };
+  using C = io::PointRecordLayout::Coordinates;
+  for (const File& f : {File{"f.ply", io::PositionPrecision::kFloat32, C::kFloat32},
+                        File{"d.ply", io::PositionPrecision::kFloat64, C::kFloat64},
+                        File{"p.las", io::PositionPrecision::kAuto, C::kLasInt32}}) {
+    const std::string path = dir.File(f.name);
+    io::PointWriteOptions w;
+    w.precision = f.precision;
+    io::WritePointCloud(path, s.cloud, w);
+    io::PointReadOptions read;
+    read.scalar_fields = false;
+    const std::optional<io::PointRecordLayout> layout = io::OpenPointReader(path, read)->record_layout();
+    ASSERT_TRUE(layout) << f.name;
+    EXPECT_EQ(layout->coordinates, f.coordinates) << f.name;
+    for (double size : {1.0, 2.5}) {
+      for (int threads : {1, 2}) {
+        for (uint64_t budget : {uint64_t{1} << 30, 3 * kOneFrame}) {
+          SpbrStreamOptions o;
+          o.repeat_level = 8;
+          o.seed = 11;
+          o.threads = threads;
+          o.point_size = size;
+          o.memory_budget = budget;
+          SpbrStreamRenderer chunks(o, s.camera, s.frame), records(o, s.camera, s.frame);
+          const MappedFile map(path);
+          for (int pass = 0; pass < chunks.passes(); ++pass) {
+            chunks.BeginPass(pass);
+            auto r = io::OpenPointReader(path, read);
+            PointCloud chunk;
+            while (r->Read(7000, &chunk) > 0) chunks.Add(chunk);
+            chunks.EndPass();
+            records.BeginPass(pass);
+            for (uint64_t at = 0; at < layout->count; at += 12345) {
+              const size_t n = static_cast<size_t>(std::min<uint64_t>(12345, layout->count - at));
+              records.AddRecords(map.data() + layout->first_byte + at * layout->stride, *layout, r->info().frame.origin, n);
+            }
+            records.EndPass();
+          }
+          const SpbrResult a = chunks.Finish(), b = records.Finish();
+          EXPECT_EQ(a.copies, 50000u);
+          EXPECT_EQ(b.copies, 50000u);
+          EXPECT_TRUE(a.sums == b.sums) << f.name << ", point size " << size << ", " << threads << " threads, budget "
+                                        << budget;
+        }
+      }
+    }
+  }
+}
+
 SpbrResult InMemory(const Scene& s, int L, uint64_t seed) {
   SplatCloudOptions build;
   build.repeat_level = L;
@@ -115,6 +196,25 @@ TEST(SpbrStream, NanPositionsAreAnErrorAndEmptyChunksAreFine) {
     FAIL() << "NaN accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("500"), std::string::npos) << e.what();
+  }
+  // Records in place: the first bad point of the stream, whichever block finds it.
+  std::vector<float> records(3 * 40000, 1.0f);
+  records[3 * 33333 + 2] = std::numeric_limits<float>::infinity();
+  records[3 * 35000] = std::numeric_limits<float>::quiet_NaN();
+  io::PointRecordLayout layout;
+  layout.stride = 12;
+  layout.xyz[1] = 4, layout.xyz[2] = 8;
+  layout.count = 40000;
+  SpbrStreamOptions two = o;
+  two.threads = 2;
+  SpbrStreamRenderer in_place(two, s.camera, s.frame);
+  in_place.BeginPass(0);
+  in_place.AddRecords(reinterpret_cast<const uint8_t*>(records.data()), layout, s.frame.origin, 100);
+  try {
+    in_place.AddRecords(reinterpret_cast<const uint8_t*>(records.data()), layout, s.frame.origin, 40000);
+    FAIL() << "infinity accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("point 33433 "), std::string::npos) << e.what();  // 100 came first
   }
 }
 

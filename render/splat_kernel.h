@@ -17,6 +17,7 @@
 #include "core/clip.h"
 #include "core/rng.h"
 #include "render/frame.h"
+#include "render/splat_cloud.h"
 
 namespace candi::render {
 
@@ -42,7 +43,8 @@ struct KernelProjection {
 struct BandBuffer {
   int width = 0, rows = 0;
   std::vector<uint64_t> keys;     // width * rows + 1; the last is the spare slot
-  std::vector<uint32_t> filled;   // pixels that went from empty to drawn
+  UninitVector<uint32_t> filled;  // pixels that went from empty to drawn (no zero fill: pages
+                                  // a stream render's ensembles never reach stay unmapped)
   size_t filled_count = 0;
   void Reset(int w, int r);
   uint32_t spare() const { return static_cast<uint32_t>(width * rows); }

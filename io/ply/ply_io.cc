@@ -272,11 +272,17 @@ void PlyReader::SetRecordLayout() {
   layout.first_byte = stream_->offset();
   layout.stride = vertex.FixedSize();
   layout.count = info_.count;
+  int axes = 0;
   for (const Column& c : columns_) {
     const int axis = c.role == Role::kX ? 0 : c.role == Role::kY ? 1 : c.role == Role::kZ ? 2 : -1;
     const int channel = c.role == Role::kR ? 0 : c.role == Role::kG ? 1 : c.role == Role::kB ? 2 : -1;
     if (axis >= 0) {
-      if (c.type != Type::kFloat32) return;
+      if (c.type != Type::kFloat32 && c.type != Type::kFloat64) return;
+      const auto coordinates = c.type == Type::kFloat32 ? PointRecordLayout::Coordinates::kFloat32
+                                                        : PointRecordLayout::Coordinates::kFloat64;
+      if (axes > 0 && coordinates != layout.coordinates) return;  // x, y and z of one type
+      layout.coordinates = coordinates;
+      ++axes;
       layout.xyz[axis] = c.offset;
     }
     if (channel >= 0) {
