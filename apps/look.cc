@@ -9,8 +9,12 @@
 #include <exception>
 #include <filesystem>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
+#include <utility>
 
 #include "apps/arg_parse.h"
 #include "apps/commands.h"
@@ -290,6 +294,7 @@ struct ViewArgs {
   std::string columns;              // XYZ/PTS inputs
   ClipArgs clip;                    // the clipping the page starts with
   FieldArgs field;                  // point files: coloured by a field
+  uint64_t preview = 10000000;      // point files of more points: a preview of this many first
 };
 
 // The source to show: a build directory or an archive opened, or point files packed into a
@@ -305,7 +310,10 @@ struct OpenedSource {
   }
 };
 
-void OpenSource(const ViewArgs& a, const render::Orientation& orientation, OpenedSource* opened) {
+// Opens the source; for point files of more than twice `a.preview` points whose points are
+// records (and no colouring by a field, `allow_preview`), a preview's archive, and returns true:
+// the caller then packs every point (PackWhole) while the preview is served.
+bool OpenSource(const ViewArgs& a, const render::Orientation& orientation, bool allow_preview, OpenedSource* opened) {
   std::error_code ec;
   const FieldColouring colour_by = ParseFieldColouring(a.field);
   if (a.inputs.size() == 1 && fs::is_directory(a.inputs[0], ec)) {
@@ -314,16 +322,83 @@ void OpenSource(const ViewArgs& a, const render::Orientation& orientation, Opene
                                   " is an archive or a build, which holds the points' colours, not their fields");
     }
     opened->source = view::OpenViewerSource(a.inputs[0], orientation);
-    return;
+    return false;
   }
   for (const std::string& in : a.inputs) {
     if (fs::is_directory(in, ec)) throw std::invalid_argument(in + " is a directory: open it alone");
+  }
+  if (allow_preview && a.preview > 0 && !colour_by.active()) {
+    ConsoleProgress progress("view: packing a preview of " + std::to_string(a.preview) + " points");
+    std::optional<view::ViewerSource> preview =
+        view::PackPreviewSource(a.inputs, a.columns, orientation, a.preview, progress.Callback());
+    if (preview) {
+      progress.Finish();
+      opened->source = std::move(*preview);
+      opened->temporary = RegisterTempPath(opened->source.temporary_dir);
+      return true;
+    }
   }
   ConsoleProgress progress("view: packing " + std::to_string(a.inputs.size()) + " point file(s)");
   opened->source = view::PackViewerSource(a.inputs, a.columns, orientation, progress.Callback(), colour_by);
   progress.Finish();
   opened->temporary = RegisterTempPath(opened->source.temporary_dir);  // removed on Ctrl-C, or on exit
+  return false;
 }
+
+// What the viewer draws from now (sections read it on their own thread): the preview's archive,
+// then the whole one.
+struct Current {
+  std::mutex mutex;
+  const view::ViewerSource* source = nullptr;
+  const render::Archive* archive = nullptr;
+  std::pair<const view::ViewerSource*, const render::Archive*> Get() {
+    std::lock_guard<std::mutex> lock(mutex);
+    return {source, archive};
+  }
+  void Set(const view::ViewerSource* s, const render::Archive* a) {
+    std::lock_guard<std::mutex> lock(mutex);
+    source = s, archive = a;
+  }
+};
+
+// Behind a preview: every point packed, on a thread of its own, then served instead of the
+// preview; a failure stops the server and is rethrown by Finish().
+class PackWhole {
+ public:
+  PackWhole(const ViewArgs& a, const render::Orientation& orientation, const ClipRegion& clip, uint64_t points,
+            view::Server* server, Current* current)
+      : thread_([=, &a] {
+          try {
+            ConsoleProgress progress("view: packing all " + std::to_string(points) + " points");
+            whole_.source = view::PackViewerSource(a.inputs, a.columns, orientation, progress.Callback());
+            progress.Finish();
+            whole_.temporary = RegisterTempPath(whole_.source.temporary_dir);
+            whole_.source.settings.clip = clip;
+            archive_ = std::make_unique<render::Archive>(whole_.source.archive_dir);
+            current->Set(&whole_.source, archive_.get());
+            server->Replace(whole_.source, *archive_, view::LocalRangeRenderer(*archive_));
+            LogInfo("view: all " + std::to_string(archive_->manifest().points) + " points packed: the pages show them");
+          } catch (...) {
+            error_ = std::current_exception();
+            server->Stop();
+          }
+        }) {}
+  ~PackWhole() { Join(); }
+  void Join() {
+    if (thread_.joinable()) thread_.join();
+  }
+  // Waits for the packing; rethrows its error.
+  void Finish() {
+    Join();
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  OpenedSource whole_;
+  std::unique_ptr<render::Archive> archive_;
+  std::exception_ptr error_;
+  std::thread thread_;  // last: starts once the members above exist
+};
 
 int RunView(const ViewArgs& a) {
   a.server.Check();  // before the source is opened (or packed)
@@ -334,10 +409,13 @@ int RunView(const ViewArgs& a) {
     return kOk;
   }
   OpenedSource opened;
-  OpenSource(a, ParseOrientation(a.orientation), &opened);
+  const render::Orientation orientation = ParseOrientation(a.orientation);
+  const bool previewed = OpenSource(a, orientation, /*allow_preview=*/!session, &opened);
   view::ViewerSource& source = opened.source;
   source.settings.clip = ParseClip(a.clip.box, a.clip.planes);
   const render::Archive archive(source.archive_dir);
+  Current current;
+  current.Set(&source, &archive);
   view::RangeRenderer renderer = view::LocalRangeRenderer(archive);
   std::string stop = render::mpi::kStopRequest;
   struct StopRanks {  // however rank 0 leaves, the other ranks stop serving
@@ -363,20 +441,23 @@ int RunView(const ViewArgs& a) {
   }
   view::ServerOptions options = a.server;
   options.log = [](const std::string& line) { LogInfo(line); };
-  options.section = [&source, &archive, threads = a.server.threads](uint64_t seq, const view::SectionRequest& r,
-                                                                     const view::ViewState& state,
-                                                                     const view::SectionControl& control) {
+  options.section = [&current, threads = a.server.threads](uint64_t seq, const view::SectionRequest& r,
+                                                             const view::ViewState& state,
+                                                             const view::SectionControl& control) {
     pipeline::SectionOptions o;
     o.threads = threads;
     o.max_points = control.max_points;
     o.checkpoint = control.checkpoint;
-    return pipeline::ExportViewerSection(source.archive_dir, archive.manifest(), o, seq, r, state);
+    const auto [drawn, drawn_archive] = current.Get();
+    return pipeline::ExportViewerSection(drawn->archive_dir, drawn_archive->manifest(), o, seq, r, state);
   };
   if (a.server.host != "127.0.0.1" && a.server.host != "localhost" && a.server.host != "::1") {
     LogWarning("serving on " + a.server.host + ": anyone who can reach this machine and has the address with its "
                "token sees the data; the connection is not encrypted");
   }
   // The default port, or the next free one (as Jupyter does); an explicit port or 0 as given.
+  // Declared before the server: the whole archive, once served, must outlive it.
+  std::optional<PackWhole> whole;
   std::unique_ptr<view::Server> server;
   const int tries = a.port == 8765 ? 20 : 1;
   for (int i = 0; i < tries && !server; ++i) {
@@ -388,10 +469,21 @@ int RunView(const ViewArgs& a) {
     }
   }
   LogInfo("view: " + source.title + " (" + source.kind + ", " + std::to_string(archive.manifest().points) +
-          " points in " + std::to_string(archive.manifest().chunks.size()) + " chunks); Ctrl-C stops");
+          " points in " + std::to_string(archive.manifest().chunks.size()) + " chunks" +
+          (previewed ? ": a preview, one point in " + std::to_string(source.preview_every) + " of " +
+                           std::to_string(source.preview_points) + ", until all are packed"
+                     : "") +
+          "); Ctrl-C stops");
   std::printf("candi view: %s\n", server->Url().c_str());
   std::fflush(stdout);
-  server->Run();
+  if (previewed) whole.emplace(a, orientation, source.settings.clip, source.preview_points, server.get(), &current);
+  try {
+    server->Run();
+  } catch (...) {
+    if (whole) whole->Join();  // before the server goes
+    throw;
+  }
+  if (whole) whole->Finish();  // a failure to pack every point: its error
   return kOk;
 }
 
@@ -416,6 +508,8 @@ void AddView(Command& root) {
   c.Option("--section-seconds", a.server.section_seconds, "A section export's time limit, s (default 120)");
   c.Option("--section-max-points", a.server.section_max_points, "The most points an exported slab may hold "
            "(default 20000000)");
+  c.Option("--preview", a.preview, "Point files of more than twice this many points (binary PLY, LAS): a preview of "
+           "this many is shown first, the whole replacing it once packed (0: none; default 10000000)");
   AddClip(c, a.clip);
   AddFieldColouring(c, a.field);
   c.Run([&a] { return RunView(a); });

@@ -155,13 +155,27 @@ struct ExportJob {
 
 }  // namespace
 
+namespace {
+// The message that gives a page the scene of an archive that replaced the one it loaded.
+std::string SceneMessage(const std::string& scene_json) { return "{\"type\":\"scene\",\"scene\":" + scene_json + "}"; }
+
+// What the pages are drawn from: an archive, its source and its renderer (Server::Replace).
+struct Drawn {
+  const ViewerSource* source = nullptr;
+  const render::Archive* archive = nullptr;
+  RangeRenderer renderer;
+};
+}  // namespace
+
 struct Server::Impl {
   ServerOptions options;
-  const ViewerSource& source;
-  const render::Archive& archive;
-  RangeRenderer renderer;
+  // Render thread only (it applies a Replace between steps).
+  Drawn drawn;
+  const render::Archive& archive() const { return *drawn.archive; }
+  std::optional<Drawn> replacement;   // under `mutex`: to be applied by the render thread
+  uint64_t replacements = 0;          // under `mutex`: replacements applied
   std::string token;
-  std::string scene_json;
+  std::string scene_json;             // under `mutex` once the server runs
   std::optional<FieldLegend> legend;  // points coloured by a field: picks read its value back
   // Caps: pages reserved from their accepted upgrade, accumulation pixels of the pages' last
   // views, sockets open. Raised on the I/O thread; lowered wherever a session ends (also when
@@ -190,7 +204,15 @@ struct Server::Impl {
       previews{0}, steps_preempted{0}, sections{0}, sections_cancelled{0}, pages_closed_unread{0};
 
   Impl(const ServerOptions& o, const ViewerSource& s, const render::Archive& a, RangeRenderer r)
-      : options(o), source(s), archive(a), renderer(std::move(r)) {}
+      : options(o), drawn{&s, &a, std::move(r)} {}
+
+  std::string SceneJson() {
+    std::lock_guard<std::mutex> lock(mutex);
+    return scene_json;
+  }
+  // Render thread: draws from the replacement from now on; every page's image starts again
+  // with its latest view, and each open page gets the new scene.
+  void ApplyReplacement(const std::vector<std::shared_ptr<Client>>& pages);
 
   void Log(const std::string& line) {
     if (options.log) options.log(line);
@@ -264,12 +286,15 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     if (ec) return;  // the reservation ends with this session
     client_ = std::make_shared<Client>();
     client_->session = weak_from_this();
+    std::string scene;  // a page that may have loaded the scene before a Replace: the current one
     {
       std::lock_guard<std::mutex> lock(server_->mutex);
       server_->clients.push_back(client_);
+      if (server_->replacements > 0) scene = SceneMessage(server_->scene_json);
     }
     ++server_->pages;
     ++server_->open_pages;
+    if (!scene.empty()) QueueText(std::move(scene));
     Read();
   }
 
@@ -539,7 +564,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     Response r{http::status::ok, version};
     if (path == "/api/scene") {
       r.set(http::field::content_type, "application/json");
-      r.body() = server_->scene_json;
+      r.body() = server_->SceneJson();
     } else {
       const WebAsset* asset = FindWebAsset(path == "/" ? "/index.html" : path);
       if (asset == nullptr) return refuse(http::status::not_found, "not found");
@@ -636,7 +661,7 @@ std::string Server::Impl::LoggedPath(std::string_view target) const {
 }
 
 std::string Server::Impl::Pick(const ClientMessage& pick, const ViewState& state) {
-  const Eigen::Vector3d& origin = archive.manifest().frame.origin;
+  const Eigen::Vector3d& origin = archive().manifest().frame.origin;
   render::Camera local = state.camera;
   local.eye -= origin;
   local.target -= origin;
@@ -645,7 +670,7 @@ std::string Server::Impl::Pick(const ClientMessage& pick, const ViewState& state
   o.seed = state.settings.seed;
   o.layer_fraction = state.settings.layer_fraction;
   o.clip = state.settings.clip.ToLocal(origin);
-  const PickResult r = PickPoint(archive, local, pick.x, pick.y, o);
+  const PickResult r = PickPoint(archive(), local, pick.x, pick.y, o);
   std::vector<PickHitWorld> hits;
   for (const PickHit& h : r.hits) {
     PickHitWorld w;
@@ -775,7 +800,7 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
     return true;
   }
   if (restart) {
-    if (!c->image) c->image = std::make_unique<ProgressiveImage>(archive, renderer, options.threads);
+    if (!c->image) c->image = std::make_unique<ProgressiveImage>(archive(), drawn.renderer, options.threads);
     if (c->image->ensembles() > 0 && !c->image->converged()) ++images_abandoned;
     try {
       c->image->Start(*restart);
@@ -852,10 +877,24 @@ bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
   return true;
 }
 
+void Server::Impl::ApplyReplacement(const std::vector<std::shared_ptr<Client>>& pages) {
+  const std::string message = SceneMessage(SceneJson());
+  for (const std::shared_ptr<Client>& c : pages) {
+    c->image.reset();  // drawn from the archive replaced
+    std::lock_guard<std::mutex> lock(c->mutex);
+    c->image_generation = ~uint64_t{0};  // != wanted_generation: the latest view is drawn again
+    c->last_state.reset();               // picks wait for it
+    if (std::shared_ptr<WsSession> session = c->session.lock()) {
+      net::post(io, [session, message] { session->QueueText(message); });
+    }
+  }
+}
+
 void Server::Impl::RenderLoop() {
   size_t turn = 0;
   for (;;) {
     std::vector<std::shared_ptr<Client>> snapshot;
+    bool replaced = false;
     {
       std::unique_lock<std::mutex> lock(mutex);
       if (stopping) return;
@@ -864,7 +903,16 @@ void Server::Impl::RenderLoop() {
         return c->closed;
       });
       snapshot.assign(clients.begin(), clients.end());
+      if (replacement) {
+        drawn = std::move(*replacement);
+        replacement.reset();
+        scene_json = drawn.source->ToJson(drawn.archive->manifest());
+        legend = drawn.source->legend;
+        ++replacements;
+        replaced = true;
+      }
     }
+    if (replaced) ApplyReplacement(snapshot);
     // Round robin: every page in turn, starting after the one served last.
     bool worked = false;
     for (size_t i = 0; i < snapshot.size() && !worked; ++i) {
@@ -908,7 +956,7 @@ Server::Server(const ServerOptions& options, const ViewerSource& source, const r
   options.Check();
   Impl& s = *impl_;
   s.token = options.token.empty() ? RandomToken() : options.token;
-  s.scene_json = source.ToJson(archive.manifest());
+  s.scene_json = source.ToJson(archive.manifest());  // before any thread reads it
   s.legend = source.legend;
   boost::system::error_code ec;
   const net::ip::address address = net::ip::make_address(options.host == "localhost" ? "127.0.0.1" : options.host, ec);
@@ -944,6 +992,15 @@ std::string Server::Url() const {
 }
 
 void Server::Run() { impl_->io.run(); }
+
+void Server::Replace(const ViewerSource& source, const render::Archive& archive, RangeRenderer renderer) {
+  Impl& s = *impl_;
+  {
+    std::lock_guard<std::mutex> lock(s.mutex);
+    s.replacement = Drawn{&source, &archive, std::move(renderer)};
+  }
+  s.Wake();
+}
 
 void Server::Stop() {
   {

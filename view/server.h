@@ -104,6 +104,13 @@ class Server {
   std::string Url() const;
   // Serves until Stop() (from any thread).
   void Run();
+  // Draws from `archive` (described by `source`) instead, from the render thread's next turn
+  // (any thread may call it): every open page's image starts again with its latest view, picks
+  // wait for it, /api/scene answers the new scene and each open page gets it as
+  // {"type": "scene", "scene": {...}}. candi view FILE shows a preview's archive first, then
+  // the whole one. Both archives and sources must outlive the server (a section exporter may
+  // still read the first).
+  void Replace(const ViewerSource& source, const render::Archive& archive, RangeRenderer renderer);
   void Stop();
   ServerStats stats() const;
 

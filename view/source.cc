@@ -6,12 +6,17 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <stdexcept>
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
+#include "core/mapped_file.h"
+#include "core/parallel.h"
 #include "io/point_io.h"
+#include "io/point_records.h"
 #include "render/archive_pack.h"
 #include "render/view_json.h"
 
@@ -224,6 +229,7 @@ std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
               {"clip", ClipPlaneArrays(settings.clip)}}}};
   if (!provenance_json.empty()) s["provenance"] = json::parse(provenance_json);
   if (legend) s["legend"] = LegendJson(*legend);
+  if (preview_every > 0) s["preview"] = {{"every", preview_every}, {"points", preview_points}};
   return s.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
@@ -252,24 +258,112 @@ ViewerSource OpenViewerSource(const std::string& path, const render::Orientation
   return source;
 }
 
-ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,
-                              const render::Orientation& orientation, const ProgressCallback& progress,
-                              const FieldColouring& colour_by) {
+namespace {
+
+// A fresh temporary directory for an archive (its path + "/archive"), removed again when `pack`
+// throws.
+ViewerSource PackIntoTemporary(const std::vector<std::string>& files, const render::Orientation& orientation,
+                               const std::function<void(const std::string& archive_dir)>& pack) {
   std::string tmpl = (fs::temp_directory_path() / "candi-view-XXXXXX").string();
   if (mkdtemp(tmpl.data()) == nullptr) throw InputError(tmpl, "", "cannot create a temporary directory");
   const std::string archive_dir = tmpl + "/archive";
+  ViewerSource source;
   try {
-    render::PackFiles(render::PackOptions(), files, columns, archive_dir, progress, colour_by);
+    pack(archive_dir);
+    source = OpenViewerSource(archive_dir, orientation);
   } catch (...) {
     std::error_code ec;
     fs::remove_all(tmpl, ec);
     throw;
   }
-  ViewerSource source = OpenViewerSource(archive_dir, orientation);
   source.kind = "points";
   source.title = fs::path(files.front()).filename().string() + (files.size() > 1 ? " + " + std::to_string(files.size() - 1) : "");
   source.temporary_dir = tmpl;
   return source;
+}
+
+// Every `every`-th record of a file of records (from the first), `piece` points a call, as the
+// file's reader would give them.
+class SampledRecords {
+ public:
+  SampledRecords(const std::string& path, const io::PointRecordLayout& layout, const LocalFrame& frame, uint64_t every)
+      : map_(std::make_shared<MappedFile>(path)), layout_(layout), frame_(frame), every_(every) {
+    if (!io::HoldsRecords(*map_, layout_)) throw InputError(path, "", "the file does not hold its points");
+    layout_.stride *= every;  // every k-th record: a layout of records k times as long
+    layout_.count = (layout.count + every - 1) / every;
+  }
+  uint64_t count() const { return layout_.count; }
+  PointCloud operator()(uint64_t first, uint64_t n) const {
+    PointCloud c;
+    c.schema.colors = layout_.rgb[0] >= 0;
+    c.schema.position_type = ScalarType::kFloat64;
+    c.SetSchema(c.schema);
+    c.frame = frame_;
+    c.Resize(n);
+    const uint8_t* records = map_->data() + layout_.first_byte + first * layout_.stride;
+    constexpr size_t kBlock = size_t{1} << 14;
+    ParallelFor(size_t{0}, (n + kBlock - 1) / kBlock, [&](size_t b) {
+      const size_t at = b * kBlock, m = std::min<size_t>(kBlock, n - at);
+      io::ForEachRecord(layout_, records + at * layout_.stride, m, 0, [&](size_t i, const Eigen::Vector3d& p, uint32_t rgb) {
+        c.positions[at + i] = p;
+        if (c.schema.colors) c.colors[at + i] = {static_cast<uint8_t>(rgb >> 16), static_cast<uint8_t>(rgb >> 8), static_cast<uint8_t>(rgb)};
+      });
+    });
+    return c;
+  }
+
+ private:
+  std::shared_ptr<MappedFile> map_;
+  io::PointRecordLayout layout_;
+  LocalFrame frame_;
+  uint64_t every_;
+};
+
+}  // namespace
+
+std::optional<ViewerSource> PackPreviewSource(const std::vector<std::string>& files, const std::string& columns,
+                                              const render::Orientation& orientation, uint64_t points,
+                                              const ProgressCallback& progress) {
+  CANDI_CHECK(points > 0) << "PackPreviewSource: points 0";
+  io::PointReadOptions read;
+  read.columns = columns;
+  read.scalar_fields = false;
+  uint64_t total = 0;
+  std::vector<io::PointRecordLayout> layouts;
+  std::vector<LocalFrame> frames;
+  for (const std::string& f : files) {
+    const auto reader = io::OpenPointReader(f, read);
+    const std::optional<io::PointRecordLayout> layout = reader->record_layout();
+    if (!layout) return std::nullopt;
+    layouts.push_back(*layout);
+    frames.push_back(reader->info().frame);
+    total += layout->count;
+  }
+  if (total <= 2 * points) return std::nullopt;
+  const uint64_t every = (total + points - 1) / points;
+  ViewerSource source = PackIntoTemporary(files, orientation, [&](const std::string& archive_dir) {
+    std::vector<render::PackInput> inputs;
+    for (size_t k = 0; k < files.size(); ++k) {
+      const SampledRecords sampled(files[k], layouts[k], frames[k], every);
+      constexpr uint64_t kPiece = uint64_t{1} << 20;
+      render::PackInput in = render::PackInputFromGenerator(
+          files[k], sampled.count(), kPiece, [sampled](uint64_t piece, uint64_t n) { return sampled(piece * kPiece, n); });
+      in.layer = fs::path(files[k]).stem().string();  // as PackInputFromFile names it
+      inputs.push_back(std::move(in));
+    }
+    render::PackArchive(render::PackOptions(), inputs, archive_dir, progress);
+  });
+  source.preview_every = every;
+  source.preview_points = total;
+  return source;
+}
+
+ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,
+                              const render::Orientation& orientation, const ProgressCallback& progress,
+                              const FieldColouring& colour_by) {
+  return PackIntoTemporary(files, orientation, [&](const std::string& archive_dir) {
+    render::PackFiles(render::PackOptions(), files, columns, archive_dir, progress, colour_by);
+  });
 }
 
 }  // namespace candi::view

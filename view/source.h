@@ -49,6 +49,9 @@ struct ViewerSource {
   // Points packed coloured by a scalar field (candi pack or view --colour-by; the archive's
   // manifest records it): the colouring, for the page's legend and the values of picks.
   std::optional<FieldLegend> legend;
+  // A preview of point files (PackPreviewSource): one point in `preview_every` of the files'
+  // `preview_points` was packed; 0: every point.
+  uint64_t preview_every = 0, preview_points = 0;
   // The page's scene description (JSON): title, kind, layers, views, settings, first view,
   // bounds (world), origin, points, provenance (when known), the legend (when coloured).
   std::string ToJson(const render::ArchiveManifest& manifest) const;
@@ -56,6 +59,15 @@ struct ViewerSource {
 
 // Opens a build directory or an archive (InputError naming the file for anything malformed).
 ViewerSource OpenViewerSource(const std::string& path, const render::Orientation& orientation);
+// A preview of point files for a first frame in seconds: when every file's points are records
+// read in place (io/point_records.h: binary PLY, uncompressed LAS) and they hold more than twice
+// `points` together, one record in k of each (k = the total / `points`, rounded up; the first of
+// every k) packed into a fresh temporary directory, with the files' layers; else nullopt (the
+// files are packed whole at once). The scene says it is a preview ("preview": {"every": k,
+// "points": the files' total}).
+std::optional<ViewerSource> PackPreviewSource(const std::vector<std::string>& files, const std::string& columns,
+                                              const render::Orientation& orientation, uint64_t points,
+                                              const ProgressCallback& progress);
 // Packs point files into a fresh temporary directory; with `colour_by` active, the points
 // coloured by that field (one legend over all the files; InputError naming a file without it).
 ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,

@@ -355,6 +355,60 @@ class ViewInBrowser(ViewerPage):
         self.assertNotIn("token", self.browser.evaluate("location.href"))
 
 
+class ViewPreviewInBrowser(ViewerPage):
+    """`candi view FILE...` of more points than twice --preview: a preview (one point in k) is
+    served first, then the whole archive replaces it. Whenever the swap comes (before or after the
+    page opened), the page ends showing every point: the converged frame is candi render's of the
+    files packed whole by candi pack."""
+    POINTS = 60000
+
+    @classmethod
+    def open_viewer(cls):
+        run("foundation", os.path.join(SOURCE, "examples", "borobudur", "foundation.dxf"), "-o",
+            os.path.join(cls.dir, "foundation.ply"), "--count", str(cls.POINTS), "--no-self-intersection", "--split")
+        cls.files = [os.path.join(cls.dir, f) for f in sorted(os.listdir(cls.dir))
+                     if f.startswith("foundation_") and f.endswith(".ply")]
+        assert len(cls.files) == 4, cls.files
+        return Viewer(*cls.files, args=("--preview", "5000"))
+
+    def test_1_the_whole_archive_replaces_the_preview(self):
+        # The whole archive is served: the scene says so, and so does the page's title.
+        self.browser.wait_for("!document.getElementById('title').textContent.includes('preview')", HANG,
+                              "the title of the whole archive")
+        scene = self.viewer.scene()
+        self.assertNotIn("preview", scene)
+        self.assertEqual(scene["points"], self.POINTS)
+        self.assertIn(" %s points" % format(self.POINTS, ","), self.browser.evaluate(
+            "document.getElementById('title').textContent"))
+        # The page asks for an image again (a camera change after the swap) and it converges to
+        # candi render's image of the whole archive.
+        self.browser.evaluate("candiViewer.setSettings({repeat_level: 16})")
+        frame = self.wait_converged()
+        view = os.path.join(self.dir, "view.json")
+        with open(view, "w") as f:
+            f.write(self.browser.evaluate("candiViewer.viewJson()"))
+        settings = self.browser.evaluate("candiViewer.settings()")
+        archive = os.path.join(self.dir, "whole.archive")
+        run("pack", *self.files, "-o", archive)
+        reference = os.path.join(self.dir, "whole.png")
+        run("render", archive, "--view", view, "-L", str(settings["repeat_level"]), "--seed", str(settings["seed"]),
+            "--background", ",".join(str(c) for c in settings["background"]),
+            "--brightness", "auto" if settings["brightness"] == "auto" else str(settings["brightness"]), "-o", reference)
+        with open(reference, "rb") as f:
+            expected = devtools.decode_png(f.read())
+        sent = base64.b64decode(self.browser.evaluate("candiViewer.pngBase64()", await_promise=True))
+        self.assertEqual(devtools.decode_png(sent), expected, "the converged frame is not the whole archive's")
+        self.assertEqual(frame["ensembles"], settings["repeat_level"])
+        # The viewer said it served a preview first, and then every point.
+        deadline = time.time() + HANG
+        while not any("points packed: the pages show them" in line for line in self.viewer.stderr_lines):
+            self.assertLess(time.time(), deadline, "no line saying every point is shown")
+            time.sleep(0.1)
+        log = "".join(self.viewer.stderr_lines)
+        self.assertIn("a preview, one point in ", log)
+        self.assertIn("of %d, until all are packed" % self.POINTS, log)
+
+
 if __name__ == "__main__":
     if len(sys.argv) < 3:
         sys.exit("usage: view_browser_test.py CANDI SOURCE_DIR")

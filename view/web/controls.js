@@ -718,10 +718,24 @@ window.CandiPage = function (backend) {
     const [x, y] = pixelOf(e);
     annotations.forEach((a, i) => { const q = project(a.position); if (q && Math.hypot(q[0] - x, q[1] - y) < 10) openAnnotation(i); });
   });
+  function showTitle() {
+    const p = scene.preview;
+    $('title').textContent = scene.title + ' · ' + (p ? 'preview: 1 point in ' + p.every + ' of ' +
+      p.points.toLocaleString() + ' points, the rest packing' : scene.points.toLocaleString() + ' points');
+  }
   backend.load().then((s) => {
     scene = s;
     document.title = (document.body.classList.contains('site') ? '' : 'candi view · ') + s.title;
-    $('title').textContent = s.title + ' · ' + s.points.toLocaleString() + ' points';
+    showTitle();
+    // candi view FILE: the whole archive replaces a preview (the layers' counts change).
+    backend.rescene = (next) => {
+      scene.points = next.points;
+      scene.chunks = next.chunks;
+      scene.preview = next.preview;
+      next.layers.forEach((l, i) => { if (scene.layers[i] && scene.layers[i].name === l.name) scene.layers[i].points = l.points; });
+      showTitle();
+      buildLayers();
+    };
     settings = clone(s.settings);
     for (const v of s.views) { const o = document.createElement('option'); o.value = v.name; o.textContent = v.name; $('views').appendChild(o); }
     if (!settings.layers) settings.layers = s.layers.map(() => 1);

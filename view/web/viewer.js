@@ -45,6 +45,7 @@
     });
   }
   function onText(m) {
+    if (m.type === 'scene' && backend.rescene) backend.rescene(m.scene);
     if ((m.type === 'pick' || m.type === 'section') && pending.has(m.seq)) {
       pending.get(m.seq).resolve(m);
       pending.delete(m.seq);
@@ -84,7 +85,7 @@
   }
 
 
-  window.CandiPage({
+  const backend = {
     load: () => fetch('/api/scene?token=' + encodeURIComponent(token)).then((r) => {
       if (!r.ok) throw new Error('the server refused: ' + r.status + ' (open the address candi view printed)');
       return r.json();
@@ -99,5 +100,6 @@
       viewSeq: () => (window.candiViewer.dirty() || !latest ? -1 : viewSeq),
       canvasPixels: () => Array.from(ctx.getImageData(0, 0, canvas.width, canvas.height).data),
     },
-  });
+  };
+  window.CandiPage(backend);
 })();
