@@ -301,12 +301,11 @@ struct ViewArgs {
 // temporary archive (removed on exit, and by an interrupt).
 struct OpenedSource {
   view::ViewerSource source;
-  int temporary = -1;
   ~OpenedSource() {
     if (source.temporary_dir.empty()) return;
     std::error_code ignored;
     fs::remove_all(source.temporary_dir, ignored);
-    UnregisterTempPath(temporary);
+    UnregisterTempPath(source.temporary_id);  // registered by the packing (removed on Ctrl-C)
   }
 };
 
@@ -334,14 +333,12 @@ bool OpenSource(const ViewArgs& a, const render::Orientation& orientation, bool 
     if (preview) {
       progress.Finish();
       opened->source = std::move(*preview);
-      opened->temporary = RegisterTempPath(opened->source.temporary_dir);
       return true;
     }
   }
   ConsoleProgress progress("view: packing " + std::to_string(a.inputs.size()) + " point file(s)");
   opened->source = view::PackViewerSource(a.inputs, a.columns, orientation, progress.Callback(), colour_by);
   progress.Finish();
-  opened->temporary = RegisterTempPath(opened->source.temporary_dir);  // removed on Ctrl-C, or on exit
   return false;
 }
 
@@ -372,7 +369,6 @@ class PackWhole {
             ConsoleProgress progress("view: packing all " + std::to_string(points) + " points");
             whole_.source = view::PackViewerSource(a.inputs, a.columns, orientation, progress.Callback());
             progress.Finish();
-            whole_.temporary = RegisterTempPath(whole_.source.temporary_dir);
             whole_.source.settings.clip = clip;
             archive_ = std::make_unique<render::Archive>(whole_.source.archive_dir);
             current->Set(&whole_.source, archive_.get());

@@ -13,6 +13,7 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
+#include "core/interrupt.h"
 #include "core/mapped_file.h"
 #include "core/parallel.h"
 #include "io/point_io.h"
@@ -266,6 +267,7 @@ ViewerSource PackIntoTemporary(const std::vector<std::string>& files, const rend
                                const std::function<void(const std::string& archive_dir)>& pack) {
   std::string tmpl = (fs::temp_directory_path() / "candi-view-XXXXXX").string();
   if (mkdtemp(tmpl.data()) == nullptr) throw InputError(tmpl, "", "cannot create a temporary directory");
+  const int id = RegisterTempPath(tmpl);  // an interrupt while packing removes it
   const std::string archive_dir = tmpl + "/archive";
   ViewerSource source;
   try {
@@ -274,8 +276,10 @@ ViewerSource PackIntoTemporary(const std::vector<std::string>& files, const rend
   } catch (...) {
     std::error_code ec;
     fs::remove_all(tmpl, ec);
+    UnregisterTempPath(id);
     throw;
   }
+  source.temporary_id = id;
   source.kind = "points";
   source.title = fs::path(files.front()).filename().string() + (files.size() > 1 ? " + " + std::to_string(files.size() - 1) : "");
   source.temporary_dir = tmpl;

@@ -42,6 +42,8 @@ struct ViewerSource {
   ViewSettings settings;            // the scene's render settings, or the defaults
   render::Camera first_view;        // world frame
   std::string temporary_dir;        // points: the packed archive's directory (removed by the caller)
+  int temporary_id = -1;            // its registration for removal on an interrupt (core/interrupt.h),
+                                    // from before the pack: the caller unregisters it
   // A build's provenance for the page (JSON object, from archive.json): the CRS, the licence and
   // annotations the scene gives, and per layer its kind, whether it was measured (scanned) or
   // reconstructed, its method and its sources. Empty for an archive or point files.

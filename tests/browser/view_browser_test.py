@@ -409,6 +409,27 @@ class ViewPreviewInBrowser(ViewerPage):
         self.assertIn("of %d, until all are packed" % self.POINTS, log)
 
 
+class ViewPreviewInterrupted(unittest.TestCase):
+    """SIGTERM while the whole archive is packed behind a preview (or after, whichever comes
+    first): the viewer ends by the signal and leaves no temporary archive behind, neither the
+    preview's nor the half-packed whole one."""
+
+    def test_no_temporary_archive_is_left(self):
+        work = tempfile.mkdtemp(prefix="candi-view-interrupt-")
+        try:
+            run("foundation", os.path.join(SOURCE, "examples", "borobudur", "foundation.dxf"), "-o",
+                os.path.join(work, "hill.ply"), "--count", "1500000", "--no-self-intersection")
+            tmp = os.path.join(work, "tmp")
+            os.mkdir(tmp)
+            viewer = Viewer(os.path.join(work, "hill.ply"), args=("--preview", "10000"), env=dict(os.environ, TMPDIR=tmp))
+            self.assertTrue(os.listdir(tmp), "the preview's archive is in TMPDIR while the viewer runs")
+            viewer.close()  # SIGTERM
+            self.assertEqual(viewer.process.returncode, -15, viewer.stderr[-2000:])
+            self.assertEqual(os.listdir(tmp), [], "temporary archives left behind")
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
+
 if __name__ == "__main__":
     if len(sys.argv) < 3:
         sys.exit("usage: view_browser_test.py CANDI SOURCE_DIR")
