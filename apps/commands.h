@@ -27,9 +27,9 @@ void AddDigitizeCommands(Command& root);  // sfm, dense, georef, register, regis
                                           // relief (digitize.cc, relief.cc)
 void AddReliefCommands(Command& root);    // relief synth|dataset|train|predict|points|eval|place (relief.cc)
 void AddAssembleCommands(Command& root);  // build, pack, export (assemble.cc)
-void AddLookCommands(Command& root);      // render, view, publish, section, opacity (look.cc)
+void AddLookCommands(Command& root);      // render, view, publish, section (look.cc)
 // `candi --help` lists these three under "Other", after the groups above.
-void AddOpacity(Command& root);           // opacity (look.cc: SPBR opacity, by the renderer)
+void AddOpacity(Command& root);           // opacity (opacity_command.cc: SPBR opacity, by the renderer)
 void AddDemo(Command& root);              // demo (assemble.cc: it builds the bundled example)
 void AddBenchCommands(Command& root);     // bench and its subcommands (bench_commands.cc)
 
