@@ -40,7 +40,7 @@ struct Staged {
   }
 };
 
-// Points are staged in parallel blocks of this many.
+// Points are staged in parallel blocks of this many (at least).
 constexpr size_t kStageBlock = size_t{1} << 14;
 
 struct ThreadSums {
@@ -112,7 +112,12 @@ struct SpbrStreamRenderer::Impl {
 template <typename Decode>
 void SpbrStreamRenderer::Impl::Stage(size_t n, Decode&& decode) {
   const int L = options.repeat_level;
-  const size_t K = static_cast<size_t>(last - first), blocks = (n + kStageBlock - 1) / kStageBlock;
+  const size_t K = static_cast<size_t>(last - first);
+  // Blocks of kStageBlock points, fewer and larger where many ensembles are resident (a small
+  // image at a large L): the per-block counts stay within 2^22 entries.
+  const size_t max_blocks = std::max<size_t>(1, (size_t{1} << 22) / (K + 1));
+  const size_t block = std::max(kStageBlock, (n + max_blocks - 1) / max_blocks);
+  const size_t blocks = (n + block - 1) / block;
   const bool indices = options.point_size != 1.0;
   if (n == 0) return;
   slots.resize(n);
@@ -120,7 +125,7 @@ void SpbrStreamRenderer::Impl::Stage(size_t n, Decode&& decode) {
   Run([&] {
     ParallelFor(size_t{0}, blocks, [&](size_t b) {
       uint64_t* count = counts.data() + b * (K + 1);
-      for (size_t i = b * kStageBlock; i < std::min(n, (b + 1) * kStageBlock); ++i) {
+      for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {
         const int e = EnsembleOf(options.seed, next_index + i, L);
         const uint32_t k = e >= first && e < last ? static_cast<uint32_t>(e - first) : static_cast<uint32_t>(K);
         slots[i] = k;
@@ -143,7 +148,7 @@ void SpbrStreamRenderer::Impl::Stage(size_t n, Decode&& decode) {
   Run([&] {
     ParallelFor(size_t{0}, blocks, [&](size_t b) {
       uint64_t* at = counts.data() + b * (K + 1);
-      const size_t begin = b * kStageBlock, m = std::min(n, begin + kStageBlock) - begin;
+      const size_t begin = b * block, m = std::min(n, begin + block) - begin;
       bool finite = true;
       decode(begin, m, [&](size_t i, const Eigen::Vector3d& p, uint32_t rgb) {
         if (!p.allFinite()) {

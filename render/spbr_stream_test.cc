@@ -91,6 +91,17 @@ TEST(SpbrStream, ParallelStagingGivesTheSerialImage) {
     }
   }
   EXPECT_TRUE(Stream(s, 16, 5, 4000, 2, 3 * kOneFrame).sums == serial.sums) << "6 passes";
+  // 10^5 ensembles resident (a 6 x 4 image): blocks grow so that their counts stay bounded.
+  Scene tiny = MakeScene(700000), tiny_ones = tiny;
+  tiny.camera.width = tiny_ones.camera.width = 6;
+  tiny.camera.height = tiny_ones.camera.height = 4;
+  tiny_ones.cloud.AddScalarField(kMultiplicityField);
+  for (size_t i = 0; i < tiny_ones.cloud.size(); ++i) tiny_ones.cloud.FindScalar(kMultiplicityField)->Set(i, 1.0);
+  const SpbrResult tiny_serial = Stream(tiny_ones, 100000, 5, 700000, 1, uint64_t{1} << 30);
+  uint64_t hits = 0;
+  for (size_t p = 0; p < 24; ++p) hits += tiny_serial.sums.sums[4 * p + 3];
+  EXPECT_GT(hits, 100000u) << "the tiny image shows the points";
+  EXPECT_TRUE(Stream(tiny, 100000, 5, 700000, 2, uint64_t{1} << 30).sums == tiny_serial.sums);
 }
 
 // The image of a file's records read in place (AddRecords) is the image of its reader's chunks,
