@@ -231,6 +231,7 @@ RenderedImage RenderFilesStreaming(const RenderOptions& o, const std::vector<std
   so.threads = o.threads;
   so.memory_budget = o.memory_budget;
   so.use_multiplicity = !o.opaque;
+  so.expected_points = total;  // few enough: gathered by ensemble, no L z-buffers held
   render::SpbrStreamRenderer renderer(so, InFrame(image.world_camera, frame), frame);
   ConsoleProgress progress("render: SPBR L=" + std::to_string(RepeatLevel(o)) + " streaming, " +
                            std::to_string(renderer.passes()) + " pass(es)");

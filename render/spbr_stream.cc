@@ -9,6 +9,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "core/check.h"
 #include "core/parallel.h"
@@ -59,8 +60,10 @@ struct SpbrStreamRenderer::Impl {
   KernelTransform transform;
   KernelProjection projection;
   int per_pass = 1, pass = -1, first = 0, last = 0;
+  bool gather = false;  // every point staged, each ensemble drawn at the end of the pass
   uint64_t next_index = 0, copies = 0;
-  std::vector<BandBuffer> buffers;  // resident ensembles [first, last)
+  std::vector<BandBuffer> buffers;  // resident ensembles [first, last) (none when gathering)
+  tbb::enumerable_thread_specific<BandBuffer> thread_buffers;  // gathering: one z-buffer a thread
   std::vector<Staged> staged;
   UninitVector<uint32_t> slots;   // Stage: each point's resident ensemble (K: none)
   std::vector<uint64_t> counts;   // Stage: per block and ensemble
@@ -79,6 +82,9 @@ struct SpbrStreamRenderer::Impl {
     }
     per_pass = static_cast<int>(std::clamp(std::floor(o.memory_budget / frame_bytes), 1.0,
                                            static_cast<double>(o.repeat_level)));
+    const double staged_bytes = (o.point_size != 1.0 ? 24.0 : 16.0) * static_cast<double>(o.expected_points);
+    gather = o.expected_points > 0 && staged_bytes <= per_pass * frame_bytes;
+    if (gather) per_pass = o.repeat_level;
     // c = R (p - eye) for positions p in the render frame (float, full precision).
     for (int r = 0; r < 3; ++r) {
       for (int k = 0; k < 3; ++k) transform.a[3 * r + k] = static_cast<float>(projector.rotation(r, k));
@@ -105,7 +111,9 @@ struct SpbrStreamRenderer::Impl {
   // NaN or infinite position.
   template <typename Decode>
   void Stage(size_t n, Decode&& decode);
-  // Draws the staged points, ensembles in parallel.
+  // Draws the staged points of resident ensemble k into `buffer`.
+  void DrawEnsemble(int k, BandBuffer* buffer);
+  // Draws the staged points into the resident z-buffers, ensembles in parallel.
   void Draw();
 };
 
@@ -133,16 +141,17 @@ void SpbrStreamRenderer::Impl::Stage(size_t n, Decode&& decode) {
       }
     });
   });
-  // Each block's first place in each ensemble.
+  // Each block's first place in each ensemble, after the points staged before (gathering).
   for (size_t k = 0; k < K; ++k) {
-    uint64_t at = 0;
+    uint64_t at = staged[k].x.size();
+    const uint64_t before = at;
     for (size_t b = 0; b < blocks; ++b) {
       const uint64_t c = counts[b * (K + 1) + k];
       counts[b * (K + 1) + k] = at;
       at += c;
     }
     staged[k].Resize(at, indices);
-    copies += at;
+    copies += at - before;
   }
   std::vector<uint64_t> bad(blocks, std::numeric_limits<uint64_t>::max());
   Run([&] {
@@ -174,23 +183,22 @@ void SpbrStreamRenderer::Impl::Stage(size_t n, Decode&& decode) {
   next_index += n;
 }
 
+void SpbrStreamRenderer::Impl::DrawEnsemble(int k, BandBuffer* buffer) {
+  Staged& s = staged[k];
+  if (s.x.empty()) return;
+  if (options.point_size == 1.0) {
+    SplatPoints(transform, projection, s.x.data(), s.y.data(), s.z.data(), s.color.data(), s.x.size(), buffer);
+  } else {
+    // Draw point by point so each keeps its own stream index for the size draw.
+    for (size_t i = 0; i < s.x.size(); ++i) {
+      SplatPointsSized(transform, projection, &s.x[i], &s.y[i], &s.z[i], &s.color[i], 1,
+                       {options.point_size, options.seed, s.index[i]}, buffer);
+    }
+  }
+}
+
 void SpbrStreamRenderer::Impl::Draw() {
-  Run([&] {
-    ParallelFor(0, last - first, [&](int k) {
-      Staged& s = staged[k];
-      if (s.x.empty()) return;
-      if (options.point_size == 1.0) {
-        SplatPoints(transform, projection, s.x.data(), s.y.data(), s.z.data(), s.color.data(), s.x.size(),
-                    &buffers[k]);
-      } else {
-        // Draw point by point so each keeps its own stream index for the size draw.
-        for (size_t i = 0; i < s.x.size(); ++i) {
-          SplatPointsSized(transform, projection, &s.x[i], &s.y[i], &s.z[i], &s.color[i], 1,
-                           {options.point_size, options.seed, s.index[i]}, &buffers[k]);
-        }
-      }
-    });
-  });
+  Run([&] { ParallelFor(0, last - first, [&](int k) { DrawEnsemble(k, &buffers[k]); }); });
 }
 
 SpbrStreamRenderer::SpbrStreamRenderer(const SpbrStreamOptions& options, const Camera& camera,
@@ -217,6 +225,19 @@ void SpbrStreamRenderer::BeginPass(int pass) {
   m.first = pass * m.per_pass;
   m.last = std::min(m.options.repeat_level, m.first + m.per_pass);
   m.next_index = 0;
+  m.staged.resize(m.last - m.first);
+  if (m.gather) {
+    // Room for each ensemble's expected share (a little more: the shares vary).
+    const uint64_t share = m.options.expected_points / static_cast<uint64_t>(m.options.repeat_level);
+    const bool indices = m.options.point_size != 1.0;
+    for (Staged& s : m.staged) {
+      s.Clear();
+      const size_t room = static_cast<size_t>(share + share / 16 + 64);
+      s.x.reserve(room), s.y.reserve(room), s.z.reserve(room), s.color.reserve(room);
+      if (indices) s.index.reserve(room);
+    }
+    return;
+  }
   m.buffers.resize(m.last - m.first);
   m.Run([&] {
     ParallelFor(size_t{0}, m.buffers.size(), [&](size_t k) {  // fresh pages: faulting them in is most of it
@@ -224,7 +245,6 @@ void SpbrStreamRenderer::BeginPass(int pass) {
       if (b.width != m.camera.width || b.rows != m.camera.height) b.Reset(m.camera.width, m.camera.height);
     });
   });
-  m.staged.resize(m.last - m.first);
 }
 
 void SpbrStreamRenderer::Add(const PointCloud& chunk) {
@@ -233,14 +253,14 @@ void SpbrStreamRenderer::Add(const PointCloud& chunk) {
   const Eigen::Vector3d shift = chunk.frame.origin - m.frame.origin;
   const ScalarField* mult = m.options.use_multiplicity ? chunk.FindScalar(kMultiplicityField) : nullptr;
   const uint32_t fallback = PackColor(m.options.default_color);
-  for (Staged& s : m.staged) s.Clear();
+  if (!m.gather) for (Staged& s : m.staged) s.Clear();
   if (!mult) {
     m.Stage(chunk.size(), [&](size_t first, size_t count, auto&& g) {
       for (size_t i = first; i < first + count; ++i) {
         g(i, chunk.positions[i] + shift, chunk.schema.colors ? PackColor(chunk.colors[i]) : fallback);
       }
     });
-    m.Draw();
+    if (!m.gather) m.Draw();
     return;
   }
   // Points with multiplicities: m copies in m ensembles, staged serially.
@@ -260,11 +280,11 @@ void SpbrStreamRenderer::Add(const PointCloud& chunk) {
       s.z.push_back(static_cast<float>(p.z()));
       s.color.push_back(PackColor(chunk.schema.colors ? chunk.colors[i] : m.options.default_color));
       s.index.push_back(index);
+      ++m.copies;
     });
   }
   m.next_index += chunk.size();
-  for (const Staged& s : m.staged) m.copies += s.x.size();
-  m.Draw();
+  if (!m.gather) m.Draw();
 }
 
 void SpbrStreamRenderer::AddRecords(const uint8_t* records, const io::PointRecordLayout& layout,
@@ -273,12 +293,12 @@ void SpbrStreamRenderer::AddRecords(const uint8_t* records, const io::PointRecor
   CANDI_CHECK(m.pass >= 0) << "AddRecords before BeginPass";
   const Eigen::Vector3d shift = origin - m.frame.origin;
   const uint32_t fallback = PackColor(m.options.default_color);
-  for (Staged& s : m.staged) s.Clear();
+  if (!m.gather) for (Staged& s : m.staged) s.Clear();
   m.Stage(n, [&](size_t first, size_t count, auto&& g) {
     io::ForEachRecord(layout, records + first * layout.stride, count, fallback,
                       [&](size_t i, const Eigen::Vector3d& p, uint32_t rgb) { g(first + i, p + shift, rgb); });
   });
-  m.Draw();
+  if (!m.gather) m.Draw();
 }
 
 void SpbrStreamRenderer::EndPass() {
@@ -287,7 +307,19 @@ void SpbrStreamRenderer::EndPass() {
   m.Run([&] {
     ParallelFor(0, m.last - m.first, [&](int k) {
       ThreadSums& t = m.sums.local();
-      m.buffers[k].DrainInto(&t.sums, m.first + k == 0 ? &t.first_grey : nullptr);
+      BandBuffer* buffer = nullptr;
+      if (m.gather) {  // the ensemble's points, all gathered: drawn in this thread's z-buffer
+        buffer = &m.thread_buffers.local();
+        if (buffer->width != m.camera.width || buffer->rows != m.camera.height) {
+          buffer->Reset(m.camera.width, m.camera.height);
+        }
+        m.DrawEnsemble(k, buffer);
+        Staged drawn;
+        std::swap(drawn, m.staged[k]);  // its memory goes back now
+      } else {
+        buffer = &m.buffers[k];
+      }
+      buffer->DrainInto(&t.sums, m.first + k == 0 ? &t.first_grey : nullptr);
     });
   });
   m.pass = -1;

@@ -39,12 +39,15 @@ PointCloud Slice(const PointCloud& cloud, size_t begin, size_t end) {
 }
 
 // Feeds `cloud` in chunks of `chunk` points, every pass.
-SpbrResult Stream(const Scene& s, int L, uint64_t seed, size_t chunk, int threads, uint64_t budget) {
+SpbrResult Stream(const Scene& s, int L, uint64_t seed, size_t chunk, int threads, uint64_t budget,
+                  uint64_t expected_points = 0, double point_size = 1.0) {
   SpbrStreamOptions o;
   o.repeat_level = L;
   o.seed = seed;
   o.threads = threads;
   o.memory_budget = budget;
+  o.expected_points = expected_points;
+  o.point_size = point_size;
   SpbrStreamRenderer renderer(o, s.camera, s.frame);
   for (int pass = 0; pass < renderer.passes(); ++pass) {
     renderer.BeginPass(pass);
@@ -104,6 +107,37 @@ TEST(SpbrStream, ParallelStagingGivesTheSerialImage) {
   EXPECT_TRUE(Stream(tiny, 100000, 5, 700000, 2, uint64_t{1} << 30).sums == tiny_serial.sums);
 }
 
+// Points gathered by ensemble and drawn at the end of the pass (few points expected) give the
+// image of resident z-buffers, with and without multiplicities, point sizes, on 1 and 2 threads.
+TEST(SpbrStream, GatheringFewPointsGivesTheResidentImage) {
+  const Scene s = MakeScene(40000);
+  Scene ones = s;
+  ones.cloud.AddScalarField(kMultiplicityField);
+  for (size_t i = 0; i < ones.cloud.size(); ++i) ones.cloud.FindScalar(kMultiplicityField)->Set(i, i % 3 == 0 ? 2.0 : 1.0);
+  for (double size : {1.0, 2.5}) {
+    for (const Scene* scene : {&s, static_cast<const Scene*>(&ones)}) {
+      const SpbrResult resident = Stream(*scene, 16, 7, 40000, 1, uint64_t{1} << 30, 0, size);
+      for (int threads : {1, 2}) {
+        const SpbrResult gathered = Stream(*scene, 16, 7, 3333, threads, uint64_t{1} << 30, 40000, size);
+        EXPECT_TRUE(gathered.sums == resident.sums) << "size " << size << ", " << threads << " threads";
+        EXPECT_EQ(gathered.copies, resident.copies);
+        EXPECT_EQ(gathered.first_ensemble_grey, resident.first_ensemble_grey);
+      }
+    }
+  }
+  // Gathering holds no more than the z-buffers would: 40000 points at 16 bytes need 640 KB, so a
+  // budget of 3 frames (184 KB) keeps 6 passes of resident z-buffers; 10^4 points (160 KB) gather.
+  SpbrStreamOptions o;
+  o.repeat_level = 16;
+  o.memory_budget = 3 * kOneFrame;
+  o.expected_points = 40000;
+  EXPECT_EQ(SpbrStreamRenderer(o, s.camera, s.frame).passes(), 6);
+  o.expected_points = 10000;
+  EXPECT_EQ(SpbrStreamRenderer(o, s.camera, s.frame).passes(), 1);
+  // More points than expected: still the same image.
+  EXPECT_TRUE(Stream(s, 16, 7, 5000, 2, uint64_t{1} << 30, 100).sums == Stream(s, 16, 7, 5000, 2, uint64_t{1} << 30).sums);
+}
+
 // The image of a file's records read in place (AddRecords) is the image of its reader's chunks,
 // for float and double PLY and for LAS, on 1 and 2 threads, in one pass or several, with
 // one-pixel points and larger ones.
@@ -132,14 +166,16 @@ TEST(SpbrStream, RecordsInPlaceGiveTheImageOfTheReadersChunks) {
     EXPECT_EQ(layout->coordinates, f.coordinates) << f.name;
     for (double size : {1.0, 2.5}) {
       for (int threads : {1, 2}) {
-        for (uint64_t budget : {uint64_t{1} << 30, 3 * kOneFrame}) {
+        for (uint64_t budget : {uint64_t{1} << 30, 3 * kOneFrame, uint64_t{0}}) {
           SpbrStreamOptions o;
           o.repeat_level = 8;
           o.seed = 11;
           o.threads = threads;
           o.point_size = size;
-          o.memory_budget = budget;
-          SpbrStreamRenderer chunks(o, s.camera, s.frame), records(o, s.camera, s.frame);
+          o.memory_budget = budget > 0 ? budget : uint64_t{1} << 30;
+          SpbrStreamOptions gathering = o;  // budget 0: the records gathered, the chunks resident
+          if (budget == 0) gathering.expected_points = 50000;
+          SpbrStreamRenderer chunks(o, s.camera, s.frame), records(gathering, s.camera, s.frame);
           const MappedFile map(path);
           for (int pass = 0; pass < chunks.passes(); ++pass) {
             chunks.BeginPass(pass);
