@@ -10,7 +10,7 @@
 //   bounds      io::RecordBounds, the bounds of the file's records read in place (the stream
 //               render's first pass over the file; nothing for XYZ, whose points are not records);
 //   end to end  pipeline::RenderPointFiles in auto mode and the PNG written (what `candi render
-//               FILE` does: from 10^7 points of records, streamed in place: bounds, then the
+//               FILE` does: from 10^6 points of records, streamed in place: bounds, then the
 //               records staged and drawn);
 //   pack        render::PackFiles (what `candi pack FILE` does).
 // The files are generated once (a seeded terrain) in --dir and kept for later runs; a text XYZ
@@ -209,6 +209,6 @@ int main(int argc, char** argv) {
     }
   }
   std::printf("\nmemory: read + prepare + draw, the bounds, the brightness and the PNG. end to end: what candi render "
-              "FILE does (from 10^7 points of records: streamed in place, bounds first).\n");
+              "FILE does (from 10^6 points of records: streamed in place, bounds first).\n");
   return 0;
 }

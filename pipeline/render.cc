@@ -27,10 +27,10 @@ namespace candi::pipeline {
 namespace {
 
 // Points above which RenderMode::kAuto streams: files whose records are drawn in place stream
-// faster than a splat cloud is prepared from 10^7 points on (bench/first_image_bench: 2·10^7
-// points, 0.7 s against 1.2 s); others from 5·10^7.
+// faster than a splat cloud is prepared (2·10^6 points: 0.12 s against 0.21 s; 2·10^7: 0.47 s
+// against 1.43 s, bench/first_image_bench) and in less memory; others from 5·10^7.
 constexpr uint64_t kStreamThreshold = 50000000;
-constexpr uint64_t kStreamInPlaceThreshold = 10000000;
+constexpr uint64_t kStreamInPlaceThreshold = 1000000;
 
 int RepeatLevel(const RenderOptions& o) { return o.opaque ? 1 : o.repeat_level; }
 
@@ -253,7 +253,7 @@ RenderedImage RenderFilesStreaming(const RenderOptions& o, const std::vector<std
 
 bool Streams(const RenderOptions& o, const std::vector<std::string>& files) {
   if (o.mode != RenderMode::kAuto) return o.mode == RenderMode::kStream;
-  if (!o.alpha.empty() || o.colour_by.active()) return false;
+  if (!o.alpha.empty() || o.colour_by.active() || o.preview > 0) return false;
   if (o.view && o.view->projection != render::Projection::kPerspective) return false;  // stream: perspective only
   uint64_t stated = 0;
   bool in_place = o.clip.empty();  // every input's points drawn from its records (StreamFile)
@@ -280,6 +280,8 @@ void RenderOptions::Check() const {
   CANDI_CHECK_OPTION(!(opaque && !alpha.empty()), opaque, "false when alpha is given (they exclude each other)");
   CANDI_CHECK_OPTION(!(mode == RenderMode::kStream && !alpha.empty()), alpha,
                      "empty in stream mode (opacity control needs the whole cloud)");
+  CANDI_CHECK_OPTION(!(mode == RenderMode::kStream && preview > 0), preview,
+                     "0 in stream mode (it draws every ensemble)");
   colour_by.Check();
   if (mode == RenderMode::kStream && colour_by.active()) {
     throw std::invalid_argument("colouring by a field needs memory mode: stream mode reads no scalar fields");

@@ -46,7 +46,7 @@ struct RenderOptions {
   int threads = 0;               // 0: all
   double point_size = 1.0;       // pixels, >= 1 (stochastic rounding)
   int preview = 0;               // > 0: only the first k ensembles
-  RenderMode mode = RenderMode::kAuto;  // point files: auto streams above 1e7 points read in place, 5e7 others (alpha: memory)
+  RenderMode mode = RenderMode::kAuto;  // point files: auto streams above 1e6 points read in place, 5e7 others (alpha, preview: memory)
   uint64_t memory_budget = uint64_t{2048} << 20;  // bytes of z-buffers resident per pass (stream, archive)
   uint64_t chunk_budget = uint64_t{256} << 20;    // bytes of archive chunks mapped at once
   std::string columns;           // XYZ/PTS column spec of point files

@@ -54,6 +54,7 @@ TEST(RenderOptions, DefaultsPassAndRulesAreChecked) {
       [](RenderOptions& o) { o.alpha = {0.5}, o.opaque = true; },
       [](RenderOptions& o) { o.alpha = {1.5}; },
       [](RenderOptions& o) { o.alpha = {0.5}, o.mode = RenderMode::kStream; },
+      [](RenderOptions& o) { o.preview = 3, o.mode = RenderMode::kStream; },
       [](RenderOptions& o) { o.brightness = 0; },
   });
 }
