@@ -1,12 +1,14 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "core/check.h"
 #include "io/point_io.h"
 #include "render/archive.h"
 #include "render/synthetic_scene.h"
@@ -58,6 +60,16 @@ TEST(ViewerSource, PreviewOfPointFilesTakesOneRecordInK) {
   EXPECT_EQ(scene.at("preview").at("every"), 11);
   EXPECT_EQ(scene.at("preview").at("points"), 10001);
   std::filesystem::remove_all(preview->temporary_dir);
+  // A NaN in a record the preview takes: the reader's error, naming the file and the record.
+  PointCloud bad = a;
+  bad.positions[33].y() = std::numeric_limits<double>::quiet_NaN();
+  io::WritePointCloud(dir.File("bad.ply"), bad, doubles);
+  try {
+    PackPreviewSource({dir.File("bad.ply"), files[1]}, "", render::Orientation(), 1000, nullptr);
+    FAIL() << "NaN accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.ply: vertex 33: coordinate is NaN"), std::string::npos) << e.what();
+  }
   // Few enough points, or a file that is not records: no preview.
   EXPECT_FALSE(PackPreviewSource(files, "", render::Orientation(), 5001, nullptr).has_value());
   io::WritePointCloud(dir.File("text.xyz"), b);

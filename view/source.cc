@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -291,7 +292,7 @@ ViewerSource PackIntoTemporary(const std::vector<std::string>& files, const rend
 class SampledRecords {
  public:
   SampledRecords(const std::string& path, const io::PointRecordLayout& layout, const LocalFrame& frame, uint64_t every)
-      : map_(std::make_shared<MappedFile>(path)), layout_(layout), frame_(frame), every_(every) {
+      : path_(path), map_(std::make_shared<MappedFile>(path)), layout_(layout), frame_(frame), every_(every) {
     if (!io::HoldsRecords(*map_, layout_)) throw InputError(path, "", "the file does not hold its points");
     layout_.stride *= every;  // every k-th record: a layout of records k times as long
     layout_.count = (layout.count + every - 1) / every;
@@ -306,17 +307,27 @@ class SampledRecords {
     c.Resize(n);
     const uint8_t* records = map_->data() + layout_.first_byte + first * layout_.stride;
     constexpr size_t kBlock = size_t{1} << 14;
+    std::atomic<bool> finite{true};
     ParallelFor(size_t{0}, (n + kBlock - 1) / kBlock, [&](size_t b) {
       const size_t at = b * kBlock, m = std::min<size_t>(kBlock, n - at);
+      bool ok = true;
       io::ForEachRecord(layout_, records + at * layout_.stride, m, 0, [&](size_t i, const Eigen::Vector3d& p, uint32_t rgb) {
         c.positions[at + i] = p;
+        ok &= p.allFinite();
         if (c.schema.colors) c.colors[at + i] = {static_cast<uint8_t>(rgb >> 16), static_cast<uint8_t>(rgb >> 8), static_cast<uint8_t>(rgb)};
       });
+      if (!ok) finite = false;
     });
+    if (!finite) {  // as the file's reader says it: the record's number in the file
+      size_t i = 0;
+      while (c.positions[i].allFinite()) ++i;
+      throw InputError(path_, "vertex " + std::to_string((first + i) * every_), "coordinate is NaN or infinite");
+    }
     return c;
   }
 
  private:
+  std::string path_;
   std::shared_ptr<MappedFile> map_;
   io::PointRecordLayout layout_;
   LocalFrame frame_;
