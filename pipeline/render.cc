@@ -141,34 +141,42 @@ RenderedImage RenderFilesInMemory(const RenderOptions& o, const std::vector<std:
   return RenderOwnedClouds(o, &clouds, files, keys, &cache);
 }
 
-// Bounds from the headers when every input states them, else from a pass over the points: over
-// the records in place, in parallel, where a file's points are records (io/point_records.h),
-// else over the reader's chunks.
+// The inputs' world bounds and point count: from a pass over the records in place, in parallel,
+// where a file's points are records (io/point_records.h; a LAS header's bounds are not trusted
+// then: the first view frames the points, as in memory mode); else from the header's bounds when
+// every other input states them (LAZ), else from a pass over the reader's chunks.
 Box3d StreamBounds(const std::vector<std::string>& files, const io::PointReadOptions& read, uint64_t* total) {
   Box3d world;
-  bool all_headers = true;
   *total = 0;
+  std::vector<std::string> others;  // inputs whose points are not records read in place
   for (const std::string& in : files) {
     auto r = io::OpenPointReader(in, read);
-    if (r->info().header_bounds) world.Extend(*r->info().header_bounds); else all_headers = false;
-    if (r->info().count != io::kUnknownCount) *total += r->info().count;
-  }
-  if (all_headers) return world;
-  world = Box3d();
-  *total = 0;
-  ConsoleProgress progress("render: bounds");
-  for (const std::string& in : files) {
-    auto r = io::OpenPointReader(in, read);
-    const uint64_t before = *total;
     if (const std::optional<io::PointRecordLayout> layout = r->record_layout()) {
       const MappedFile map(in);
       if (const std::optional<Box3d> box = io::RecordBounds(map, *layout)) {
         world.Extend(box->Translated(r->info().frame.origin));
         *total += layout->count;
-        progress.Update(*total, 0);
         continue;
       }  // else the reader says what is wrong with the file
     }
+    others.push_back(in);
+  }
+  bool all_headers = true;
+  Box3d headers = world;
+  uint64_t counted = *total;
+  for (const std::string& in : others) {
+    auto r = io::OpenPointReader(in, read);
+    if (r->info().header_bounds) headers.Extend(*r->info().header_bounds); else all_headers = false;
+    if (r->info().count != io::kUnknownCount) counted += r->info().count;
+  }
+  if (all_headers) {
+    *total = counted;
+    return headers;
+  }
+  ConsoleProgress progress("render: bounds");
+  for (const std::string& in : others) {
+    auto r = io::OpenPointReader(in, read);
+    const uint64_t before = *total;
     const io::PointScan scan = io::ScanPoints(*r, [&](uint64_t done, uint64_t) { progress.Update(before + done, 0); });
     world.Extend(scan.world);
     *total += scan.count;

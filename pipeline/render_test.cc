@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <limits>
 
+#include "core/atomic_file.h"
 #include "core/check.h"
 #include "io/point_io.h"
 #include "render/archive_pack.h"
@@ -99,6 +101,22 @@ TEST(RenderPointFiles, StreamModeReadsRecordsInPlaceAndHonoursMultiplicities) {
   EXPECT_TRUE(in_place.result.sums == read.result.sums) << "in place and through the reader differ";
   o.threads = 2;
   EXPECT_TRUE(RenderPointFiles(o, files).result.sums == in_place.result.sums);
+
+  // A LAS header's bounds are not trusted where the records are read: wrong ones (a box 10 km
+  // away) frame the same first view as memory mode's, which frames the points.
+  {
+    std::string bytes = ReadFileToString(files.back());
+    const double far_away[6] = {510000, 500000, 9110000, 9100000, 1000, 900};  // max x, min x, max y, ...
+    std::memcpy(&bytes[179], far_away, sizeof(far_away));
+    const std::string liar = dir.File("liar.las");
+    WriteFileAtomic(liar, bytes);
+    RenderOptions memory = Small();
+    const RenderedImage m = RenderPointFiles(memory, {liar});
+    const RenderedImage s = RenderPointFiles(o, {liar});
+    EXPECT_EQ(s.mode, "stream");
+    EXPECT_TRUE(s.world_camera.eye.isApprox(m.world_camera.eye, 1e-9)) << s.world_camera.eye.transpose();
+    EXPECT_TRUE(s.world_camera.target.isApprox(m.world_camera.target, 1e-9));
+  }
 
   PointCloud none = Sheets()[0];
   none.AddScalarField(render::kMultiplicityField);  // every point's multiplicity 0
