@@ -16,6 +16,7 @@
 #include "core/mapped_file.h"
 #include "core/parallel.h"
 #include "io/crs.h"
+#include "io/las/las_colour_scan.h"
 #include "io/las/las_columns.h"
 #include "io/las/las_crs.h"
 #include "io/las/las_header.h"
@@ -91,7 +92,7 @@ LasReader::LasReader(const std::string& path, const PointReadOptions& options)
   for (LasVlr& evlr : ReadLasEvlrs(&file_, header_)) vlrs.push_back(std::move(evlr));
   BuildSchema(FillInfo(std::move(vlrs)));
   if (info_.schema.colors) {
-    info_.meta.las.color_16bit = HasWideColors();
+    info_.meta.las.color_16bit = CachedWideColours(path, [this] { return HasWideColors(); });
     color_shift_ = info_.meta.las.color_16bit ? 8 : 0;
   }
 }
