@@ -323,15 +323,14 @@ bool OpenSource(const ViewArgs& a, const render::Orientation& orientation, bool 
   for (const std::string& in : a.inputs) {
     if (fs::is_directory(in, ec)) throw std::invalid_argument(in + " is a directory: open it alone");
   }
-  if (allow_preview && a.preview > 0 && !colour_by.active()) {
+  if (allow_preview && a.preview > 0 && !colour_by.active() && view::PreviewEvery(a.inputs, a.columns, a.preview) > 0) {
     ConsoleProgress progress("view: packing a preview of " + std::to_string(a.preview) + " points");
     std::optional<view::ViewerSource> preview =
         view::PackPreviewSource(a.inputs, a.columns, orientation, a.preview, progress.Callback());
-    if (preview) {
-      progress.Finish();
-      opened->source = std::move(*preview);
-      return true;
-    }
+    progress.Finish();
+    CANDI_CHECK(preview.has_value()) << "PreviewEvery promised a preview";
+    opened->source = std::move(*preview);
+    return true;
   }
   ConsoleProgress progress("view: packing " + std::to_string(a.inputs.size()) + " point file(s)");
   opened->source = view::PackViewerSource(a.inputs, a.columns, orientation, progress.Callback(), colour_by);

@@ -36,6 +36,7 @@ TEST(ViewerSource, PreviewOfPointFilesTakesOneRecordInK) {
   ASSERT_TRUE(preview.has_value());
   EXPECT_EQ(preview->kind, "points");
   EXPECT_EQ(preview->preview_every, 11u);  // 10001 points / 1000, rounded up
+  EXPECT_EQ(PreviewEvery(files, "", 1000), 11u);
   EXPECT_EQ(preview->preview_points, 10001u);
   const render::Archive archive(preview->archive_dir);
   const render::ArchiveManifest& m = archive.manifest();
@@ -72,6 +73,8 @@ TEST(ViewerSource, PreviewOfPointFilesTakesOneRecordInK) {
   }
   // Few enough points, or a file that is not records: no preview.
   EXPECT_FALSE(PackPreviewSource(files, "", render::Orientation(), 5001, nullptr).has_value());
+  EXPECT_EQ(PreviewEvery(files, "", 5001), 0u);
+  EXPECT_EQ(PreviewEvery(files, "", 5000), 3u);  // 10001 > 2 * 5000
   io::WritePointCloud(dir.File("text.xyz"), b);
   EXPECT_FALSE(PackPreviewSource({files[0], dir.File("text.xyz")}, "", render::Orientation(), 100, nullptr).has_value());
 }

@@ -336,26 +336,49 @@ class SampledRecords {
 
 }  // namespace
 
+namespace {
+
+// The files' record layouts and frames, and their points together; false when a file's points
+// are not records.
+bool RecordsOf(const std::vector<std::string>& files, const std::string& columns,
+               std::vector<io::PointRecordLayout>* layouts, std::vector<LocalFrame>* frames, uint64_t* total) {
+  io::PointReadOptions read;
+  read.columns = columns;
+  read.scalar_fields = false;
+  *total = 0;
+  for (const std::string& f : files) {
+    const auto reader = io::OpenPointReader(f, read);
+    const std::optional<io::PointRecordLayout> layout = reader->record_layout();
+    if (!layout) return false;
+    layouts->push_back(*layout);
+    frames->push_back(reader->info().frame);
+    *total += layout->count;
+  }
+  return true;
+}
+
+uint64_t EveryFor(uint64_t total, uint64_t points) { return total <= 2 * points ? 0 : (total + points - 1) / points; }
+
+}  // namespace
+
+uint64_t PreviewEvery(const std::vector<std::string>& files, const std::string& columns, uint64_t points) {
+  CANDI_CHECK(points > 0) << "PreviewEvery: points 0";
+  std::vector<io::PointRecordLayout> layouts;
+  std::vector<LocalFrame> frames;
+  uint64_t total = 0;
+  return RecordsOf(files, columns, &layouts, &frames, &total) ? EveryFor(total, points) : 0;
+}
+
 std::optional<ViewerSource> PackPreviewSource(const std::vector<std::string>& files, const std::string& columns,
                                               const render::Orientation& orientation, uint64_t points,
                                               const ProgressCallback& progress) {
   CANDI_CHECK(points > 0) << "PackPreviewSource: points 0";
-  io::PointReadOptions read;
-  read.columns = columns;
-  read.scalar_fields = false;
-  uint64_t total = 0;
   std::vector<io::PointRecordLayout> layouts;
   std::vector<LocalFrame> frames;
-  for (const std::string& f : files) {
-    const auto reader = io::OpenPointReader(f, read);
-    const std::optional<io::PointRecordLayout> layout = reader->record_layout();
-    if (!layout) return std::nullopt;
-    layouts.push_back(*layout);
-    frames.push_back(reader->info().frame);
-    total += layout->count;
-  }
-  if (total <= 2 * points) return std::nullopt;
-  const uint64_t every = (total + points - 1) / points;
+  uint64_t total = 0;
+  if (!RecordsOf(files, columns, &layouts, &frames, &total)) return std::nullopt;
+  const uint64_t every = EveryFor(total, points);
+  if (every == 0) return std::nullopt;
   ViewerSource source = PackIntoTemporary(files, orientation, [&](const std::string& archive_dir) {
     std::vector<render::PackInput> inputs;
     for (size_t k = 0; k < files.size(); ++k) {

@@ -70,6 +70,8 @@ ViewerSource OpenViewerSource(const std::string& path, const render::Orientation
 std::optional<ViewerSource> PackPreviewSource(const std::vector<std::string>& files, const std::string& columns,
                                               const render::Orientation& orientation, uint64_t points,
                                               const ProgressCallback& progress);
+// The k of PackPreviewSource's preview (one record in k), or 0 when it makes none.
+uint64_t PreviewEvery(const std::vector<std::string>& files, const std::string& columns, uint64_t points);
 // Packs point files into a fresh temporary directory; with `colour_by` active, the points
 // coloured by that field (one legend over all the files; InputError naming a file without it).
 ViewerSource PackViewerSource(const std::vector<std::string>& files, const std::string& columns,
