@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <initializer_list>
@@ -102,6 +103,26 @@ int RegisterTempPath(const std::string& path) {
   std::lock_guard<std::mutex> lock(r.mutex);
   const int id = r.next_id++;
   r.temps[id] = path;
+  return id;
+}
+
+int CreateTempDirectory(const std::string& path, std::error_code* ec) {
+  Registry& r = Reg();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  ec->clear();
+  std::filesystem::create_directories(path, *ec);
+  if (*ec) return -1;
+  const int id = r.next_id++;
+  r.temps[id] = path;
+  return id;
+}
+
+int MakeTempDirectory(std::string* pattern) {
+  Registry& r = Reg();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  if (mkdtemp(pattern->data()) == nullptr) return -1;
+  const int id = r.next_id++;
+  r.temps[id] = *pattern;
   return id;
 }
 

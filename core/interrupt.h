@@ -14,6 +14,7 @@
 
 #include <functional>
 #include <string>
+#include <system_error>
 
 namespace candi {
 
@@ -27,6 +28,14 @@ void ChildSignalMask(sigset_t* mask);
 
 // A temporary file or folder to remove on interrupt; returns an id for UnregisterTempPath.
 int RegisterTempPath(const std::string& path);
+// Creates the folder `path` (with its parents; it may exist) and registers it, in one step the
+// interrupt waits for: an interrupt comes either before (nothing is created, as a thread that
+// creates folders while the handler removes them could do) or after (the folder is removed).
+// Returns the id, or -1 with *ec set when the folder cannot be created.
+int CreateTempDirectory(const std::string& path, std::error_code* ec);
+// mkdtemp(*pattern) (ending in XXXXXX, which becomes the folder's name) in that step; -1 (errno
+// set) when it fails.
+int MakeTempDirectory(std::string* pattern);
 void UnregisterTempPath(int id);
 
 // A child process to stop on interrupt; returns an id for UnregisterChild.

@@ -494,9 +494,9 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   const std::string temp = out_path.string() + ".candi-tmp-" + std::to_string(getpid());
   std::error_code ec;
   fs::remove_all(temp, ec);
-  if (!fs::create_directories(temp, ec) || ec) {
-    throw InputError(temp, "", "cannot create the archive's build directory: " + ec.message());
-  }
+  // Created and registered in one step: an interrupt removes it, or comes before it exists.
+  const int interrupt_id = CreateTempDirectory(temp, &ec);
+  if (interrupt_id < 0) throw InputError(temp, "", "cannot create the archive's build directory: " + ec.message());
   struct Cleanup {
     std::string dir;
     int interrupt_id;  // core/interrupt.h: the folder is removed if the process is interrupted
@@ -505,7 +505,7 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
       if (!dir.empty()) fs::remove_all(dir, ignored);
       UnregisterTempPath(interrupt_id);
     }
-  } cleanup{temp, RegisterTempPath(temp)};
+  } cleanup{temp, interrupt_id};
 
   auto pack = [&](auto point_type) {
     using P = decltype(point_type);

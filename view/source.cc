@@ -3,9 +3,11 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -267,8 +269,8 @@ namespace {
 ViewerSource PackIntoTemporary(const std::vector<std::string>& files, const render::Orientation& orientation,
                                const std::function<void(const std::string& archive_dir)>& pack) {
   std::string tmpl = (fs::temp_directory_path() / "candi-view-XXXXXX").string();
-  if (mkdtemp(tmpl.data()) == nullptr) throw InputError(tmpl, "", "cannot create a temporary directory");
-  const int id = RegisterTempPath(tmpl);  // an interrupt while packing removes it
+  const int id = MakeTempDirectory(&tmpl);  // an interrupt while packing removes it
+  if (id < 0) throw InputError(tmpl, "", std::string("cannot create a temporary directory: ") + std::strerror(errno));
   const std::string archive_dir = tmpl + "/archive";
   ViewerSource source;
   try {
