@@ -170,9 +170,9 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
 
   const std::string temp = out.string() + ".candi-tmp-" + std::to_string(getpid());
   fs::remove_all(temp, ec);
-  if (!fs::create_directories(fs::path(temp) / "data", ec) || ec) {
-    throw InputError(temp, "", "cannot create the site's build folder: " + ec.message());
-  }
+  // Created and registered in one step: an interrupt removes it, or comes before it exists.
+  const int interrupt_id = CreateTempDirectory(temp, &ec);
+  if (interrupt_id < 0) throw InputError(temp, "", "cannot create the site's build folder: " + ec.message());
   struct Cleanup {
     std::string dir;
     int interrupt_id;
@@ -181,7 +181,10 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
       if (!dir.empty()) fs::remove_all(dir, ignored);
       UnregisterTempPath(interrupt_id);
     }
-  } cleanup{temp, RegisterTempPath(temp)};
+  } cleanup{temp, interrupt_id};
+  if (!fs::create_directory(fs::path(temp) / "data", ec) || ec) {
+    throw InputError(temp, "", "cannot create the site's build folder: " + ec.message());
+  }
 
   // Page files, in parallel over (group, page) in group order (a group's chunks are released
   // once its last page is written): the same bytes for any thread count.
