@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 
+#include "core/check.h"
 #include "core/rng.h"
 #include "io/point_io.h"
 #include "tests/util/test_util.h"
@@ -90,6 +91,17 @@ TEST(PointRecords, PlyLayoutsOfDoublesInAnyOrderButNotMixedTypes) {
   EXPECT_FALSE(layout_of("property double x\nproperty float y\nproperty double z\n", 20));
   EXPECT_FALSE(layout_of("property float x\nproperty float y\nproperty double z\n", 16));
   EXPECT_FALSE(layout_of("property int x\nproperty int y\nproperty int z\n", 12));
+  // A property named twice is refused by the header (so no record offset is ever left unset).
+  EXPECT_THROW(layout_of("property float x\nproperty float x\nproperty float y\nproperty float z\n", 16),
+               InputError);
+  EXPECT_THROW(layout_of("property float x\nproperty float y\nproperty float z\nproperty uchar red\n"
+                         "property uchar red\nproperty uchar green\n", 15),
+               InputError);
+  const auto rgb = layout_of("property float x\nproperty float y\nproperty float z\nproperty uchar blue\n"
+                             "property uchar green\nproperty uchar red\n", 15);
+  ASSERT_TRUE(rgb);
+  EXPECT_EQ(rgb->rgb[0], 14);
+  EXPECT_EQ(rgb->rgb[2], 12);
 }
 
 // NaN or infinity anywhere, or a file cut short: no bounds (the reader then says where).

@@ -290,6 +290,14 @@ void PlyReader::SetRecordLayout() {
       layout.rgb[channel] = static_cast<int>(c.offset);
     }
   }
+  // Each coordinate and colour channel named once (a header may repeat a property and miss
+  // another): else the reader's own decoding, never a record offset left unset.
+  int channels = 0;
+  for (const Column& c : columns_) channels += c.role == Role::kR || c.role == Role::kG || c.role == Role::kB;
+  const bool colour = layout.rgb[0] >= 0 && layout.rgb[1] >= 0 && layout.rgb[2] >= 0;
+  if (axes != 3 || !(channels == 0 || (channels == 3 && colour))) return;
+  const size_t x = layout.xyz[0], y = layout.xyz[1], z = layout.xyz[2];
+  if (x == y || y == z || x == z) return;  // an axis named twice, another not at all
   record_layout_ = layout;
 }
 
