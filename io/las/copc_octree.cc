@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
-#include <mutex>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -21,15 +21,16 @@ namespace {
 constexpr int kCellBits = 7;  // 128 = 2^7 cells a side
 static_assert(1 << kCellBits == kCopcCellsPerAxis);
 
-struct Split {
-  std::vector<uint64_t> kept;
-  std::array<std::vector<uint64_t>, 8> children;  // octant bit 0: x, 1: y, 2: z
-};
-
-// Nodes of more points than this are split through a table of every cell (O(n), parallel);
-// smaller ones sort their (cell, position) keys.
+// A node's points are sorted into buckets by their cells at the next kBucketBits levels (512
+// buckets, of 16^3 cells each), so that a bucket's cells are chosen in a small table, and the
+// points a node passes on are its children's, each a contiguous range.
+constexpr int kBucketBits = 3;
+constexpr size_t kBuckets = size_t{1} << (3 * kBucketBits);
+constexpr int kBucketCellBits = kCellBits - kBucketBits;
+constexpr size_t kBucketCells = size_t{1} << (3 * kBucketCellBits);
+// Nodes of more points than this are sorted by several threads; smaller ones by one each.
 constexpr size_t kLargeNodePoints = size_t{1} << 16;
-constexpr uint32_t kNone = 0xFFFFFFFFu;
+constexpr size_t kBlock = size_t{1} << 16;  // points a task sorts into buckets
 
 // A point's place in the cube, per axis q = floor(t * 2^62), t = (world - cube min) / cube width
 // clamped to [0, 1): floor(t * 2^L) = q >> (62 - L) exactly for every level L <= 62 (t * 2^L is
@@ -37,31 +38,49 @@ constexpr uint32_t kNone = 0xFFFFFFFFu;
 constexpr int kFixedBits = 62;
 using Place = std::array<uint64_t, 3>;
 
+// floor(t * 2^62) clamped to [0, 2^62 - 1]; the conversion truncates, which is the floor for the
+// positive values it sees (and needs no libm call on the baseline x86-64 this is built for).
 uint64_t ToFixed(double t) {
   constexpr double kOne = static_cast<double>(uint64_t{1} << kFixedBits);
-  const double u = std::floor(t * kOne);
+  const double u = t * kOne;
   if (!(u > 0.0)) return 0;
-  return u >= kOne ? (uint64_t{1} << kFixedBits) - 1 : static_cast<uint64_t>(u);
+  return u >= kOne ? (uint64_t{1} << kFixedBits) - 1
+                   : static_cast<uint64_t>(static_cast<int64_t>(u));
 }
 
-Eigen::Vector3d World(const uint8_t* p, const Eigen::Vector3d& scale, const Eigen::Vector3d& offset) {
-  Eigen::Vector3d w;
-  for (int k = 0; k < 3; ++k) w[k] = LoadLE<int32_t>(p + 4 * k) * scale[k] + offset[k];
-  return w;
-}
+// A point as the tree is built: its record's X, Y, Z and its index.
+struct Element {
+  int32_t xyz[3];
+  uint32_t index;
+};
 
-// The cube of the points (into tree) and their places in it. The bounds are reduced block by
-// block in parallel: a minimum and a maximum do not depend on the order.
-std::vector<Place> CubePlaces(const uint8_t* records, size_t n, size_t length,
-                              const Eigen::Vector3d& scale, const Eigen::Vector3d& offset,
-                              CopcOctree* tree) {
-  constexpr size_t kBlock = size_t{1} << 16;
+struct Cube {
+  Eigen::Vector3d scale, offset, min;
+  double width = 0.0;
+  Place operator()(const Element& e) const {
+    Place q;
+    for (int k = 0; k < 3; ++k) q[k] = ToFixed((e.xyz[k] * scale[k] + offset[k] - min[k]) / width);
+    return q;
+  }
+};
+
+// The cube of the points (into tree) and their elements (into elements[0, n)). The bounds are
+// reduced block by block in parallel: a minimum and a maximum do not depend on the order.
+void CubeElements(const uint8_t* records, size_t n, size_t length, const Eigen::Vector3d& scale,
+                  const Eigen::Vector3d& offset, CopcOctree* tree, Cube* cube,
+                  Element* elements) {
   const size_t blocks = (n + kBlock - 1) / kBlock;
   std::vector<Eigen::Vector3d> block_lo(blocks), block_hi(blocks);
   ParallelFor(size_t{0}, blocks, [&](size_t b) {
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
     for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
-      const Eigen::Vector3d w = World(records + i * length, scale, offset);
+      Element& e = elements[i];
+      Eigen::Vector3d w;
+      for (int k = 0; k < 3; ++k) {
+        e.xyz[k] = LoadLE<int32_t>(records + i * length + 4 * k);
+        w[k] = e.xyz[k] * scale[k] + offset[k];
+      }
+      e.index = static_cast<uint32_t>(i);
       lo = lo.cwiseMin(w);
       hi = hi.cwiseMax(w);
     }
@@ -78,157 +97,180 @@ std::vector<Place> CubePlaces(const uint8_t* records, size_t n, size_t length,
   tree->halfsize = 0.5 * (hi - lo).maxCoeff();
   if (!(tree->halfsize > 0.0)) tree->halfsize = scale.cwiseAbs().maxCoeff();
   tree->spacing = 2.0 * tree->halfsize / kCopcCellsPerAxis;
-  const Eigen::Vector3d min = tree->center.array() - tree->halfsize;
-  const double width = 2.0 * tree->halfsize;
-  std::vector<Place> places(n);
-  ParallelFor(size_t{0}, n, [&](size_t i) {
-    const Eigen::Vector3d t = (World(records + i * length, scale, offset) - min) / width;
-    for (int k = 0; k < 3; ++k) places[i][k] = ToFixed(t[k]);
-  });
-  return places;
+  *cube = {scale, offset, tree->center.array() - tree->halfsize, 2.0 * tree->halfsize};
 }
 
-// A point in a node: its cell (21 bits: x, y, z of 7), the child octant holding it (bit 0: x,
-// 1: y, 2: z) and its squared distance to the cell's centre in cell widths.
-struct Located {
-  uint64_t cell = 0;
-  uint32_t octant = 0;
-  double distance = 0.0;
-};
-
-// Squared distance (float bits, which order as the values do for >= 0) above the position: the
+// Squared distance (float bits, which order as the values do for >= 0) above the index: the
 // smaller of two is the nearer point, the earlier on a tie.
-uint64_t Packed(double distance, size_t j) {
+uint64_t Packed(double distance, uint32_t index) {
   const float d = static_cast<float>(distance);
   uint32_t bits;
   std::memcpy(&bits, &d, 4);
-  return uint64_t{bits} << 32 | j;
+  return uint64_t{bits} << 32 | index;
 }
 
 constexpr uint64_t kEmpty = ~uint64_t{0};
-constexpr size_t kCells = size_t{1} << (3 * kCellBits);
-using CellTable = std::unique_ptr<std::atomic<uint64_t>[]>;
 
-// Tables of one slot a cell (16 MiB) for large nodes, every slot kEmpty between uses (a node
-// empties the slots it used), so a table is filled once however many nodes use it.
-class CellTables {
- public:
-  CellTable Take() {
-    {
-      const std::lock_guard<std::mutex> lock(mutex_);
-      if (!free_.empty()) {
-        CellTable t = std::move(free_.back());
-        free_.pop_back();
-        return t;
-      }
-    }
-    CellTable t(new std::atomic<uint64_t>[kCells]);
-    for (size_t c = 0; c < kCells; ++c) t[c].store(kEmpty, std::memory_order_relaxed);
-    return t;
-  }
-  void Give(CellTable t) {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    free_.push_back(std::move(t));
-  }
-
- private:
-  std::mutex mutex_;
-  std::vector<CellTable> free_;
-};
-
-// Marks in `kept` the point of each cell with the least packed (distance, position), through a
-// table's atomic minima, which do not depend on the order the threads reach them in.
-template <typename Locate>
-void KeepNearestLarge(size_t n, const Locate& locate, CellTables* tables,
-                      std::vector<uint8_t>* octant, std::vector<uint8_t>* kept) {
-  CellTable best = tables->Take();
-  std::vector<uint32_t> cell(n);
-  ParallelFor(size_t{0}, n, [&](size_t j) {
-    const Located l = locate(j);
-    (*octant)[j] = static_cast<uint8_t>(l.octant);
-    cell[j] = static_cast<uint32_t>(l.cell);
-    const uint64_t v = Packed(l.distance, j);
-    std::atomic<uint64_t>& b = best[l.cell];
-    uint64_t now = b.load(std::memory_order_relaxed);
-    while (v < now && !b.compare_exchange_weak(now, v, std::memory_order_relaxed)) {
-    }
-  });
-  ParallelFor(size_t{0}, n, [&](size_t j) {
-    (*kept)[j] = (best[cell[j]].load(std::memory_order_relaxed) & 0xFFFFFFFFu) == j;
-  });
-  ParallelFor(size_t{0}, n,
-              [&](size_t j) { best[cell[j]].store(kEmpty, std::memory_order_relaxed); });
-  tables->Give(std::move(best));
-}
-
-// One node: one point a cell kept, the others to their child octants.
-Split SplitNode(const CopcOctreeOptions& options, const CopcKey& key,
-                const std::vector<uint64_t>& points, const std::vector<Place>& places,
-                bool keep_all, CellTables* tables) {
-  Split s;
-  if (keep_all || points.size() < static_cast<size_t>(options.min_subtree_points)) {
-    s.kept = points;
-    return s;
-  }
-  const int shift = kFixedBits - (key.level + kCellBits);
-  const uint64_t frac_mask = (uint64_t{1} << shift) - 1;
-  const double frac_unit = std::ldexp(1.0, -shift);
-  const uint64_t base[3] = {uint64_t(key.x) << kCellBits, uint64_t(key.y) << kCellBits,
-                            uint64_t(key.z) << kCellBits};
-  auto locate = [&](size_t j) {
-    Located l;
-    const Place& q = places[points[j]];
-    for (int k = 0; k < 3; ++k) {
-      const uint64_t local = (q[k] >> shift) - base[k];  // in [0, 128)
-      l.cell = l.cell << kCellBits | local;
-      l.octant |= static_cast<uint32_t>(local >> (kCellBits - 1)) << k;
-      const double e = static_cast<double>(q[k] & frac_mask) * frac_unit - 0.5;
-      l.distance += e * e;
-    }
-    return l;
-  };
-  const size_t n = points.size();
-  CANDI_CHECK(n < kNone) << "COPC node of " << n << " points";
-  std::vector<uint8_t> octant(n), kept(n, 0);
-  if (n > kLargeNodePoints) {
-    KeepNearestLarge(n, locate, tables, &octant, &kept);
+// Runs f(0..n-1) on several threads or on this one.
+template <typename F>
+void Loop(bool parallel, size_t n, const F& f) {
+  if (parallel) {
+    ParallelFor(size_t{0}, n, f);
   } else {
-    // Per point: its cell above its position in the node, sorted; each cell's run's least packed.
-    std::vector<uint64_t> keys(n), packed(n);
-    for (size_t j = 0; j < n; ++j) {
-      const Located l = locate(j);
-      keys[j] = l.cell << 32 | j;
-      packed[j] = Packed(l.distance, j);
-      octant[j] = static_cast<uint8_t>(l.octant);
-    }
-    std::sort(keys.begin(), keys.end());
-    for (size_t e = 0; e < n;) {
-      const uint64_t cell = keys[e] >> 32;
-      uint64_t best = packed[keys[e] & 0xFFFFFFFFu];
-      for (++e; e < n && keys[e] >> 32 == cell; ++e) best = std::min(best, packed[keys[e] & 0xFFFFFFFFu]);
-      kept[best & 0xFFFFFFFFu] = 1;
-    }
+    for (size_t i = 0; i < n; ++i) f(i);
   }
-  std::array<size_t, 8> sizes{};
-  for (size_t j = 0; j < n; ++j) sizes[octant[j]] += !kept[j];
-  size_t kept_size = n;  // each list allocated once, at its size
-  for (int o = 0; o < 8; ++o) {
-    if (sizes[o] < static_cast<size_t>(options.min_octant_points)) continue;
-    s.children[o].reserve(sizes[o]);
-    kept_size -= sizes[o];
-  }
-  s.kept.reserve(kept_size);
-  for (size_t j = 0; j < n; ++j) {
-    const bool small = sizes[octant[j]] < static_cast<size_t>(options.min_octant_points);
-    (kept[j] || small ? s.kept : s.children[octant[j]]).push_back(points[j]);
-  }
-  return s;
 }
+
+// A node being built: its points are elements [begin, end) of the level's buffer.
+struct Range {
+  CopcKey key;
+  size_t begin = 0, end = 0;
+};
 
 CopcKey ChildKey(const CopcKey& key, int octant) {
   return {key.level + 1, 2 * key.x + (octant & 1), 2 * key.y + ((octant >> 1) & 1),
           2 * key.z + ((octant >> 2) & 1)};
 }
+
+// Bytes of the builder's buffers for n points.
+size_t BuilderBytes(size_t n) { return n * (2 * sizeof(Element) + sizeof(uint16_t)); }
+
+// The tree's buffers (in `memory`, BuilderBytes): a level's nodes are ranges of `points`; a node
+// sorts its range into `sorted` by bucket and passes its children's points back into the front
+// of its range. Pages are first touched by the passes that fill them, in parallel.
+class Builder {
+ public:
+  Builder(const CopcOctreeOptions& options, const Cube& cube, size_t n, uint8_t* memory,
+          uint32_t* node_of)
+      : options_(options), cube_(cube), points_(reinterpret_cast<Element*>(memory)),
+        sorted_(points_ + n), flags_(reinterpret_cast<uint16_t*>(sorted_ + n)),
+        node_of_(node_of) {}
+
+  // Splits node `range` (id `id`): its points one a cell, the rest to its children's ranges
+  // (into children, octant order); its points' node_of set to id; returns how many it keeps.
+  size_t Split(const Range& range, uint32_t id, bool keep_all, bool parallel,
+               std::vector<Range>* children) {
+    const size_t n = range.end - range.begin;
+    if (keep_all || n < static_cast<size_t>(options_.min_subtree_points)) {
+      Loop(parallel, n, [&](size_t i) { node_of_[points_[range.begin + i].index] = id; });
+      return n;
+    }
+    const int level = range.key.level;
+    // Sort by bucket, block by block: each block's count of each bucket, then its points to
+    // their places, in order.
+    const size_t blocks = (n + kBlock - 1) / kBlock;
+    std::vector<uint32_t> counts(blocks * kBuckets, 0);
+    const int bucket_shift = kFixedBits - (level + kBucketBits);
+    auto block_begin = [&](size_t b) { return range.begin + b * kBlock; };
+    auto block_end = [&](size_t b) { return std::min(range.end, range.begin + (b + 1) * kBlock); };
+    Loop(parallel, blocks, [&](size_t b) {
+      uint32_t* count = counts.data() + b * kBuckets;
+      for (size_t i = block_begin(b); i < block_end(b); ++i) {
+        const Place q = cube_(points_[i]);
+        uint32_t bucket = 0;
+        for (int bit = kBucketBits - 1; bit >= 0; --bit) {
+          for (int k = 2; k >= 0; --k) bucket = bucket << 1 | ((q[k] >> (bucket_shift + bit)) & 1);
+        }
+        flags_[i] = static_cast<uint16_t>(bucket);
+        ++count[bucket];
+      }
+    });
+    std::vector<size_t> bucket_begin(kBuckets + 1);
+    {
+      size_t at = range.begin;
+      for (size_t u = 0; u < kBuckets; ++u) {
+        bucket_begin[u] = at;
+        for (size_t b = 0; b < blocks; ++b) {
+          const uint32_t c = counts[b * kBuckets + u];
+          counts[b * kBuckets + u] = static_cast<uint32_t>(at - range.begin);
+          at += c;
+        }
+      }
+      bucket_begin[kBuckets] = at;
+    }
+    Loop(parallel, blocks, [&](size_t b) {
+      uint32_t* next = counts.data() + b * kBuckets;
+      for (size_t i = block_begin(b); i < block_end(b); ++i) {
+        sorted_[range.begin + next[flags_[i]]++] = points_[i];
+      }
+    });
+    // Each bucket's cells: the point of the least packed (distance, index) stays (flag 1).
+    const int cell_shift = kFixedBits - (level + kCellBits);
+    const uint64_t frac_mask = (uint64_t{1} << cell_shift) - 1;
+    const double frac_unit = std::ldexp(1.0, -cell_shift);
+    std::vector<size_t> passed(kBuckets);  // points a bucket passes on
+    Loop(parallel, kBuckets, [&](size_t u) {
+      thread_local std::vector<uint64_t> best(kBucketCells, kEmpty);
+      thread_local std::vector<uint64_t> packed;
+      thread_local std::vector<uint16_t> cell;
+      const size_t b = bucket_begin[u], m = bucket_begin[u + 1] - b;
+      packed.resize(m);
+      cell.resize(m);
+      for (size_t i = 0; i < m; ++i) {
+        const Place q = cube_(sorted_[b + i]);
+        uint32_t c = 0;
+        double distance = 0.0;
+        for (int k = 0; k < 3; ++k) {
+          const uint64_t local = (q[k] >> cell_shift) & ((uint64_t{1} << kBucketCellBits) - 1);
+          c |= static_cast<uint32_t>(local) << (kBucketCellBits * k);
+          const double e = static_cast<double>(q[k] & frac_mask) * frac_unit - 0.5;
+          distance += e * e;
+        }
+        cell[i] = static_cast<uint16_t>(c);
+        packed[i] = Packed(distance, sorted_[b + i].index);
+        best[c] = std::min(best[c], packed[i]);
+      }
+      size_t pass = 0;
+      for (size_t i = 0; i < m; ++i) {
+        const bool keep = best[cell[i]] == packed[i];
+        flags_[b + i] = keep;
+        pass += !keep;
+      }
+      for (size_t i = 0; i < m; ++i) best[cell[i]] = kEmpty;
+      passed[u] = pass;
+    });
+    // A child octant of too few points stays in the node; the others' points go back to the
+    // front of the range, octant by octant.
+    constexpr size_t kPerOctant = kBuckets / 8;
+    std::array<size_t, 8> octant_size{};
+    for (size_t u = 0; u < kBuckets; ++u) octant_size[u / kPerOctant] += passed[u];
+    std::array<bool, 8> stays{};
+    for (int o = 0; o < 8; ++o) {
+      stays[o] = octant_size[o] < static_cast<size_t>(options_.min_octant_points);
+    }
+    std::vector<size_t> out(kBuckets);
+    size_t at = range.begin, kept = n;
+    for (size_t u = 0; u < kBuckets; ++u) {
+      const int o = static_cast<int>(u / kPerOctant);
+      if (u % kPerOctant == 0 && !stays[o] && octant_size[o] > 0) {
+        children->push_back({ChildKey(range.key, o), at, at + octant_size[o]});
+        kept -= octant_size[o];
+      }
+      out[u] = at;
+      if (!stays[o]) at += passed[u];
+    }
+    Loop(parallel, kBuckets, [&](size_t u) {
+      const bool stay = stays[u / kPerOctant];
+      size_t to = out[u];
+      for (size_t i = bucket_begin[u]; i < bucket_begin[u + 1]; ++i) {
+        if (flags_[i] || stay) {
+          node_of_[sorted_[i].index] = id;
+        } else {
+          points_[to++] = sorted_[i];
+        }
+      }
+    });
+    return kept;
+  }
+
+ private:
+  const CopcOctreeOptions& options_;
+  const Cube cube_;
+  Element* const points_;
+  Element* const sorted_;
+  uint16_t* const flags_;  // a point's bucket while sorting, then whether it stays
+  uint32_t* const node_of_;
+};
 
 }  // namespace
 
@@ -252,40 +294,68 @@ void CopcOctreeOptions::Check() const {
   }
 }
 
-CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
-                           size_t record_length, const Eigen::Vector3d& scale,
-                           const Eigen::Vector3d& offset) {
+CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_t* records,
+                                  size_t n, size_t record_length, const Eigen::Vector3d& scale,
+                                  const Eigen::Vector3d& offset) {
   options.Check();
-  CopcOctree tree;
-  const std::vector<Place> places = CubePlaces(records, n, record_length, scale, offset, &tree);
-  if (n == 0) return tree;
+  CANDI_CHECK(n <= size_t{std::numeric_limits<uint32_t>::max()})
+      << "a COPC octree of " << n << " points (at most 2^32 - 1)";
+  CopcPartition partition;
+  CopcOctree& tree = partition.tree;
+  // Not value-initialised: the passes write every byte they read.
+  partition.memory_bytes = std::max(BuilderBytes(n), n * record_length);
+  partition.memory.reset(new uint8_t[partition.memory_bytes]);
+  static_assert(alignof(Element) <= alignof(std::max_align_t));
+  Cube cube;
+  CubeElements(records, n, record_length, scale, offset, &tree, &cube,
+               reinterpret_cast<Element*>(partition.memory.get()));
+  if (n == 0) return partition;
+  partition.node_of.reset(new uint32_t[n]);
+  Builder builder(options, cube, n, partition.memory.get(), partition.node_of.get());
   const double min_scale = scale.cwiseAbs().minCoeff();
-  CellTables tables;
-  std::vector<CopcNode> level(1);
-  level[0].points.resize(n);
-  for (size_t i = 0; i < n; ++i) level[0].points[i] = i;
+  std::vector<Range> level{{CopcKey{}, 0, n}};
   while (!level.empty()) {
     // Cells narrower than a LAS unit: only duplicates share one; keep them all here.
     const double cell = std::ldexp(tree.spacing, -level[0].key.level);
     const bool keep_all = cell < min_scale || level[0].key.level + kCellBits >= 62;
-    std::vector<Split> splits(level.size());
-    ParallelFor(size_t{0}, level.size(), [&](size_t j) {
-      splits[j] = SplitNode(options, level[j].key, level[j].points, places, keep_all, &tables);
-    });
-    std::vector<CopcNode> next;
+    const size_t first = tree.nodes.size();
+    CANDI_CHECK(first + level.size() <= size_t{std::numeric_limits<uint32_t>::max()})
+        << "COPC octree of " << first + level.size() << " nodes";
+    for (const Range& r : level) tree.nodes.push_back({r.key, 0, {}});
+    // Large nodes one at a time, each on every thread; the small ones a thread each.
+    std::vector<std::vector<Range>> children(level.size());
+    std::vector<size_t> small;
     for (size_t j = 0; j < level.size(); ++j) {
-      tree.nodes.push_back({level[j].key, std::move(splits[j].kept)});
-      for (int o = 0; o < 8; ++o) {
-        if (splits[j].children[o].empty()) continue;
-        next.push_back({ChildKey(level[j].key, o), std::move(splits[j].children[o])});
+      if (level[j].end - level[j].begin > kLargeNodePoints) {
+        tree.nodes[first + j].size = builder.Split(level[j], static_cast<uint32_t>(first + j),
+                                                   keep_all, true, &children[j]);
+      } else {
+        small.push_back(j);
       }
     }
-    std::sort(next.begin(), next.end(), [](const CopcNode& a, const CopcNode& b) {
+    ParallelFor(size_t{0}, small.size(), [&](size_t s) {
+      const size_t j = small[s];
+      tree.nodes[first + j].size = builder.Split(level[j], static_cast<uint32_t>(first + j),
+                                                 keep_all, false, &children[j]);
+    });
+    std::vector<Range> next;
+    for (const std::vector<Range>& c : children) next.insert(next.end(), c.begin(), c.end());
+    std::sort(next.begin(), next.end(), [](const Range& a, const Range& b) {
       return std::tie(a.key.x, a.key.y, a.key.z) < std::tie(b.key.x, b.key.y, b.key.z);
     });
     level = std::move(next);
   }
-  return tree;
+  return partition;
+}
+
+CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
+                           size_t record_length, const Eigen::Vector3d& scale,
+                           const Eigen::Vector3d& offset) {
+  CopcPartition partition = PartitionCopcOctree(options, records, n, record_length, scale, offset);
+  std::vector<CopcNode>& nodes = partition.tree.nodes;
+  for (CopcNode& node : nodes) node.points.reserve(node.size);
+  for (size_t i = 0; i < n; ++i) nodes[partition.node_of[i]].points.push_back(i);
+  return std::move(partition.tree);
 }
 
 }  // namespace candi::io

@@ -1,33 +1,37 @@
 // The octree of a COPC file (https://copc.io, COPC 1.0): which points each node (voxel) holds.
 //
-// The cube: centred on the points' bounds, halfsize = half the largest extent (or the largest
-// scale when every point is at one place). Node (d, x, y, z) is the cube's cell at level d,
-// width 2 * halfsize / 2^d, x, y, z in [0, 2^d). Each node lays a grid of 128^3 cells over
-// itself (untwine's CellCount) and keeps one point a cell: the one nearest to the cell's centre
-// (squared distance rounded to float), the earlier in input order on a tie; the others go to the child octant holding them. So the
-// points a node keeps are at most one per cell of width spacing / 2^d, spacing = 2 * halfsize /
-// 128 being the root's (COPC info "spacing"; untwine and PDAL write the cube width over their
-// cell count, 128). A node whose cells are narrower than the smallest LAS scale keeps all its
-// points (only exact duplicates can share a cell there), so the depth is bounded.
-// Small nodes are avoided as untwine avoids them (bu/Processor.cpp: MinimumPoints 100,
-// MinimumTotalPoints 1500): a node reached by fewer than min_subtree_points points keeps them all,
-// and a child octant that would get fewer than min_octant_points stays in its parent. (Each LAZ
-// chunk costs its coder's set-up: a scan with far jumps made 9,000 nodes of ~6 points of 60,000
-// points without this.) A node's points in octants that have a child node are one a cell.
+// The cube: centred on the points' bounds, halfsize = half the largest extent (or the largest scale
+// when every point is at one place). Node (d, x, y, z) is the cube's cell at level d, width 2 *
+// halfsize / 2^d, x, y, z in [0, 2^d). Each node lays a grid of 128^3 cells over itself (untwine's
+// CellCount) and keeps one point a cell: the one nearest to the cell's centre (squared distance
+// rounded to float), the earlier in input order on a tie; the others go to the child octant holding
+// them. So the points a node keeps are at most one per cell of width spacing / 2^d, spacing = 2 *
+// halfsize / 128 being the root's (COPC info "spacing"; untwine and PDAL write the cube width over
+// their cell count, 128). A node whose cells are narrower than the smallest LAS scale keeps all its
+// points (only exact duplicates can share a cell there), so the depth is bounded. Small nodes are
+// avoided as untwine avoids them (bu/Processor.cpp: MinimumPoints 100, MinimumTotalPoints 1500): a
+// node reached by fewer than min_subtree_points points keeps them all, and a child octant that
+// would get fewer than min_octant_points stays in its parent. (Each LAZ chunk costs its coder's
+// set-up: a scan with far jumps made 9,000 nodes of ~6 points of 60,000 points without this.) A
+// node's points in octants that have a child node are one a cell.
 //
 // Positions are the records' integer X, Y, Z (LAS units, world = X * scale + offset): a point
 // belongs to the cell floor(t * 2^L) at level L, t = (world - cube min) / cube width, clamped to
-// [0, 2^L - 1], the same rule at every level, so a point of node (d, x) lies in a child
-// (d + 1, 2x or 2x + 1); it is computed once, as floor(t * 2^62), of which each level's cell is
-// a shift. Deterministic: the nodes and their points do not depend on the thread count (the
-// nodes of a level are processed in parallel, each on its own; a large node's cells are chosen
-// by atomic minima of (distance, position)).
-// Memory: ~5 words a point, and 16 MiB a large node being split. Thread-safety: a pure function.
+// [0, 2^L - 1], the same rule at every level, so a point of node (d, x) lies in a child (d + 1, 2x
+// or 2x + 1); each level's cell is a shift of floor(t * 2^62). Deterministic: the nodes and their
+// points do not depend on the thread count.
+// Built level by level: a node's points (a range of the level's buffer) are sorted by their cells
+// three levels down into 512 buckets, each bucket's cells chosen in a small table, and the points
+// passed on written back as the children's ranges; a level's nodes are split in parallel, a large
+// one by blocks and buckets, so each pass over the points reads and writes them in order.
+// Memory: 38 bytes a point, or the record length + 4 if more (the records' X, Y, Z and index twice,
+// a bucket, the node of each). Thread-safety: a pure function.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -45,7 +49,8 @@ struct CopcKey {
 
 struct CopcNode {
   CopcKey key;
-  std::vector<uint64_t> points;  // indices of the records it holds, ascending
+  uint64_t size = 0;             // points it holds
+  std::vector<uint64_t> points;  // their records' indices, ascending (empty in a CopcPartition)
 };
 
 struct CopcOctree {
@@ -65,6 +70,21 @@ struct CopcOctreeOptions {
   int min_octant_points = 100;
   void Check() const;
 };
+
+// The octree of n LAS records (record_length bytes each, X, Y, Z int32 at bytes 0, 4, 8) with
+// the header's scale and offset, as node sizes and each record's node: node_of[i] is the index
+// in tree.nodes of the node holding record i. `memory` is the builder's, handed on (its contents
+// undefined) so that the records in node order (RecordsByNode, io/las/copc_write.h) take no new
+// pages. CANDI_CHECK: n < 2^32.
+struct CopcPartition {
+  CopcOctree tree;                       // nodes without their points lists
+  std::unique_ptr<uint32_t[]> node_of;   // n
+  std::unique_ptr<uint8_t[]> memory;     // memory_bytes >= n * record_length
+  size_t memory_bytes = 0;
+};
+CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_t* records,
+                                  size_t n, size_t record_length, const Eigen::Vector3d& scale,
+                                  const Eigen::Vector3d& offset);
 
 // Builds the octree of n LAS records (record_length bytes each, X, Y, Z int32 at bytes 0, 4, 8)
 // with the header's scale and offset.

@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <array>
 #include <cmath>
 #include <map>
 #include <random>
 #include <set>
 #include <stdexcept>
+#include <utility>
 #include <tuple>
 #include <vector>
 
@@ -160,6 +162,120 @@ TEST(CopcOctree, SmallNodesStayInTheirParentsAsInUntwine) {
   EXPECT_LT(tree.nodes.size(), grid.nodes.size());
   std::printf("%zu nodes with untwine's minimums, %zu with the grid alone\n", tree.nodes.size(),
               grid.nodes.size());
+}
+
+// The header's rule written as plainly as it reads: each node's points by their cell on a map,
+// the nearest to the cell's centre (its squared distance as a float, then the earlier point)
+// staying; the rest to their octants, octants of too few points staying too.
+class ReferenceTree {
+ public:
+  ReferenceTree(const CopcOctreeOptions& options, const std::vector<uint8_t>& records, size_t n,
+                const CopcOctree& cube)
+      : options_(options), places_(n) {
+    const Eigen::Vector3d min = cube.center.array() - cube.halfsize;
+    const long double one = std::ldexp(1.0L, 62);
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d t = (World(records, i) - min) / (2.0 * cube.halfsize);
+      for (int k = 0; k < 3; ++k) {
+        const long double u = std::floor(static_cast<long double>(t[k]) * one);
+        places_[i][k] = u <= 0 ? 0 : u >= one ? (uint64_t{1} << 62) - 1 : uint64_t(u);
+      }
+    }
+    spacing_ = cube.spacing;
+  }
+
+  std::map<std::tuple<int, int, int, int>, std::vector<uint64_t>> Build() {
+    std::vector<uint64_t> all(places_.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+    Split(CopcKey{}, all);
+    return nodes_;
+  }
+
+ private:
+  void Split(const CopcKey& key, const std::vector<uint64_t>& points) {
+    std::vector<uint64_t>& kept = nodes_[Tuple(key)];
+    const bool keep_all = std::ldexp(spacing_, -key.level) < kScale.minCoeff();
+    if (keep_all || points.size() < static_cast<size_t>(options_.min_subtree_points)) {
+      kept = points;
+      return;
+    }
+    const int shift = 62 - (key.level + 7);
+    std::map<std::tuple<uint64_t, uint64_t, uint64_t>, std::pair<float, uint64_t>> best;
+    for (uint64_t i : points) {
+      double d = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        const double e = std::ldexp(double(places_[i][k] & ((uint64_t{1} << shift) - 1)), -shift);
+        d += (e - 0.5) * (e - 0.5);
+      }
+      const auto cell = std::make_tuple(places_[i][0] >> shift, places_[i][1] >> shift,
+                                        places_[i][2] >> shift);
+      const auto candidate = std::make_pair(static_cast<float>(d), i);
+      const auto it = best.find(cell);
+      if (it == best.end() || candidate < it->second) best[cell] = candidate;
+    }
+    std::set<uint64_t> stays;
+    for (const auto& [cell, b] : best) stays.insert(b.second);
+    std::array<std::vector<uint64_t>, 8> octants;
+    for (uint64_t i : points) {
+      if (stays.count(i)) continue;
+      int o = 0;
+      for (int k = 0; k < 3; ++k) o |= int((places_[i][k] >> (61 - key.level)) & 1) << k;
+      octants[o].push_back(i);
+    }
+    for (int o = 0; o < 8; ++o) {
+      if (octants[o].size() < static_cast<size_t>(options_.min_octant_points)) {
+        stays.insert(octants[o].begin(), octants[o].end());
+      }
+    }
+    kept.assign(stays.begin(), stays.end());
+    for (int o = 0; o < 8; ++o) {
+      if (octants[o].empty() || octants[o].size() < size_t(options_.min_octant_points)) continue;
+      Split({key.level + 1, 2 * key.x + (o & 1), 2 * key.y + (o >> 1 & 1), 2 * key.z + (o >> 2)},
+            octants[o]);
+    }
+  }
+
+  const CopcOctreeOptions options_;
+  std::vector<std::array<uint64_t, 3>> places_;
+  double spacing_ = 0.0;
+  std::map<std::tuple<int, int, int, int>, std::vector<uint64_t>> nodes_;
+};
+
+TEST(CopcOctree, TheBucketedBuildGivesTheRulesTree) {
+  // 150,000 points: the root and the first levels take the large nodes' way (blocks, buckets on
+  // every thread), the rest the small nodes' (a thread each).
+  const size_t n = 150000;
+  const std::vector<uint8_t> records = ClusteredRecords(n, 11);
+  for (const CopcOctreeOptions& options : {kGridOnly, CopcOctreeOptions{}}) {
+    const CopcOctree tree = BuildCopcOctree(options, records.data(), n, kLength, kScale, kOffset);
+    const auto reference = ReferenceTree(options, records, n, tree).Build();
+    ASSERT_EQ(tree.nodes.size(), reference.size());
+    int previous_level = 0;
+    for (const CopcNode& node : tree.nodes) {
+      EXPECT_GE(node.key.level, previous_level) << "nodes level by level";
+      previous_level = node.key.level;
+      const auto it = reference.find(Tuple(node.key));
+      ASSERT_NE(it, reference.end()) << node.key.level << "-" << node.key.x << "-" << node.key.y
+                                     << "-" << node.key.z;
+      EXPECT_EQ(node.points, it->second);
+      EXPECT_EQ(node.size, node.points.size());
+    }
+  }
+}
+
+TEST(CopcOctree, ThePartitionNamesEachPointsNode) {
+  const size_t n = 80000;
+  const std::vector<uint8_t> records = ClusteredRecords(n, 5);
+  const CopcOctree tree = BuildCopcOctree({}, records.data(), n, kLength, kScale, kOffset);
+  const CopcPartition partition =
+      PartitionCopcOctree({}, records.data(), n, kLength, kScale, kOffset);
+  ASSERT_EQ(partition.tree.nodes.size(), tree.nodes.size());
+  EXPECT_GE(partition.memory_bytes, n * kLength);
+  for (size_t j = 0; j < tree.nodes.size(); ++j) {
+    EXPECT_TRUE(partition.tree.nodes[j].points.empty());
+    EXPECT_EQ(partition.tree.nodes[j].size, tree.nodes[j].size);
+    for (uint64_t i : tree.nodes[j].points) ASSERT_EQ(partition.node_of[i], j);
+  }
 }
 
 TEST(CopcOctreeOptions, DefaultsPassAndNegativeMinimumsAreRefused) {

@@ -180,6 +180,41 @@ CopcHierarchy EncodeCopcHierarchyPages(const CopcWriteOptions& options,
   return PageWriter(options, entries, payload_offset).Write();
 }
 
+std::unique_ptr<uint8_t[]> RecordsByNode(CopcPartition* partition, const uint8_t* records, size_t n,
+                                         size_t record_length) {
+  const std::vector<CopcNode>& nodes = partition->tree.nodes;
+  const uint32_t* node_of = partition->node_of.get();
+  CANDI_CHECK(partition->memory_bytes >= n * record_length) << "COPC partition memory";
+  // Blocks of records, each block's count of each node, then each block's records to their
+  // places: a node's records stay in input order, whatever the thread count.
+  constexpr size_t kBlock = size_t{1} << 22;
+  const size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<uint64_t> at(blocks * nodes.size(), 0);
+  ParallelFor(size_t{0}, blocks, [&](size_t b) {
+    uint64_t* count = at.data() + b * nodes.size();
+    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) ++count[node_of[i]];
+  });
+  uint64_t next = 0;
+  for (size_t j = 0; j < nodes.size(); ++j) {
+    for (size_t b = 0; b < blocks; ++b) {
+      const uint64_t c = at[b * nodes.size() + j];
+      at[b * nodes.size() + j] = next;
+      next += c;
+    }
+  }
+  CANDI_CHECK_EQ(next, uint64_t{n}) << "COPC node sizes";
+  std::unique_ptr<uint8_t[]> sorted = std::move(partition->memory);
+  partition->memory_bytes = 0;
+  ParallelFor(size_t{0}, blocks, [&](size_t b) {
+    uint64_t* to = at.data() + b * nodes.size();
+    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+      std::memcpy(sorted.get() + to[node_of[i]]++ * record_length, records + i * record_length,
+                  record_length);
+    }
+  });
+  return sorted;
+}
+
 CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
                               const laz::Vlr& vlr, uint64_t first_chunk,
                               const std::function<void(const uint8_t*, size_t)>& sink) {
@@ -190,33 +225,34 @@ CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, si
   std::vector<uint32_t> bytes, points;
   uint64_t offset = first_chunk;
   std::vector<std::vector<uint8_t>> chunks;
+  std::vector<const uint8_t*> starts;
+  const uint8_t* start = records;
+  for (const CopcNode& node : tree.nodes) {
+    starts.push_back(start);
+    start += node.size * record_length;
+  }
   for (size_t first = 0, count = 0; first < tree.nodes.size(); first += count) {
     size_t points_in_batch = 0;
     for (count = 0; first + count < tree.nodes.size() && points_in_batch < kBatchPoints; ++count) {
-      points_in_batch += tree.nodes[first + count].points.size();
+      points_in_batch += tree.nodes[first + count].size;
     }
     if (chunks.size() < count) chunks.resize(count);
     ParallelFor(size_t{0}, count, [&](size_t j) {
       const CopcNode& node = tree.nodes[first + j];
-      std::vector<uint8_t> gathered(node.points.size() * record_length);
-      for (size_t i = 0; i < node.points.size(); ++i) {
-        std::memcpy(gathered.data() + i * record_length, records + node.points[i] * record_length,
-                    record_length);
-      }
       chunks[j].clear();
-      laz::EncodeLayeredChunk(vlr.items, gathered.data(), static_cast<uint32_t>(node.points.size()),
+      laz::EncodeLayeredChunk(vlr.items, starts[first + j], static_cast<uint32_t>(node.size),
                               &chunks[j]);
     });
     for (size_t j = 0; j < count; ++j) {
       const CopcNode& node = tree.nodes[first + j];
       CANDI_CHECK(chunks[j].size() <= size_t{std::numeric_limits<int32_t>::max()} &&
-                  node.points.size() <= size_t{std::numeric_limits<int32_t>::max()})
-          << "COPC node of " << node.points.size() << " points, " << chunks[j].size() << " bytes";
+                  node.size <= size_t{std::numeric_limits<int32_t>::max()})
+          << "COPC node of " << node.size << " points, " << chunks[j].size() << " bytes";
       sink(chunks[j].data(), chunks[j].size());
       data.entries.push_back({node.key, offset, static_cast<int32_t>(chunks[j].size()),
-                              static_cast<int32_t>(node.points.size())});
+                              static_cast<int32_t>(node.size)});
       bytes.push_back(static_cast<uint32_t>(chunks[j].size()));
-      points.push_back(static_cast<uint32_t>(node.points.size()));
+      points.push_back(static_cast<uint32_t>(node.size));
       offset += chunks[j].size();
     }
   }

@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -68,9 +69,15 @@ struct CopcPointData {
   std::vector<CopcEntry> entries;    // one a node, in tree.nodes' order
   std::vector<uint8_t> chunk_table;  // LASzip's, variable chunks
 };
-// Compresses each node's records (gathered from `records`, record_length bytes each) into one
-// chunk with the items of `vlr` (layered), handing the chunks in node order to `sink`; the
-// first chunk starts at file offset `first_chunk`.
+// The n records in node order: tree.nodes[0]'s (in input order), then tree.nodes[1]'s, and so
+// on, written into the partition's memory (taken). Reads the records once in order, by parallel
+// blocks.
+std::unique_ptr<uint8_t[]> RecordsByNode(CopcPartition* partition, const uint8_t* records, size_t n,
+                                         size_t record_length);
+
+// Compresses each node's records (`records`: in node order, as RecordsByNode gives them,
+// record_length bytes each) into one chunk with the items of `vlr` (layered), handing the chunks
+// in node order to `sink`; the first chunk starts at file offset `first_chunk`.
 CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
                               const laz::Vlr& vlr, uint64_t first_chunk,
                               const std::function<void(const uint8_t*, size_t)>& sink);

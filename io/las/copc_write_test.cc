@@ -553,6 +553,25 @@ TEST(CopcWrite, SameBytesOnOneAndTwoThreads) {
   EXPECT_TRUE(bytes[0] == bytes[1]);
 }
 
+TEST(CopcWrite, InfoGpsTimeRangeLeavesNaNOutWhereverItLands) {
+  // A NaN time, first in input order: the nodes reorder the records, and the info VLR's range
+  // must come from the other times whichever record ends up first.
+  TempDir dir;
+  PointCloud cloud = RandomCloud(7, 20000, 21);
+  ScalarField* gps = cloud.FindScalar(las_field::kGpsTime);
+  ASSERT_NE(gps, nullptr);
+  double lo = INFINITY, hi = -INFINITY;
+  for (size_t i = 1; i < cloud.size(); ++i) {
+    lo = std::min(lo, gps->Get(i));
+    hi = std::max(hi, gps->Get(i));
+  }
+  gps->Set(0, std::nan(""));
+  WritePointCloud(dir.File("t.copc.laz"), cloud);
+  const CopcFile f = ReadCopc(dir.File("t.copc.laz"));
+  EXPECT_EQ(f.info.gpstime_minimum, lo);
+  EXPECT_EQ(f.info.gpstime_maximum, hi);
+}
+
 TEST(CopcWrite, InterruptedWriteLeavesNoPartialFile) {
   TempDir dir;
   EXPECT_TRUE(

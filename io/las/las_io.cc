@@ -895,11 +895,17 @@ void LasWriter::WriteLazPointData() {
 void LasWriter::WriteCopcPointData() {
   const size_t length = header_.record_length;
   const size_t n = copc_records_.size() / length;
-  const CopcOctree tree =
-      BuildCopcOctree({}, copc_records_.data(), n, length, header_.scale, header_.offset);
+  CopcPartition partition = PartitionCopcOctree({}, copc_records_.data(), n, length,
+                                                header_.scale, header_.offset);
+  const CopcOctree& tree = partition.tree;
+  // The records in node order; the input's freed.
+  const std::unique_ptr<uint8_t[]> sorted =
+      RecordsByNode(&partition, copc_records_.data(), n, length);
+  partition.node_of.reset();
+  std::vector<uint8_t>().swap(copc_records_);
   const laz::Vlr vlr = laz::ParseVlr(vlrs_.back().data);
   const CopcPointData data = WriteCopcChunks(
-      tree, copc_records_.data(), length, vlr, file_->Tell(),
+      tree, sorted.get(), length, vlr, file_->Tell(),
       [this](const uint8_t* bytes, size_t size) { file_->Write(bytes, size); });
   WriteChunkTable(file_.get(), header_.offset_to_point_data, data.chunk_table);
   CopcInfo info;
@@ -911,18 +917,20 @@ void LasWriter::WriteCopcPointData() {
   CopcHierarchy hierarchy = EncodeCopcHierarchyPages(copc_options_, data.entries, payload);
   info.root_hier_offset = payload + hierarchy.root_offset;
   info.root_hier_size = hierarchy.root_size;
+  bool any = false;  // NaN times are left out, so the records' order does not matter
   for (size_t i = 0; i < n; ++i) {
     double t;
-    std::memcpy(&t, copc_records_.data() + i * length + layout_.gps_offset, 8);
-    info.gpstime_minimum = i == 0 ? t : std::min(info.gpstime_minimum, t);
-    info.gpstime_maximum = i == 0 ? t : std::max(info.gpstime_maximum, t);
+    std::memcpy(&t, sorted.get() + i * length + layout_.gps_offset, 8);
+    if (std::isnan(t)) continue;
+    info.gpstime_minimum = any ? std::min(info.gpstime_minimum, t) : t;
+    info.gpstime_maximum = any ? std::max(info.gpstime_maximum, t) : t;
+    any = true;
   }
   const std::string encoded = EncodeCopcInfo(info);
   file_->WriteAt(header_.header_size + 54, encoded.data(), encoded.size());
   evlrs_.insert(evlrs_.begin(),
                 LasVlr{kCopcUserId, kCopcHierarchyRecord, "EPT hierarchy",
                        std::move(hierarchy.data), true});
-  std::vector<uint8_t>().swap(copc_records_);
 }
 
 }  // namespace
