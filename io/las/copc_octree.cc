@@ -28,6 +28,10 @@ constexpr int kBucketBits = 3;
 constexpr size_t kBuckets = size_t{1} << (3 * kBucketBits);
 constexpr int kBucketCellBits = kCellBits - kBucketBits;
 constexpr size_t kBucketCells = size_t{1} << (3 * kBucketCellBits);
+// A 3-bit value's bits spread to bits 0, 3 and 6: a bucket is x's spread | y's << 1 | z's << 2,
+// so its top three bits are the octant one level down (bit 0: x, 1: y, 2: z).
+constexpr uint32_t kSpread[8] = {0, 1, 8, 9, 64, 65, 72, 73};
+static_assert(kBucketBits == 3);
 // Nodes of more points than this are sorted by several threads; smaller ones by one each.
 constexpr size_t kLargeNodePoints = size_t{1} << 16;
 constexpr size_t kBlock = size_t{1} << 16;  // points a task sorts into buckets
@@ -168,9 +172,7 @@ class Builder {
       for (size_t i = block_begin(b); i < block_end(b); ++i) {
         const Place q = cube_(points_[i]);
         uint32_t bucket = 0;
-        for (int bit = kBucketBits - 1; bit >= 0; --bit) {
-          for (int k = 2; k >= 0; --k) bucket = bucket << 1 | ((q[k] >> (bucket_shift + bit)) & 1);
-        }
+        for (int k = 0; k < 3; ++k) bucket |= kSpread[(q[k] >> bucket_shift) & 7] << k;
         flags_[i] = static_cast<uint16_t>(bucket);
         ++count[bucket];
       }

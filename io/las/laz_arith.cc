@@ -65,7 +65,7 @@ void SymbolModel::Reset() {
   symbols_until_update_ = update_cycle_ = (symbols_ + 6) >> 1;
 }
 
-void SymbolModel::Update() {
+void SymbolModel::Update(bool with_table) {
   if ((total_count_ += update_cycle_) > kSymbolMaxCount) {  // halve the counts at the threshold
     total_count_ = 0;
     for (uint32_t& c : symbol_count_) total_count_ += (c = (c + 1) >> 1);
@@ -74,7 +74,7 @@ void SymbolModel::Update() {
   // bracket of the top table_bits bits, the first symbol whose range reaches into it.
   const uint32_t scale = 0x80000000u / total_count_;
   uint32_t sum = 0;
-  if (table_size_ == 0) {
+  if (table_size_ == 0 || !with_table) {
     for (uint32_t k = 0; k < symbols_; ++k) {
       distribution_[k] = (scale * sum) >> (31 - arith_internal::kSymbolLengthShift);
       sum += symbol_count_[k];
@@ -110,10 +110,12 @@ void ArithmeticDecoder::Init(const uint8_t* begin, const uint8_t* end) {
 // ---- ArithmeticEncoder ----
 
 void ArithmeticEncoder::Init() {
-  out_.clear();
+  used_ = 0;
   base_ = 0;
   length_ = 0xFFFFFFFFu;
 }
+
+void ArithmeticEncoder::Grow() { out_.resize(std::max<size_t>(4096, 2 * out_.size())); }
 
 void ArithmeticEncoder::Done() {
   // Pick a value inside the final interval that takes one byte (or two when the interval is
@@ -130,9 +132,10 @@ void ArithmeticEncoder::Done() {
   }
   if (init_base > base_) PropagateCarry();
   Renormalize();
-  out_.push_back(0);
-  out_.push_back(0);
-  if (another_byte) out_.push_back(0);
+  for (int i = 0; i < (another_byte ? 3 : 2); ++i) {
+    if (used_ == out_.size()) Grow();
+    out_[used_++] = 0;
+  }
 }
 
 // ---- IntegerCoder ----

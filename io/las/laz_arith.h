@@ -50,7 +50,9 @@ class SymbolModel {
  private:
   friend class ArithmeticDecoder;
   friend class ArithmeticEncoder;
-  void Update();
+  // New distribution from the counts; with_table: also the decoder's table (an encoder never
+  // reads it, and Reset() makes it again before a model decodes a new stream).
+  void Update(bool with_table = true);
   uint32_t symbols_, last_symbol_, table_size_, table_shift_;
   uint32_t total_count_, update_cycle_, symbols_until_update_;
   // distribution_ (symbols_), symbol_count_ (symbols_), decoder_table_ (table_size_ + 2 when
@@ -98,13 +100,20 @@ class ArithmeticEncoder {
   void WriteInt64(uint64_t value);
   // Ends the stream (LASzip done(): the interval's final bytes, then two or three zero bytes).
   void Done();
-  const std::vector<uint8_t>& bytes() const { return out_; }
+  // The stream, after Done().
+  const uint8_t* data() const { return out_.data(); }
+  size_t size() const { return used_; }
 
  private:
   void WriteRaw(uint32_t bits, uint32_t value);  // bits <= 16
   void PropagateCarry();
   void Renormalize();
+  void Grow();  // makes room for at least one more byte after the used_ ones
+  // The stream is the first used_ bytes of out_, whose size only grows, so that its storage
+  // serves stream after stream. The byte stores may alias any member, so Renormalize works on
+  // copies in locals.
   std::vector<uint8_t> out_;
+  size_t used_ = 0;
   uint32_t base_ = 0, length_ = 0;
 };
 
@@ -256,16 +265,24 @@ inline uint64_t ArithmeticDecoder::ReadInt64() {
 
 inline void ArithmeticEncoder::PropagateCarry() {
   // The carry runs back over 0xFF bytes; a stream's first byte never overflows (base < 2^32).
-  for (size_t i = out_.size(); i-- > 0;) {
-    if (++out_[i] != 0) return;
+  uint8_t* const first = out_.data();
+  for (uint8_t* p = first + used_; p-- != first;) {
+    if (++*p != 0) return;
   }
 }
 
 inline void ArithmeticEncoder::Renormalize() {
+  uint32_t base = base_, length = length_;
+  // At most 3 bytes (length >= 1 after a symbol); Grow() leaves room for them.
+  if (__builtin_expect(used_ + 4 > out_.size(), 0)) Grow();
+  uint8_t* next = out_.data() + used_;
   do {
-    out_.push_back(static_cast<uint8_t>(base_ >> 24));
-    base_ <<= 8;
-  } while ((length_ <<= 8) < arith_internal::kMinLength);
+    *next++ = static_cast<uint8_t>(base >> 24);
+    base <<= 8;
+  } while ((length <<= 8) < arith_internal::kMinLength);
+  used_ = static_cast<size_t>(next - out_.data());
+  base_ = base;
+  length_ = length;
 }
 
 inline void ArithmeticEncoder::EncodeBit(BitModel* m, uint32_t bit) {
@@ -298,7 +315,7 @@ inline void ArithmeticEncoder::EncodeSymbol(SymbolModel* m, uint32_t sym) {
   if (init_base > base_) PropagateCarry();
   if (length_ < arith_internal::kMinLength) Renormalize();
   ++m->symbol_count_[sym];
-  if (__builtin_expect(--m->symbols_until_update_ == 0, 0)) m->Update();
+  if (__builtin_expect(--m->symbols_until_update_ == 0, 0)) m->Update(false);
 }
 
 inline void ArithmeticEncoder::WriteRaw(uint32_t bits, uint32_t value) {

@@ -246,7 +246,7 @@ std::vector<uint8_t> EncodeLazChunkTable(const std::vector<uint32_t>& chunk_byte
                 static_cast<int32_t>(chunk_bytes[i]), 1);
   }
   encoder.Done();
-  table.insert(table.end(), encoder.bytes().begin(), encoder.bytes().end());
+  table.insert(table.end(), encoder.data(), encoder.data() + encoder.size());
   return table;
 }
 

@@ -380,8 +380,8 @@ void PutU32(uint32_t v, std::vector<uint8_t>* out) {
 void FinishLayer(ArithmeticEncoder* enc, bool stored, std::vector<uint8_t>* sizes,
                  std::vector<uint8_t>* bytes) {
   enc->Done();
-  PutU32(stored ? static_cast<uint32_t>(enc->bytes().size()) : 0, sizes);
-  if (stored) bytes->insert(bytes->end(), enc->bytes().begin(), enc->bytes().end());
+  PutU32(stored ? static_cast<uint32_t>(enc->size()) : 0, sizes);
+  if (stored) bytes->insert(bytes->end(), enc->data(), enc->data() + enc->size());
 }
 
 uint32_t Flags(const Point14& p) {

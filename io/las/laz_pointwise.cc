@@ -481,7 +481,7 @@ void EncodeChunk(const Layout& l, const uint8_t* records, uint32_t points,
   ArithmeticEncoder enc;
   for (uint32_t i = 1; i < points; ++i) items.Code(&enc, records + i * l.length);
   enc.Done();
-  out->insert(out->end(), enc.bytes().begin(), enc.bytes().end());
+  out->insert(out->end(), enc.data(), enc.data() + enc.size());
 }
 
 // Calls f(gps, rgb, bytes) with std::bool_constant tags of the items present: the chunk coders

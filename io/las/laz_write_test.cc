@@ -93,9 +93,8 @@ TEST(LazEncoder, SymbolsBitsAndRawValuesDecodeToTheirInput) {
     ops.push_back(op);
   }
   enc.Done();
-  const std::vector<uint8_t>& bytes = enc.bytes();
   laz::ArithmeticDecoder dec;
-  dec.Init(bytes.data(), bytes.data() + bytes.size());
+  dec.Init(enc.data(), enc.data() + enc.size());
   for (size_t i = 0; i < ops.size(); ++i) {
     const Op& op = ops[i];
     uint32_t got = 0;
@@ -122,7 +121,7 @@ TEST(LazEncoder, SymbolsBitsAndRawValuesDecodeToTheirInput) {
     ASSERT_EQ(got, op.value) << "operation " << i << " of kind " << op.kind;
   }
   EXPECT_FALSE(dec.overrun());
-  EXPECT_EQ(dec.consumed(), bytes.size());  // Done() ends exactly where the decoder stops
+  EXPECT_EQ(dec.consumed(), enc.size());  // Done() ends exactly where the decoder stops
 }
 
 TEST(LazEncoder, IntegersOfEveryWidthAndExtremeCorrectorsRoundTrip) {
@@ -148,7 +147,7 @@ TEST(LazEncoder, IntegersOfEveryWidthAndExtremeCorrectorsRoundTrip) {
     }
     enc.Done();
     laz::ArithmeticDecoder dec;
-    dec.Init(enc.bytes().data(), enc.bytes().data() + enc.bytes().size());
+    dec.Init(enc.data(), enc.data() + enc.size());
     for (size_t i = 0; i < values.size(); ++i) {
       const int32_t got =
           dec_ic.Decompress(&dec, values[i][0], static_cast<uint32_t>(values[i][2]));
