@@ -2,7 +2,7 @@
 // the EPT hierarchy EVLR (record 1000, 32-byte entries), and the octree's nodes as one LAZ chunk
 // each (layered, variable-size chunks, io/las/copc_octree.h).
 //
-// Internal to the LAS writer (io/las/las_io.cc), which writes a COPC file for a name ending in
+// Internal to the LAS writer (io/las/las_writer.cc), which writes a COPC file for a name ending in
 // ".copc.laz": LAS 1.4, point format 6-8, the info VLR first, the laszip VLR with variable
 // chunks, the point data (the chunk table's offset, the nodes' chunks level by level, the chunk
 // table with per-chunk point counts), then the hierarchy EVLR (its pages, the root page last) and

@@ -1,7 +1,7 @@
-// LAS file layout below the codec: the public header, VLR/EVLR records, Extra Bytes descriptors
-// and point record layouts (ASPRS LAS 1.4 R15: tables 3, 4, 6, 24, 25; 1.2 and 1.3 headers are
-// prefixes of the 1.4 one). Internal to the LAS codec (io/las/las_io.cc); kept apart so the
-// byte-level parsing and the point-count logic can be unit-tested.
+// LAS file layout below the codec: the public header, VLR/EVLR records, Extra Bytes descriptors and
+// point record layouts (ASPRS LAS 1.4 R15: tables 3, 4, 6, 24, 25; 1.2 and 1.3 headers are prefixes
+// of the 1.4 one). Internal to the LAS codec (io/las/las_reader.cc, las_writer.cc); kept apart so
+// the byte-level parsing and the point-count logic can be unit-tested.
 //
 // Failure: ReadLasHeader/ReadLasVlrs/ReadLasEvlrs throw InputError("<path>: byte <pos>: ...").
 // Not thread-safe (they move the BinaryFile's position).

@@ -5,9 +5,9 @@
 // point counts first when the chunk size is variable, each coded with an IntegerCoder(32,
 // 2) against the previous one on one arithmetic stream).
 //
-// Internal to the LAS reader (io/las/las_io.cc). Memory is bounded: the table (a few words a chunk,
-// at most one chunk per record_length bytes of file) and one run of chunks, at most ~64 MiB of
-// decoded records or one chunk; a single chunk may decode to at most 1 GiB.
+// Internal to the LAS reader (io/las/las_reader.cc). Memory is bounded: the table (a few words a
+// chunk, at most one chunk per record_length bytes of file) and one run of chunks, at most ~64 MiB
+// of decoded records or one chunk; a single chunk may decode to at most 1 GiB.
 //
 // Failure: an absent, truncated or inconsistent chunk table (against the file size, the header's
 // point count and the VLR's chunk size) throws InputError("<path>: byte <pos>: LAZ chunk table:
