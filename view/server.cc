@@ -10,19 +10,14 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <deque>
-#include <list>
 #include <mutex>
 #include <optional>
-#include <random>
 #include <string_view>
 #include <thread>
 
 #include "core/check.h"
-#include "core/text_format.h"
-#include "io/image/jpeg_io.h"
-#include "io/image/png_io.h"
+#include "view/server_internal.h"
 #include "view/web_assets.h"
 
 namespace candi::view {
@@ -30,8 +25,12 @@ namespace candi::view {
 namespace beast = boost::beast;
 namespace http = beast::http;
 namespace websocket = beast::websocket;
-namespace net = boost::asio;
-using tcp = net::ip::tcp;
+using server_internal::Client;
+using server_internal::ConstantTimeEqual;
+using server_internal::Drawn;
+using server_internal::PageSink;
+using server_internal::RandomToken;
+using server_internal::SceneMessage;
 
 namespace {
 
@@ -43,191 +42,7 @@ constexpr int kUnauthorisedSeconds = 5, kIdleSeconds = 30;
 constexpr size_t kMaxQueuedTexts = 16, kMaxQueuedTextBytes = size_t{64} << 20;
 constexpr std::chrono::milliseconds kAcceptPause(100);
 
-std::string RandomToken() {
-  std::random_device device;  // /dev/urandom
-  std::string hex;
-  static const char* digits = "0123456789abcdef";
-  for (int i = 0; i < 4; ++i) {
-    const uint32_t word = device();
-    for (int k = 0; k < 8; ++k) hex += digits[(word >> (4 * k)) & 15];
-  }
-  return hex;
-}
-
-bool ConstantTimeEqual(const std::string& a, const std::string& b) {
-  if (a.size() != b.size()) return false;
-  unsigned char diff = 0;
-  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
-  return diff == 0;
-}
-
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-bool IsLoopback(const std::string& bind) { return bind == "127.0.0.1" || bind == "localhost" || bind == "::1"; }
-
-bool IsIpLiteral(const std::string& host) {
-  boost::system::error_code ec;
-  net::ip::make_address(host, ec);
-  return !ec;
-}
-
-// "host:port" or "[v6]:port" -> host (brackets removed) and port text.
-bool SplitHostPort(const std::string& text, std::string* host, std::string* port) {
-  if (!text.empty() && text[0] == '[') {
-    const size_t close = text.find(']');
-    if (close == std::string::npos) return false;
-    *host = text.substr(1, close - 1);
-    const std::string rest = text.substr(close + 1);
-    if (rest.empty()) *port = "";
-    else if (rest[0] == ':') *port = rest.substr(1);
-    else return false;
-    return true;
-  }
-  const size_t colon = text.rfind(':');
-  if (colon == std::string::npos) {
-    *host = text;
-    *port = "";
-  } else {
-    *host = text.substr(0, colon);
-    *port = text.substr(colon + 1);
-  }
-  return host->find(':') == std::string::npos;
-}
-
 }  // namespace
-
-bool HostAllowed(const std::string& header, const std::string& bind, int port) {
-  std::string host, port_text;
-  if (header.size() > 255 || !SplitHostPort(Lower(header), &host, &port_text)) return false;
-  const std::string expected_port = std::to_string(port);
-  if (port_text != expected_port && !(port == 80 && port_text.empty())) return false;
-  if (host == "localhost" || host == "127.0.0.1" || host == "::1") return true;
-  if (IsLoopback(bind)) return false;
-  // Bound to an address of the network: that address, or any address literal when bound to all
-  // of them; never a name (a name can be rebound to another address by its DNS).
-  if (bind == "0.0.0.0" || bind == "::") return IsIpLiteral(host);
-  return host == Lower(bind);
-}
-
-bool OriginAllowed(const std::string& origin, const std::string& bind, int port) {
-  const std::string prefix = "http://";
-  const std::string o = Lower(origin);
-  if (o.compare(0, prefix.size(), prefix) != 0) return false;
-  return HostAllowed(o.substr(prefix.size()), bind, port);
-}
-
-namespace {
-
-// ---------------------------------------------------------------------------------------------
-// A page's state, shared by its WebSocket (I/O thread) and the render thread.
-class WsSession;
-struct Client {
-  std::mutex mutex;
-  std::optional<ViewState> wanted;     // the latest view the page sent
-  uint64_t wanted_seq = 0;
-  uint64_t wanted_generation = 0;      // bumped by every view message
-  std::deque<ClientMessage> picks;     // picks and sections, answered in turn
-  int frames_outstanding = 0;          // posted to the socket, not yet written or dropped
-  bool closed = false;
-  std::weak_ptr<WsSession> session;
-  // Render thread only.
-  std::unique_ptr<ProgressiveImage> image;
-  uint64_t image_generation = 0, image_seq = 0;
-  int steps = 0;                       // steps since the image started
-  std::optional<ViewState> last_state;  // of the image drawn (picks, sections)
-  std::atomic<uint64_t> generation{0};  // wanted_generation, for cancelling without the lock
-  // Export thread: bumped by each section request the render thread hands over (a running export
-  // of an older one is cancelled); `gone` when the page closed.
-  std::atomic<uint64_t> export_generation{0};
-  std::atomic<bool> gone{false};
-};
-
-// A section export waiting for the export thread.
-struct ExportJob {
-  std::shared_ptr<Client> client;
-  ClientMessage message;
-  ViewState state;
-  uint64_t generation = 0;
-};
-
-}  // namespace
-
-namespace {
-// The message that gives a page the scene of an archive that replaced the one it loaded.
-std::string SceneMessage(const std::string& scene_json) { return "{\"type\":\"scene\",\"scene\":" + scene_json + "}"; }
-
-// What the pages are drawn from: an archive, its source and its renderer (Server::Replace).
-struct Drawn {
-  const ViewerSource* source = nullptr;
-  const render::Archive* archive = nullptr;
-  RangeRenderer renderer;
-};
-}  // namespace
-
-struct Server::Impl {
-  ServerOptions options;
-  // Render thread only (it applies a Replace between steps).
-  Drawn drawn;
-  const render::Archive& archive() const { return *drawn.archive; }
-  std::optional<Drawn> replacement;   // under `mutex`: to be applied by the render thread
-  uint64_t replacements = 0;          // under `mutex`: replacements applied
-  std::string token;
-  std::string scene_json;             // under `mutex` once the server runs
-  std::optional<FieldLegend> legend;  // points coloured by a field: picks read its value back
-  // Caps: pages reserved from their accepted upgrade, accumulation pixels of the pages' last
-  // views, sockets open. Raised on the I/O thread; lowered wherever a session ends (also when
-  // `io` destroys the handlers still queued at the end: so declared before it).
-  std::atomic<int> pages_reserved{0}, connections{0};
-  std::atomic<uint64_t> pixels_reserved{0};
-  net::io_context io{1};
-  tcp::acceptor acceptor{io};
-  int port = 0;
-
-  std::mutex mutex;                    // clients, cv, exports, export_cv
-  std::condition_variable cv;
-  std::list<std::shared_ptr<Client>> clients;
-  bool stopping = false;
-  std::thread render_thread;
-  std::deque<ExportJob> exports;
-  std::condition_variable export_cv;
-  std::thread export_thread;
-
-  std::atomic<uint64_t> view_messages{0};  // every page's camera messages: a refinement gives way
-  net::steady_timer accept_timer{io};
-  uint64_t accept_streak = 0, refuse_streak = 0;  // I/O thread: failed accepts, refused connections in a row
-
-  std::atomic<uint64_t> requests{0}, refused{0}, pages{0}, open_pages{0}, frames_sent{0}, frames_dropped{0},
-      images_abandoned{0}, bad_messages{0}, accept_errors{0}, connections_refused{0}, views_refused{0},
-      previews{0}, steps_preempted{0}, sections{0}, sections_cancelled{0}, pages_closed_unread{0};
-
-  Impl(const ServerOptions& o, const ViewerSource& s, const render::Archive& a, RangeRenderer r)
-      : options(o), drawn{&s, &a, std::move(r)} {}
-
-  std::string SceneJson() {
-    std::lock_guard<std::mutex> lock(mutex);
-    return scene_json;
-  }
-  // Render thread: draws from the replacement from now on; every page's image starts again
-  // with its latest view, and each open page gets the new scene.
-  void ApplyReplacement(const std::vector<std::shared_ptr<Client>>& pages);
-
-  void Log(const std::string& line) {
-    if (options.log) options.log(line);
-  }
-  void Wake() { cv.notify_all(); }
-
-  void Accept();
-  void RenderLoop();
-  void ExportLoop();
-  bool StepClient(const std::shared_ptr<Client>& c);
-  std::string Pick(const ClientMessage& pick, const ViewState& state);
-  void QueueExport(const std::shared_ptr<Client>& c, const ClientMessage& m, const ViewState& state);
-  // The log's form of a request target: its path (the query, which may hold the token, dropped).
-  std::string LoggedPath(std::string_view target) const;
-};
 
 // A socket counted against max_connections while a session holds it.
 struct ConnectionSlot {
@@ -241,7 +56,7 @@ struct ConnectionSlot {
 namespace {
 
 // ---------------------------------------------------------------------------------------------
-class WsSession : public std::enable_shared_from_this<WsSession> {
+class WsSession : public PageSink, public std::enable_shared_from_this<WsSession> {
  public:
   // Holds one of the server's page reservations (pages_reserved, taken by the HTTP session that
   // accepted the upgrade) until it ends, whether or not the handshake completes.
@@ -259,7 +74,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   }
 
   // Render thread -> I/O thread.
-  void QueueFrame(std::shared_ptr<const std::string> frame) {
+  void QueueFrame(std::shared_ptr<const std::string> frame) override {
     if (frame_) {  // the page has not taken the last one: the newer replaces it
       ++server_->frames_dropped;
       Done(1);
@@ -267,7 +82,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     frame_ = std::move(frame);
     Write();
   }
-  void QueueText(std::string text) {
+  void QueueText(std::string text) override {
     if (closed_) return;
     if (texts_.size() >= kMaxQueuedTexts || queued_bytes_ + text.size() > kMaxQueuedTextBytes) {
       ++server_->pages_closed_unread;
@@ -658,276 +473,6 @@ std::string Server::Impl::LoggedPath(std::string_view target) const {
     path.replace(at, token.size(), "...");
   }
   return path;
-}
-
-std::string Server::Impl::Pick(const ClientMessage& pick, const ViewState& state) {
-  const Eigen::Vector3d& origin = archive().manifest().frame.origin;
-  render::Camera local = state.camera;
-  local.eye -= origin;
-  local.target -= origin;
-  PickOptions o;
-  o.repeat_level = state.settings.EffectiveRepeatLevel();
-  o.seed = state.settings.seed;
-  o.layer_fraction = state.settings.layer_fraction;
-  o.clip = state.settings.clip.ToLocal(origin);
-  const PickResult r = PickPoint(archive(), local, pick.x, pick.y, o);
-  std::vector<PickHitWorld> hits;
-  for (const PickHit& h : r.hits) {
-    PickHitWorld w;
-    w.layer = h.layer;
-    w.world = h.local + origin;
-    w.depth = h.depth;
-    if (legend) {
-      w.field = true;
-      w.value = legend->ValueOfColour(h.colour, &w.value_half_width);
-    }
-    hits.push_back(w);
-  }
-  return PickReply(pick.seq, hits);
-}
-
-// Hands a section request to the export thread: at most one per page (a newer request cancels
-// the page's running export and replaces a waiting one).
-void Server::Impl::QueueExport(const std::shared_ptr<Client>& c, const ClientMessage& m, const ViewState& state) {
-  std::optional<uint64_t> replaced;
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    const uint64_t generation = ++c->export_generation;
-    for (auto it = exports.begin(); it != exports.end(); ++it) {
-      if (it->client == c) {
-        replaced = it->message.seq;
-        exports.erase(it);
-        break;
-      }
-    }
-    exports.push_back({c, m, state, generation});
-  }
-  export_cv.notify_one();
-  if (replaced) {
-    ++sections_cancelled;
-    if (std::shared_ptr<WsSession> session = c->session.lock()) {
-      net::post(io, [session, seq = *replaced] {
-        session->QueueText(ErrorReply("section " + std::to_string(seq) + " cancelled: a newer one replaced it"));
-      });
-    }
-  }
-}
-
-void Server::Impl::ExportLoop() {
-  for (;;) {
-    ExportJob job;
-    {
-      std::unique_lock<std::mutex> lock(mutex);
-      export_cv.wait(lock, [&] { return stopping || !exports.empty(); });
-      if (stopping) return;
-      job = std::move(exports.front());
-      exports.pop_front();
-    }
-    const std::shared_ptr<Client>& c = job.client;
-    const auto start = std::chrono::steady_clock::now();
-    const double limit = options.section_seconds;
-    SectionControl control;
-    control.max_points = options.section_max_points;
-    control.checkpoint = [&] {
-      if (c->gone || c->export_generation.load() != job.generation) throw Cancelled{};
-      {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (stopping) throw Cancelled{};
-      }
-      if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > limit) {
-        throw std::runtime_error("stopped after " + FormatSignificant(limit, 6) + " s" +
-                                 " (the viewer's limit): cut a thinner slab, clip it, or use candi section");
-      }
-    };
-    std::string reply;
-    try {
-      if (!options.section) throw std::runtime_error("this viewer cannot export sections");
-      control.checkpoint();
-      reply = options.section(job.message.seq, job.message.section, job.state, control);
-      ++sections;
-    } catch (const Cancelled&) {
-      ++sections_cancelled;
-      if (c->gone) continue;
-      reply = ErrorReply("section " + std::to_string(job.message.seq) + " cancelled: a newer one replaced it");
-    } catch (const std::exception& e) {  // a corrupt chunk, too many points, the time limit
-      reply = ErrorReply(std::string("section failed: ") + e.what());
-    }
-    if (std::shared_ptr<WsSession> session = c->session.lock()) {
-      net::post(io, [session, reply = std::move(reply)]() mutable { session->QueueText(std::move(reply)); });
-    }
-  }
-}
-
-// One step of one page: its picks, then (if its image is not converged and the page has room
-// for a frame) the next batch of ensembles. Returns false when the page had nothing to do.
-bool Server::Impl::StepClient(const std::shared_ptr<Client>& c) {
-  std::optional<ClientMessage> pick;
-  std::optional<ViewState> restart;
-  uint64_t generation = 0, seq = 0;
-  {
-    std::lock_guard<std::mutex> lock(c->mutex);
-    if (c->closed) return false;
-    const bool moved = c->wanted && c->wanted_generation != c->image_generation;
-    if (!c->picks.empty() && c->last_state) {
-      pick = c->picks.front();
-      c->picks.pop_front();
-    } else if (c->frames_outstanding >= 2 || (c->frames_outstanding == 1 && !moved)) {
-      // The page has frames to take first. A new camera's frame may wait behind the one being
-      // written (it replaces any other), but a converging image waits for the page.
-      return false;
-    } else if (moved) {
-      restart = c->wanted;
-      generation = c->wanted_generation;
-      seq = c->wanted_seq;
-    } else if (!c->image || c->image->converged()) {
-      return false;
-    }
-  }
-  std::shared_ptr<WsSession> session = c->session.lock();
-  if (!session) return false;
-  if (pick && pick->type == MessageType::kSection) {
-    QueueExport(c, *pick, *c->last_state);
-    return true;
-  }
-  if (pick) {
-    std::string reply;
-    try {
-      reply = Pick(*pick, *c->last_state);
-    } catch (const std::exception& e) {  // a corrupt chunk
-      reply = ErrorReply(std::string("pick failed: ") + e.what());
-    }
-    net::post(io, [session, reply] { session->QueueText(reply); });
-    return true;
-  }
-  if (restart) {
-    if (!c->image) c->image = std::make_unique<ProgressiveImage>(archive(), drawn.renderer, options.threads);
-    if (c->image->ensembles() > 0 && !c->image->converged()) ++images_abandoned;
-    try {
-      c->image->Start(*restart);
-    } catch (const std::exception& e) {  // Camera::Check: the parser has checked it already
-      net::post(io, [session, m = ErrorReply(e.what())] { session->QueueText(m); });
-      c->image_generation = generation;
-      c->image.reset();
-      return true;
-    }
-    c->image_generation = generation;
-    c->image_seq = seq;
-    c->steps = 0;
-    c->last_state = *restart;
-  }
-  ProgressiveImage& image = *c->image;
-  int count = StepPolicy{options.first_frame_ms, options.step_ms}.Ensembles(image.ms_per_ensemble(), c->steps);
-  const uint64_t mine = c->image_generation;
-  double ms = 0;
-  // The first step of an image (its preview) is abandoned only when its page closes: a page that
-  // sends cameras faster than they can be drawn still gets a frame of a recent one each turn. Its
-  // cost is bounded instead: at most preview_pixels written, else a sampled preview.
-  // Refinement steps are abandoned as soon as the camera moves, and give way to another page's
-  // new camera once they have run step_ms (they are drawn again on this page's next turn).
-  const bool first = c->steps == 0;
-  double sample = 1;
-  if (first) {
-    const double per = image.EnsembleFootprint(), budget = options.preview_pixels;
-    if (per * count > budget) count = std::max(1, static_cast<int>(budget / per));
-    if (per > budget) sample = std::max(budget / per, 1e-9);
-  }
-  const uint64_t views_before = view_messages.load();
-  const auto start = std::chrono::steady_clock::now();
-  // Polled by the drawing threads (every few thousand points): reads atomics and the clock only.
-  auto cancel = [&] {
-    const uint64_t now = c->generation.load();
-    if (first) return now == ~uint64_t{0};
-    if (now != mine) return true;
-    return view_messages.load() != views_before &&
-           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() > options.step_ms;
-  };
-  try {
-    ms = image.Step(count, cancel, sample);
-  } catch (const Cancelled&) {
-    ++(!first && c->generation.load() == mine ? steps_preempted : images_abandoned);
-    return true;
-  } catch (const std::exception& e) {  // a corrupt chunk, out of memory
-    Log(std::string("view: render failed: ") + e.what());
-    net::post(io, [session, m = ErrorReply(std::string("render failed: ") + e.what())] { session->QueueText(m); });
-    c->image.reset();
-    return true;
-  }
-  ++c->steps;
-  if (image.sampled()) ++previews;
-  double gain = 1;
-  const Image8 pixels = image.Image(&gain);
-  FrameHeader h;
-  h.seq = c->image_seq;
-  h.ensembles = image.ensembles();
-  h.repeat_level = image.repeat_level();
-  h.png = image.converged();
-  h.width = pixels.width();
-  h.height = pixels.height();
-  h.gain = gain;
-  h.render_ms = ms;
-  h.sample = image.sample();
-  auto frame = std::make_shared<const std::string>(
-      FrameMessage(h, h.png ? io::EncodePng(pixels, {}, io::PngCompression::kFast)
-                            : io::EncodeJpeg(pixels, options.jpeg_quality)));
-  {
-    std::lock_guard<std::mutex> lock(c->mutex);
-    ++c->frames_outstanding;
-  }
-  net::post(io, [session, frame] { session->QueueFrame(frame); });
-  return true;
-}
-
-void Server::Impl::ApplyReplacement(const std::vector<std::shared_ptr<Client>>& pages) {
-  const std::string message = SceneMessage(SceneJson());
-  for (const std::shared_ptr<Client>& c : pages) {
-    c->image.reset();  // drawn from the archive replaced
-    std::lock_guard<std::mutex> lock(c->mutex);
-    c->image_generation = ~uint64_t{0};  // != wanted_generation: the latest view is drawn again
-    c->last_state.reset();               // picks wait for it
-    if (std::shared_ptr<WsSession> session = c->session.lock()) {
-      net::post(io, [session, message] { session->QueueText(message); });
-    }
-  }
-}
-
-void Server::Impl::RenderLoop() {
-  size_t turn = 0;
-  for (;;) {
-    std::vector<std::shared_ptr<Client>> snapshot;
-    bool replaced = false;
-    {
-      std::unique_lock<std::mutex> lock(mutex);
-      if (stopping) return;
-      clients.remove_if([](const std::shared_ptr<Client>& c) {
-        std::lock_guard<std::mutex> l(c->mutex);
-        return c->closed;
-      });
-      snapshot.assign(clients.begin(), clients.end());
-      if (replacement) {
-        drawn = std::move(*replacement);
-        replacement.reset();
-        scene_json = drawn.source->ToJson(drawn.archive->manifest());
-        legend = drawn.source->legend;
-        ++replacements;
-        replaced = true;
-      }
-    }
-    if (replaced) ApplyReplacement(snapshot);
-    // Round robin: every page in turn, starting after the one served last.
-    bool worked = false;
-    for (size_t i = 0; i < snapshot.size() && !worked; ++i) {
-      const size_t k = (turn + i) % snapshot.size();
-      if (StepClient(snapshot[k])) {
-        worked = true;
-        turn = k + 1;
-      }
-    }
-    if (!worked) {
-      std::unique_lock<std::mutex> lock(mutex);
-      if (stopping) return;
-      cv.wait_for(lock, std::chrono::milliseconds(200));
-    }
-  }
 }
 
 void ServerOptions::Check() const {
