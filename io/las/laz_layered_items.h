@@ -1,5 +1,5 @@
-// Private to io/las/laz_layered.cc: the per-item decoders of LASzip's layered chunked compressor
-// (items of version 3), kept in a header of their own so that laz_layered.cc stays readable.
+// Private to io/las/laz_layered.cc and laz_layered_encode.cc: the per-item decoders and encoders
+// of LASzip's layered chunked compressor (items of version 3), and what both directions share.
 //
 // Each decoder is made for one chunk: Start() takes the raw first record (already copied to the
 // output) and the item's layers, Decode() fills the next record. They decode as LASzip's
@@ -23,10 +23,22 @@
 #include <vector>
 
 #include "io/las/laz_arith.h"
+#include "io/las/laz_format.h"
 #include "io/las/laz_color.h"
 #include "io/las/laz_gps_time.h"
 
 namespace candi::io::laz::layered {
+
+// Where POINT14's companions are: their item index and record offset (-1: absent); at most one
+// of each kind. ItemSetOf checks the items (LazError naming a bad one).
+struct ItemSet {
+  size_t record = 0;  // record bytes
+  int color = -1, extra = -1;
+  size_t color_offset = 0, extra_offset = 0;
+  bool nir = false;
+  uint32_t extra_count = 0;
+};
+ItemSet ItemSetOf(const std::vector<Item>& items);
 
 // One layer's bytes inside the chunk.
 struct LayerSpan {
@@ -59,6 +71,42 @@ inline void StoreU64(uint8_t* p, uint64_t v) {
   StoreU32(p, static_cast<uint32_t>(v));
   StoreU32(p + 4, static_cast<uint32_t>(v >> 32));
 }
+
+// LASzip's context of a point's return map (number of returns n, return number r): 6 classes.
+inline constexpr uint8_t kReturnMap6[16][16] = {
+    {0, 1, 2, 3, 4, 5, 3, 4, 4, 5, 5, 5, 5, 5, 5, 5},
+    {1, 0, 1, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3},
+    {2, 1, 2, 4, 4, 4, 4, 4, 4, 4, 4, 3, 3, 3, 3, 3},
+    {3, 3, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4},
+    {4, 3, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4},
+    {5, 3, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4},
+    {3, 3, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4},
+    {4, 3, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4},
+    {4, 3, 4, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4},
+    {5, 3, 4, 4, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4},
+    {5, 3, 4, 4, 4, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4},
+    {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 4, 4, 4},
+    {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5, 4, 4},
+    {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5, 4},
+    {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5},
+    {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5}};
+
+// LASzip's "return level" context: |n - r| capped at 7 (its number_return_level_8ctx table).
+inline uint32_t ReturnLevel(uint32_t n, uint32_t r) {
+  return std::min<uint32_t>(n > r ? n - r : r - n, 7);
+}
+
+// LASzip adds and multiplies int32 predictions with two's-complement wrap-around.
+inline int32_t WrapAdd(int32_t a, int32_t b) {
+  return static_cast<int32_t>(static_cast<uint32_t>(a) + static_cast<uint32_t>(b));
+}
+inline int32_t WrapSub(int32_t a, int32_t b) {
+  return static_cast<int32_t>(static_cast<uint32_t>(a) - static_cast<uint32_t>(b));
+}
+inline int32_t WrapMul(int32_t a, int32_t b) {
+  return static_cast<int32_t>(static_cast<uint32_t>(a) * static_cast<uint32_t>(b));
+}
+inline uint32_t EvenCapped(uint32_t k, uint32_t cap) { return k < cap ? (k & ~1u) : cap; }
 
 // A model created on first use, as LASzip does for its sparse context tables (most of the 64
 // classification contexts never occur, and 256-symbol models are not free to build).
