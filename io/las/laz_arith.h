@@ -145,6 +145,17 @@ class IntegerCoder {
   std::vector<SymbolModel> m_corrector_;  // classes 1..corr_bits_ (index k - 1)
 };
 
+// LASzip adds and multiplies int32 predictions with two's-complement wrap-around.
+inline int32_t WrapAdd(int32_t a, int32_t b) {
+  return static_cast<int32_t>(static_cast<uint32_t>(a) + static_cast<uint32_t>(b));
+}
+inline int32_t WrapSub(int32_t a, int32_t b) {
+  return static_cast<int32_t>(static_cast<uint32_t>(a) - static_cast<uint32_t>(b));
+}
+inline int32_t WrapMul(int32_t a, int32_t b) {
+  return static_cast<int32_t>(static_cast<uint32_t>(a) * static_cast<uint32_t>(b));
+}
+
 // ---- Hot paths, inline (a chunk decodes millions of symbols). ----
 
 namespace arith_internal {

@@ -96,16 +96,6 @@ inline uint32_t ReturnLevel(uint32_t n, uint32_t r) {
   return std::min<uint32_t>(n > r ? n - r : r - n, 7);
 }
 
-// LASzip adds and multiplies int32 predictions with two's-complement wrap-around.
-inline int32_t WrapAdd(int32_t a, int32_t b) {
-  return static_cast<int32_t>(static_cast<uint32_t>(a) + static_cast<uint32_t>(b));
-}
-inline int32_t WrapSub(int32_t a, int32_t b) {
-  return static_cast<int32_t>(static_cast<uint32_t>(a) - static_cast<uint32_t>(b));
-}
-inline int32_t WrapMul(int32_t a, int32_t b) {
-  return static_cast<int32_t>(static_cast<uint32_t>(a) * static_cast<uint32_t>(b));
-}
 inline uint32_t EvenCapped(uint32_t k, uint32_t cap) { return k < cap ? (k & ~1u) : cap; }
 
 // A model created on first use, as LASzip does for its sparse context tables (most of the 64

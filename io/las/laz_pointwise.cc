@@ -48,16 +48,6 @@ class LazyModels {
   std::array<std::unique_ptr<SymbolModel>, 256> models_;
 };
 
-inline int32_t AddWrapping(int32_t a, int32_t b) {
-  return static_cast<int32_t>(static_cast<uint32_t>(a) + static_cast<uint32_t>(b));
-}
-inline int32_t SubWrapping(int32_t a, int32_t b) {
-  return static_cast<int32_t>(static_cast<uint32_t>(a) - static_cast<uint32_t>(b));
-}
-inline int32_t MulWrapping(int32_t a, int32_t b) {
-  return static_cast<int32_t>(static_cast<uint32_t>(a) * static_cast<uint32_t>(b));
-}
-
 // ---- POINT10 v2: x, y, z, intensity, return bits, class, scan angle, user data, source id ----
 
 // What the POINT10 encoder and decoder both keep: the models and the predictions' state.
@@ -105,11 +95,11 @@ class Point10Decoder {
     const uint32_t l = kNumberReturnLevel[n][bits_ & 7];
     const uint32_t single = n == 1;
     const int32_t dx = c_.ic_dx.Decompress(dec, c_.x_median[m].Get(), single);
-    x_ = AddWrapping(x_, dx);
+    x_ = WrapAdd(x_, dx);
     c_.x_median[m].Add(dx);
     const int32_t dy =
         c_.ic_dy.Decompress(dec, c_.y_median[m].Get(), DyContext(single, c_.ic_dx.k()));
-    y_ = AddWrapping(y_, dy);
+    y_ = WrapAdd(y_, dy);
     c_.y_median[m].Add(dy);
     z_ = c_.ic_z.Decompress(dec, c_.last_height[l],
                             ZContext(single, c_.ic_dx.k(), c_.ic_dy.k()));
@@ -189,10 +179,10 @@ class Point10Encoder {
     if (changed & 2) enc->EncodeSymbol(c_.user_data.At(last_[17]), item[17]);
     if (changed & 1) c_.ic_source_id.Compress(enc, last_source_id, source_id);
     const uint32_t single = n == 1;
-    const int32_t dx = SubWrapping(LoadLE<int32_t>(item), LoadLE<int32_t>(last_));
+    const int32_t dx = WrapSub(LoadLE<int32_t>(item), LoadLE<int32_t>(last_));
     c_.ic_dx.Compress(enc, c_.x_median[m].Get(), dx, single);
     c_.x_median[m].Add(dx);
-    const int32_t dy = SubWrapping(LoadLE<int32_t>(item + 4), LoadLE<int32_t>(last_ + 4));
+    const int32_t dy = WrapSub(LoadLE<int32_t>(item + 4), LoadLE<int32_t>(last_ + 4));
     c_.ic_dy.Compress(enc, c_.y_median[m].Get(), dy, DyContext(single, c_.ic_dx.k()));
     c_.y_median[m].Add(dy);
     const int32_t z = LoadLE<int32_t>(item + 8);
@@ -282,16 +272,16 @@ class GpsTime11Decoder {
       diff = ic.Decompress(dec, 0, 7);
       extreme = true;
     } else if (multi < kGpsMulti) {
-      diff = ic.Decompress(dec, MulWrapping(static_cast<int32_t>(multi), last), multi < 10 ? 2 : 3);
+      diff = ic.Decompress(dec, WrapMul(static_cast<int32_t>(multi), last), multi < 10 ? 2 : 3);
     } else if (multi == kGpsMulti) {
-      diff = ic.Decompress(dec, MulWrapping(kGpsMulti, last), 4);
+      diff = ic.Decompress(dec, WrapMul(kGpsMulti, last), 4);
       extreme = true;
     } else {
       const int32_t negative = static_cast<int32_t>(kGpsMulti) - static_cast<int32_t>(multi);
       if (negative > kGpsMultiMinus) {
-        diff = ic.Decompress(dec, MulWrapping(negative, last), 5);
+        diff = ic.Decompress(dec, WrapMul(negative, last), 5);
       } else {
-        diff = ic.Decompress(dec, MulWrapping(kGpsMultiMinus, last), 6);
+        diff = ic.Decompress(dec, WrapMul(kGpsMultiMinus, last), 6);
         extreme = true;
       }
     }
