@@ -123,10 +123,16 @@ void AddPack(Command& root) {
 
 int RunExportCopc(const pipeline::CopcExportOptions& o) {
   std::optional<ConsoleProgress> progress;  // from the first point: no bar before an error
-  const std::vector<pipeline::CopcFile> files = pipeline::ExportCopc(o, [&](uint64_t done, uint64_t total) {
-    if (!progress) progress.emplace("copc");
-    progress->Update(done, total);
-  });
+  StagedProgress closing("copc");            // each file's octree and chunks, once all is read
+  const std::vector<pipeline::CopcFile> files = pipeline::ExportCopc(
+      o,
+      [&](uint64_t done, uint64_t total) {
+        if (!progress) progress.emplace("copc");
+        progress->Update(done, total);
+        if (total > 0 && done >= total) progress->Finish();  // all read: the files close next
+      },
+      closing.Callback());
+  closing.Finish();
   if (progress) progress->Finish();
   for (const pipeline::CopcFile& f : files) {
     std::printf("%s: %llu points (%s), %llu bytes\n", f.path.c_str(), static_cast<unsigned long long>(f.points),

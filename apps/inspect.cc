@@ -182,10 +182,17 @@ int RunConvert(const ConvertArgs& args) {
   // The bar starts when the output is open (the call's first report), so that a file that fails
   // to open prints only its error.
   std::optional<ConsoleProgress> progress;
+  // What the writer does once every point is in (a COPC file's octree and chunks): a bar a stage.
+  StagedProgress stages("convert " + args.output);
+  o.write.close_progress = [&](const std::string& stage, uint64_t done, uint64_t total) {
+    if (progress) progress->Finish();
+    stages.Update(stage, done, total);
+  };
   io::ConvertPointFile(o, args.input, args.output, [&](uint64_t done, uint64_t total) {
     if (!progress) progress.emplace("convert " + args.input + " -> " + args.output);
     if (done > 0) progress->Update(done, total);
   });
+  stages.Finish();
   if (progress) progress->Finish();
   return kOk;
 }

@@ -106,4 +106,31 @@ void ConsoleProgress::Finish() {
   }
 }
 
+StagedProgress::StagedProgress(std::string label, ConsoleProgressOptions options,
+                               std::function<void(const std::string&)> sink)
+    : label_(std::move(label)), options_(std::move(options)), sink_(std::move(sink)) {
+  options_.Check();
+}
+
+void StagedProgress::Update(const std::string& stage, uint64_t done, uint64_t total) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!bar_ || stage != stage_) {
+    if (bar_) bar_->Finish();
+    bar_ = std::make_unique<ConsoleProgress>(label_ + ": " + stage, options_, sink_);
+    stage_ = stage;
+  }
+  bar_->Update(done, total);
+}
+
+void StagedProgress::Finish() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (bar_) bar_->Finish();
+}
+
+StageProgressCallback StagedProgress::Callback() {
+  return [this](const std::string& stage, uint64_t done, uint64_t total) {
+    Update(stage, done, total);
+  };
+}
+
 }  // namespace candi

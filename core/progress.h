@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <string>
 
@@ -17,6 +18,10 @@ void SetConsoleProgressEnabled(bool enabled);
 
 // Called with work done and total (total 0 = unknown). Must be cheap; may be called often.
 using ProgressCallback = std::function<void(uint64_t done, uint64_t total)>;
+// The same for work in named stages, one after the other (e.g. a COPC file's "octree", then
+// "chunks"): done and total count within the stage.
+using StageProgressCallback =
+    std::function<void(const std::string& stage, uint64_t done, uint64_t total)>;
 
 struct ConsoleProgressOptions {
   double min_interval_s = 0.1;    // minimum seconds between bar redraws on a terminal, >= 0
@@ -53,6 +58,25 @@ class ConsoleProgress {
   uint64_t done_ = 0, total_ = 0;
   bool finished_ = false, drawn_ = false;
   uint64_t drawn_done_ = 0;  // `done` of the last line printed
+};
+
+// A ConsoleProgress a stage, labelled "<label>: <stage>": a new one starts (the last one
+// finished) whenever the stage changes. Thread-safe; the destructor finishes the last.
+class StagedProgress {
+ public:
+  explicit StagedProgress(std::string label, ConsoleProgressOptions options = {},
+                          std::function<void(const std::string&)> sink = nullptr);
+  void Update(const std::string& stage, uint64_t done, uint64_t total);
+  void Finish();
+  StageProgressCallback Callback();  // a callback bound to this reporter
+
+ private:
+  std::string label_;
+  ConsoleProgressOptions options_;
+  std::function<void(const std::string&)> sink_;
+  std::mutex mutex_;
+  std::string stage_;
+  std::unique_ptr<ConsoleProgress> bar_;
 };
 
 }  // namespace candi

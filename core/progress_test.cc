@@ -47,6 +47,29 @@ TEST(ConsoleProgress, TerminalDrawsABarAndUnknownTotalsCount) {
   EXPECT_NE(lines.back().find("7 points"), std::string::npos);
 }
 
+TEST(StagedProgress, ABarAStageEachFinishedWhenTheNextStarts) {
+  std::vector<std::string> lines;
+  ConsoleProgressOptions options;
+  options.force_tty = 0;
+  options.line_interval_s = 3600;
+  {
+    StagedProgress stages("write x.copc.laz", options,
+                          [&](const std::string& s) { lines.push_back(s); });
+    const StageProgressCallback report = stages.Callback();
+    report("octree", 10, 100);
+    report("octree", 100, 100);
+    report("chunks", 50, 100);
+    report("chunks", 100, 100);
+  }  // the destructor finishes the last stage
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[0].rfind("write x.copc.laz: octree:", 0), 0u) << lines[0];
+  EXPECT_NE(lines[1].find("100.0%"), std::string::npos) << lines[1];
+  EXPECT_NE(lines[1].find("done"), std::string::npos) << "octree finished as chunks start";
+  EXPECT_EQ(lines[2].rfind("write x.copc.laz: chunks:", 0), 0u) << lines[2];
+  EXPECT_NE(lines[2].find("50.0%"), std::string::npos) << lines[2];
+  EXPECT_NE(lines[3].find("done"), std::string::npos) << lines[3];
+}
+
 TEST(ConsoleProgressOptions, DefaultsPassAndNegativesFail) {
   EXPECT_NO_THROW(ConsoleProgressOptions{}.Check());
   ConsoleProgressOptions bad;

@@ -23,6 +23,7 @@
 #include <string>
 
 #include "core/point_cloud.h"
+#include "core/progress.h"
 #include "io/point_format.h"
 
 namespace candi::io {
@@ -126,6 +127,10 @@ struct PointWriteOptions {
   // XYZ/PTS: column spec as in PointReadOptions; empty = all of the schema (x,y,z[,r,g,b][,nx,ny,nz][,scalars]).
   std::string columns;
   CopcWriteOptions copc;
+  // The work Close() does after the last Write, by stage, as (stage, done, total): a COPC
+  // file's "octree" (points whose node is settled, of all) then "chunks" (points compressed).
+  // Called on the thread that calls Close(); null: not reported.
+  StageProgressCallback close_progress;
   void Check() const;
 };
 

@@ -290,7 +290,15 @@ json WriteSceneCopc(const Scene& scene, const json& scene_json, const fs::path& 
   } else {
     const Stopwatch watch;
     ConsoleProgress progress("copc");
-    const std::vector<CopcFile> files = WriteCopc(scene.copc, source, (out / scene_file).string(), progress.Callback());
+    StagedProgress closing("copc");  // each file's octree and chunks, once every point is read
+    const std::vector<CopcFile> files = WriteCopc(
+        scene.copc, source, (out / scene_file).string(),
+        [&](uint64_t done, uint64_t total) {
+          progress.Update(done, total);
+          if (total > 0 && done >= total) progress.Finish();  // all read: the files close next
+        },
+        closing.Callback());
+    closing.Finish();
     progress.Finish();
     json list = {{"layers", json::array()}};
     for (const CopcFile& f : files) {

@@ -61,6 +61,20 @@ void ToCopcChunk(const PointCloud& chunk, uint16_t id, PointCloud* out) {
   }
 }
 
+// A writer's options whose Close() reports its stages as "<file name> <stage>".
+io::PointWriteOptions WriteOptionsFor(const std::string& path,
+                                      const StageProgressCallback& close_progress) {
+  io::PointWriteOptions o;
+  if (close_progress) {
+    const std::string name = fs::path(path).filename().string();
+    o.close_progress = [name, close_progress](const std::string& stage, uint64_t done,
+                                              uint64_t total) {
+      close_progress(name + " " + stage, done, total);
+    };
+  }
+  return o;
+}
+
 CopcFile Closed(std::unique_ptr<io::PointWriter> writer, const std::string& path,
                 const std::string& layer, uint64_t points) {
   writer->Close();
@@ -104,7 +118,8 @@ std::string SceneCopcName(const std::string& scene_name) {
 }
 
 std::vector<CopcFile> WriteCopc(const CopcOptions& options, const CopcSource& source,
-                                const std::string& scene_file, const ProgressCallback& progress) {
+                                const std::string& scene_file, const ProgressCallback& progress,
+                                const StageProgressCallback& close_progress) {
   options.Check();
   CANDI_CHECK(source.layer_names.size() == source.layer_files.size() &&
               source.layer_names.size() < 65536)
@@ -126,7 +141,8 @@ std::vector<CopcFile> WriteCopc(const CopcOptions& options, const CopcSource& so
     std::error_code ec;
     if (!parent.empty()) fs::create_directories(parent, ec);
     if (ec) throw InputError(scene_file, "", "cannot create its folder: " + ec.message());
-    scene = io::OpenPointWriter(scene_file, {CopcSchema(), LocalFrame(), meta, total});
+    scene = io::OpenPointWriter(scene_file, {CopcSchema(), LocalFrame(), meta, total},
+                                WriteOptionsFor(scene_file, close_progress));
   }
   PointCloud chunk, copc;
   copc.SetSchema(CopcSchema());
@@ -137,7 +153,7 @@ std::vector<CopcFile> WriteCopc(const CopcOptions& options, const CopcSource& so
             .string();
     const io::PointWriteSpec spec{CopcSchema(), LocalFrame(), meta, readers[k]->info().count};
     std::unique_ptr<io::PointWriter> layer;
-    if (options.layers) layer = io::OpenPointWriter(path, spec);
+    if (options.layers) layer = io::OpenPointWriter(path, spec, WriteOptionsFor(path, close_progress));
     uint64_t points = 0;
     while (const size_t n = readers[k]->Read(kChunkPoints, &chunk)) {
       ToCopcChunk(chunk, static_cast<uint16_t>(k), &copc);
@@ -145,7 +161,7 @@ std::vector<CopcFile> WriteCopc(const CopcOptions& options, const CopcSource& so
       if (scene) scene->Write(copc);
       points += n;
       done += n;
-      if (progress) progress(done, total == io::kUnknownCount ? done : total);
+      if (progress) progress(done, total == io::kUnknownCount ? 0 : total);
     }
     scene_points += points;
     if (layer) files.push_back(Closed(std::move(layer), path, source.layer_names[k], points));
@@ -208,13 +224,14 @@ void CopcExportOptions::Check() const {
 }
 
 std::vector<CopcFile> ExportCopc(const CopcExportOptions& options,
-                                 const ProgressCallback& progress) {
+                                 const ProgressCallback& progress,
+                                 const StageProgressCallback& close_progress) {
   options.Check();
   const CopcSource source = ReadCopcSource(options.build);
   const std::string scene_file =
       options.out.empty() ? (fs::path(options.build) / SceneCopcName(source.name)).string()
                           : options.out;
-  return WriteCopc(options.copc, source, scene_file, progress);
+  return WriteCopc(options.copc, source, scene_file, progress, close_progress);
 }
 
 }  // namespace candi::pipeline

@@ -69,9 +69,12 @@ std::string SceneCopcName(const std::string& scene_name);
 
 // Writes what `options` asks: each layer beside its layer file (<name>.copc.laz in the same
 // folder) and the whole scene to `scene_file`. Returns the files, layers first, in scene order.
+// progress: points read; close_progress: each file's closing stages (its octree, its chunks) as
+// "<file name> <stage>".
 std::vector<CopcFile> WriteCopc(const CopcOptions& options, const CopcSource& source,
                                 const std::string& scene_file,
-                                const ProgressCallback& progress = nullptr);
+                                const ProgressCallback& progress = nullptr,
+                                const StageProgressCallback& close_progress = nullptr);
 
 // A finished build's layers, from its archive.json.
 CopcSource ReadCopcSource(const std::string& build_dir);
@@ -84,7 +87,9 @@ struct CopcExportOptions {
 };
 
 // `candi export copc`: the COPC files of a finished build, from its layer files.
+// close_progress: each file's closing stages (its octree, its chunks) as "<file name> <stage>".
 std::vector<CopcFile> ExportCopc(const CopcExportOptions& options,
-                                 const ProgressCallback& progress = nullptr);
+                                 const ProgressCallback& progress = nullptr,
+                                 const StageProgressCallback& close_progress = nullptr);
 
 }  // namespace candi::pipeline

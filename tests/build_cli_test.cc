@@ -188,9 +188,16 @@ TEST(BuildCli, CopcFromTheBuildAndFromTheExportAreTheSameBytes) {
   WriteScene(dir.File("scene.json"), scene);
   const Result b = RunCandi("-q build " + dir.File("scene.json") + " -o " + dir.File("out"));
   ASSERT_EQ(b.code, 0) << b.output;
-  const Result e = RunCandi("-q export copc " + dir.File("out") + " --out " + dir.File("again.copc.laz"));
+  const Result e = RunCandi("export copc " + dir.File("out") + " --out " + dir.File("again.copc.laz"));
   ASSERT_EQ(e.code, 0) << e.output;
   EXPECT_NE(e.out.find("again.copc.laz: 83000 points (every layer"), std::string::npos) << e.out;
+  // Progress on stderr: the points read, then the file's octree and its chunks, each to its end.
+  for (const std::string stage : {"octree", "chunks"}) {
+    EXPECT_NE(e.output.find("copc: again.copc.laz " + stage + ": 100.0% 83000 points"),
+              std::string::npos)
+        << stage << ":\n" << e.output;
+  }
+  EXPECT_LT(e.output.find("copc: 100.0%"), e.output.find("again.copc.laz octree")) << e.output;
   const std::string built = testing::ReadBytes(dir.File("out/copc/test.copc.laz"));
   EXPECT_FALSE(built.empty());
   EXPECT_EQ(testing::ReadBytes(dir.File("again.copc.laz")), built);

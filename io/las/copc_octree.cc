@@ -298,7 +298,8 @@ void CopcOctreeOptions::Check() const {
 
 CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_t* records,
                                   size_t n, size_t record_length, const Eigen::Vector3d& scale,
-                                  const Eigen::Vector3d& offset) {
+                                  const Eigen::Vector3d& offset,
+                                  const std::function<void(uint64_t, uint64_t)>& progress) {
   options.Check();
   CANDI_CHECK(n <= size_t{std::numeric_limits<uint32_t>::max()})
       << "a COPC octree of " << n << " points (at most 2^32 - 1)";
@@ -316,6 +317,8 @@ CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_
   Builder builder(options, cube, n, partition.memory.get(), partition.node_of.get());
   const double min_scale = scale.cwiseAbs().minCoeff();
   std::vector<Range> level{{CopcKey{}, 0, n}};
+  uint64_t settled = 0;
+  if (progress) progress(0, n);
   while (!level.empty()) {
     // Cells narrower than a LAS unit: only duplicates share one; keep them all here.
     const double cell = std::ldexp(tree.spacing, -level[0].key.level);
@@ -340,6 +343,8 @@ CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_
       tree.nodes[first + j].size = builder.Split(level[j], static_cast<uint32_t>(first + j),
                                                  keep_all, false, &children[j]);
     });
+    for (size_t j = first; j < tree.nodes.size(); ++j) settled += tree.nodes[j].size;
+    if (progress) progress(settled, n);
     std::vector<Range> next;
     for (const std::vector<Range>& c : children) next.insert(next.end(), c.begin(), c.end());
     std::sort(next.begin(), next.end(), [](const Range& a, const Range& b) {

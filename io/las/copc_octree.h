@@ -31,6 +31,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -82,9 +83,11 @@ struct CopcPartition {
   std::unique_ptr<uint8_t[]> memory;     // memory_bytes >= n * record_length
   size_t memory_bytes = 0;
 };
+// `progress` (may be null): (points whose node is settled, n) after each level.
 CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_t* records,
                                   size_t n, size_t record_length, const Eigen::Vector3d& scale,
-                                  const Eigen::Vector3d& offset);
+                                  const Eigen::Vector3d& offset,
+                                  const std::function<void(uint64_t, uint64_t)>& progress = {});
 
 // Builds the octree of n LAS records (record_length bytes each, X, Y, Z int32 at bytes 0, 4, 8)
 // with the header's scale and offset.

@@ -217,7 +217,8 @@ std::unique_ptr<uint8_t[]> RecordsByNode(CopcPartition* partition, const uint8_t
 
 CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
                               const laz::Vlr& vlr, uint64_t first_chunk,
-                              const std::function<void(const uint8_t*, size_t)>& sink) {
+                              const std::function<void(const uint8_t*, size_t)>& sink,
+                              const std::function<void(uint64_t, uint64_t)>& progress) {
   CANDI_CHECK(vlr.compressor == laz::kLayeredChunked &&
               record_length == static_cast<size_t>(vlr.record_length()))
       << "COPC chunks are layered, with the record's items";
@@ -227,10 +228,13 @@ CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, si
   std::vector<std::vector<uint8_t>> chunks;
   std::vector<const uint8_t*> starts;
   const uint8_t* start = records;
+  uint64_t total = 0, compressed = 0;
   for (const CopcNode& node : tree.nodes) {
     starts.push_back(start);
     start += node.size * record_length;
+    total += node.size;
   }
+  if (progress) progress(0, total);
   for (size_t first = 0, count = 0; first < tree.nodes.size(); first += count) {
     size_t points_in_batch = 0;
     for (count = 0; first + count < tree.nodes.size() && points_in_batch < kBatchPoints; ++count) {
@@ -254,7 +258,9 @@ CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, si
       bytes.push_back(static_cast<uint32_t>(chunks[j].size()));
       points.push_back(static_cast<uint32_t>(node.size));
       offset += chunks[j].size();
+      compressed += node.size;
     }
+    if (progress) progress(compressed, total);
   }
   data.chunk_table = EncodeLazChunkTable(bytes, points);
   return data;

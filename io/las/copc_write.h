@@ -78,8 +78,10 @@ std::unique_ptr<uint8_t[]> RecordsByNode(CopcPartition* partition, const uint8_t
 // Compresses each node's records (`records`: in node order, as RecordsByNode gives them,
 // record_length bytes each) into one chunk with the items of `vlr` (layered), handing the chunks
 // in node order to `sink`; the first chunk starts at file offset `first_chunk`.
+// `progress` (may be null): (points compressed, all the nodes' points) after each batch.
 CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
                               const laz::Vlr& vlr, uint64_t first_chunk,
-                              const std::function<void(const uint8_t*, size_t)>& sink);
+                              const std::function<void(const uint8_t*, size_t)>& sink,
+                              const std::function<void(uint64_t, uint64_t)>& progress = {});
 
 }  // namespace candi::io

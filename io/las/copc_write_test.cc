@@ -572,6 +572,42 @@ TEST(CopcWrite, InfoGpsTimeRangeLeavesNaNOutWhereverItLands) {
   EXPECT_EQ(f.info.gpstime_maximum, hi);
 }
 
+TEST(CopcWrite, CloseReportsTheOctreeThenTheChunks) {
+  TempDir dir;
+  const size_t n = 60001;
+  const PointCloud cloud = RandomCloud(7, n, 17);
+  std::vector<std::tuple<std::string, uint64_t, uint64_t>> reports;
+  PointWriteOptions options;
+  options.close_progress = [&](const std::string& stage, uint64_t done, uint64_t total) {
+    reports.emplace_back(stage, done, total);
+  };
+  WritePointCloud(dir.File("p.copc.laz"), cloud, options);
+  ASSERT_GE(reports.size(), 2u);
+  std::vector<std::string> stages;
+  for (size_t i = 0; i < reports.size(); ++i) {
+    const auto& [stage, done, total] = reports[i];
+    EXPECT_EQ(total, n) << stage;
+    EXPECT_LE(done, total) << stage;
+    if (stages.empty() || stages.back() != stage) {
+      stages.push_back(stage);
+    } else {
+      EXPECT_GE(done, std::get<1>(reports[i - 1])) << stage << ": done never goes back";
+    }
+  }
+  EXPECT_EQ(stages, (std::vector<std::string>{"octree", "chunks"}));
+  EXPECT_EQ(std::get<1>(reports.back()), n) << "every point compressed";
+  for (size_t i = 1; i < reports.size(); ++i) {
+    if (std::get<0>(reports[i]) == "chunks") {
+      EXPECT_EQ(std::get<1>(reports[i - 1]), n) << "every point's node settled before the chunks";
+      break;
+    }
+  }
+  // A plain LAS or LAZ has nothing to do at Close() worth reporting.
+  reports.clear();
+  WritePointCloud(dir.File("p.laz"), cloud, options);
+  EXPECT_TRUE(reports.empty());
+}
+
 TEST(CopcWrite, InterruptedWriteLeavesNoPartialFile) {
   TempDir dir;
   EXPECT_TRUE(

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <ctime>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 
@@ -178,6 +179,7 @@ class LasWriter : public PointWriter {
   // COPC (a .copc.laz name): every record is held until Close() builds the octree.
   bool copc_ = false;
   CopcWriteOptions copc_options_;
+  StageProgressCallback close_progress_;
   std::vector<uint8_t> copc_records_;
   std::unique_ptr<AtomicFile> file_;  // created last: a rejected spec creates nothing
   // LAZ (a .laz name): the records go through the chunk writer; the point data starts with the
@@ -210,6 +212,7 @@ LasWriter::LasWriter(const std::string& path, const PointWriteSpec& spec,
       spec_(spec),
       copc_(EndsWith(path, ".copc.laz")),
       copc_options_(options.copc),
+      close_progress_(options.close_progress),
       compressed_(IsLazPath(path)) {
   min_.fill(std::numeric_limits<int32_t>::max());
   max_.fill(std::numeric_limits<int32_t>::min());
@@ -578,8 +581,12 @@ void LasWriter::WriteLazPointData() {
 void LasWriter::WriteCopcPointData() {
   const size_t length = header_.record_length;
   const size_t n = copc_records_.size() / length;
+  auto stage = [this](const char* name) -> ProgressCallback {
+    if (!close_progress_) return {};
+    return [this, name](uint64_t done, uint64_t total) { close_progress_(name, done, total); };
+  };
   CopcPartition partition = PartitionCopcOctree({}, copc_records_.data(), n, length,
-                                                header_.scale, header_.offset);
+                                                header_.scale, header_.offset, stage("octree"));
   const CopcOctree& tree = partition.tree;
   // The records in node order; the input's freed.
   const std::unique_ptr<uint8_t[]> sorted =
@@ -589,7 +596,7 @@ void LasWriter::WriteCopcPointData() {
   const laz::Vlr vlr = laz::ParseVlr(vlrs_.back().data);
   const CopcPointData data = WriteCopcChunks(
       tree, sorted.get(), length, vlr, file_->Tell(),
-      [this](const uint8_t* bytes, size_t size) { file_->Write(bytes, size); });
+      [this](const uint8_t* bytes, size_t size) { file_->Write(bytes, size); }, stage("chunks"));
   WriteChunkTable(file_.get(), header_.offset_to_point_data, data.chunk_table);
   CopcInfo info;
   info.center = tree.center;
