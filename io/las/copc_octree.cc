@@ -159,9 +159,18 @@ class Builder {
       Loop(parallel, n, [&](size_t i) { node_of_[points_[range.begin + i].index] = id; });
       return n;
     }
+    const std::vector<size_t> bucket_begin = SortByBucket(range, parallel);
+    const std::vector<size_t> passed = KeepNearest(range, bucket_begin, parallel);
+    return PassOn(range, id, bucket_begin, passed, parallel, children);
+  }
+
+ private:
+  // Sorts the range's points into `sorted` by bucket, block by block: each block's count of
+  // each bucket, then its points to their places, in order. Returns where each bucket begins
+  // (and, last, the range's end).
+  std::vector<size_t> SortByBucket(const Range& range, bool parallel) {
+    const size_t n = range.end - range.begin;
     const int level = range.key.level;
-    // Sort by bucket, block by block: each block's count of each bucket, then its points to
-    // their places, in order.
     const size_t blocks = (n + kBlock - 1) / kBlock;
     std::vector<uint32_t> counts(blocks * kBuckets, 0);
     const int bucket_shift = kFixedBits - (level + kBucketBits);
@@ -196,7 +205,14 @@ class Builder {
         sorted_[range.begin + next[flags_[i]]++] = points_[i];
       }
     });
-    // Each bucket's cells: the point of the least packed (distance, index) stays (flag 1).
+    return bucket_begin;
+  }
+
+  // Flags the point of each cell with the least packed (distance, index): it stays. Returns how
+  // many points each bucket passes on.
+  std::vector<size_t> KeepNearest(const Range& range, const std::vector<size_t>& bucket_begin,
+                                  bool parallel) {
+    const int level = range.key.level;
     const int cell_shift = kFixedBits - (level + kCellBits);
     const uint64_t frac_mask = (uint64_t{1} << cell_shift) - 1;
     const double frac_unit = std::ldexp(1.0, -cell_shift);
@@ -231,8 +247,15 @@ class Builder {
       for (size_t i = 0; i < m; ++i) best[cell[i]] = kEmpty;
       passed[u] = pass;
     });
-    // A child octant of too few points stays in the node; the others' points go back to the
-    // front of the range, octant by octant.
+    return passed;
+  }
+
+  // The node keeps its flagged points and those of child octants of too few points; the others
+  // go back to the front of the range, octant by octant, as the children's ranges. Returns how
+  // many the node keeps.
+  size_t PassOn(const Range& range, uint32_t id, const std::vector<size_t>& bucket_begin,
+                const std::vector<size_t>& passed, bool parallel, std::vector<Range>* children) {
+    const size_t n = range.end - range.begin;
     constexpr size_t kPerOctant = kBuckets / 8;
     std::array<size_t, 8> octant_size{};
     for (size_t u = 0; u < kBuckets; ++u) octant_size[u / kPerOctant] += passed[u];
@@ -265,7 +288,6 @@ class Builder {
     return kept;
   }
 
- private:
   const CopcOctreeOptions& options_;
   const Cube cube_;
   Element* const points_;
