@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/binary_file.h"
+#include "core/check.h"
 #include "io/convert.h"
 #include "io/las/copc_write.h"
 #include "io/las/las_header.h"
@@ -606,6 +607,26 @@ TEST(CopcWrite, CloseReportsTheOctreeThenTheChunks) {
   reports.clear();
   WritePointCloud(dir.File("p.laz"), cloud, options);
   EXPECT_TRUE(reports.empty());
+}
+
+TEST(CopcWrite, ACountBeyondThisMachinesMemoryIsRefusedBeforeAnythingIsWritten) {
+  TempDir dir;
+  const PointCloud cloud = RandomCloud(7, 10, 3);
+  const std::string path = dir.File("huge.copc.laz");
+  const PointWriteSpec spec{cloud.schema, cloud.frame, cloud.meta, uint64_t{1} << 40};
+  try {
+    OpenPointWriter(path, spec);
+    FAIL() << "10^12 points accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    EXPECT_NE(what.find("1099511627776 points needs about"), std::string::npos) << what;
+    EXPECT_NE(what.find("write LAZ"), std::string::npos) << what;
+  }
+  EXPECT_FALSE(util::FileExists(path));
+  // The same count as LAZ streams, so it opens (and, unclosed, leaves nothing either).
+  { OpenPointWriter(dir.File("huge.laz"), spec); }
+  EXPECT_FALSE(util::FileExists(dir.File("huge.laz")));
 }
 
 TEST(CopcWrite, InterruptedWriteLeavesNoPartialFile) {

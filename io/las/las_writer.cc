@@ -12,11 +12,14 @@
 #include <limits>
 #include <stdexcept>
 
+#include <unistd.h>
+
 #include "core/atomic_file.h"
 #include "core/binary_file.h"
 #include "core/check.h"
 #include "core/log.h"
 #include "core/parallel.h"
+#include "core/text_format.h"
 #include "io/crs.h"
 #include "io/las/copc_octree.h"
 #include "io/las/copc_write.h"
@@ -153,6 +156,9 @@ class LasWriter : public PointWriter {
   void BindSource(const char* name, LasColumn* c, std::vector<bool>* used) const;
   void AddExtraBytes(const std::string& name, ScalarType type, int scalar, int axis, int* offset);
   void SplitVlrs();
+  // A COPC file holds every record until Close(): a count this machine's memory cannot hold is
+  // refused before anything is written.
+  void CheckCopcMemory() const;
   void AddCrsVlr();
   void WriteHeaderAndVlrs();
   std::string EncodedHeader() const;
@@ -220,8 +226,28 @@ LasWriter::LasWriter(const std::string& path, const PointWriteSpec& spec,
   InitHeader(copc_ ? CopcChoice(choice) : choice, options);
   BuildColumns();
   SplitVlrs();
+  if (copc_) CheckCopcMemory();
   file_ = std::make_unique<AtomicFile>(path);
   WriteHeaderAndVlrs();
+}
+
+void LasWriter::CheckCopcMemory() const {
+  if (spec_.count == kUnknownCount) return;
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return;
+  const double physical = static_cast<double>(pages) * static_cast<double>(page);
+  // The peak: the records, the octree's buffers (at least the records' size again) and each
+  // point's node.
+  const double length = header_.record_length;
+  const double needed = static_cast<double>(spec_.count) * (length + std::max(34.0, length) + 4);
+  if (needed <= physical) return;
+  constexpr double kGiB = double(uint64_t{1} << 30);
+  throw InputError(path_, "",
+                   "a COPC file of " + std::to_string(spec_.count) + " points needs about " +
+                       FormatSignificant(needed / kGiB, 3) + " GiB of memory while it is " +
+                       "written (every record is held until its octree is built), and this " +
+                       "machine has " + FormatSignificant(physical / kGiB, 3) +
+                       " GiB: write LAZ (a .laz name), or fewer points a file");
 }
 
 void SetCreationDateToday(LasHeader* header) {
