@@ -186,13 +186,14 @@ std::unique_ptr<uint8_t[]> RecordsByNode(CopcPartition* partition, const uint8_t
   const uint32_t* node_of = partition->node_of.get();
   CANDI_CHECK(partition->memory_bytes >= n * record_length) << "COPC partition memory";
   // Blocks of records, each block's count of each node, then each block's records to their
-  // places: a node's records stay in input order, whatever the thread count.
-  constexpr size_t kBlock = size_t{1} << 22;
-  const size_t blocks = (n + kBlock - 1) / kBlock;
+  // places: a node's records stay in input order, whatever the thread count. At most 64 blocks
+  // (of at least 2^22 records), so the counts (blocks x nodes) stay small however large n is.
+  const size_t block = std::max(size_t{1} << 22, (n + 63) / 64);
+  const size_t blocks = (n + block - 1) / block;
   std::vector<uint64_t> at(blocks * nodes.size(), 0);
   ParallelFor(size_t{0}, blocks, [&](size_t b) {
     uint64_t* count = at.data() + b * nodes.size();
-    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) ++count[node_of[i]];
+    for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) ++count[node_of[i]];
   });
   uint64_t next = 0;
   for (size_t j = 0; j < nodes.size(); ++j) {
@@ -207,7 +208,7 @@ std::unique_ptr<uint8_t[]> RecordsByNode(CopcPartition* partition, const uint8_t
   partition->memory_bytes = 0;
   ParallelFor(size_t{0}, blocks, [&](size_t b) {
     uint64_t* to = at.data() + b * nodes.size();
-    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+    for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {
       std::memcpy(sorted.get() + to[node_of[i]]++ * record_length, records + i * record_length,
                   record_length);
     }
