@@ -1,7 +1,7 @@
 #include "io/las/copc_octree.h"
 
 #include <algorithm>
-#include <atomic>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -9,9 +9,13 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <vector>
+
+#include <tbb/enumerable_thread_specific.h>
 
 #include "core/binary_file.h"
 #include "core/check.h"
+#include "core/morton.h"
 #include "core/parallel.h"
 
 namespace candi::io {
@@ -20,21 +24,6 @@ namespace {
 
 constexpr int kCellBits = 7;  // 128 = 2^7 cells a side
 static_assert(1 << kCellBits == kCopcCellsPerAxis);
-
-// A node's points are sorted into buckets by their cells at the next kBucketBits levels (512
-// buckets, of 16^3 cells each), so that a bucket's cells are chosen in a small table, and the
-// points a node passes on are its children's, each a contiguous range.
-constexpr int kBucketBits = 3;
-constexpr size_t kBuckets = size_t{1} << (3 * kBucketBits);
-constexpr int kBucketCellBits = kCellBits - kBucketBits;
-constexpr size_t kBucketCells = size_t{1} << (3 * kBucketCellBits);
-// A 3-bit value's bits spread to bits 0, 3 and 6: a bucket is x's spread | y's << 1 | z's << 2,
-// so its top three bits are the octant one level down (bit 0: x, 1: y, 2: z).
-constexpr uint32_t kSpread[8] = {0, 1, 8, 9, 64, 65, 72, 73};
-static_assert(kBucketBits == 3);
-// Nodes of more points than this are sorted by several threads; smaller ones by one each.
-constexpr size_t kLargeNodePoints = size_t{1} << 16;
-constexpr size_t kBlock = size_t{1} << 16;  // points a task sorts into buckets
 
 // A point's place in the cube, per axis q = floor(t * 2^62), t = (world - cube min) / cube width
 // clamped to [0, 1): floor(t * 2^L) = q >> (62 - L) exactly for every level L <= 62 (t * 2^L is
@@ -52,39 +41,142 @@ uint64_t ToFixed(double t) {
                    : static_cast<uint64_t>(static_cast<int64_t>(u));
 }
 
-// A point as the tree is built: its record's X, Y, Z and its index.
+// The points are kept in Morton order: a key holds a point's octants at kKeyLevels levels below
+// a base level (3 bits each, the nearer level higher), so that a node's points, its children's
+// and each of its cells (kCellBits levels down) are contiguous ranges while the node is at most
+// kKeyLevels - kCellBits levels below the base; deeper nodes re-key their points from their own
+// level. The key's top bit flags a point that a node has kept.
+constexpr int kKeyLevels = 21;
+constexpr uint64_t kKept = uint64_t{1} << 63;
+
+// A point as the tree is built: its key, its record's X, Y, Z and its index.
 struct Element {
+  uint64_t key;
   int32_t xyz[3];
   uint32_t index;
 };
+static_assert(sizeof(Element) == 24);
+
+uint64_t Code(const Element& e) { return e.key & ~kKept; }
 
 struct Cube {
   Eigen::Vector3d scale, offset, min;
   double width = 0.0;
-  Place operator()(const Element& e) const {
+  Place operator()(const int32_t* xyz) const {
     Place q;
-    for (int k = 0; k < 3; ++k) q[k] = ToFixed((e.xyz[k] * scale[k] + offset[k] - min[k]) / width);
+    for (int k = 0; k < 3; ++k) q[k] = ToFixed((xyz[k] * scale[k] + offset[k] - min[k]) / width);
     return q;
   }
 };
 
-// The cube of the points (into tree) and their elements (into elements[0, n)). The bounds are
-// reduced block by block in parallel: a minimum and a maximum do not depend on the order.
-void CubeElements(const uint8_t* records, size_t n, size_t length, const Eigen::Vector3d& scale,
-                  const Eigen::Vector3d& offset, CopcOctree* tree, Cube* cube,
-                  Element* elements) {
+// The Morton code of a place's cells at levels base + 1 .. base + kKeyLevels (octant bits x, y,
+// z = bits 0, 1, 2, as ChildKey has them); levels past 62 read as 0.
+uint64_t MortonCode(const Place& q, int base) {
+  const int shift = kFixedBits - base - kKeyLevels;
+  auto bits = [&](int k) { return shift >= 0 ? q[k] >> shift : q[k] << -shift; };
+  return MortonCode21(bits(0), bits(1), bits(2));
+}
+
+// Squared distance (float bits, which order as the values do for >= 0) above the index: the
+// smaller of two is the nearer point, the earlier on a tie.
+uint64_t Packed(double distance, uint32_t index) {
+  const float d = static_cast<float>(distance);
+  uint32_t bits;
+  std::memcpy(&bits, &d, 4);
+  return uint64_t{bits} << 32 | index;
+}
+
+// Sorts elements by Code, most significant 9 bits first (bits [0, top) unsorted, the ones above
+// equal): by a scatter through `scratch` where it holds the range, else by cycles in place.
+constexpr int kDigitBits = 9;
+constexpr size_t kSmallSort = 32;
+
+void InsertionSort(Element* a, size_t n) {
+  for (size_t i = 1; i < n; ++i) {
+    const Element e = a[i];
+    size_t j = i;
+    for (; j > 0 && Code(a[j - 1]) > Code(e); --j) a[j] = a[j - 1];
+    a[j] = e;
+  }
+}
+
+void SortElements(Element* a, size_t n, int top, std::vector<Element>* scratch,
+                  size_t scratch_cap) {
+  constexpr size_t kDigits = size_t{1} << kDigitBits;
+  while (n > kSmallSort && top > 0) {
+    const int shift = std::max(0, top - kDigitBits);
+    const uint64_t mask = (uint64_t{1} << (top - shift)) - 1;
+    auto digit = [&](const Element& e) { return (Code(e) >> shift) & mask; };
+    std::array<size_t, kDigits + 1> begin{};
+    for (size_t i = 0; i < n; ++i) ++begin[digit(a[i]) + 1];
+    if (*std::max_element(begin.begin(), begin.end()) == n) {  // one bucket: the next digit
+      top = shift;
+      continue;
+    }
+    for (size_t u = 0; u < kDigits; ++u) begin[u + 1] += begin[u];
+    std::array<size_t, kDigits> next;
+    std::copy(begin.begin(), begin.end() - 1, next.begin());
+    if (n <= scratch_cap) {
+      if (scratch->size() < n) {
+        scratch->resize(std::min(scratch_cap, std::max(n, 2 * scratch->size())));
+      }
+      Element* s = scratch->data();
+      for (size_t i = 0; i < n; ++i) s[next[digit(a[i])]++] = a[i];
+      std::copy(s, s + n, a);
+    } else {
+      for (size_t u = 0; u < kDigits; ++u) {
+        while (next[u] < begin[u + 1]) {
+          Element e = a[next[u]];
+          for (uint64_t d = digit(e); d != u; d = digit(e)) std::swap(e, a[next[d]++]);
+          a[next[u]++] = e;
+        }
+      }
+    }
+    for (size_t u = 0; u < kDigits; ++u) {
+      if (begin[u + 1] - begin[u] > 1) {
+        SortElements(a + begin[u], begin[u + 1] - begin[u], shift, scratch, scratch_cap);
+      }
+    }
+    return;
+  }
+  InsertionSort(a, n);
+}
+
+// The sorts of one build: each thread's scratch, of at most `cap` elements, freed with it.
+class Sorter {
+ public:
+  explicit Sorter(size_t cap) : cap_(cap) {}
+  void operator()(Element* a, size_t n, int top) {
+    SortElements(a, n, top, &scratch_.local(), cap_);
+  }
+
+ private:
+  const size_t cap_;
+  tbb::enumerable_thread_specific<std::vector<Element>> scratch_;
+};
+
+constexpr size_t kBlock = size_t{1} << 16;  // points a task takes
+
+// The points' cube (into tree) and their elements in Morton order (into elements[0, n)), with
+// `codes` (n) for their codes on the way: the bounds by parallel blocks (a minimum and a maximum
+// do not depend on the order), the codes and their counts by the first 12 bits, the elements
+// scattered by them, each bucket sorted on.
+void SortedElements(const uint8_t* records, size_t n, size_t length, const Eigen::Vector3d& scale,
+                    const Eigen::Vector3d& offset, Sorter* sort, CopcOctree* tree, Cube* cube,
+                    Element* elements, uint64_t* codes) {
   const size_t blocks = (n + kBlock - 1) / kBlock;
+  auto block_end = [&](size_t b) { return std::min(n, (b + 1) * kBlock); };
+  auto xyz = [&](size_t i, int32_t* out) {
+    for (int k = 0; k < 3; ++k) out[k] = LoadLE<int32_t>(records + i * length + 4 * k);
+  };
   std::vector<Eigen::Vector3d> block_lo(blocks), block_hi(blocks);
   ParallelFor(size_t{0}, blocks, [&](size_t b) {
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
-      Element& e = elements[i];
-      Eigen::Vector3d w;
-      for (int k = 0; k < 3; ++k) {
-        e.xyz[k] = LoadLE<int32_t>(records + i * length + 4 * k);
-        w[k] = e.xyz[k] * scale[k] + offset[k];
-      }
-      e.index = static_cast<uint32_t>(i);
+    for (size_t i = b * kBlock; i < block_end(b); ++i) {
+      int32_t p[3];
+      xyz(i, p);
+      const Eigen::Vector3d w(p[0] * scale[0] + offset[0], p[1] * scale[1] + offset[1],
+                              p[2] * scale[2] + offset[2]);
       lo = lo.cwiseMin(w);
       hi = hi.cwiseMax(w);
     }
@@ -102,18 +194,69 @@ void CubeElements(const uint8_t* records, size_t n, size_t length, const Eigen::
   if (!(tree->halfsize > 0.0)) tree->halfsize = scale.cwiseAbs().maxCoeff();
   tree->spacing = 2.0 * tree->halfsize / kCopcCellsPerAxis;
   *cube = {scale, offset, tree->center.array() - tree->halfsize, 2.0 * tree->halfsize};
+  if (n == 0) return;
+
+  constexpr int kFirstBits = 12;
+  constexpr size_t kFirst = size_t{1} << kFirstBits;
+  constexpr int kFirstShift = 3 * kKeyLevels - kFirstBits;
+  std::vector<uint32_t> counts(blocks * kFirst, 0);
+  ParallelFor(size_t{0}, blocks, [&](size_t b) {
+    uint32_t* count = counts.data() + b * kFirst;
+    for (size_t i = b * kBlock; i < block_end(b); ++i) {
+      int32_t p[3];
+      xyz(i, p);
+      codes[i] = MortonCode((*cube)(p), 0);
+      ++count[codes[i] >> kFirstShift];
+    }
+  });
+  std::vector<size_t> bucket_begin(kFirst + 1);
+  size_t at = 0;
+  for (size_t u = 0; u < kFirst; ++u) {
+    bucket_begin[u] = at;
+    for (size_t b = 0; b < blocks; ++b) {
+      const uint32_t c = counts[b * kFirst + u];
+      counts[b * kFirst + u] = static_cast<uint32_t>(at);
+      at += c;
+    }
+  }
+  bucket_begin[kFirst] = at;
+  ParallelFor(size_t{0}, blocks, [&](size_t b) {
+    uint32_t* next = counts.data() + b * kFirst;
+    for (size_t i = b * kBlock; i < block_end(b); ++i) {
+      Element& e = elements[next[codes[i] >> kFirstShift]++];
+      e.key = codes[i];
+      xyz(i, e.xyz);
+      e.index = static_cast<uint32_t>(i);
+    }
+  });
+  ParallelFor(size_t{0}, kFirst, [&](size_t u) {
+    (*sort)(elements + bucket_begin[u], bucket_begin[u + 1] - bucket_begin[u], kFirstShift);
+  });
 }
 
-// Squared distance (float bits, which order as the values do for >= 0) above the index: the
-// smaller of two is the nearer point, the earlier on a tie.
-uint64_t Packed(double distance, uint32_t index) {
-  const float d = static_cast<float>(distance);
-  uint32_t bits;
-  std::memcpy(&bits, &d, 4);
-  return uint64_t{bits} << 32 | index;
-}
-
-constexpr uint64_t kEmpty = ~uint64_t{0};
+// The least squared distance from a cell's centre (in cell widths, as float bits) of a point in
+// each of its 8^3 subcells, three levels down, by their octants' bits (a Morton code: the
+// nearest level highest, x, y, z the low bits of each). Along an axis the three bits b1 b2 b3
+// place the point at [v / 8, (v + 1) / 8), v = 4 b1 + 2 b2 + b3, at least m / 8 from the
+// centre, m = 3 - v when b1 = 0 and v - 4 when b1 = 1.
+constexpr int kBoundLevels = 3;
+struct SubcellBound {
+  uint32_t bits[512];
+  SubcellBound() {
+    for (uint32_t code = 0; code < 512; ++code) {
+      int sum = 0;
+      for (int k = 0; k < 3; ++k) {
+        const int v = static_cast<int>(((code >> (6 + k)) & 1) << 2 | ((code >> (3 + k)) & 1) << 1 |
+                                       ((code >> k) & 1));
+        const int m = v < 4 ? 3 - v : v - 4;
+        sum += m * m;
+      }
+      const float bound = static_cast<float>(sum) / 64.0f;
+      std::memcpy(&bits[code], &bound, 4);
+    }
+  }
+};
+const SubcellBound kSubcellBound;
 
 // Runs f(0..n-1) on several threads or on this one.
 template <typename F>
@@ -125,10 +268,10 @@ void Loop(bool parallel, size_t n, const F& f) {
   }
 }
 
-// A node being built: its points are elements [begin, end) of the level's buffer.
+// A node being built: its points are the elements [begin, end) not yet kept, `size` of them.
 struct Range {
   CopcKey key;
-  size_t begin = 0, end = 0;
+  size_t begin = 0, end = 0, size = 0;
 };
 
 CopcKey ChildKey(const CopcKey& key, int octant) {
@@ -136,164 +279,190 @@ CopcKey ChildKey(const CopcKey& key, int octant) {
           2 * key.z + ((octant >> 2) & 1)};
 }
 
-// Bytes of the builder's buffers for n points.
-size_t BuilderBytes(size_t n) { return n * (2 * sizeof(Element) + sizeof(uint16_t)); }
+// Nodes of more points than this are split by several threads; smaller ones by one each.
+constexpr size_t kLargeNodePoints = size_t{1} << 16;
 
-// The tree's buffers (in `memory`, BuilderBytes): a level's nodes are ranges of `points`; a node
-// sorts its range into `sorted` by bucket and passes its children's points back into the front
-// of its range. Pages are first touched by the passes that fill them, in parallel.
+// The tree's points, in Morton order by the keys of level `base`: a node keeps the nearest
+// point of each of its cells (a run of its range) and passes the others on, in place, to the
+// children that are the ranges of its octants.
 class Builder {
  public:
-  Builder(const CopcOctreeOptions& options, const Cube& cube, size_t n, uint8_t* memory,
+  Builder(const CopcOctreeOptions& options, const Cube& cube, Sorter* sort, Element* elements,
           uint32_t* node_of)
-      : options_(options), cube_(cube), points_(reinterpret_cast<Element*>(memory)),
-        sorted_(points_ + n), flags_(reinterpret_cast<uint16_t*>(sorted_ + n)),
-        node_of_(node_of) {}
+      : options_(options), cube_(cube), sort_(sort), elements_(elements), node_of_(node_of) {}
 
-  // Splits node `range` (id `id`): its points one a cell, the rest to its children's ranges
-  // (into children, octant order); its points' node_of set to id; returns how many it keeps.
+  int base() const { return base_; }
+
+  // Re-keys the points of `ranges` (one level's nodes) by the keys of their own level.
+  void Rebase(const std::vector<Range>& ranges) {
+    base_ = ranges[0].key.level;
+    auto rekey = [&](size_t i) {
+      Element& e = elements_[i];
+      e.key = (e.key & kKept) | MortonCode(cube_(e.xyz), base_);
+    };
+    for (const Range& r : ranges) {
+      const bool large = r.end - r.begin > kLargeNodePoints;
+      const size_t blocks = (r.end - r.begin + kBlock - 1) / kBlock;
+      Loop(large, blocks, [&](size_t b) {
+        for (size_t i = r.begin + b * kBlock; i < std::min(r.end, r.begin + (b + 1) * kBlock); ++i) {
+          rekey(i);
+        }
+      });
+    }
+    ParallelFor(size_t{0}, ranges.size(), [&](size_t j) {
+      (*sort_)(elements_ + ranges[j].begin, ranges[j].end - ranges[j].begin, 3 * kKeyLevels);
+    });
+  }
+
+  // Splits node `range` (id `id`): its points one a cell, the rest to its children (into
+  // children, octant order); its points' node_of set to id; returns how many it keeps.
   size_t Split(const Range& range, uint32_t id, bool keep_all, bool parallel,
                std::vector<Range>* children) {
-    const size_t n = range.end - range.begin;
-    if (keep_all || n < static_cast<size_t>(options_.min_subtree_points)) {
-      Loop(parallel, n, [&](size_t i) { node_of_[points_[range.begin + i].index] = id; });
-      return n;
+    const int level = range.key.level;
+    if (keep_all || range.size < static_cast<size_t>(options_.min_subtree_points)) {
+      KeepAll(range.begin, range.end, id, parallel);
+      return range.size;
     }
-    const std::vector<size_t> bucket_begin = SortByBucket(range, parallel);
-    const std::vector<size_t> passed = KeepNearest(range, bucket_begin, parallel);
-    return PassOn(range, id, bucket_begin, passed, parallel, children);
+    // The node's octants (one level down) and cells (kCellBits down) are runs of its codes.
+    const int octant_shift = 3 * (base_ + kKeyLevels - (level + 1));
+    const int cell_shift = 3 * (base_ + kKeyLevels - (level + kCellBits));
+    std::array<size_t, 9> octant_begin;
+    for (int o = 0; o < 8; ++o) {
+      octant_begin[o] = static_cast<size_t>(
+          std::partition_point(elements_ + range.begin, elements_ + range.end,
+                               [&](const Element& e) {
+                                 return static_cast<int>((Code(e) >> octant_shift) & 7) < o;
+                               }) -
+          elements_);
+    }
+    octant_begin[8] = range.end;
+    // Blocks of whole cells, each kept nearest point counted by octant.
+    std::vector<size_t> cuts{range.begin};
+    if (parallel) {
+      const size_t blocks = (range.end - range.begin + kBlock - 1) / kBlock;
+      for (size_t b = 1; b < blocks; ++b) {
+        const size_t at = std::max(cuts.back(), range.begin + b * kBlock);
+        if (at >= range.end) break;
+        const uint64_t cell = Code(elements_[at - 1]) >> cell_shift;
+        cuts.push_back(static_cast<size_t>(
+            std::partition_point(elements_ + at, elements_ + range.end,
+                                 [&](const Element& e) { return Code(e) >> cell_shift == cell; }) -
+            elements_));
+      }
+    }
+    cuts.push_back(range.end);
+    std::vector<std::array<size_t, 8>> passed_in(cuts.size() - 1);
+    Loop(parallel, cuts.size() - 1, [&](size_t b) {
+      passed_in[b] = KeepNearest(cuts[b], cuts[b + 1], level, cell_shift, octant_shift, id);
+    });
+    size_t size = range.size;
+    for (int o = 0; o < 8; ++o) {
+      size_t passed = 0;
+      for (const auto& p : passed_in) passed += p[o];
+      if (passed == 0) continue;
+      if (passed < static_cast<size_t>(options_.min_octant_points)) {
+        KeepAll(octant_begin[o], octant_begin[o + 1], id, parallel);
+        continue;
+      }
+      children->push_back({ChildKey(range.key, o), octant_begin[o], octant_begin[o + 1], passed});
+      size -= passed;
+    }
+    return size;
   }
 
  private:
-  // Sorts the range's points into `sorted` by bucket, block by block: each block's count of
-  // each bucket, then its points to their places, in order. Returns where each bucket begins
-  // (and, last, the range's end).
-  std::vector<size_t> SortByBucket(const Range& range, bool parallel) {
-    const size_t n = range.end - range.begin;
-    const int level = range.key.level;
-    const size_t blocks = (n + kBlock - 1) / kBlock;
-    std::vector<uint32_t> counts(blocks * kBuckets, 0);
-    const int bucket_shift = kFixedBits - (level + kBucketBits);
-    auto block_begin = [&](size_t b) { return range.begin + b * kBlock; };
-    auto block_end = [&](size_t b) { return std::min(range.end, range.begin + (b + 1) * kBlock); };
-    Loop(parallel, blocks, [&](size_t b) {
-      uint32_t* count = counts.data() + b * kBuckets;
-      for (size_t i = block_begin(b); i < block_end(b); ++i) {
-        const Place q = cube_(points_[i]);
-        uint32_t bucket = 0;
-        for (int k = 0; k < 3; ++k) bucket |= kSpread[(q[k] >> bucket_shift) & 7] << k;
-        flags_[i] = static_cast<uint16_t>(bucket);
-        ++count[bucket];
+  // Keeps the nearest point of each cell in [begin, end) (whole cells); returns how many it
+  // kept in each octant.
+  std::array<size_t, 8> KeepNearest(size_t begin, size_t end, int level, int cell_shift,
+                                    int octant_shift, uint32_t id) {
+    const int place_shift = kFixedBits - (level + kCellBits);
+    const uint64_t frac_mask = (uint64_t{1} << place_shift) - 1;
+    const double frac_unit = std::ldexp(1.0, -place_shift);
+    std::array<size_t, 8> passed{};
+    auto keep = [&](size_t i) {
+      Element& e = elements_[i];
+      --passed[(e.key >> octant_shift) & 7];
+      e.key |= kKept;
+      node_of_[e.index] = id;
+    };
+    auto packed = [&](const Element& e) {
+      const Place q = cube_(e.xyz);
+      double distance = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        const double f = static_cast<double>(q[k] & frac_mask) * frac_unit - 0.5;
+        distance += f * f;
       }
-    });
-    std::vector<size_t> bucket_begin(kBuckets + 1);
-    {
-      size_t at = range.begin;
-      for (size_t u = 0; u < kBuckets; ++u) {
-        bucket_begin[u] = at;
-        for (size_t b = 0; b < blocks; ++b) {
-          const uint32_t c = counts[b * kBuckets + u];
-          counts[b * kBuckets + u] = static_cast<uint32_t>(at - range.begin);
-          at += c;
+      return Packed(distance, e.index);
+    };
+    // A bound from the key: the octants of the next three levels place a point in one of the
+    // cell's 8^3 subcells, at least kSubcellBound from its centre; a point whose bound exceeds
+    // the best distance is not computed. (A computed distance is never below its bound: the
+    // subcells' faces are exact binary fractions and each rounding on the way is monotonic.)
+    const int bound_levels = base_ + kKeyLevels - (level + kCellBits);
+    const bool bounded = bound_levels >= kBoundLevels;
+    const int bound_shift = bounded ? 3 * (bound_levels - kBoundLevels) : 0;
+    auto subcell = [&](uint64_t key) { return (key >> bound_shift) & 511; };
+    size_t i = begin;
+    while (i < end) {
+      if (elements_[i].key & kKept) {
+        ++i;
+        continue;
+      }
+      // The cell [cell_begin, i). First pass: the point of least bound (the first of them).
+      const uint64_t cell = elements_[i].key >> cell_shift;
+      const size_t cell_begin = i;
+      uint32_t least = ~uint32_t{0};
+      size_t best_at = i, live = 0;
+      for (; i < end; ++i) {
+        const uint64_t key = elements_[i].key;
+        if (key & kKept) continue;
+        if (key >> cell_shift != cell) break;
+        ++live;
+        const uint32_t bound = bounded ? kSubcellBound.bits[subcell(key)] : 0;
+        if (bound < least) {
+          least = bound;
+          best_at = i;
         }
       }
-      bucket_begin[kBuckets] = at;
+      // Second pass: the best distance, from that point's.
+      if (live > 1) {
+        uint64_t best = packed(elements_[best_at]);
+        for (size_t j = cell_begin; j < i; ++j) {
+          const uint64_t key = elements_[j].key;
+          if ((key & kKept) || j == best_at) continue;
+          if (bounded && (uint64_t{kSubcellBound.bits[subcell(key)]} << 32) > best) continue;
+          const uint64_t p = packed(elements_[j]);
+          if (p < best) {
+            best = p;
+            best_at = j;
+          }
+        }
+      }
+      passed[(elements_[best_at].key >> octant_shift) & 7] += live;
+      keep(best_at);
     }
-    Loop(parallel, blocks, [&](size_t b) {
-      uint32_t* next = counts.data() + b * kBuckets;
-      for (size_t i = block_begin(b); i < block_end(b); ++i) {
-        sorted_[range.begin + next[flags_[i]]++] = points_[i];
-      }
-    });
-    return bucket_begin;
-  }
-
-  // Flags the point of each cell with the least packed (distance, index): it stays. Returns how
-  // many points each bucket passes on.
-  std::vector<size_t> KeepNearest(const Range& range, const std::vector<size_t>& bucket_begin,
-                                  bool parallel) {
-    const int level = range.key.level;
-    const int cell_shift = kFixedBits - (level + kCellBits);
-    const uint64_t frac_mask = (uint64_t{1} << cell_shift) - 1;
-    const double frac_unit = std::ldexp(1.0, -cell_shift);
-    std::vector<size_t> passed(kBuckets);  // points a bucket passes on
-    Loop(parallel, kBuckets, [&](size_t u) {
-      thread_local std::vector<uint64_t> best(kBucketCells, kEmpty);
-      thread_local std::vector<uint64_t> packed;
-      thread_local std::vector<uint16_t> cell;
-      const size_t b = bucket_begin[u], m = bucket_begin[u + 1] - b;
-      packed.resize(m);
-      cell.resize(m);
-      for (size_t i = 0; i < m; ++i) {
-        const Place q = cube_(sorted_[b + i]);
-        uint32_t c = 0;
-        double distance = 0.0;
-        for (int k = 0; k < 3; ++k) {
-          const uint64_t local = (q[k] >> cell_shift) & ((uint64_t{1} << kBucketCellBits) - 1);
-          c |= static_cast<uint32_t>(local) << (kBucketCellBits * k);
-          const double e = static_cast<double>(q[k] & frac_mask) * frac_unit - 0.5;
-          distance += e * e;
-        }
-        cell[i] = static_cast<uint16_t>(c);
-        packed[i] = Packed(distance, sorted_[b + i].index);
-        best[c] = std::min(best[c], packed[i]);
-      }
-      size_t pass = 0;
-      for (size_t i = 0; i < m; ++i) {
-        const bool keep = best[cell[i]] == packed[i];
-        flags_[b + i] = keep;
-        pass += !keep;
-      }
-      for (size_t i = 0; i < m; ++i) best[cell[i]] = kEmpty;
-      passed[u] = pass;
-    });
     return passed;
   }
 
-  // The node keeps its flagged points and those of child octants of too few points; the others
-  // go back to the front of the range, octant by octant, as the children's ranges. Returns how
-  // many the node keeps.
-  size_t PassOn(const Range& range, uint32_t id, const std::vector<size_t>& bucket_begin,
-                const std::vector<size_t>& passed, bool parallel, std::vector<Range>* children) {
-    const size_t n = range.end - range.begin;
-    constexpr size_t kPerOctant = kBuckets / 8;
-    std::array<size_t, 8> octant_size{};
-    for (size_t u = 0; u < kBuckets; ++u) octant_size[u / kPerOctant] += passed[u];
-    std::array<bool, 8> stays{};
-    for (int o = 0; o < 8; ++o) {
-      stays[o] = octant_size[o] < static_cast<size_t>(options_.min_octant_points);
-    }
-    std::vector<size_t> out(kBuckets);
-    size_t at = range.begin, kept = n;
-    for (size_t u = 0; u < kBuckets; ++u) {
-      const int o = static_cast<int>(u / kPerOctant);
-      if (u % kPerOctant == 0 && !stays[o] && octant_size[o] > 0) {
-        children->push_back({ChildKey(range.key, o), at, at + octant_size[o]});
-        kept -= octant_size[o];
-      }
-      out[u] = at;
-      if (!stays[o]) at += passed[u];
-    }
-    Loop(parallel, kBuckets, [&](size_t u) {
-      const bool stay = stays[u / kPerOctant];
-      size_t to = out[u];
-      for (size_t i = bucket_begin[u]; i < bucket_begin[u + 1]; ++i) {
-        if (flags_[i] || stay) {
-          node_of_[sorted_[i].index] = id;
-        } else {
-          points_[to++] = sorted_[i];
-        }
+  // Keeps every point of [begin, end) not yet kept.
+  void KeepAll(size_t begin, size_t end, uint32_t id, bool parallel) {
+    const size_t blocks = (end - begin + kBlock - 1) / kBlock;
+    Loop(parallel, blocks, [&](size_t b) {
+      for (size_t i = begin + b * kBlock; i < std::min(end, begin + (b + 1) * kBlock); ++i) {
+        Element& e = elements_[i];
+        if (e.key & kKept) continue;
+        e.key |= kKept;
+        node_of_[e.index] = id;
       }
     });
-    return kept;
   }
 
   const CopcOctreeOptions& options_;
   const Cube cube_;
-  Element* const points_;
-  Element* const sorted_;
-  uint16_t* const flags_;  // a point's bucket while sorting, then whether it stays
+  Sorter* const sort_;
+  Element* const elements_;
   uint32_t* const node_of_;
+  int base_ = 0;
 };
 
 }  // namespace
@@ -328,23 +497,27 @@ CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_
   CopcPartition partition;
   CopcOctree& tree = partition.tree;
   // Not value-initialised: the passes write every byte they read.
-  partition.memory_bytes = std::max(BuilderBytes(n), n * record_length);
+  partition.memory_bytes = std::max(n * (sizeof(Element) + sizeof(uint64_t)), n * record_length);
   partition.memory.reset(new uint8_t[partition.memory_bytes]);
   static_assert(alignof(Element) <= alignof(std::max_align_t));
+  Element* elements = reinterpret_cast<Element*>(partition.memory.get());
   Cube cube;
-  CubeElements(records, n, record_length, scale, offset, &tree, &cube,
-               reinterpret_cast<Element*>(partition.memory.get()));
+  Sorter sort(options.sort_scratch_points);
+  SortedElements(records, n, record_length, scale, offset, &sort, &tree, &cube, elements,
+                 reinterpret_cast<uint64_t*>(elements + n));
   if (n == 0) return partition;
   partition.node_of.reset(new uint32_t[n]);
-  Builder builder(options, cube, n, partition.memory.get(), partition.node_of.get());
+  Builder builder(options, cube, &sort, elements, partition.node_of.get());
   const double min_scale = scale.cwiseAbs().minCoeff();
-  std::vector<Range> level{{CopcKey{}, 0, n}};
+  std::vector<Range> level{{CopcKey{}, 0, n, n}};
   uint64_t settled = 0;
   if (progress) progress(0, n);
   while (!level.empty()) {
     // Cells narrower than a LAS unit: only duplicates share one; keep them all here.
-    const double cell = std::ldexp(tree.spacing, -level[0].key.level);
-    const bool keep_all = cell < min_scale || level[0].key.level + kCellBits >= 62;
+    const int depth = level[0].key.level;
+    const bool keep_all =
+        std::ldexp(tree.spacing, -depth) < min_scale || depth + kCellBits >= kFixedBits;
+    if (!keep_all && depth + kCellBits > builder.base() + kKeyLevels) builder.Rebase(level);
     const size_t first = tree.nodes.size();
     CANDI_CHECK(first + level.size() <= size_t{std::numeric_limits<uint32_t>::max()})
         << "COPC octree of " << first + level.size() << " nodes";

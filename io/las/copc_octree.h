@@ -20,12 +20,15 @@
 // [0, 2^L - 1], the same rule at every level, so a point of node (d, x) lies in a child (d + 1, 2x
 // or 2x + 1); each level's cell is a shift of floor(t * 2^62). Deterministic: the nodes and their
 // points do not depend on the thread count.
-// Built level by level: a node's points (a range of the level's buffer) are sorted by their cells
-// three levels down into 512 buckets, each bucket's cells chosen in a small table, and the points
-// passed on written back as the children's ranges; a level's nodes are split in parallel, a large
-// one by blocks and buckets, so each pass over the points reads and writes them in order.
-// Memory: 38 bytes a point, or the record length + 4 if more (the records' X, Y, Z and index twice,
-// a bucket, the node of each). Thread-safety: a pure function.
+// Built level by level over the points in Morton order (sorted once by a parallel radix pass
+// on the first 12 bits and each bucket on its own): a node's points, its children's and each of
+// its cells are then contiguous ranges, so a level is one pass over its nodes' ranges, a cell's
+// nearest point chosen from its run (a point's distance computed only where a bound from its
+// Morton code does not rule it out) and flagged as kept in place. A large node is split by several
+// threads in blocks of whole cells; small nodes a thread each. A key holds 21 levels; nodes more
+// than 14 levels below the level it was made for are keyed again from their own level.
+// Memory: 32 bytes a point, or the record length if more (each point's key, X, Y, Z and index,
+// its key again while sorting), and the node of each. Thread-safety: a pure function.
 #pragma once
 
 #include <array>
@@ -69,6 +72,9 @@ struct CopcOctreeOptions {
   int min_subtree_points = 1500;
   // A child octant of fewer points is kept in its parent. >= 0; 0: never.
   int min_octant_points = 100;
+  // The sort's scratch on each thread, in points (24 bytes each; 48 MiB): larger groups are
+  // sorted in place, more slowly. 0: every group in place.
+  size_t sort_scratch_points = size_t{1} << 21;
   void Check() const;
 };
 

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
@@ -51,10 +52,12 @@ std::vector<uint8_t> ClusteredRecords(size_t n, uint32_t seed) {
   return records;
 }
 
-Eigen::Vector3d World(const std::vector<uint8_t>& records, uint64_t i) {
+Eigen::Vector3d World(const std::vector<uint8_t>& records, uint64_t i,
+                      const Eigen::Vector3d& scale = kScale,
+                      const Eigen::Vector3d& offset = kOffset) {
   Eigen::Vector3d w;
   for (int k = 0; k < 3; ++k) {
-    w[k] = LoadLE<int32_t>(records.data() + i * kLength + 4 * k) * kScale[k] + kOffset[k];
+    w[k] = LoadLE<int32_t>(records.data() + i * kLength + 4 * k) * scale[k] + offset[k];
   }
   return w;
 }
@@ -170,12 +173,13 @@ TEST(CopcOctree, SmallNodesStayInTheirParentsAsInUntwine) {
 class ReferenceTree {
  public:
   ReferenceTree(const CopcOctreeOptions& options, const std::vector<uint8_t>& records, size_t n,
-                const CopcOctree& cube)
-      : options_(options), places_(n) {
+                const CopcOctree& cube, const Eigen::Vector3d& scale = kScale,
+                const Eigen::Vector3d& offset = kOffset)
+      : options_(options), places_(n), min_scale_(scale.minCoeff()) {
     const Eigen::Vector3d min = cube.center.array() - cube.halfsize;
     const long double one = std::ldexp(1.0L, 62);
     for (size_t i = 0; i < n; ++i) {
-      const Eigen::Vector3d t = (World(records, i) - min) / (2.0 * cube.halfsize);
+      const Eigen::Vector3d t = (World(records, i, scale, offset) - min) / (2.0 * cube.halfsize);
       for (int k = 0; k < 3; ++k) {
         const long double u = std::floor(static_cast<long double>(t[k]) * one);
         places_[i][k] = u <= 0 ? 0 : u >= one ? (uint64_t{1} << 62) - 1 : uint64_t(u);
@@ -194,7 +198,7 @@ class ReferenceTree {
  private:
   void Split(const CopcKey& key, const std::vector<uint64_t>& points) {
     std::vector<uint64_t>& kept = nodes_[Tuple(key)];
-    const bool keep_all = std::ldexp(spacing_, -key.level) < kScale.minCoeff();
+    const bool keep_all = std::ldexp(spacing_, -key.level) < min_scale_;
     if (keep_all || points.size() < static_cast<size_t>(options_.min_subtree_points)) {
       kept = points;
       return;
@@ -237,29 +241,93 @@ class ReferenceTree {
 
   const CopcOctreeOptions options_;
   std::vector<std::array<uint64_t, 3>> places_;
-  double spacing_ = 0.0;
+  double min_scale_ = 0.0, spacing_ = 0.0;
   std::map<std::tuple<int, int, int, int>, std::vector<uint64_t>> nodes_;
 };
 
-TEST(CopcOctree, TheBucketedBuildGivesTheRulesTree) {
-  // 150,000 points: the root and the first levels take the large nodes' way (blocks, buckets on
+// Compares the tree of n records with the rule's, node by node; returns the depth.
+int ExpectTheRulesTree(const CopcOctreeOptions& options, const std::vector<uint8_t>& records,
+                       size_t n, const Eigen::Vector3d& scale, const Eigen::Vector3d& offset) {
+  const CopcOctree tree = BuildCopcOctree(options, records.data(), n, kLength, scale, offset);
+  const auto reference = ReferenceTree(options, records, n, tree, scale, offset).Build();
+  EXPECT_EQ(tree.nodes.size(), reference.size());
+  int previous_level = 0;
+  for (const CopcNode& node : tree.nodes) {
+    EXPECT_GE(node.key.level, previous_level) << "nodes level by level";
+    previous_level = node.key.level;
+    const auto it = reference.find(Tuple(node.key));
+    if (it == reference.end()) {
+      ADD_FAILURE() << "no node " << node.key.level << "-" << node.key.x << "-" << node.key.y
+                    << "-" << node.key.z << " in the rule's tree";
+      break;
+    }
+    EXPECT_EQ(node.points, it->second);
+    EXPECT_EQ(node.size, node.points.size());
+  }
+  return previous_level;
+}
+
+TEST(CopcOctree, TheMortonBuildGivesTheRulesTree) {
+  // 150,000 points: the root and the first levels take the large nodes' way (blocks of cells on
   // every thread), the rest the small nodes' (a thread each).
+  // The sort's scratch cut down: groups sorted in place (all, or those over 100 points).
   const size_t n = 150000;
   const std::vector<uint8_t> records = ClusteredRecords(n, 11);
-  for (const CopcOctreeOptions& options : {kGridOnly, CopcOctreeOptions{}}) {
-    const CopcOctree tree = BuildCopcOctree(options, records.data(), n, kLength, kScale, kOffset);
-    const auto reference = ReferenceTree(options, records, n, tree).Build();
-    ASSERT_EQ(tree.nodes.size(), reference.size());
-    int previous_level = 0;
-    for (const CopcNode& node : tree.nodes) {
-      EXPECT_GE(node.key.level, previous_level) << "nodes level by level";
-      previous_level = node.key.level;
-      const auto it = reference.find(Tuple(node.key));
-      ASSERT_NE(it, reference.end()) << node.key.level << "-" << node.key.x << "-" << node.key.y
-                                     << "-" << node.key.z;
-      EXPECT_EQ(node.points, it->second);
-      EXPECT_EQ(node.size, node.points.size());
+  const CopcOctreeOptions in_place{1500, 100, 0}, mixed{0, 0, 100};
+  for (const CopcOctreeOptions& options : {kGridOnly, CopcOctreeOptions{}, in_place, mixed}) {
+    SCOPED_TRACE(options.sort_scratch_points);
+    ExpectTheRulesTree(options, records, n, kScale, kOffset);
+  }
+}
+
+TEST(CopcOctree, LatticesOfBinaryFractionsGiveTheRulesTree) {
+  // A 128 m cube (corners (0, 0, 0) and (128, 128, 128): the root's cells are 1 m) and a lattice
+  // in it, in shuffled order. Steps of 1/8 m from 0: points on the faces of the subcells whose
+  // bounds skip distances, and at cells' centres. Steps of 1/4 m from 1/8 m: eight points of a
+  // cell equally near its centre, at the least distance its subcells allow (the earlier stays).
+  for (const int32_t step : {125, 250}) {
+    const int32_t from = step == 125 ? 0 : 125, side = 4000 / step;
+    std::vector<std::array<int32_t, 3>> points{{0, 0, 0}, {128000, 128000, 128000}};
+    for (int32_t x = 0; x < side; ++x) {
+      for (int32_t y = 0; y < side; ++y) {
+        for (int32_t z = 0; z < 8; ++z) {
+          points.push_back({from + step * x, from + step * y, from + step * z + 250});
+        }
+      }
     }
+    std::shuffle(points.begin() + 2, points.end(), std::mt19937(23));
+    const size_t n = points.size();
+    std::vector<uint8_t> records(n * kLength, 0);
+    for (size_t i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        StoreLE<int32_t>(records.data() + i * kLength + 4 * k, points[i][k]);
+      }
+    }
+    const Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+    for (const CopcOctreeOptions& options : {kGridOnly, CopcOctreeOptions{}}) {
+      SCOPED_TRACE(step);
+      EXPECT_GT(ExpectTheRulesTree(options, records, n, kScale, origin), 0);
+    }
+  }
+}
+
+TEST(CopcOctree, NodesDeeperThanTheKeysHoldAreKeyedAgain) {
+  // A 2 mm cluster of micrometre points (a scale of 1 um) between two points 2 km apart: nodes
+  // go 24 levels down, past the 14 levels below a base that a Morton key holds with its cells.
+  const size_t n = 40000;
+  const Eigen::Vector3d scale = Eigen::Vector3d::Constant(1e-6), offset(700000.0, 0.0, 0.0);
+  std::vector<uint8_t> records(n * kLength, 0);
+  std::mt19937 rng(17);
+  std::uniform_int_distribution<int32_t> um(0, 2000);
+  for (size_t i = 0; i < n; ++i) {
+    int32_t p[3] = {300000 + um(rng), 200000 + um(rng), 100000 + um(rng)};
+    if (i == 0 || i == 1) p[0] = i == 0 ? -1000000000 : 1000000000;
+    if (i >= 2 && i < 3002) p[0] = p[1] = p[2] = 301234;  // duplicates: a chain of nodes
+    for (int k = 0; k < 3; ++k) StoreLE<int32_t>(records.data() + i * kLength + 4 * k, p[k]);
+  }
+  for (const CopcOctreeOptions& options : {kGridOnly, CopcOctreeOptions{}, {0, 0, 0}}) {
+    const int depth = ExpectTheRulesTree(options, records, n, scale, offset);
+    EXPECT_GT(depth, 21) << "the tree must reach past a second base";
   }
 }
 

@@ -239,7 +239,7 @@ void LasWriter::CheckCopcMemory() const {
   // The peak: the records, the octree's buffers (at least the records' size again) and each
   // point's node.
   const double length = header_.record_length;
-  const double needed = static_cast<double>(spec_.count) * (length + std::max(34.0, length) + 4);
+  const double needed = static_cast<double>(spec_.count) * (length + std::max(32.0, length) + 4);
   if (needed <= physical) return;
   constexpr double kGiB = double(uint64_t{1} << 30);
   throw InputError(path_, "",
