@@ -17,6 +17,7 @@
 #include "core/atomic_file.h"
 #include "core/binary_file.h"
 #include "core/check.h"
+#include "core/fresh_memory.h"
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/text_format.h"
@@ -186,7 +187,7 @@ class LasWriter : public PointWriter {
   bool copc_ = false;
   CopcWriteOptions copc_options_;
   StageProgressCallback close_progress_;
-  std::vector<uint8_t> copc_records_;
+  FreshBuffer copc_records_;
   std::unique_ptr<AtomicFile> file_;  // created last: a rejected spec creates nothing
   // LAZ (a .laz name): the records go through the chunk writer; the point data starts with the
   // chunk table's offset, patched by Close().
@@ -466,7 +467,7 @@ void LasWriter::WriteHeaderAndVlrs() {
   header_.number_of_vlrs = static_cast<uint32_t>(vlrs_.size());
   header_.offset_to_point_data = static_cast<uint32_t>(point_offset);
   if (spec_.count != kUnknownCount && copc_) {
-    copc_records_.reserve(spec_.count * header_.record_length);
+    copc_records_.Reserve(spec_.count * header_.record_length);
   }
   if (spec_.count != kUnknownCount && !compressed_) {
     file_->Reserve(point_offset + spec_.count * header_.record_length);
@@ -504,7 +505,7 @@ void LasWriter::Write(const PointCloud& chunk) {
     const size_t block = std::min(kLasBlockRecords, n - first);
     EncodeBlock(chunk, first, block, buffer_.data());
     if (copc_) {
-      copc_records_.insert(copc_records_.end(), buffer_.data(), buffer_.data() + block * length);
+      copc_records_.Append(buffer_.data(), block * length);
     } else if (laz_) {
       laz_->Add(buffer_.data(), block);
     } else {
@@ -618,7 +619,7 @@ void LasWriter::WriteCopcPointData() {
   const std::unique_ptr<uint8_t[]> sorted =
       RecordsByNode(&partition, copc_records_.data(), n, length);
   partition.node_of.reset();
-  std::vector<uint8_t>().swap(copc_records_);
+  copc_records_.Release();
   const laz::Vlr vlr = laz::ParseVlr(vlrs_.back().data);
   const CopcPointData data = WriteCopcChunks(
       tree, sorted.get(), length, vlr, file_->Tell(),
