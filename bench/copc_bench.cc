@@ -3,7 +3,9 @@
 // terrain, 5.5 points/m^2, with colour, intensity and GPS time; LAS 1.2 format 3, COPC 1.4
 // format 7), streamed to the writer in chunks of 2^20 points as a conversion streams them.
 // Each case runs in a child process of its own, so its peak RSS (getrusage) is its own; the
-// seconds are those of the writer's Write and Close calls (the generation is not counted).
+// seconds are those of the writer's Write and Close calls (the generation is not counted), and
+// split: "in" the Write calls, then Close: for COPC its "octree" (until the writer reports its
+// chunks stage) and "chunks" (the rest), for LAS and LAZ all "chunks".
 //
 //   copc_bench [--points 1e6,1e7] [--threads 1,2] [--formats las,laz,copc.laz] [--dir DIR]
 //              [--keep]
@@ -73,8 +75,13 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+struct Split {
+  double in = 0.0, octree = 0.0, chunks = 0.0;
+  double Total() const { return in + octree + chunks; }
+};
+
 // Writes `points` points of the scan to `path` on `threads` threads; the writer's seconds.
-double WriteScan(const std::string& path, uint64_t points, int threads) {
+Split WriteScan(const std::string& path, uint64_t points, int threads) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                             static_cast<size_t>(threads));
   PointCloud chunk;
@@ -86,21 +93,31 @@ double WriteScan(const std::string& path, uint64_t points, int threads) {
   spec.count = points;
   io::PointWriteOptions options;
   options.las_scale = Eigen::Vector3d::Constant(0.001);
+  bool chunks_started = false;
+  std::chrono::steady_clock::time_point chunks_t0;
+  options.close_progress = [&](const std::string& stage, uint64_t, uint64_t) {
+    if (stage != "chunks" || chunks_started) return;
+    chunks_started = true;
+    chunks_t0 = std::chrono::steady_clock::now();
+  };
   Rng rng(1);
-  double seconds = 0.0;
+  Split split;
   auto t0 = std::chrono::steady_clock::now();
   const std::unique_ptr<io::PointWriter> writer = io::OpenPointWriter(path, spec, options);
-  seconds += Seconds(t0);
+  split.in += Seconds(t0);
   for (uint64_t first = 0; first < points; first += kChunkPoints) {
     ScanChunk(first, static_cast<size_t>(std::min<uint64_t>(kChunkPoints, points - first)), &rng,
               &chunk);
     t0 = std::chrono::steady_clock::now();
     writer->Write(chunk);
-    seconds += Seconds(t0);
+    split.in += Seconds(t0);
   }
   t0 = std::chrono::steady_clock::now();
   writer->Close();
-  return seconds + Seconds(t0);
+  const double close = Seconds(t0);
+  split.chunks = chunks_started ? Seconds(chunks_t0) : close;
+  split.octree = close - split.chunks;
+  return split;
 }
 
 // One case in a child process: prints its row.
@@ -108,15 +125,17 @@ void RunCase(const std::string& path, uint64_t points, int threads, bool keep) {
   std::fflush(stdout);
   const pid_t pid = fork();
   if (pid == 0) {
-    const double s = WriteScan(path, points, threads);
+    const Split split = WriteScan(path, points, threads);
+    const double s = split.Total();
     struct rusage usage;
     getrusage(RUSAGE_SELF, &usage);
     const double bytes = static_cast<double>(fs::file_size(path));
     const double n = static_cast<double>(points);
     const std::string name = fs::path(path).filename().string();
-    std::printf("%-14s %12llu %4d %10.2f %10.2f %12.2f %12.2f\n",
+    std::printf("%-14s %12llu %4d %10.2f %10.2f %12.2f %12.2f %7.2f %7.2f %7.2f\n",
                 name.substr(name.find('.') + 1).c_str(), static_cast<unsigned long long>(points),
-                threads, s, n * 1e-6 / s, usage.ru_maxrss / 1048576.0, bytes / n);
+                threads, s, n * 1e-6 / s, usage.ru_maxrss / 1048576.0, bytes / n, split.in,
+                split.octree, split.chunks);
     std::fflush(stdout);
     if (!keep) fs::remove(path);
     std::_Exit(0);
@@ -162,8 +181,8 @@ int main(int argc, char** argv) {
   }
   fs::create_directories(dir);
   std::printf("copc_bench: a generated airborne scan written through io::OpenPointWriter\n");
-  std::printf("%-14s %12s %4s %10s %10s %12s %12s\n", "format", "points", "thr", "seconds",
-              "M pts/s", "peak RSS GiB", "bytes/point");
+  std::printf("%-14s %12s %4s %10s %10s %12s %12s %7s %7s %7s\n", "format", "points", "thr",
+              "seconds", "M pts/s", "peak RSS GiB", "bytes/point", "in s", "octree", "chunks");
   for (const std::string& p : SplitList(points_text)) {
     const uint64_t points = static_cast<uint64_t>(std::stod(p));
     for (const std::string& format : SplitList(formats_text)) {
