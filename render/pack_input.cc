@@ -17,14 +17,16 @@
 namespace candi::render {
 
 uint64_t HashFile(const std::string& path, uint64_t* bytes) {
-  BinaryFile file(path);
+  // Through a map of the file: its blocks are hashed where the page cache holds them, with no
+  // copy out (a read copies every byte, a fifth of a LAS pack's time).
+  const MappedFile file(path);
   *bytes = file.size();
-  std::vector<uint8_t> buffer(std::min<uint64_t>(pack_internal::kHashBlock, std::max<uint64_t>(file.size(), 1)));
   std::vector<uint64_t> blocks;
-  while (file.remaining() > 0) {
-    const size_t n = static_cast<size_t>(std::min<uint64_t>(pack_internal::kHashBlock, file.remaining()));
-    file.ReadExact(buffer.data(), n, "block for hashing");
-    blocks.push_back(ArchiveHash(buffer.data(), n));
+  for (uint64_t at = 0; at < file.size(); at += pack_internal::kHashBlock) {
+    const uint64_t n = std::min<uint64_t>(pack_internal::kHashBlock, file.size() - at);
+    file.CheckSize(at + n, "block for hashing");
+    file.WillNeed(at + n, pack_internal::kHashBlock);
+    blocks.push_back(ArchiveHash(file.data() + at, static_cast<size_t>(n)));
   }
   return ArchiveHash(blocks.data(), 8 * blocks.size(), file.size());
 }
