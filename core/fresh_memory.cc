@@ -42,11 +42,16 @@ void FreshBuffer::Reserve(size_t bytes) {
 }
 
 void FreshBuffer::Append(const uint8_t* p, size_t bytes) {
+  if (bytes > 0) std::memcpy(Extend(bytes), p, bytes);
+}
+
+uint8_t* FreshBuffer::Extend(size_t bytes) {
   if (size_ + bytes > capacity_) {
     Reserve(std::max({size_ + bytes, 2 * capacity_, size_t{1} << 26}));
   }
-  std::memcpy(data_.get() + size_, p, bytes);
+  uint8_t* at = data_.get() + size_;
   size_ += bytes;
+  return at;
 }
 
 void FreshBuffer::Release() {

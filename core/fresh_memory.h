@@ -23,6 +23,8 @@ class FreshBuffer {
   // Capacity for at least `bytes` in all.
   void Reserve(size_t bytes);
   void Append(const uint8_t* p, size_t bytes);
+  // Grows the size by `bytes`; returns where they start (their contents undefined).
+  uint8_t* Extend(size_t bytes);
   // Frees the memory.
   void Release();
   const uint8_t* data() const { return data_.get(); }

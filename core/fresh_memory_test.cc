@@ -28,6 +28,9 @@ TEST(FreshBuffer, KeepsWhatWasAppendedAcrossItsGrowth) {
   EXPECT_EQ(buffer.data(), nullptr);
   buffer.Append(piece.data(), 10);
   EXPECT_EQ(buffer.data()[9], piece[9]);
+  uint8_t* tail = buffer.Extend(5);  // the next five bytes, to be written in place
+  EXPECT_EQ(tail, buffer.data() + 10);
+  EXPECT_EQ(buffer.size(), 15u);
 }
 
 TEST(FaultInParallel, LeavesTheBytesAroundItsRangeAlone) {

@@ -163,10 +163,20 @@ class LasWriter : public PointWriter {
   void AddCrsVlr();
   void WriteHeaderAndVlrs();
   std::string EncodedHeader() const;
-  void EncodeBlock(const PointCloud& chunk, size_t first, size_t n, uint8_t* records);
-  void EncodePositions(const PointCloud& chunk, size_t first, size_t n, uint8_t* records);
+  // What a block of records adds to the header: its bounds and return counts, or the first of
+  // its points that does not fit (`bad` < its size).
+  struct BlockTally {
+    std::array<int32_t, 3> min, max;
+    std::array<uint64_t, 16> returns{};
+    size_t size = 0, bad = 0;
+  };
+  // Encodes the chunk's blocks [begin, end) (kLasBlockRecords points each) into `records` on
+  // the pool's threads, then adds their tallies in order (throwing for the first point that does
+  // not fit).
+  void EncodeBlocks(const PointCloud& chunk, size_t begin, size_t end, uint8_t* records);
+  void EncodeBlock(const PointCloud& chunk, size_t first, size_t n, uint8_t* records,
+                   BlockTally* tally) const;
   [[noreturn]] void ThrowOutOfRange(const PointCloud& chunk, size_t i) const;
-  void CountReturns(const uint8_t* records, size_t n);
   Box3d WrittenBounds() const;
   void WriteLazPointData();
   void WriteCopcPointData();
@@ -497,29 +507,61 @@ void LasWriter::Write(const PointCloud& chunk) {
     offset_pending_ = false;
   }
   const size_t length = header_.record_length;
-  // Block by block through one small buffer: it stays in cache, and no chunk-sized buffer is
-  // faulted in.
-  buffer_.resize(std::min(n, kLasBlockRecords) * length);
+  const size_t blocks = (n + kLasBlockRecords - 1) / kLasBlockRecords;
   failed_ = true;  // until the chunk is complete: a throw leaves a partial chunk behind
-  for (size_t first = 0; first < n; first += kLasBlockRecords) {
-    const size_t block = std::min(kLasBlockRecords, n - first);
-    EncodeBlock(chunk, first, block, buffer_.data());
-    if (copc_) {
-      copc_records_.Append(buffer_.data(), block * length);
-    } else if (laz_) {
-      laz_->Add(buffer_.data(), block);
-    } else {
-      file_->Write(buffer_.data(), block * length);
+  if (copc_) {  // straight into the records held for Close()
+    EncodeBlocks(chunk, 0, blocks, copc_records_.Extend(n * length));
+  } else {
+    // A round of blocks through one buffer that stays in the cache, and no chunk-sized buffer
+    // is faulted in.
+    constexpr size_t kRoundBlocks = 16;
+    buffer_.resize(std::min(n, kRoundBlocks * kLasBlockRecords) * length);
+    for (size_t begin = 0; begin < blocks; begin += kRoundBlocks) {
+      const size_t end = std::min(blocks, begin + kRoundBlocks);
+      EncodeBlocks(chunk, begin, end, buffer_.data());
+      const size_t records = std::min(n, end * kLasBlockRecords) - begin * kLasBlockRecords;
+      if (laz_) {
+        laz_->Add(buffer_.data(), records);
+      } else {
+        file_->Write(buffer_.data(), records * length);
+      }
     }
   }
   failed_ = false;
   points_written_ += n;
 }
 
-void LasWriter::EncodeBlock(const PointCloud& chunk, size_t first, size_t n, uint8_t* records) {
+void LasWriter::EncodeBlocks(const PointCloud& chunk, size_t begin, size_t end,
+                             uint8_t* records) {
+  const size_t n = chunk.size(), length = header_.record_length;
+  std::vector<BlockTally> tallies(end - begin);
+  ParallelFor(begin, end, [&](size_t b) {
+    const size_t first = b * kLasBlockRecords;
+    EncodeBlock(chunk, first, std::min(kLasBlockRecords, n - first),
+                records + (b - begin) * kLasBlockRecords * length, &tallies[b - begin]);
+  });
+  for (size_t b = begin; b < end; ++b) {
+    const BlockTally& t = tallies[b - begin];
+    if (t.bad < t.size) ThrowOutOfRange(chunk, b * kLasBlockRecords + t.bad);
+    for (int k = 0; k < 3; ++k) {
+      min_[k] = std::min(min_[k], t.min[k]);
+      max_[k] = std::max(max_[k], t.max[k]);
+    }
+    for (int r = 1; r <= 15; ++r) by_return_[r - 1] += t.returns[r];
+  }
+}
+
+void LasWriter::EncodeBlock(const PointCloud& chunk, size_t first, size_t n, uint8_t* records,
+                            BlockTally* tally) const {
   const size_t length = header_.record_length;
   std::memset(records, 0, n * length);
-  EncodePositions(chunk, first, n, records);
+  tally->size = n;
+  tally->min.fill(std::numeric_limits<int32_t>::max());
+  tally->max.fill(std::numeric_limits<int32_t>::min());
+  tally->bad = EncodeLasPositions(chunk.positions.data() + first, n, chunk.frame.origin,
+                                  header_.offset, header_.scale, records, length,
+                                  tally->min.data(), tally->max.data());
+  if (tally->bad < n) return;
   if (spec_.schema.colors && layout_.color_offset >= 0) {
     const uint16_t f = color_factor_;
     const Rgb8* colors = chunk.colors.data() + first;
@@ -531,14 +573,8 @@ void LasWriter::EncodeBlock(const PointCloud& chunk, size_t first, size_t n, uin
     }
   }
   for (const LasColumn& c : columns_) EncodeLasColumn(c, chunk, first, n, records, length);
-  CountReturns(records, n);
-}
-
-void LasWriter::EncodePositions(const PointCloud& chunk, size_t first, size_t n, uint8_t* records) {
-  const size_t bad = EncodeLasPositions(chunk.positions.data() + first, n, chunk.frame.origin,
-                                        header_.offset, header_.scale, records,
-                                        header_.record_length, min_.data(), max_.data());
-  if (bad < n) ThrowOutOfRange(chunk, first + bad);
+  const uint8_t mask = layout_.extended ? 15 : 7;
+  for (size_t i = 0; i < n; ++i) ++tally->returns[records[i * length + 14] & mask];
 }
 
 void LasWriter::ThrowOutOfRange(const PointCloud& chunk, size_t i) const {
@@ -550,14 +586,6 @@ void LasWriter::ThrowOutOfRange(const PointCloud& chunk, size_t i) const {
                    "coordinate (" + text(w) + ") does not fit LAS int32 with scale (" +
                        text(header_.scale) + ") and offset (" + text(header_.offset) +
                        "); choose a larger scale or a nearer offset");
-}
-
-void LasWriter::CountReturns(const uint8_t* records, size_t n) {
-  const size_t length = header_.record_length;
-  const uint8_t mask = layout_.extended ? 15 : 7;
-  uint64_t counts[16] = {};
-  for (size_t i = 0; i < n; ++i) ++counts[records[i * length + 14] & mask];
-  for (int r = 1; r <= 15; ++r) by_return_[r - 1] += counts[r];
 }
 
 Box3d LasWriter::WrittenBounds() const {
