@@ -304,9 +304,8 @@ class Builder {
       const bool large = r.end - r.begin > kLargeNodePoints;
       const size_t blocks = (r.end - r.begin + kBlock - 1) / kBlock;
       Loop(large, blocks, [&](size_t b) {
-        for (size_t i = r.begin + b * kBlock; i < std::min(r.end, r.begin + (b + 1) * kBlock); ++i) {
-          rekey(i);
-        }
+        const size_t end = std::min(r.end, r.begin + (b + 1) * kBlock);
+        for (size_t i = r.begin + b * kBlock; i < end; ++i) rekey(i);
       });
     }
     ParallelFor(size_t{0}, ranges.size(), [&](size_t j) {
@@ -371,8 +370,8 @@ class Builder {
   }
 
  private:
-  // Keeps the nearest point of each cell in [begin, end) (whole cells); returns how many it
-  // kept in each octant.
+  // Keeps the nearest point of each cell in [begin, end) (whole cells); returns how many points
+  // of each octant it passes on.
   std::array<size_t, 8> KeepNearest(size_t begin, size_t end, int level, int cell_shift,
                                     int octant_shift, uint32_t id) {
     const int place_shift = kFixedBits - (level + kCellBits);
