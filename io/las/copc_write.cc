@@ -1,6 +1,7 @@
 #include "io/las/copc_write.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -214,6 +215,28 @@ std::unique_ptr<uint8_t[]> RecordsByNode(CopcPartition* partition, const uint8_t
     }
   });
   return sorted;
+}
+
+std::array<double, 2> CopcGpsTimeRange(const uint8_t* records, size_t n, size_t record_length,
+                                       size_t gps_offset) {
+  constexpr size_t kBlock = size_t{1} << 20;
+  const size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::array<double, 2>> range(blocks, {INFINITY, -INFINITY});
+  ParallelFor(size_t{0}, blocks, [&](size_t b) {
+    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+      const double t = LoadLE<double>(records + i * record_length + gps_offset);
+      if (std::isnan(t)) continue;
+      range[b][0] = std::min(range[b][0], t);
+      range[b][1] = std::max(range[b][1], t);
+    }
+  });
+  std::array<double, 2> all{INFINITY, -INFINITY};
+  for (const std::array<double, 2>& r : range) {
+    all[0] = std::min(all[0], r[0]);
+    all[1] = std::max(all[1], r[1]);
+  }
+  if (!(all[0] <= all[1])) all = {0.0, 0.0};  // no time, or none but NaN
+  return all;
 }
 
 CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,

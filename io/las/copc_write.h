@@ -12,6 +12,7 @@
 // functions; WriteCopcChunks compresses in parallel with the same bytes on any thread count.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -74,6 +75,11 @@ struct CopcPointData {
 // blocks.
 std::unique_ptr<uint8_t[]> RecordsByNode(CopcPartition* partition, const uint8_t* records, size_t n,
                                          size_t record_length);
+
+// The least and the greatest GPS time of n records (the double at byte gps_offset of each), NaN
+// times left out, by parallel blocks (no order matters); {0, 0} when there is none.
+std::array<double, 2> CopcGpsTimeRange(const uint8_t* records, size_t n, size_t record_length,
+                                       size_t gps_offset);
 
 // Compresses each node's records (`records`: in node order, as RecordsByNode gives them,
 // record_length bytes each) into one chunk with the items of `vlr` (layered), handing the chunks

@@ -662,27 +662,9 @@ void LasWriter::WriteCopcPointData() {
   CopcHierarchy hierarchy = EncodeCopcHierarchyPages(copc_options_, data.entries, payload);
   info.root_hier_offset = payload + hierarchy.root_offset;
   info.root_hier_size = hierarchy.root_size;
-  // The GPS range by parallel blocks; NaN times are left out, so no order matters.
-  constexpr size_t kRangeBlock = size_t{1} << 20;
-  const size_t blocks = (n + kRangeBlock - 1) / kRangeBlock;
-  std::vector<std::array<double, 2>> range(blocks, {INFINITY, -INFINITY});
-  ParallelFor(size_t{0}, blocks, [&](size_t b) {
-    for (size_t i = b * kRangeBlock; i < std::min(n, (b + 1) * kRangeBlock); ++i) {
-      const double t = LoadLE<double>(sorted.get() + i * length + layout_.gps_offset);
-      if (std::isnan(t)) continue;
-      range[b][0] = std::min(range[b][0], t);
-      range[b][1] = std::max(range[b][1], t);
-    }
-  });
-  info.gpstime_minimum = INFINITY;
-  info.gpstime_maximum = -INFINITY;
-  for (const std::array<double, 2>& r : range) {
-    info.gpstime_minimum = std::min(info.gpstime_minimum, r[0]);
-    info.gpstime_maximum = std::max(info.gpstime_maximum, r[1]);
-  }
-  if (!(info.gpstime_minimum <= info.gpstime_maximum)) {  // no time, or none but NaN
-    info.gpstime_minimum = info.gpstime_maximum = 0.0;
-  }
+  const std::array<double, 2> gps = CopcGpsTimeRange(sorted.get(), n, length, layout_.gps_offset);
+  info.gpstime_minimum = gps[0];
+  info.gpstime_maximum = gps[1];
   const std::string encoded = EncodeCopcInfo(info);
   file_->WriteAt(header_.header_size + 54, encoded.data(), encoded.size());
   evlrs_.insert(evlrs_.begin(),
