@@ -48,20 +48,19 @@ SymbolModel::SymbolModel(uint32_t symbols) : symbols_(symbols) {
     while (symbols > (1u << (table_bits + 2))) ++table_bits;
     table_size_ = 1u << table_bits;
     table_shift_ = arith_internal::kSymbolLengthShift - table_bits;
-    decoder_table_.assign(table_size_ + 2, 0);
   } else {
     table_size_ = table_shift_ = 0;
   }
-  distribution_.assign(symbols, 0);
-  symbol_count_.assign(symbols, 0);
-  Reset();
 }
 
-void SymbolModel::Reset() {
+void SymbolModel::Start(bool with_table) {
   total_count_ = 0;
   update_cycle_ = symbols_;
-  std::fill(symbol_count_.begin(), symbol_count_.end(), 1u);
-  Update();
+  symbol_count_.assign(symbols_, 1u);
+  distribution_.resize(symbols_);
+  with_table = with_table && table_size_ != 0;
+  if (with_table) decoder_table_.resize(table_size_ + 2);
+  Update(with_table);
   symbols_until_update_ = update_cycle_ = (symbols_ + 6) >> 1;
 }
 

@@ -40,23 +40,29 @@ class BitModel {
 };
 
 // Adaptive model of `symbols` (2..2048) symbols (LASzip ArithmeticModel); CANDI_CHECK on a bad
-// count.
+// count. The initial (equiprobable) distribution is made at the model's first symbol, not when
+// it is constructed or reset: a chunk's coders hold hundreds of models, most of which (the
+// integer coders' classes of large correctors) a chunk never uses.
 class SymbolModel {
  public:
   explicit SymbolModel(uint32_t symbols);
-  void Reset();
+  // Back to the initial distribution (made at the next symbol). Keeps the storage.
+  void Reset() { distribution_.clear(); }
   uint32_t symbols() const { return symbols_; }
 
  private:
   friend class ArithmeticDecoder;
   friend class ArithmeticEncoder;
+  // The initial distribution (LASzip ArithmeticModel::init), with the decoder's table or not.
+  void Start(bool with_table);
   // New distribution from the counts; with_table: also the decoder's table (an encoder never
-  // reads it, and Reset() makes it again before a model decodes a new stream).
+  // reads it).
   void Update(bool with_table = true);
   uint32_t symbols_, last_symbol_, table_size_, table_shift_;
-  uint32_t total_count_, update_cycle_, symbols_until_update_;
-  // distribution_ (symbols_), symbol_count_ (symbols_), decoder_table_ (table_size_ + 2 when
-  // symbols_ > 16, else empty).
+  uint32_t total_count_ = 0, update_cycle_ = 0, symbols_until_update_ = 0;
+  // distribution_ (symbols_; empty until the first symbol after construction or Reset),
+  // symbol_count_ (symbols_), decoder_table_ (table_size_ + 2 in a decoder when symbols_ > 16,
+  // else empty).
   std::vector<uint32_t> distribution_, symbol_count_, decoder_table_;
 };
 
@@ -192,6 +198,7 @@ inline uint32_t ArithmeticDecoder::DecodeBit(BitModel* m) {
 }
 
 inline uint32_t ArithmeticDecoder::DecodeSymbol(SymbolModel* m) {
+  if (__builtin_expect(m->distribution_.empty(), 0)) m->Start(true);
   const uint32_t* dist = m->distribution_.data();
   uint32_t sym, x, y = length_;
   if (!m->decoder_table_.empty()) {
@@ -312,6 +319,7 @@ inline void ArithmeticEncoder::EncodeBit(BitModel* m, uint32_t bit) {
 }
 
 inline void ArithmeticEncoder::EncodeSymbol(SymbolModel* m, uint32_t sym) {
+  if (__builtin_expect(m->distribution_.empty(), 0)) m->Start(false);
   const uint32_t init_base = base_;
   const uint32_t* dist = m->distribution_.data();
   if (sym == m->last_symbol_) {  // the interval's top: no product needed (as the decoder)

@@ -157,6 +157,46 @@ TEST(LazEncoder, IntegersOfEveryWidthAndExtremeCorrectorsRoundTrip) {
   }
 }
 
+TEST(LazEncoder, AResetModelCodesAsANewOne) {
+  // A model's first distribution is made at its first symbol; after Reset() (and an integer
+  // coder's second Init()) it must code, and decode, as a model just built.
+  std::mt19937 rng(5);
+  std::vector<uint32_t> symbols(3000);
+  for (uint32_t& s : symbols) s = rng() % 7 == 0 ? rng() % 300 : rng() % 5;
+  auto encode = [&](laz::SymbolModel* m, laz::IntegerCoder* ic) {
+    laz::ArithmeticEncoder enc;
+    for (uint32_t s : symbols) {
+      enc.EncodeSymbol(m, s);
+      ic->Compress(&enc, 150, static_cast<int32_t>(s));  // correctors of both signs
+    }
+    enc.Done();
+    return std::vector<uint8_t>(enc.data(), enc.data() + enc.size());
+  };
+  laz::SymbolModel fresh(300), reused(300);
+  laz::IntegerCoder fresh_ic(16), reused_ic(16);
+  fresh_ic.Init();
+  reused_ic.Init();
+  const std::vector<uint8_t> first = encode(&reused, &reused_ic);  // both adapt to the symbols
+  reused.Reset();
+  reused_ic.Init();
+  const std::vector<uint8_t> expected = encode(&fresh, &fresh_ic);
+  EXPECT_TRUE(first == expected);
+  EXPECT_TRUE(encode(&reused, &reused_ic) == expected);
+  laz::SymbolModel dec_model(300);
+  laz::IntegerCoder dec_ic(16);
+  dec_ic.Init();
+  for (int pass = 0; pass < 2; ++pass) {
+    laz::ArithmeticDecoder dec;
+    dec.Init(expected.data(), expected.data() + expected.size());
+    for (size_t i = 0; i < symbols.size(); ++i) {
+      ASSERT_EQ(dec.DecodeSymbol(&dec_model), symbols[i]) << "pass " << pass << ", symbol " << i;
+      ASSERT_EQ(dec_ic.Decompress(&dec, 150), static_cast<int32_t>(symbols[i]));
+    }
+    dec_model.Reset();
+    dec_ic.Init();
+  }
+}
+
 // ---- Chunks ----
 
 std::vector<uint8_t> EncodeChunk(const laz::Vlr& vlr, const uint8_t* records, uint32_t n) {
