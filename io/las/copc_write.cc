@@ -18,10 +18,6 @@ namespace {
 
 constexpr size_t kCopcInfoBytes = 160;
 constexpr size_t kEntryBytes = 32;
-// Nodes compressed together: consecutive nodes up to this many points (or one larger node), so
-// that threads seldom wait for a batch's last node, and the chunks held stay bounded (~8 bytes a
-// point).
-constexpr size_t kBatchPoints = size_t{1} << 21;
 
 void PutF64(std::string* out, size_t at, double v) {
   StoreLE<double>(reinterpret_cast<uint8_t*>(out->data()) + at, v);
@@ -242,14 +238,15 @@ std::array<double, 2> CopcGpsTimeRange(const uint8_t* records, size_t n, size_t 
 CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
                               const laz::Vlr& vlr, uint64_t first_chunk,
                               const std::function<void(const uint8_t*, size_t)>& sink,
-                              const std::function<void(uint64_t, uint64_t)>& progress) {
+                              const std::function<void(uint64_t, uint64_t)>& progress,
+                              size_t batch_points) {
   CANDI_CHECK(vlr.compressor == laz::kLayeredChunked &&
               record_length == static_cast<size_t>(vlr.record_length()))
       << "COPC chunks are layered, with the record's items";
+  CANDI_CHECK(batch_points > 0) << "COPC chunk batches of 0 points";
   CopcPointData data;
   std::vector<uint32_t> bytes, points;
   uint64_t offset = first_chunk;
-  std::vector<std::vector<uint8_t>> chunks;
   std::vector<const uint8_t*> starts;
   const uint8_t* start = records;
   uint64_t total = 0, compressed = 0;
@@ -259,9 +256,12 @@ CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, si
     total += node.size;
   }
   if (progress) progress(0, total);
+  // Batches of consecutive nodes, large enough that threads seldom wait for a batch's last node,
+  // small enough that the chunks held stay bounded (~8 bytes a point).
+  std::vector<std::vector<uint8_t>> chunks;
   for (size_t first = 0, count = 0; first < tree.nodes.size(); first += count) {
     size_t points_in_batch = 0;
-    for (count = 0; first + count < tree.nodes.size() && points_in_batch < kBatchPoints; ++count) {
+    for (count = 0; first + count < tree.nodes.size() && points_in_batch < batch_points; ++count) {
       points_in_batch += tree.nodes[first + count].size;
     }
     if (chunks.size() < count) chunks.resize(count);

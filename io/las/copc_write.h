@@ -83,11 +83,16 @@ std::array<double, 2> CopcGpsTimeRange(const uint8_t* records, size_t n, size_t 
 
 // Compresses each node's records (`records`: in node order, as RecordsByNode gives them,
 // record_length bytes each) into one chunk with the items of `vlr` (layered), handing the chunks
-// in node order to `sink`; the first chunk starts at file offset `first_chunk`.
+// in node order to `sink`; the first chunk starts at file offset `first_chunk`. Nodes are
+// compressed in parallel by batches of consecutive nodes (up to batch_points points, or one
+// larger node), each batch's chunks then handed on. An exception from the sink ends the
+// writing and is rethrown.
 // `progress` (may be null): (points compressed, all the nodes' points) after each batch.
+inline constexpr size_t kCopcBatchPoints = size_t{1} << 21;
 CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
                               const laz::Vlr& vlr, uint64_t first_chunk,
                               const std::function<void(const uint8_t*, size_t)>& sink,
-                              const std::function<void(uint64_t, uint64_t)>& progress = {});
+                              const std::function<void(uint64_t, uint64_t)>& progress = {},
+                              size_t batch_points = kCopcBatchPoints);
 
 }  // namespace candi::io
