@@ -161,34 +161,57 @@ constexpr size_t kBlock = size_t{1} << 16;  // points a task takes
 // `codes` (n) for their codes on the way: the bounds by parallel blocks (a minimum and a maximum
 // do not depend on the order), the codes and their counts by the first 12 bits, the elements
 // scattered by them, each bucket sorted on.
+// The world bounds of the records' positions, X * scale + offset (by parallel blocks), or from
+// their integer bounds when known: the position is a monotonic function of the integer, so its
+// extremes are those of the integer's.
+void WorldBounds(const uint8_t* records, size_t n, size_t length, const Eigen::Vector3d& scale,
+                 const Eigen::Vector3d& offset, const CopcXyzBounds* xyz_bounds,
+                 Eigen::Vector3d* lo_out, Eigen::Vector3d* hi_out) {
+  auto world = [&](const int32_t* p) {
+    return Eigen::Vector3d(p[0] * scale[0] + offset[0], p[1] * scale[1] + offset[1],
+                           p[2] * scale[2] + offset[2]);
+  };
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  if (n == 0) {
+    lo = hi = Eigen::Vector3d::Zero();
+  } else if (xyz_bounds) {
+    const Eigen::Vector3d a = world((*xyz_bounds)[0].data()), b = world((*xyz_bounds)[1].data());
+    lo = a.cwiseMin(b);
+    hi = a.cwiseMax(b);
+  } else {
+    const size_t blocks = (n + kBlock - 1) / kBlock;
+    std::vector<Eigen::Vector3d> block_lo(blocks), block_hi(blocks);
+    ParallelFor(size_t{0}, blocks, [&](size_t b) {
+      Eigen::Vector3d block_min = Eigen::Vector3d::Constant(INFINITY), block_max = -block_min;
+      for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+        int32_t p[3];
+        for (int k = 0; k < 3; ++k) p[k] = LoadLE<int32_t>(records + i * length + 4 * k);
+        const Eigen::Vector3d w = world(p);
+        block_min = block_min.cwiseMin(w);
+        block_max = block_max.cwiseMax(w);
+      }
+      block_lo[b] = block_min;
+      block_hi[b] = block_max;
+    });
+    for (size_t b = 0; b < blocks; ++b) {
+      lo = lo.cwiseMin(block_lo[b]);
+      hi = hi.cwiseMax(block_hi[b]);
+    }
+  }
+  *lo_out = lo;
+  *hi_out = hi;
+}
+
 void SortedElements(const uint8_t* records, size_t n, size_t length, const Eigen::Vector3d& scale,
-                    const Eigen::Vector3d& offset, Sorter* sort, CopcOctree* tree, Cube* cube,
-                    Element* elements, uint64_t* codes) {
+                    const Eigen::Vector3d& offset, const CopcXyzBounds* xyz_bounds, Sorter* sort,
+                    CopcOctree* tree, Cube* cube, Element* elements, uint64_t* codes) {
   const size_t blocks = (n + kBlock - 1) / kBlock;
   auto block_end = [&](size_t b) { return std::min(n, (b + 1) * kBlock); };
   auto xyz = [&](size_t i, int32_t* out) {
     for (int k = 0; k < 3; ++k) out[k] = LoadLE<int32_t>(records + i * length + 4 * k);
   };
-  std::vector<Eigen::Vector3d> block_lo(blocks), block_hi(blocks);
-  ParallelFor(size_t{0}, blocks, [&](size_t b) {
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-    for (size_t i = b * kBlock; i < block_end(b); ++i) {
-      int32_t p[3];
-      xyz(i, p);
-      const Eigen::Vector3d w(p[0] * scale[0] + offset[0], p[1] * scale[1] + offset[1],
-                              p[2] * scale[2] + offset[2]);
-      lo = lo.cwiseMin(w);
-      hi = hi.cwiseMax(w);
-    }
-    block_lo[b] = lo;
-    block_hi[b] = hi;
-  });
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-  for (size_t b = 0; b < blocks; ++b) {
-    lo = lo.cwiseMin(block_lo[b]);
-    hi = hi.cwiseMax(block_hi[b]);
-  }
-  if (n == 0) lo = hi = Eigen::Vector3d::Zero();
+  Eigen::Vector3d lo, hi;
+  WorldBounds(records, n, length, scale, offset, xyz_bounds, &lo, &hi);
   tree->center = 0.5 * (lo + hi);
   tree->halfsize = 0.5 * (hi - lo).maxCoeff();
   if (!(tree->halfsize > 0.0)) tree->halfsize = scale.cwiseAbs().maxCoeff();
@@ -489,7 +512,8 @@ void CopcOctreeOptions::Check() const {
 CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_t* records,
                                   size_t n, size_t record_length, const Eigen::Vector3d& scale,
                                   const Eigen::Vector3d& offset,
-                                  const std::function<void(uint64_t, uint64_t)>& progress) {
+                                  const std::function<void(uint64_t, uint64_t)>& progress,
+                                  const CopcXyzBounds* xyz_bounds) {
   options.Check();
   CANDI_CHECK(n <= size_t{std::numeric_limits<uint32_t>::max()})
       << "a COPC octree of " << n << " points (at most 2^32 - 1)";
@@ -502,8 +526,8 @@ CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_
   Element* elements = reinterpret_cast<Element*>(partition.memory.get());
   Cube cube;
   Sorter sort(options.sort_scratch_points);
-  SortedElements(records, n, record_length, scale, offset, &sort, &tree, &cube, elements,
-                 reinterpret_cast<uint64_t*>(elements + n));
+  SortedElements(records, n, record_length, scale, offset, xyz_bounds, &sort, &tree, &cube,
+                 elements, reinterpret_cast<uint64_t*>(elements + n));
   if (n == 0) return partition;
   partition.node_of.reset(new uint32_t[n]);
   Builder builder(options, cube, &sort, elements, partition.node_of.get());

@@ -89,11 +89,15 @@ struct CopcPartition {
   std::unique_ptr<uint8_t[]> memory;     // memory_bytes >= n * record_length
   size_t memory_bytes = 0;
 };
-// `progress` (may be null): (points whose node is settled, n) after each level.
+// `progress` (may be null): (points whose node is settled, n) after each level. `xyz_bounds`
+// (may be null): the records' least and greatest X, Y, Z, when the caller has them (a writer
+// tracks them), which saves a pass over the records; the tree is the same.
+using CopcXyzBounds = std::array<std::array<int32_t, 3>, 2>;
 CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_t* records,
                                   size_t n, size_t record_length, const Eigen::Vector3d& scale,
                                   const Eigen::Vector3d& offset,
-                                  const std::function<void(uint64_t, uint64_t)>& progress = {});
+                                  const std::function<void(uint64_t, uint64_t)>& progress = {},
+                                  const CopcXyzBounds* xyz_bounds = nullptr);
 
 // Builds the octree of n LAS records (record_length bytes each, X, Y, Z int32 at bytes 0, 4, 8)
 // with the header's scale and offset.

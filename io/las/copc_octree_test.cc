@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -343,6 +344,41 @@ TEST(CopcOctree, ThePartitionNamesEachPointsNode) {
     EXPECT_TRUE(partition.tree.nodes[j].points.empty());
     EXPECT_EQ(partition.tree.nodes[j].size, tree.nodes[j].size);
     for (uint64_t i : tree.nodes[j].points) ASSERT_EQ(partition.node_of[i], j);
+  }
+}
+
+TEST(CopcOctree, TheRecordsIntegerBoundsGiveTheSameTreeAsTheirPass) {
+  // A writer passes the X, Y, Z bounds it tracked instead of a pass over the records: the cube
+  // and every point's node must be the same, for a positive and a negative scale (whose least
+  // world coordinate is the greatest integer's) and for an offset that cancels a position.
+  const size_t n = 50000;
+  const std::vector<uint8_t> records = ClusteredRecords(n, 7);
+  CopcXyzBounds bounds;
+  bounds[0].fill(std::numeric_limits<int32_t>::max());
+  bounds[1].fill(std::numeric_limits<int32_t>::min());
+  for (size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const int32_t v = LoadLE<int32_t>(records.data() + i * kLength + 4 * k);
+      bounds[0][k] = std::min(bounds[0][k], v);
+      bounds[1][k] = std::max(bounds[1][k], v);
+    }
+  }
+  const double cancel = -bounds[0][0] * 0.25;
+  for (const auto& [scale, offset] :
+       {std::pair{kScale, kOffset},
+        std::pair{Eigen::Vector3d(-0.001, 0.01, -0.25), Eigen::Vector3d(5e5, -3.0, 0.0)},
+        std::pair{Eigen::Vector3d::Constant(0.25).eval(), Eigen::Vector3d(cancel, 0.0, -0.0)}}) {
+    const CopcPartition pass = PartitionCopcOctree({}, records.data(), n, kLength, scale, offset);
+    const CopcPartition known =
+        PartitionCopcOctree({}, records.data(), n, kLength, scale, offset, {}, &bounds);
+    EXPECT_EQ(known.tree.center, pass.tree.center) << scale.transpose();
+    EXPECT_EQ(known.tree.halfsize, pass.tree.halfsize);
+    ASSERT_EQ(known.tree.nodes.size(), pass.tree.nodes.size());
+    for (size_t j = 0; j < pass.tree.nodes.size(); ++j) {
+      ASSERT_TRUE(known.tree.nodes[j].key == pass.tree.nodes[j].key);
+      ASSERT_EQ(known.tree.nodes[j].size, pass.tree.nodes[j].size);
+    }
+    EXPECT_TRUE(std::equal(known.node_of.get(), known.node_of.get() + n, pass.node_of.get()));
   }
 }
 

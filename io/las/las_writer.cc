@@ -640,8 +640,10 @@ void LasWriter::WriteCopcPointData() {
     if (!close_progress_) return {};
     return [this, name](uint64_t done, uint64_t total) { close_progress_(name, done, total); };
   };
-  CopcPartition partition = PartitionCopcOctree({}, copc_records_.data(), n, length,
-                                                header_.scale, header_.offset, stage("octree"));
+  const CopcXyzBounds xyz_bounds{min_, max_};  // what the records hold, when n > 0
+  CopcPartition partition =
+      PartitionCopcOctree({}, copc_records_.data(), n, length, header_.scale, header_.offset,
+                          stage("octree"), &xyz_bounds);
   const CopcOctree& tree = partition.tree;
   // The records in node order; the input's freed.
   const std::unique_ptr<uint8_t[]> sorted =
