@@ -12,6 +12,7 @@
 #include "core/mapped_file.h"
 #include "core/parallel.h"
 #include "io/byte_stream.h"
+#include "io/ply/ply_columns.h"
 #include "io/ply/ply_header.h"
 #include "io/shift_sidecar.h"
 
@@ -22,171 +23,13 @@ namespace {
 // Binary vertices decode in blocks of this many, in parallel.
 constexpr size_t kDecodeBlock = size_t{1} << 15;
 
+using ply::Assign;
+using ply::Column;
+using ply::DecodeColumn;
+using ply::DecodeFastPaths;
+using ply::DecodeInto;
+using ply::Role;
 using ply::Type;
-
-// ---------------------------------------------------------------------------------------------
-// Decoding
-
-// What a vertex property becomes in the PointCloud.
-enum class Role { kSkip, kX, kY, kZ, kR, kG, kB, kA, kNx, kNy, kNz, kLayer, kScalar };
-
-struct Column {
-  Role role = Role::kSkip;
-  Type type = Type::kFloat32;
-  int scalar = -1;    // index into the cloud's scalar fields (kScalar)
-  size_t offset = 0;  // byte offset inside the compact record (binary)
-};
-
-template <typename T, typename F>
-void LoopColumn(const uint8_t* base, size_t stride, size_t n, bool swap, F& f) {
-  if (swap) {
-    for (size_t i = 0; i < n; ++i) f(i, ByteSwap(LoadLE<T>(base + i * stride)));
-  } else {
-    for (size_t i = 0; i < n; ++i) f(i, LoadLE<T>(base + i * stride));
-  }
-}
-
-// Calls f(i, value) for the n values of one column, dispatching on the type once per column.
-template <typename F>
-void DecodeColumn(Type type, const uint8_t* base, size_t stride, size_t n, bool swap, F&& f) {
-  switch (type) {
-    case Type::kInt8: LoopColumn<int8_t>(base, stride, n, swap, f); break;
-    case Type::kUint8: LoopColumn<uint8_t>(base, stride, n, swap, f); break;
-    case Type::kInt16: LoopColumn<int16_t>(base, stride, n, swap, f); break;
-    case Type::kUint16: LoopColumn<uint16_t>(base, stride, n, swap, f); break;
-    case Type::kInt32: LoopColumn<int32_t>(base, stride, n, swap, f); break;
-    case Type::kUint32: LoopColumn<uint32_t>(base, stride, n, swap, f); break;
-    case Type::kFloat32: LoopColumn<float>(base, stride, n, swap, f); break;
-    case Type::kFloat64: LoopColumn<double>(base, stride, n, swap, f); break;
-  }
-}
-
-// Colour channel from a property of any type: uchar as is, ushort scaled down, floats in [0, 1].
-template <typename V>
-uint8_t ToColor(V v, Type type) {
-  double x = static_cast<double>(v);
-  if (type == Type::kUint16) x = x / 257.0;
-  else if (type == Type::kFloat32 || type == Type::kFloat64) x = x * 255.0;
-  if (!(x > 0.0)) return 0;
-  return x >= 255.0 ? 255 : static_cast<uint8_t>(x + 0.5);
-}
-
-uint16_t ToLayer(double v) {
-  if (!(v > 0.0)) return 0;
-  return v >= 65535.0 ? 65535 : static_cast<uint16_t>(v + 0.5);
-}
-
-// Stores value v of column c into point i of chunk.
-template <typename V>
-void Assign(const Column& c, size_t i, V v, PointCloud* chunk) {
-  switch (c.role) {
-    case Role::kSkip: break;
-    case Role::kX: chunk->positions[i][0] = static_cast<double>(v); break;
-    case Role::kY: chunk->positions[i][1] = static_cast<double>(v); break;
-    case Role::kZ: chunk->positions[i][2] = static_cast<double>(v); break;
-    case Role::kR: chunk->colors[i].r = ToColor(v, c.type); break;
-    case Role::kG: chunk->colors[i].g = ToColor(v, c.type); break;
-    case Role::kB: chunk->colors[i].b = ToColor(v, c.type); break;
-    case Role::kA: chunk->alphas[i] = ToColor(v, c.type); break;
-    case Role::kNx: chunk->normals[i][0] = static_cast<float>(v); break;
-    case Role::kNy: chunk->normals[i][1] = static_cast<float>(v); break;
-    case Role::kNz: chunk->normals[i][2] = static_cast<float>(v); break;
-    case Role::kLayer: chunk->layers[i] = ToLayer(static_cast<double>(v)); break;
-    case Role::kScalar: chunk->scalars[c.scalar].Set(i, static_cast<double>(v)); break;
-  }
-}
-
-// Decodes column c of n compact records into chunk points [0, n). The role switch sits outside
-// the loops: each branch instantiates a tight loop per type.
-// Decodes records[0, n) into the chunk's points [first, first + n).
-void DecodeInto(const Column& c, const uint8_t* records, size_t stride, size_t n, bool swap, size_t first,
-                PointCloud* chunk) {
-  const uint8_t* base = records + c.offset;
-  auto run = [&](auto store) { DecodeColumn(c.type, base, stride, n, swap, store); };
-  switch (c.role) {
-    case Role::kSkip: break;
-    case Role::kX: case Role::kY: case Role::kZ: {
-      const int k = c.role == Role::kX ? 0 : c.role == Role::kY ? 1 : 2;
-      Eigen::Vector3d* p = chunk->positions.data() + first;
-      run([p, k](size_t i, auto v) { p[i][k] = static_cast<double>(v); });
-      break;
-    }
-    case Role::kNx: case Role::kNy: case Role::kNz: {
-      const int k = c.role == Role::kNx ? 0 : c.role == Role::kNy ? 1 : 2;
-      Eigen::Vector3f* nrm = chunk->normals.data() + first;
-      run([nrm, k](size_t i, auto v) { nrm[i][k] = static_cast<float>(v); });
-      break;
-    }
-    case Role::kScalar: {
-      ScalarField& field = chunk->scalars[c.scalar];
-      if (field.spec.type == ScalarType::kFloat32) {
-        float* out = field.f32.data() + first;
-        run([out](size_t i, auto v) { out[i] = static_cast<float>(v); });
-      } else {
-        double* out = field.f64.data() + first;
-        run([out](size_t i, auto v) { out[i] = static_cast<double>(v); });
-      }
-      break;
-    }
-    case Role::kR: case Role::kG: case Role::kB: case Role::kA: {
-      // Byte offset of the channel inside Rgb8 (r, g, b), or the alpha array.
-      uint8_t* out = c.role == Role::kA ? chunk->alphas.data() + first : &(chunk->colors.data() + first)->r;
-      const size_t step = c.role == Role::kA ? 1 : sizeof(Rgb8);
-      out += c.role == Role::kG ? 1 : c.role == Role::kB ? 2 : 0;
-      const Type type = c.type;
-      if (type == Type::kUint8) {
-        for (size_t i = 0; i < n; ++i) out[i * step] = base[i * stride];
-      } else {
-        run([out, step, type](size_t i, auto v) { out[i * step] = ToColor(v, type); });
-      }
-      break;
-    }
-    default:
-      run([&c, chunk, first](size_t i, auto v) { Assign(c, first + i, v, chunk); });
-  }
-}
-
-// The common layouts (x y z adjacent, same type, little endian; red green blue adjacent uchar)
-// decoded record by record in one pass: the per-column loops above, with runtime strides, cost
-// several times more. Marks the columns it decoded in `done`.
-template <typename T>
-void DecodeXyzRows(const uint8_t* base, size_t stride, size_t n, Eigen::Vector3d* out) {
-  for (size_t i = 0; i < n; ++i) {
-    T xyz[3];
-    std::memcpy(xyz, base + i * stride, sizeof(xyz));
-    out[i] = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
-  }
-}
-
-void DecodeFastPaths(const std::vector<Column>& columns, const uint8_t* records, size_t stride,
-                     size_t n, size_t first, PointCloud* chunk, std::vector<bool>* done) {
-  auto find = [&](Role role) -> int {
-    for (size_t k = 0; k < columns.size(); ++k) if (columns[k].role == role) return static_cast<int>(k);
-    return -1;
-  };
-  auto adjacent = [&](int a, int b, int c, Type type) {
-    const size_t size = ply::TypeSize(type);
-    return a >= 0 && b >= 0 && c >= 0 && columns[a].type == type && columns[b].type == type &&
-           columns[c].type == type && columns[b].offset == columns[a].offset + size &&
-           columns[c].offset == columns[a].offset + 2 * size;
-  };
-  const int x = find(Role::kX), y = find(Role::kY), z = find(Role::kZ);
-  if (adjacent(x, y, z, Type::kFloat32)) {
-    DecodeXyzRows<float>(records + columns[x].offset, stride, n, chunk->positions.data() + first);
-  } else if (adjacent(x, y, z, Type::kFloat64)) {
-    DecodeXyzRows<double>(records + columns[x].offset, stride, n, chunk->positions.data() + first);
-  }
-  if (adjacent(x, y, z, Type::kFloat32) || adjacent(x, y, z, Type::kFloat64)) {
-    (*done)[x] = (*done)[y] = (*done)[z] = true;
-  }
-  const int r = find(Role::kR), g = find(Role::kG), b = find(Role::kB);
-  if (adjacent(r, g, b, Type::kUint8)) {
-    const uint8_t* base = records + columns[r].offset;
-    Rgb8* out = chunk->colors.data() + first;
-    for (size_t i = 0; i < n; ++i) std::memcpy(&out[i], base + i * stride, 3);
-    (*done)[r] = (*done)[g] = (*done)[b] = true;
-  }
-}
 
 // ---------------------------------------------------------------------------------------------
 // Reader
