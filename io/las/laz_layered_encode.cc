@@ -39,9 +39,11 @@ uint32_t Flags(const Point14& p) {
 
 }  // namespace
 
-uint32_t Point14Encoder::Start(const uint8_t* first) {
+uint32_t Point14Encoder::Start(const uint8_t* first,
+                               const std::array<bool, kPoint14Layers>& coded) {
   for (ArithmeticEncoder& e : enc_) e.Init();
   changed_.fill(false);
+  coded_ = coded;
   const Point14 seed = UnpackPoint14(first);
   current_ = seed.scanner_channel;
   std::array<bool, kPoint14Layers> all;
@@ -129,21 +131,29 @@ void Point14Encoder::EncodeAttributes(Point14Context* c, const Point14& p, bool 
   const Point14& last = c->last;
   const uint32_t n = p.number_of_returns, r = p.return_number;
   const uint32_t cpr = (r == 1 ? 2u : 0u) + (r >= n ? 1u : 0u);  // single 3, first 2, last 1
-  changed_[kClass] = changed_[kClass] || p.classification != last.classification;
-  const uint32_t class_ctx = ((last.classification & 0x1Fu) << 1) + (cpr == 3 ? 1u : 0u);
-  enc_[kClass].EncodeSymbol(LazyModel(&c->classification[class_ctx], 256), p.classification);
-  changed_[kFlags] = changed_[kFlags] || Flags(p) != Flags(last);
-  enc_[kFlags].EncodeSymbol(LazyModel(&c->flags[Flags(last)], 64), Flags(p));
-  changed_[kIntensity] = changed_[kIntensity] || p.intensity != last.intensity;
-  const uint32_t intensity_ctx = cpr << 1 | (gps_change ? 1u : 0u);
-  c->intensity.Compress(&enc_[kIntensity], c->last_intensity[intensity_ctx], p.intensity, cpr);
-  c->last_intensity[intensity_ctx] = p.intensity;
+  if (coded_[kClass]) {
+    changed_[kClass] = changed_[kClass] || p.classification != last.classification;
+    const uint32_t class_ctx = ((last.classification & 0x1Fu) << 1) + (cpr == 3 ? 1u : 0u);
+    enc_[kClass].EncodeSymbol(LazyModel(&c->classification[class_ctx], 256), p.classification);
+  }
+  if (coded_[kFlags]) {
+    changed_[kFlags] = changed_[kFlags] || Flags(p) != Flags(last);
+    enc_[kFlags].EncodeSymbol(LazyModel(&c->flags[Flags(last)], 64), Flags(p));
+  }
+  if (coded_[kIntensity]) {
+    changed_[kIntensity] = changed_[kIntensity] || p.intensity != last.intensity;
+    const uint32_t intensity_ctx = cpr << 1 | (gps_change ? 1u : 0u);
+    c->intensity.Compress(&enc_[kIntensity], c->last_intensity[intensity_ctx], p.intensity, cpr);
+    c->last_intensity[intensity_ctx] = p.intensity;
+  }
   if (angle_change) {
     changed_[kScanAngle] = true;
     c->scan_angle.Compress(&enc_[kScanAngle], last.scan_angle, p.scan_angle, gps_change ? 1 : 0);
   }
-  changed_[kUserData] = changed_[kUserData] || p.user_data != last.user_data;
-  enc_[kUserData].EncodeSymbol(LazyModel(&c->user_data[last.user_data / 4], 256), p.user_data);
+  if (coded_[kUserData]) {
+    changed_[kUserData] = changed_[kUserData] || p.user_data != last.user_data;
+    enc_[kUserData].EncodeSymbol(LazyModel(&c->user_data[last.user_data / 4], 256), p.user_data);
+  }
   if (source_change) {
     changed_[kSource] = true;
     c->point_source.Compress(&enc_[kSource], last.point_source, p.point_source, 0);
@@ -161,8 +171,9 @@ void Point14Encoder::Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* b
   }
 }
 
-ColorEncoder::ColorEncoder(bool nir, const uint8_t* first, uint32_t context)
-    : nir_(nir), current_(context) {
+ColorEncoder::ColorEncoder(bool nir, const uint8_t* first, uint32_t context, bool code_rgb,
+                           bool code_nir)
+    : nir_(nir), code_rgb_(code_rgb), code_nir_(code_nir), current_(context) {
   ColorContext& c = contexts_[context];
   c.used = true;
   for (int i = 0; i < (nir_ ? 4 : 3); ++i) c.last[i] = LoadU16(first + 2 * i);
@@ -181,12 +192,14 @@ void ColorEncoder::Encode(const uint8_t* item, uint32_t context) {
                        ->last.data();
   ColorContext& c = contexts_[current_];
   const uint16_t rgb[3] = {LoadU16(item), LoadU16(item + 2), LoadU16(item + 4)};
-  rgb_changed_ = EncodeRgb(&rgb_enc_, c.rgb.get(), last, rgb) != 0 || rgb_changed_;
+  if (code_rgb_) rgb_changed_ = EncodeRgb(&rgb_enc_, c.rgb.get(), last, rgb) != 0 || rgb_changed_;
   std::copy(rgb, rgb + 3, last);
   if (!nir_) return;
   const uint16_t nir = LoadU16(item + 6);
-  EncodeNir(&nir_enc_, c.nir.get(), last[3], nir);
-  nir_changed_ = nir_changed_ || nir != last[3];
+  if (code_nir_) {
+    EncodeNir(&nir_enc_, c.nir.get(), last[3], nir);
+    nir_changed_ = nir_changed_ || nir != last[3];
+  }
   last[3] = nir;
 }
 
@@ -226,6 +239,40 @@ void ByteEncoder::Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* byte
 
 namespace candi::io::laz {
 
+namespace {
+
+// The layers a chunk codes. A layer is stored only when its field changed in the chunk, so the
+// layers of fields that are the same in every record are not coded at all: POINT14's
+// classification, flags, intensity and user data, the colour's RGB and NIR.
+struct CodedLayers {
+  std::array<bool, layered::kPoint14Layers> point;
+  bool rgb = false, nir = false;
+};
+
+CodedLayers LayersToCode(const layered::ItemSet& set, const uint8_t* records, uint32_t points) {
+  using layered::kClass, layered::kFlags, layered::kIntensity, layered::kUserData;
+  CodedLayers coded;
+  coded.point.fill(true);
+  for (layered::Point14Layer l : {kClass, kFlags, kIntensity, kUserData}) coded.point[l] = false;
+  std::array<bool, layered::kPoint14Layers>& c = coded.point;
+  const uint8_t* first = records;
+  for (uint32_t i = 1; i < points; ++i) {
+    const uint8_t* rec = records + size_t{i} * set.record;
+    c[kIntensity] = c[kIntensity] || layered::LoadU16(rec + 12) != layered::LoadU16(first + 12);
+    c[kFlags] = c[kFlags] || ((rec[15] ^ first[15]) & 0xCF) != 0;  // all but the channel
+    c[kClass] = c[kClass] || rec[16] != first[16];
+    c[kUserData] = c[kUserData] || rec[17] != first[17];
+    if (set.color >= 0) {
+      const uint8_t *a = rec + set.color_offset, *b = first + set.color_offset;
+      coded.rgb = coded.rgb || std::memcmp(a, b, 6) != 0;
+      coded.nir = coded.nir || (set.nir && std::memcmp(a + 6, b + 6, 2) != 0);
+    }
+  }
+  return coded;
+}
+
+}  // namespace
+
 void EncodeLayeredChunk(const std::vector<Item>& items, const uint8_t* records, uint32_t points,
                         std::vector<uint8_t>* out) {
   const layered::ItemSet set = layered::ItemSetOf(items);
@@ -233,13 +280,15 @@ void EncodeLayeredChunk(const std::vector<Item>& items, const uint8_t* records, 
   out->insert(out->end(), records, records + set.record);
   std::vector<uint8_t> sizes, bytes;
   layered::PutU32(points, &sizes);
+  const CodedLayers coded = LayersToCode(set, records, points);
   // As LASzip, the layers are started and ended even for a chunk of one point.
   layered::Point14Encoder point;
   std::unique_ptr<layered::ColorEncoder> color;
   std::unique_ptr<layered::ByteEncoder> extra;
-  uint32_t context = point.Start(records);
+  uint32_t context = point.Start(records, coded.point);
   if (set.color >= 0) {
-    color = std::make_unique<layered::ColorEncoder>(set.nir, records + set.color_offset, context);
+    color = std::make_unique<layered::ColorEncoder>(set.nir, records + set.color_offset, context,
+                                                    coded.rgb, coded.nir);
   }
   if (set.extra >= 0) {
     extra = std::make_unique<layered::ByteEncoder>(set.extra_count, records + set.extra_offset,

@@ -315,10 +315,14 @@ class ByteDecoder {
 // changed in the chunk is stored with size 0 (the decoder then keeps the field), except POINT14's
 // XY and Z layers, which are always stored.
 
+// A layer whose field is the same in every record of the chunk is stored empty whatever it codes,
+// so its coding can be skipped: `coded` says which layers to code (POINT14's classification,
+// flags, intensity and user data layers, the colour's RGB and NIR layers; the others are coded
+// as their changes require).
 class Point14Encoder {
  public:
   // Starts the chunk from its first record; returns its scanner channel, the other items' context.
-  uint32_t Start(const uint8_t* first);
+  uint32_t Start(const uint8_t* first, const std::array<bool, kPoint14Layers>& coded);
   // Codes the next record (30 bytes); returns the other items' context as Point14Decoder::Decode.
   uint32_t Encode(const uint8_t* record);
   void Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* bytes);
@@ -330,20 +334,21 @@ class Point14Encoder {
                         bool source_change, bool gps_change);
 
   std::array<ArithmeticEncoder, kPoint14Layers> enc_;
-  std::array<bool, kPoint14Layers> changed_{};
+  std::array<bool, kPoint14Layers> changed_{}, coded_{};
   std::array<std::unique_ptr<Point14Context>, 4> contexts_;
   uint32_t current_ = 0;
 };
 
-// RGB14 (nir false) or RGBNIR14, started from the chunk's first colour and POINT14's context.
+// RGB14 (nir false) or RGBNIR14, started from the chunk's first colour and POINT14's context;
+// code_rgb, code_nir: whether to code each layer (as Point14Encoder's `coded`).
 class ColorEncoder {
  public:
-  ColorEncoder(bool nir, const uint8_t* first, uint32_t context);
+  ColorEncoder(bool nir, const uint8_t* first, uint32_t context, bool code_rgb, bool code_nir);
   void Encode(const uint8_t* item, uint32_t context);
   void Finish(std::vector<uint8_t>* sizes, std::vector<uint8_t>* bytes);
 
  private:
-  bool nir_;
+  bool nir_, code_rgb_, code_nir_;
   bool rgb_changed_ = false, nir_changed_ = false;  // a layer is stored only when it changed
   ArithmeticEncoder rgb_enc_, nir_enc_;
   std::array<ColorContext, 4> contexts_;

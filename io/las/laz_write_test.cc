@@ -259,6 +259,41 @@ TEST(LazChunk, ArbitraryBytesRoundTrip) {
   }
 }
 
+TEST(LazChunk, AFieldThatChangesAtOneRecordIsStillCoded) {
+  // The layered encoder does not code the layers of fields that are the same in every record of
+  // the chunk (they are stored empty); a field that changes at a single record (the second, a
+  // middle one, the last) must still be coded.
+  struct Field {
+    const char* name;
+    size_t offset;
+    uint8_t flip;  // the bits changed
+  };
+  for (int format : {6, 7, 8}) {
+    const laz::Vlr vlr = laz::WriterVlr(format, 0, 50000);
+    const size_t length = vlr.record_length();
+    const uint32_t n = 600;
+    std::vector<uint8_t> constant = ScanLikeRecords(format, 0, n, static_cast<uint32_t>(format));
+    std::vector<Field> fields = {{"intensity", 12, 0x01}, {"intensity high", 13, 0x80},
+                                 {"flags", 15, 0x81},     {"classification", 16, 0x02},
+                                 {"user data", 17, 0x04}};
+    if (format >= 7) fields.push_back({"green", 32, 0x01});
+    if (format == 8) fields.push_back({"NIR", 37, 0x10});
+    for (uint32_t i = 1; i < n; ++i) {  // every field as in the first record
+      for (const Field& f : fields) constant[i * length + f.offset] = constant[f.offset];
+    }
+    ASSERT_TRUE(DecodeChunk(vlr, EncodeChunk(vlr, constant.data(), n), n) == constant);
+    for (const Field& f : fields) {
+      for (uint32_t at : {1u, n / 2, n - 1}) {
+        std::vector<uint8_t> records = constant;
+        records[at * length + f.offset] ^= f.flip;
+        const std::vector<uint8_t> chunk = EncodeChunk(vlr, records.data(), n);
+        EXPECT_TRUE(DecodeChunk(vlr, chunk, n) == records)
+            << "format " << format << ", " << f.name << " changed at record " << at;
+      }
+    }
+  }
+}
+
 TEST(LazChunkWriter, PiecesAndBatchesDoNotChangeTheBytes) {
   // 10 chunks (two batches of LazChunkWriter::kBatchChunks = 8, the last chunk short), added at
   // once or in odd pieces: the same chunks, each the chunk encoder's bytes for its records.
