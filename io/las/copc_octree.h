@@ -20,15 +20,24 @@
 // [0, 2^L - 1], the same rule at every level, so a point of node (d, x) lies in a child (d + 1, 2x
 // or 2x + 1); each level's cell is a shift of floor(t * 2^62). Deterministic: the nodes and their
 // points do not depend on the thread count.
-// Built level by level over the points in Morton order (sorted once by a parallel radix pass
-// on the first 12 bits and each bucket on its own): a node's points, its children's and each of
-// its cells are then contiguous ranges, so a level is one pass over its nodes' ranges, a cell's
-// nearest point chosen from its run (a point's distance computed only where a bound from its
-// Morton code does not rule it out) and flagged as kept in place. A large node is split by several
-// threads in blocks of whole cells; small nodes a thread each. A key holds 21 levels; nodes more
-// than 14 levels below the level it was made for are keyed again from their own level.
-// Memory: 32 bytes a point, or the record length if more (each point's key, X, Y, Z and index,
-// its key again while sorting), and the node of each. Thread-safety: a pure function.
+// Built bucket by bucket (copc_nodes.cc): the cube's cells at level 7 are counted (the points'
+// places, by parallel blocks), and the cube is cut into buckets, nodes of at most bucket_points
+// points or at level 7 (fewer where cells narrower than a LAS unit start sooner), a bucket's
+// points listed in input order. A bucket's points are then built alone, in Morton order in the
+// cache (a node's points, its children's and each of its cells contiguous ranges of it, a cell's
+// nearest point chosen from its run, a point's distance computed only where a bound from its
+// Morton code does not rule it out, and flagged as kept in place): the levels above the bucket
+// first, whose cells (7 levels below a node of level < 7) lie whole in it, then its own subtree,
+// whose records are gathered in node order and encoded while the bucket is in the cache. The
+// rules above the buckets need counts across them: a node above that its subtree's points or its
+// octant's would fold (fewer than the minimums below) can only cover buckets with fewer points
+// than the minimums at their parent's level, which are held until every bucket's counts are in.
+// The nodes above the buckets are encoded last, their points gathered from the records in input
+// order. A key holds 21 levels; nodes more than 14 levels below the level it was made for are
+// keyed again from their own level. Memory: the records, 8 bytes a point (each point's cell while
+// the buckets are cut, then each bucket's list) and 8 for each point of a node above the buckets;
+// each bucket in the works ~100 bytes a point. Deterministic: the nodes, their points and the
+// order they are handed on do not depend on the thread count. Thread-safety: a pure function.
 #pragma once
 
 #include <array>
@@ -54,14 +63,14 @@ struct CopcKey {
 struct CopcNode {
   CopcKey key;
   uint64_t size = 0;             // points it holds
-  std::vector<uint64_t> points;  // their records' indices, ascending (empty in a CopcPartition)
+  std::vector<uint64_t> points;  // their records' indices, ascending (BuildCopcOctree's only)
 };
 
 struct CopcOctree {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // world, metres (LAS units)
   double halfsize = 0.0;                             // half the cube's width
   double spacing = 0.0;                              // root cell width: 2 * halfsize / 128
-  std::vector<CopcNode> nodes;  // level by level, each level ordered by (x, y, z); none empty
+  std::vector<CopcNode> nodes;                       // none empty
   // World bounds of a node's cube.
   Eigen::Vector3d NodeMin(const CopcKey& key) const;
   double NodeWidth(const CopcKey& key) const;
@@ -75,34 +84,48 @@ struct CopcOctreeOptions {
   // The sort's scratch on each thread, in points (24 bytes each; 48 MiB): larger groups are
   // sorted in place, more slowly. 0: every group in place.
   size_t sort_scratch_points = size_t{1} << 21;
+  // A node of more points than this is cut into buckets (down to level 7). >= 1. The tree is
+  // the same for any value; the order the nodes are handed on is not.
+  size_t bucket_points = size_t{1} << 17;
+  // Buckets are built in parallel by batches of consecutive ones of about this many points
+  // (scheduling only: the nodes and their order are the same for any value). >= 1.
+  size_t batch_points = size_t{1} << 22;
   void Check() const;
 };
 
-// The octree of n LAS records (record_length bytes each, X, Y, Z int32 at bytes 0, 4, 8) with
-// the header's scale and offset, as node sizes and each record's node: node_of[i] is the index
-// in tree.nodes of the node holding record i. `memory` is the builder's, handed on (its contents
-// undefined) so that the records in node order (RecordsByNode, io/las/copc_write.h) take no new
-// pages. CANDI_CHECK: n < 2^32.
-struct CopcPartition {
-  CopcOctree tree;                       // nodes without their points lists
-  std::unique_ptr<uint32_t[]> node_of;   // n
-  std::unique_ptr<uint8_t[]> memory;     // memory_bytes >= n * record_length
-  size_t memory_bytes = 0;
-};
-// `progress` (may be null): (points whose node is settled, n) after each level. `xyz_bounds`
-// (may be null): the records' least and greatest X, Y, Z, when the caller has them (a writer
-// tracks them), which saves a pass over the records; the tree is the same.
 using CopcXyzBounds = std::array<std::array<int32_t, 3>, 2>;
-CopcPartition PartitionCopcOctree(const CopcOctreeOptions& options, const uint8_t* records,
-                                  size_t n, size_t record_length, const Eigen::Vector3d& scale,
-                                  const Eigen::Vector3d& offset,
-                                  const std::function<void(uint64_t, uint64_t)>& progress = {},
-                                  const CopcXyzBounds* xyz_bounds = nullptr);
+
+// What a node becomes (its LAZ chunk, for the COPC writer): called on several threads at once,
+// once a node, with the node's `count` records (record_length bytes each, contiguous, in input
+// order) and their indices among the n; appends to *out (empty when called).
+using CopcNodeEncoder =
+    std::function<void(const CopcKey& key, const uint8_t* records, const uint32_t* indices,
+                       size_t count, std::vector<uint8_t>* out)>;
+// Takes the nodes, one call at a time, in the order they are written: the buckets' nodes
+// bucket by bucket (in Morton order), each bucket's level by level, then the nodes above the
+// buckets level by level. An exception ends the build and reaches the caller.
+using CopcNodeSink =
+    std::function<void(const CopcKey& key, uint64_t count, std::vector<uint8_t>* encoded)>;
 
 // Builds the octree of n LAS records (record_length bytes each, X, Y, Z int32 at bytes 0, 4, 8)
-// with the header's scale and offset.
+// with the header's scale and offset, encodes each node and hands it to `sink`; returns the cube
+// and the nodes (without their points lists) in the sink's order. `xyz_bounds` (may be null):
+// the records' least and greatest X, Y, Z, when the caller has them (a writer tracks them),
+// which saves a pass over the records; the tree is the same. `bucketing` and `encoding` (may be
+// null): (done, n) as the buckets are cut (points placed) and as nodes are handed on (points
+// settled). CANDI_CHECK: n < 2^32.
+CopcOctree BuildCopcNodes(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
+                          size_t record_length, const Eigen::Vector3d& scale,
+                          const Eigen::Vector3d& offset, const CopcXyzBounds* xyz_bounds,
+                          const CopcNodeEncoder& encode, const CopcNodeSink& sink,
+                          const std::function<void(uint64_t, uint64_t)>& bucketing = {},
+                          const std::function<void(uint64_t, uint64_t)>& encoding = {});
+
+// The octree of n LAS records as BuildCopcNodes builds it, each node with its points list, the
+// nodes level by level, each level ordered by (x, y, z).
 CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
                            size_t record_length, const Eigen::Vector3d& scale,
-                           const Eigen::Vector3d& offset);
+                           const Eigen::Vector3d& offset,
+                           const CopcXyzBounds* xyz_bounds = nullptr);
 
 }  // namespace candi::io

@@ -9,13 +9,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <random>
 #include <set>
 #include <stdexcept>
-#include <utility>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "core/binary_file.h"
@@ -212,8 +213,8 @@ class ReferenceTree {
         const double e = std::ldexp(double(places_[i][k] & ((uint64_t{1} << shift) - 1)), -shift);
         d += (e - 0.5) * (e - 0.5);
       }
-      const auto cell = std::make_tuple(places_[i][0] >> shift, places_[i][1] >> shift,
-                                        places_[i][2] >> shift);
+      const auto cell =
+          std::make_tuple(places_[i][0] >> shift, places_[i][1] >> shift, places_[i][2] >> shift);
       const auto candidate = std::make_pair(static_cast<float>(d), i);
       const auto it = best.find(cell);
       if (it == best.end() || candidate < it->second) best[cell] = candidate;
@@ -258,8 +259,8 @@ int ExpectTheRulesTree(const CopcOctreeOptions& options, const std::vector<uint8
     previous_level = node.key.level;
     const auto it = reference.find(Tuple(node.key));
     if (it == reference.end()) {
-      ADD_FAILURE() << "no node " << node.key.level << "-" << node.key.x << "-" << node.key.y
-                    << "-" << node.key.z << " in the rule's tree";
+      ADD_FAILURE() << "no node " << node.key.level << "-" << node.key.x << "-" << node.key.y << "-"
+                    << node.key.z << " in the rule's tree";
       break;
     }
     EXPECT_EQ(node.points, it->second);
@@ -332,21 +333,6 @@ TEST(CopcOctree, NodesDeeperThanTheKeysHoldAreKeyedAgain) {
   }
 }
 
-TEST(CopcOctree, ThePartitionNamesEachPointsNode) {
-  const size_t n = 80000;
-  const std::vector<uint8_t> records = ClusteredRecords(n, 5);
-  const CopcOctree tree = BuildCopcOctree({}, records.data(), n, kLength, kScale, kOffset);
-  const CopcPartition partition =
-      PartitionCopcOctree({}, records.data(), n, kLength, kScale, kOffset);
-  ASSERT_EQ(partition.tree.nodes.size(), tree.nodes.size());
-  EXPECT_GE(partition.memory_bytes, n * kLength);
-  for (size_t j = 0; j < tree.nodes.size(); ++j) {
-    EXPECT_TRUE(partition.tree.nodes[j].points.empty());
-    EXPECT_EQ(partition.tree.nodes[j].size, tree.nodes[j].size);
-    for (uint64_t i : tree.nodes[j].points) ASSERT_EQ(partition.node_of[i], j);
-  }
-}
-
 TEST(CopcOctree, TheRecordsIntegerBoundsGiveTheSameTreeAsTheirPass) {
   // A writer passes the X, Y, Z bounds it tracked instead of a pass over the records: the cube
   // and every point's node must be the same, for a positive and a negative scale (whose least
@@ -368,17 +354,16 @@ TEST(CopcOctree, TheRecordsIntegerBoundsGiveTheSameTreeAsTheirPass) {
        {std::pair{kScale, kOffset},
         std::pair{Eigen::Vector3d(-0.001, 0.01, -0.25), Eigen::Vector3d(5e5, -3.0, 0.0)},
         std::pair{Eigen::Vector3d::Constant(0.25).eval(), Eigen::Vector3d(cancel, 0.0, -0.0)}}) {
-    const CopcPartition pass = PartitionCopcOctree({}, records.data(), n, kLength, scale, offset);
-    const CopcPartition known =
-        PartitionCopcOctree({}, records.data(), n, kLength, scale, offset, {}, &bounds);
-    EXPECT_EQ(known.tree.center, pass.tree.center) << scale.transpose();
-    EXPECT_EQ(known.tree.halfsize, pass.tree.halfsize);
-    ASSERT_EQ(known.tree.nodes.size(), pass.tree.nodes.size());
-    for (size_t j = 0; j < pass.tree.nodes.size(); ++j) {
-      ASSERT_TRUE(known.tree.nodes[j].key == pass.tree.nodes[j].key);
-      ASSERT_EQ(known.tree.nodes[j].size, pass.tree.nodes[j].size);
+    const CopcOctree pass = BuildCopcOctree({}, records.data(), n, kLength, scale, offset);
+    const CopcOctree known =
+        BuildCopcOctree({}, records.data(), n, kLength, scale, offset, &bounds);
+    EXPECT_EQ(known.center, pass.center) << scale.transpose();
+    EXPECT_EQ(known.halfsize, pass.halfsize);
+    ASSERT_EQ(known.nodes.size(), pass.nodes.size());
+    for (size_t j = 0; j < pass.nodes.size(); ++j) {
+      ASSERT_TRUE(known.nodes[j].key == pass.nodes[j].key);
+      ASSERT_EQ(known.nodes[j].points, pass.nodes[j].points);
     }
-    EXPECT_TRUE(std::equal(known.node_of.get(), known.node_of.get() + n, pass.node_of.get()));
   }
 }
 
@@ -390,6 +375,12 @@ TEST(CopcOctreeOptions, DefaultsPassAndNegativeMinimumsAreRefused) {
   o = {};
   o.min_octant_points = -5;
   EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = {};
+  o.bucket_points = 0;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = {};
+  o.batch_points = 0;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
 }
 
 TEST(CopcOctree, EmptyAndSinglePoint) {
@@ -398,6 +389,130 @@ TEST(CopcOctree, EmptyAndSinglePoint) {
   const CopcOctree tree = BuildCopcOctree({}, one.data(), 1, kLength, kScale, kOffset);
   ASSERT_EQ(tree.nodes.size(), 1u);
   EXPECT_GT(tree.halfsize, 0.0);
+}
+
+TEST(CopcOctree, AnyBucketSizeGivesTheRulesTree) {
+  // Buckets of at most 1 point (every bucket a cell at level 7, or one that cannot be cut), of a
+  // few and of many: the levels above each bucket are built in it, their rules from every
+  // bucket's counts. The clustered cloud's fringes fold small octants and subtrees into nodes
+  // above the buckets.
+  const size_t n = 60000;
+  const std::vector<uint8_t> records = ClusteredRecords(n, 13);
+  for (const size_t bucket : {size_t{1}, size_t{40}, size_t{1000}, size_t{20000}}) {
+    for (CopcOctreeOptions options : {kGridOnly, CopcOctreeOptions{}, CopcOctreeOptions{300, 20}}) {
+      options.bucket_points = bucket;
+      options.batch_points = 5000;
+      SCOPED_TRACE(::testing::Message()
+                   << bucket << " points a bucket, minimums " << options.min_subtree_points << ", "
+                   << options.min_octant_points);
+      ExpectTheRulesTree(options, records, n, kScale, kOffset);
+    }
+  }
+}
+
+// Two corners of a 1,024 m cube, a dense 10 m floor near one, and `far` points within 1 m near
+// the other: the far points' octant of the root, a node above small buckets, has fewer points
+// than the minimums.
+std::vector<uint8_t> FarClusterRecords(size_t n, size_t far) {
+  std::vector<uint8_t> records(n * kLength, 0);
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (size_t i = 0; i < n; ++i) {
+    Eigen::Vector3d p(10.0 * u(rng), 10.0 * u(rng), 0.1 * u(rng));
+    if (i == 0) p = Eigen::Vector3d::Zero();
+    if (i == 1) p = Eigen::Vector3d::Constant(1024.0);
+    if (i >= 2 && i < 2 + far)
+      p = Eigen::Vector3d::Constant(1000.0) + Eigen::Vector3d(u(rng), u(rng), u(rng));
+    for (int k = 0; k < 3; ++k) {
+      StoreLE<int32_t>(records.data() + i * kLength + 4 * k,
+                       static_cast<int32_t>(std::lround(p[k] / kScale[k])));
+    }
+  }
+  return records;
+}
+
+TEST(CopcOctree, NodesAboveTheBucketsFoldTheirSubtreesAndOctants) {
+  // Buckets of 16 points: the far cluster's octant is cut into buckets down to level 7, so its
+  // rules are decided above them. 300 far points: the octant's node is reached by fewer than 1500
+  // and keeps them all; 60: fewer than 100 reach the octant, which stays in the root.
+  const size_t n = 20000;
+  const CopcKey far_octant{1, 1, 1, 1};
+  for (const size_t far : {size_t{300}, size_t{60}}) {
+    SCOPED_TRACE(far);
+    const std::vector<uint8_t> records = FarClusterRecords(n, far);
+    CopcOctreeOptions options;
+    options.bucket_points = 16;
+    ExpectTheRulesTree(options, records, n, kScale, Eigen::Vector3d::Zero());
+    const CopcOctree tree =
+        BuildCopcOctree(options, records.data(), n, kLength, kScale, Eigen::Vector3d::Zero());
+    size_t in_far_octant = 0, below_it = 0;
+    for (const CopcNode& node : tree.nodes) {
+      if (node.key.level == 0) continue;
+      const int up = node.key.level - 1;
+      const bool inside =
+          (node.key.x >> up) == 1 && (node.key.y >> up) == 1 && (node.key.z >> up) == 1;
+      if (node.key == far_octant) {
+        in_far_octant = node.size;
+      } else if (inside) {
+        ++below_it;
+      }
+    }
+    EXPECT_EQ(below_it, 0u) << "nodes under the far octant: its subtree must fold";
+    if (far == 300) {
+      EXPECT_GE(in_far_octant, 290u);
+    } else {
+      EXPECT_EQ(in_far_octant, 0u) << "the far octant must stay in the root";
+    }
+  }
+}
+
+TEST(CopcOctree, TheNodesComeBucketByBucketThenTheNodesAbove) {
+  // BuildCopcNodes hands each node on once, with its records (contiguous, in input order) and
+  // their indices; the nodes above the buckets last, level by level.
+  const size_t n = 50000;
+  const std::vector<uint8_t> records = ClusteredRecords(n, 19);
+  CopcOctreeOptions options;
+  options.bucket_points = 2000;
+  const CopcOctree reference =
+      BuildCopcOctree(options, records.data(), n, kLength, kScale, kOffset);
+  std::map<std::tuple<int, int, int, int>, std::vector<uint64_t>> expected;
+  for (const CopcNode& node : reference.nodes) expected[Tuple(node.key)] = node.points;
+  std::vector<CopcKey> order;
+  size_t encoded = 0;
+  const CopcOctree tree = BuildCopcNodes(
+      options, records.data(), n, kLength, kScale, kOffset, nullptr,
+      [&](const CopcKey& key, const uint8_t* node_records, const uint32_t* indices, size_t count,
+          std::vector<uint8_t>* out) {
+        EXPECT_TRUE(out->empty());
+        for (size_t k = 0; k < count; ++k) {
+          ASSERT_EQ(std::memcmp(node_records + k * kLength,
+                                records.data() + size_t{indices[k]} * kLength, kLength),
+                    0);
+          if (k > 0) {
+            ASSERT_LT(indices[k - 1], indices[k]) << "input order";
+          }
+        }
+        out->assign(1, static_cast<uint8_t>(key.level));
+      },
+      [&](const CopcKey& key, uint64_t count, std::vector<uint8_t>* out) {
+        ASSERT_EQ(out->size(), 1u);
+        EXPECT_EQ((*out)[0], key.level);
+        EXPECT_EQ(count, expected[Tuple(key)].size());
+        order.push_back(key);
+        ++encoded;
+      });
+  EXPECT_EQ(encoded, reference.nodes.size());
+  ASSERT_EQ(tree.nodes.size(), order.size());
+  for (size_t j = 0; j < order.size(); ++j) EXPECT_TRUE(tree.nodes[j].key == order[j]);
+  // The root is above the buckets (there are several), so it comes in the last run, which goes
+  // level by level.
+  size_t root = order.size();
+  for (size_t j = 0; j < order.size(); ++j) {
+    if (order[j].level == 0) root = j;
+  }
+  ASSERT_LT(root, order.size());
+  for (size_t j = root + 1; j < order.size(); ++j) EXPECT_GE(order[j].level, order[j - 1].level);
+  EXPECT_GT(root, 0u) << "the buckets' nodes first";
 }
 
 }  // namespace

@@ -177,42 +177,6 @@ CopcHierarchy EncodeCopcHierarchyPages(const CopcWriteOptions& options,
   return PageWriter(options, entries, payload_offset).Write();
 }
 
-std::unique_ptr<uint8_t[]> RecordsByNode(CopcPartition* partition, const uint8_t* records, size_t n,
-                                         size_t record_length) {
-  const std::vector<CopcNode>& nodes = partition->tree.nodes;
-  const uint32_t* node_of = partition->node_of.get();
-  CANDI_CHECK(partition->memory_bytes >= n * record_length) << "COPC partition memory";
-  // Blocks of records, each block's count of each node, then each block's records to their
-  // places: a node's records stay in input order, whatever the thread count. At most 64 blocks
-  // (of at least 2^22 records), so the counts (blocks x nodes) stay small however large n is.
-  const size_t block = std::max(size_t{1} << 22, (n + 63) / 64);
-  const size_t blocks = (n + block - 1) / block;
-  std::vector<uint64_t> at(blocks * nodes.size(), 0);
-  ParallelFor(size_t{0}, blocks, [&](size_t b) {
-    uint64_t* count = at.data() + b * nodes.size();
-    for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) ++count[node_of[i]];
-  });
-  uint64_t next = 0;
-  for (size_t j = 0; j < nodes.size(); ++j) {
-    for (size_t b = 0; b < blocks; ++b) {
-      const uint64_t c = at[b * nodes.size() + j];
-      at[b * nodes.size() + j] = next;
-      next += c;
-    }
-  }
-  CANDI_CHECK_EQ(next, uint64_t{n}) << "COPC node sizes";
-  std::unique_ptr<uint8_t[]> sorted = std::move(partition->memory);
-  partition->memory_bytes = 0;
-  ParallelFor(size_t{0}, blocks, [&](size_t b) {
-    uint64_t* to = at.data() + b * nodes.size();
-    for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {
-      std::memcpy(sorted.get() + to[node_of[i]]++ * record_length, records + i * record_length,
-                  record_length);
-    }
-  });
-  return sorted;
-}
-
 std::array<double, 2> CopcGpsTimeRange(const uint8_t* records, size_t n, size_t record_length,
                                        size_t gps_offset) {
   constexpr size_t kBlock = size_t{1} << 20;
@@ -235,57 +199,38 @@ std::array<double, 2> CopcGpsTimeRange(const uint8_t* records, size_t n, size_t 
   return all;
 }
 
-CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
-                              const laz::Vlr& vlr, uint64_t first_chunk,
-                              const std::function<void(const uint8_t*, size_t)>& sink,
-                              const std::function<void(uint64_t, uint64_t)>& progress,
-                              size_t batch_points) {
+CopcPointData WriteCopcNodes(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
+                             size_t record_length, const Eigen::Vector3d& scale,
+                             const Eigen::Vector3d& offset, const CopcXyzBounds* xyz_bounds,
+                             const laz::Vlr& vlr, uint64_t first_chunk,
+                             const std::function<void(const uint8_t*, size_t)>& sink,
+                             const std::function<void(uint64_t, uint64_t)>& bucketing,
+                             const std::function<void(uint64_t, uint64_t)>& chunks) {
   CANDI_CHECK(vlr.compressor == laz::kLayeredChunked &&
               record_length == static_cast<size_t>(vlr.record_length()))
       << "COPC chunks are layered, with the record's items";
-  CANDI_CHECK(batch_points > 0) << "COPC chunk batches of 0 points";
   CopcPointData data;
   std::vector<uint32_t> bytes, points;
-  uint64_t offset = first_chunk;
-  std::vector<const uint8_t*> starts;
-  const uint8_t* start = records;
-  uint64_t total = 0, compressed = 0;
-  for (const CopcNode& node : tree.nodes) {
-    starts.push_back(start);
-    start += node.size * record_length;
-    total += node.size;
-  }
-  if (progress) progress(0, total);
-  // Batches of consecutive nodes, large enough that threads seldom wait for a batch's last node,
-  // small enough that the chunks held stay bounded (~8 bytes a point).
-  std::vector<std::vector<uint8_t>> chunks;
-  for (size_t first = 0, count = 0; first < tree.nodes.size(); first += count) {
-    size_t points_in_batch = 0;
-    for (count = 0; first + count < tree.nodes.size() && points_in_batch < batch_points; ++count) {
-      points_in_batch += tree.nodes[first + count].size;
-    }
-    if (chunks.size() < count) chunks.resize(count);
-    ParallelFor(size_t{0}, count, [&](size_t j) {
-      const CopcNode& node = tree.nodes[first + j];
-      chunks[j].clear();
-      laz::EncodeLayeredChunk(vlr.items, starts[first + j], static_cast<uint32_t>(node.size),
-                              &chunks[j]);
-    });
-    for (size_t j = 0; j < count; ++j) {
-      const CopcNode& node = tree.nodes[first + j];
-      CANDI_CHECK(chunks[j].size() <= size_t{std::numeric_limits<int32_t>::max()} &&
-                  node.size <= size_t{std::numeric_limits<int32_t>::max()})
-          << "COPC node of " << node.size << " points, " << chunks[j].size() << " bytes";
-      sink(chunks[j].data(), chunks[j].size());
-      data.entries.push_back({node.key, offset, static_cast<int32_t>(chunks[j].size()),
-                              static_cast<int32_t>(node.size)});
-      bytes.push_back(static_cast<uint32_t>(chunks[j].size()));
-      points.push_back(static_cast<uint32_t>(node.size));
-      offset += chunks[j].size();
-      compressed += node.size;
-    }
-    if (progress) progress(compressed, total);
-  }
+  uint64_t offset_in_file = first_chunk;
+  data.tree = BuildCopcNodes(
+      options, records, n, record_length, scale, offset, xyz_bounds,
+      [&vlr](const CopcKey&, const uint8_t* node_records, const uint32_t*, size_t count,
+             std::vector<uint8_t>* out) {
+        laz::EncodeLayeredChunk(vlr.items, node_records, static_cast<uint32_t>(count), out);
+      },
+      [&](const CopcKey& key, uint64_t count, std::vector<uint8_t>* chunk) {
+        CANDI_CHECK(chunk->size() <= size_t{std::numeric_limits<int32_t>::max()} &&
+                    count <= uint64_t{std::numeric_limits<int32_t>::max()})
+            << "COPC node of " << count << " points, " << chunk->size() << " bytes";
+        sink(chunk->data(), chunk->size());
+        data.entries.push_back({key, offset_in_file, static_cast<int32_t>(chunk->size()),
+                                static_cast<int32_t>(count)});
+        bytes.push_back(static_cast<uint32_t>(chunk->size()));
+        points.push_back(static_cast<uint32_t>(count));
+        offset_in_file += chunk->size();
+        std::vector<uint8_t>().swap(*chunk);  // written: its memory back
+      },
+      bucketing, chunks);
   data.chunk_table = EncodeLazChunkTable(bytes, points);
   return data;
 }

@@ -4,12 +4,12 @@
 //
 // Internal to the LAS writer (io/las/las_writer.cc), which writes a COPC file for a name ending in
 // ".copc.laz": LAS 1.4, point format 6-8, the info VLR first, the laszip VLR with variable
-// chunks, the point data (the chunk table's offset, the nodes' chunks level by level, the chunk
-// table with per-chunk point counts), then the hierarchy EVLR (its pages, the root page last) and
-// the EVLRs kept from the source.
+// chunks, the point data (the chunk table's offset, the nodes' chunks bucket by bucket and the
+// nodes above the buckets last, the chunk table with per-chunk point counts), then the hierarchy
+// EVLR (its pages, the root page last) and the EVLRs kept from the source.
 // Failure: the Parse* functions (for tests and tools) CANDI_CHECK the payload sizes; a chunk the
 // encoder refuses is a CANDI_CHECK (the writer built the records). Thread-safety: pure
-// functions; WriteCopcChunks compresses in parallel with the same bytes on any thread count.
+// functions; WriteCopcNodes compresses in parallel with the same bytes on any thread count.
 #pragma once
 
 #include <array>
@@ -67,32 +67,28 @@ CopcHierarchy EncodeCopcHierarchyPages(const CopcWriteOptions& options,
                                        uint64_t payload_offset);
 
 struct CopcPointData {
-  std::vector<CopcEntry> entries;    // one a node, in tree.nodes' order
+  CopcOctree tree;                   // the cube; the nodes in the order of their chunks
+  std::vector<CopcEntry> entries;    // one a node, in the order of their chunks
   std::vector<uint8_t> chunk_table;  // LASzip's, variable chunks
 };
-// The n records in node order: tree.nodes[0]'s (in input order), then tree.nodes[1]'s, and so
-// on, written into the partition's memory (taken). Reads the records once in order, by parallel
-// blocks.
-std::unique_ptr<uint8_t[]> RecordsByNode(CopcPartition* partition, const uint8_t* records, size_t n,
-                                         size_t record_length);
+// Builds the octree of n records (record_length bytes each: io/las/copc_octree.h's
+// BuildCopcNodes) and compresses each node's records (in input order) into one chunk with the
+// items of `vlr` (layered), handing the chunks to `sink` in the order the octree hands the nodes
+// on; the first chunk starts at file offset `first_chunk`. The chunks are compressed on several
+// threads, bucket by bucket, with the same bytes on any thread count. An exception from the sink
+// ends the writing and is rethrown; no chunk is handed on after it.
+// `bucketing`, `chunks` (may be null): (done, n) as the buckets are cut and as chunks are written.
+CopcPointData WriteCopcNodes(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
+                             size_t record_length, const Eigen::Vector3d& scale,
+                             const Eigen::Vector3d& offset, const CopcXyzBounds* xyz_bounds,
+                             const laz::Vlr& vlr, uint64_t first_chunk,
+                             const std::function<void(const uint8_t*, size_t)>& sink,
+                             const std::function<void(uint64_t, uint64_t)>& bucketing = {},
+                             const std::function<void(uint64_t, uint64_t)>& chunks = {});
 
 // The least and the greatest GPS time of n records (the double at byte gps_offset of each), NaN
 // times left out, by parallel blocks (no order matters); {0, 0} when there is none.
 std::array<double, 2> CopcGpsTimeRange(const uint8_t* records, size_t n, size_t record_length,
                                        size_t gps_offset);
-
-// Compresses each node's records (`records`: in node order, as RecordsByNode gives them,
-// record_length bytes each) into one chunk with the items of `vlr` (layered), handing the chunks
-// in node order to `sink`; the first chunk starts at file offset `first_chunk`. Nodes are
-// compressed in parallel by batches of consecutive nodes (up to batch_points points, or one
-// larger node), each batch's chunks then handed on. An exception from the sink ends the
-// writing and is rethrown.
-// `progress` (may be null): (points compressed, all the nodes' points) after each batch.
-inline constexpr size_t kCopcBatchPoints = size_t{1} << 21;
-CopcPointData WriteCopcChunks(const CopcOctree& tree, const uint8_t* records, size_t record_length,
-                              const laz::Vlr& vlr, uint64_t first_chunk,
-                              const std::function<void(const uint8_t*, size_t)>& sink,
-                              const std::function<void(uint64_t, uint64_t)>& progress = {},
-                              size_t batch_points = kCopcBatchPoints);
 
 }  // namespace candi::io

@@ -247,10 +247,10 @@ void LasWriter::CheckCopcMemory() const {
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
   if (pages <= 0 || page <= 0) return;
   const double physical = static_cast<double>(pages) * static_cast<double>(page);
-  // The peak: the records, the octree's buffers (at least the records' size again) and each
-  // point's node.
+  // The peak: the records, each point's cell then its place in its bucket's list, and the points
+  // of the nodes above the buckets (io/las/copc_octree.h).
   const double length = header_.record_length;
-  const double needed = static_cast<double>(spec_.count) * (length + std::max(32.0, length) + 4);
+  const double needed = static_cast<double>(spec_.count) * (length + 16);
   if (needed <= physical) return;
   constexpr double kGiB = double(uint64_t{1} << 30);
   throw InputError(path_, "",
@@ -641,19 +641,15 @@ void LasWriter::WriteCopcPointData() {
     return [this, name](uint64_t done, uint64_t total) { close_progress_(name, done, total); };
   };
   const CopcXyzBounds xyz_bounds{min_, max_};  // what the records hold, when n > 0
-  CopcPartition partition =
-      PartitionCopcOctree({}, copc_records_.data(), n, length, header_.scale, header_.offset,
-                          stage("octree"), &xyz_bounds);
-  const CopcOctree& tree = partition.tree;
-  // The records in node order; the input's freed.
-  const std::unique_ptr<uint8_t[]> sorted =
-      RecordsByNode(&partition, copc_records_.data(), n, length);
-  partition.node_of.reset();
-  copc_records_.Release();
   const laz::Vlr vlr = laz::ParseVlr(vlrs_.back().data);
-  const CopcPointData data = WriteCopcChunks(
-      tree, sorted.get(), length, vlr, file_->Tell(),
-      [this](const uint8_t* bytes, size_t size) { file_->Write(bytes, size); }, stage("chunks"));
+  const CopcPointData data = WriteCopcNodes(
+      {}, copc_records_.data(), n, length, header_.scale, header_.offset, &xyz_bounds, vlr,
+      file_->Tell(), [this](const uint8_t* bytes, size_t size) { file_->Write(bytes, size); },
+      stage("octree"), stage("chunks"));
+  const CopcOctree& tree = data.tree;
+  const std::array<double, 2> gps =
+      CopcGpsTimeRange(copc_records_.data(), n, length, layout_.gps_offset);
+  copc_records_.Release();
   WriteChunkTable(file_.get(), header_.offset_to_point_data, data.chunk_table);
   CopcInfo info;
   info.center = tree.center;
@@ -664,7 +660,6 @@ void LasWriter::WriteCopcPointData() {
   CopcHierarchy hierarchy = EncodeCopcHierarchyPages(copc_options_, data.entries, payload);
   info.root_hier_offset = payload + hierarchy.root_offset;
   info.root_hier_size = hierarchy.root_size;
-  const std::array<double, 2> gps = CopcGpsTimeRange(sorted.get(), n, length, layout_.gps_offset);
   info.gpstime_minimum = gps[0];
   info.gpstime_maximum = gps[1];
   const std::string encoded = EncodeCopcInfo(info);
