@@ -156,6 +156,7 @@ struct ConvertArgs {
   io::ConvertOptions options;
   std::string shift;      // "" (keep the input's), "auto", "none" or "x,y,z"
   std::string las_scale;  // "s" or "sx,sy,sz"
+  double copc_memory_mb = 0;
 };
 
 Eigen::Vector3d ParseScale(const std::string& text) {
@@ -171,6 +172,11 @@ Eigen::Vector3d ParseScale(const std::string& text) {
 int RunConvert(const ConvertArgs& args) {
   io::ConvertOptions o = args.options;
   if (!args.las_scale.empty()) o.write.las_scale = ParseScale(args.las_scale);
+  if (!(args.copc_memory_mb >= 0)) {
+    throw std::invalid_argument("--copc-memory " + FormatSignificant(args.copc_memory_mb, 6) +
+                                ": must be >= 0 (MB; 0: half of this machine's memory)");
+  }
+  o.write.copc.memory_bytes = static_cast<uint64_t>(args.copc_memory_mb * 1048576.0);
   if (args.shift == "auto") {
     o.shift = io::ShiftChoice::kAuto;
   } else if (args.shift == "none") {
@@ -222,6 +228,9 @@ void AddConvert(Command& root) {
   c.Option("--las-scale", a.las_scale, "LAS output scale, s or sx,sy,sz (default: keep, else 0.001)");
   c.Option("--las-format", o.write.las_point_format, "LAS output point format: 0-3 or 6-8");
   c.Option("--las-version", o.write.las_version_minor, "LAS output minor version: 2, 3 or 4");
+  c.Option("--copc-memory", a.copc_memory_mb,
+           "COPC output: the memory (MB) its records may take until the file is complete; "
+           "beyond it they are spilled beside the file (default 0: half of this machine's)");
   c.Option("--crs", o.crs, "The input's CRS (e.g. EPSG:4979), for files that state none; carried into the output");
   c.Option("--to-crs", o.to_crs, "Reproject into this CRS with PROJ (e.g. EPSG:32749)");
   c.Run([&a] { return RunConvert(a); });

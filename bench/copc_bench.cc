@@ -7,8 +7,11 @@
 // split: "in" the Write calls, then Close: for COPC its "octree" (until the writer reports its
 // chunks stage) and "chunks" (the rest), for LAS and LAZ all "chunks".
 //
+// --copc-memory MB: the memory a COPC file's records may take before they are spilled beside it
+// (io::CopcWriteOptions::memory_bytes; default: half the machine's).
+//
 //   copc_bench [--points 1e6,1e7] [--threads 1,2] [--formats las,laz,copc.laz] [--dir DIR]
-//              [--keep]
+//              [--copc-memory MB] [--keep]
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <tbb/global_control.h>
@@ -81,7 +84,7 @@ struct Split {
 };
 
 // Writes `points` points of the scan to `path` on `threads` threads; the writer's seconds.
-Split WriteScan(const std::string& path, uint64_t points, int threads) {
+Split WriteScan(const std::string& path, uint64_t points, int threads, uint64_t copc_memory) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                             static_cast<size_t>(threads));
   PointCloud chunk;
@@ -93,6 +96,7 @@ Split WriteScan(const std::string& path, uint64_t points, int threads) {
   spec.count = points;
   io::PointWriteOptions options;
   options.las_scale = Eigen::Vector3d::Constant(0.001);
+  options.copc.memory_bytes = copc_memory;
   bool chunks_started = false;
   std::chrono::steady_clock::time_point chunks_t0;
   options.close_progress = [&](const std::string& stage, uint64_t, uint64_t) {
@@ -121,11 +125,12 @@ Split WriteScan(const std::string& path, uint64_t points, int threads) {
 }
 
 // One case in a child process: prints its row.
-void RunCase(const std::string& path, uint64_t points, int threads, bool keep) {
+void RunCase(const std::string& path, uint64_t points, int threads, uint64_t copc_memory,
+             bool keep) {
   std::fflush(stdout);
   const pid_t pid = fork();
   if (pid == 0) {
-    const Split split = WriteScan(path, points, threads);
+    const Split split = WriteScan(path, points, threads, copc_memory);
     const double s = split.Total();
     struct rusage usage;
     getrusage(RUSAGE_SELF, &usage);
@@ -164,6 +169,7 @@ int main(int argc, char** argv) {
   std::string points_text = "1e6,1e7", threads_text = "1,2", formats_text = "las,laz,copc.laz";
   std::string dir = "candi-bench-copc";
   bool keep = false;
+  uint64_t copc_memory = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
@@ -171,11 +177,12 @@ int main(int argc, char** argv) {
     else if (a == "--threads" && has_value) threads_text = argv[++i];
     else if (a == "--formats" && has_value) formats_text = argv[++i];
     else if (a == "--dir" && has_value) dir = argv[++i];
+    else if (a == "--copc-memory" && has_value) copc_memory = static_cast<uint64_t>(std::stod(argv[++i]) * 1048576.0);
     else if (a == "--keep") keep = true;
     else {
       std::fprintf(stderr,
                    "usage: copc_bench [--points 1e6,1e7] [--threads 1,2] "
-                   "[--formats las,laz,copc.laz] [--dir DIR] [--keep]\n");
+                   "[--formats las,laz,copc.laz] [--dir DIR] [--copc-memory MB] [--keep]\n");
       return 2;
     }
   }
@@ -187,7 +194,7 @@ int main(int argc, char** argv) {
     const uint64_t points = static_cast<uint64_t>(std::stod(p));
     for (const std::string& format : SplitList(formats_text)) {
       for (const std::string& t : SplitList(threads_text)) {
-        RunCase(dir + "/scan." + format, points, std::stoi(t), keep);
+        RunCase(dir + "/scan." + format, points, std::stoi(t), copc_memory, keep);
       }
     }
   }

@@ -54,23 +54,18 @@ TEST(AtomicFile, AFailedWriteIsReportedAndTheDestinationKept) {
   // A file-size limit makes writes fail (EFBIG) the way a full disk does (ENOSPC), as any user.
   TempDir dir;
   WriteFileAtomic(dir.File("keep"), "precious");
-  struct rlimit old_limit;
-  getrlimit(RLIMIT_FSIZE, &old_limit);
-  void (*old_handler)(int) = signal(SIGXFSZ, SIG_IGN);
-  struct rlimit limit = old_limit;
-  limit.rlim_cur = 1 << 20;
-  setrlimit(RLIMIT_FSIZE, &limit);
   std::string error;
-  try {
-    AtomicFile f(dir.File("keep"));
-    const std::string block(1 << 16, 'x');
-    for (int i = 0; i < 64; ++i) f.Write(block);
-    f.Commit();
-  } catch (const InputError& e) {
-    error = e.what();
+  {
+    const testing::FileSizeLimit limit(1 << 20);
+    try {
+      AtomicFile f(dir.File("keep"));
+      const std::string block(1 << 16, 'x');
+      for (int i = 0; i < 64; ++i) f.Write(block);
+      f.Commit();
+    } catch (const InputError& e) {
+      error = e.what();
+    }
   }
-  setrlimit(RLIMIT_FSIZE, &old_limit);
-  signal(SIGXFSZ, old_handler);
   EXPECT_NE(error.find("write failed"), std::string::npos) << error;
   EXPECT_NE(error.find("destination is unchanged"), std::string::npos) << error;
   EXPECT_EQ(ReadBytes(dir.File("keep")), "precious");

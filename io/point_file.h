@@ -111,6 +111,11 @@ struct CopcWriteOptions {
   // children one level down, for tests).
   int page_levels = 4;
   int min_page_nodes = 50;
+  // The memory the records may take until Close() builds the octree (about the record length
+  // + 16 bytes a point); beyond it they are spilled to a temporary folder beside the file (its
+  // disk needs about twice the records' size) and the octree is built from there, the same
+  // bytes. 0: half this machine's physical memory.
+  uint64_t memory_bytes = 0;
   void Check() const;
 };
 
@@ -128,7 +133,8 @@ struct PointWriteOptions {
   std::string columns;
   CopcWriteOptions copc;
   // The work Close() does after the last Write, by stage, as (stage, done, total): a COPC
-  // file's "octree" (points whose node is settled, of all) then "chunks" (points compressed).
+  // file's "octree" (points placed in their buckets, of all) then "chunks" (points whose node is
+  // built and compressed).
   // Called on the thread that calls Close(); null: not reported.
   StageProgressCallback close_progress;
   void Check() const;

@@ -20,6 +20,7 @@
 #include "core/interrupt.h"
 #include "core/parallel.h"
 #include "core/rng.h"
+#include "core/spill_file.h"
 #include "render/morton_sort.h"
 #include "render/pack_input.h"
 #include "render/pack_records.h"
@@ -168,9 +169,9 @@ class Packer {
     int k = 1;
     while (k < 3 && level + k < kMortonBits && count >> (3 * k) > o_.memory_points / 2) ++k;
     const size_t cells = size_t{1} << (3 * k);
-    std::vector<std::unique_ptr<CellFile<P>>> files(cells);
+    std::vector<std::unique_ptr<SpillRecords<P>>> files(cells);
     const std::string stem = dir_ + "/cell-L" + std::to_string(level) + "-" + std::to_string(spill_id_++) + "-";
-    for (size_t c = 0; c < cells; ++c) files[c] = std::make_unique<CellFile<P>>(stem + std::to_string(c) + ".tmp");
+    for (size_t c = 0; c < cells; ++c) files[c] = std::make_unique<SpillRecords<P>>(stem + std::to_string(c) + ".tmp");
     UninitVector<P> batch;
     UninitVector<P> grouped;
     UninitVector<uint16_t> cell;
@@ -209,7 +210,7 @@ class Packer {
       });
     }
     for (size_t c = 0; c < cells; ++c) {
-      CellFile<P>& f = *files[c];
+      SpillRecords<P>& f = *files[c];
       const uint64_t n = f.count();
       if (n == 0) {
         files[c].reset();
@@ -219,8 +220,8 @@ class Packer {
         {
           // Mapped, not copied out of the page cache; the file is deleted as soon as it is
           // sorted, so disk stays ~ one copy of the input.
-          const typename CellFile<P>::Mapping mapped = f.Map();
-          AddCell(mapped.points(), static_cast<size_t>(n), level + k);
+          const SpillFile::Mapping mapped = f.Map();
+          AddCell(reinterpret_cast<const P*>(mapped.data()), static_cast<size_t>(n), level + k);
         }
         files[c].reset();
       } else {

@@ -1,11 +1,8 @@
 // The packer's intermediate points (render/archive_pack.cc), private to it: the three record
-// forms a point takes between reading and quantizing, the Morton grid over the archive's bounds,
-// and the cell files of the external sort.
+// forms a point takes between reading and quantizing, and the Morton grid over the archive's
+// bounds (the external sort's cell files are core/spill_file.h's).
 #pragma once
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -87,74 +84,6 @@ struct MortonGrid {
 
 // The key of a point at a level: the code's top 3 * levels bits.
 inline uint64_t Prefix(uint64_t code, int levels) { return levels == 0 ? 0 : code >> (63 - 3 * levels); }
-
-template <typename P>
-class CellFile {
- public:
-  explicit CellFile(std::string path) : path_(std::move(path)) {}
-  ~CellFile() {
-    if (fd_ >= 0) close(fd_);
-    if (!path_.empty()) unlink(path_.c_str());
-  }
-  // Appends n points to the file.
-  void Append(const P* points, size_t n) {
-    if (n == 0) return;
-    if (fd_ < 0) {
-      fd_ = open(path_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-      if (fd_ < 0) throw InputError(path_, "", std::string("cannot create cell file: ") + std::strerror(errno));
-    }
-    const char* p = reinterpret_cast<const char*>(points);
-    size_t left = n * sizeof(P);
-    while (left > 0) {
-      const ssize_t w = write(fd_, p, left);
-      if (w < 0 && errno == EINTR) continue;
-      if (w <= 0) throw InputError(path_, "", std::string("cannot write cell file: ") + std::strerror(errno));
-      p += w, left -= static_cast<size_t>(w);
-    }
-    count_ += n;
-  }
-  uint64_t count() const { return count_; }
-  // The flushed points, memory-mapped (read-only) while the Mapping lives.
-  class Mapping {
-   public:
-    Mapping(void* data, size_t bytes) : data_(data), bytes_(bytes) {}
-    ~Mapping() {
-      if (data_) munmap(data_, bytes_);
-    }
-    Mapping(const Mapping&) = delete;
-    Mapping& operator=(const Mapping&) = delete;
-    const P* points() const { return static_cast<const P*>(data_); }
-
-   private:
-    void* data_;
-    size_t bytes_;
-  };
-  Mapping Map() const {
-    const size_t bytes = static_cast<size_t>(count_) * sizeof(P);
-    if (bytes == 0) return Mapping(nullptr, 0);
-    void* p = mmap(nullptr, bytes, PROT_READ, MAP_PRIVATE, fd_, 0);
-    if (p == MAP_FAILED) throw InputError(path_, "", std::string("cannot map cell file: ") + std::strerror(errno));
-    madvise(p, bytes, MADV_SEQUENTIAL);
-    return Mapping(p, bytes);
-  }
-  // Reads points [from, from + n).
-  void Read(uint64_t from, size_t n, P* out) const {
-    size_t left = n * sizeof(P);
-    char* p = reinterpret_cast<char*>(out);
-    uint64_t offset = from * sizeof(P);
-    while (left > 0) {
-      const ssize_t got = pread(fd_, p, left, static_cast<off_t>(offset));
-      if (got < 0 && errno == EINTR) continue;
-      if (got <= 0) throw InputError(path_, "byte " + std::to_string(offset), "cannot read cell file back");
-      p += got, left -= static_cast<size_t>(got), offset += static_cast<uint64_t>(got);
-    }
-  }
-
- private:
-  std::string path_;
-  int fd_ = -1;
-  uint64_t count_ = 0;
-};
 
 // Quantizes points[0, n) on a chunk's quantizer into words[0, n) (ChunkQuantizer::Encode).
 // Compiled for AVX2 as well (the loader picks), where Encode's rounding is one instruction rather

@@ -342,24 +342,36 @@ TEST(Fault, AnInterruptedBuildLeavesFinishedFilesAndResumes) {
 
 // LAZ and COPC (issue 38) go through the same temporary file as every writer: a full disk, a
 // read-only folder and an interrupt mid-write leave the earlier output under the target name and
-// no temporary. (The COPC writer holds the points until Close(), so its writes all come last.)
+// no temporary. (The COPC writer holds the points until Close(), so its writes all come last;
+// spilled, its records go to a temporary folder beside the file first.)
 TEST(Fault, LazAndCopcOnAFullDiskOrInterruptedKeepTheEarlierOutput) {
   TempDir dir;
   WriteCloud(dir.File("in.ply"), 600000, 7);  // ~3 MB of LAZ: more than the 1 MiB limit
-  for (const std::string name : {"out.laz", "out.copc.laz"}) {
+  // A COPC file's records in memory, or spilled beside it (a budget of 1 MB: its spill then
+  // meets the full disk first, and its folder is a temporary too).
+  const std::vector<std::vector<std::string>> outputs = {
+      {"out.laz"}, {"out.copc.laz"}, {"spilled.copc.laz", "--copc-memory", "1"}};
+  for (const std::vector<std::string>& output : outputs) {
+    const std::string& name = output[0];
     SCOPED_TRACE(name);
     const std::string out = dir.File(name);
+    std::vector<std::string> args{"convert", dir.File("in.ply"), out};
+    args.insert(args.end(), output.begin() + 1, output.end());
     WriteBytes(out, "an earlier output\n");
-    const auto [code, err] = RunToEnd({"convert", dir.File("in.ply"), out}, LogDir(dir), {}, LimitFileSize);
+    const auto [code, err] = RunToEnd(args, LogDir(dir), {}, LimitFileSize);
     EXPECT_EQ(code, 2) << err;
     EXPECT_TRUE(Contains(err, out)) << err;
-    EXPECT_TRUE(Contains(err, "write failed: File too large")) << err;
-    EXPECT_TRUE(Contains(err, "the destination is unchanged")) << err;
+    if (output.size() > 1) {
+      EXPECT_TRUE(Contains(err, "cannot write a spill file: File too large")) << err;
+    } else {
+      EXPECT_TRUE(Contains(err, "write failed: File too large")) << err;
+      EXPECT_TRUE(Contains(err, "the destination is unchanged")) << err;
+    }
     EXPECT_TRUE(ReadBytes(out) == "an earlier output\n");
     EXPECT_TRUE(Temporaries(dir.path()).empty());
 
     // Interrupted (SIGINT through the real handler) once 300,000 bytes are written.
-    Process p({"convert", dir.File("in.ply"), out}, LogDir(dir), {"CANDI_TEST_INTERRUPT_AT_BYTE=300000"});
+    Process p(args, LogDir(dir), {"CANDI_TEST_INTERRUPT_AT_BYTE=300000"});
     const int status = p.Wait();
     const std::string interrupted = p.Stderr();
     ASSERT_TRUE(WIFSIGNALED(status)) << "the write ended before the interrupt: " << interrupted;
@@ -369,11 +381,15 @@ TEST(Fault, LazAndCopcOnAFullDiskOrInterruptedKeepTheEarlierOutput) {
     EXPECT_TRUE(Temporaries(dir.path()).empty());
 
     // Unlimited, the same command writes the file in full.
-    const auto [ok, ok_err] = RunToEnd({"convert", dir.File("in.ply"), out}, LogDir(dir));
+    const auto [ok, ok_err] = RunToEnd(args, LogDir(dir));
     ASSERT_EQ(ok, 0) << ok_err;
     EXPECT_GT(fs::file_size(out), size_t{1} << 20);
     EXPECT_EQ(io::ReadPointCloud(out).size(), 600000u);
+    EXPECT_TRUE(Temporaries(dir.path()).empty());
   }
+  EXPECT_TRUE(ReadBytes(dir.File("out.copc.laz")).substr(94) ==
+              ReadBytes(dir.File("spilled.copc.laz")).substr(94))
+      << "spilled or in memory, the same file (but the creation date)";
 
   // A real full disk (a 1 MiB tmpfs) where the tests may mount one.
   const SmallDisk small(dir.File("disk"));

@@ -21,6 +21,14 @@ namespace util = ::candi::testing;
 
 const Eigen::Vector3d kScale = Eigen::Vector3d::Constant(0.001);
 
+CopcRecords InMemory(const std::vector<uint8_t>& records, size_t n, const laz::Vlr& vlr) {
+  CopcRecords in;
+  in.data = records.data();
+  in.n = n;
+  in.record_length = vlr.record_length();
+  return in;
+}
+
 struct Written {
   std::vector<uint8_t> bytes;
   CopcPointData data;
@@ -31,8 +39,7 @@ Written Write(const std::vector<uint8_t>& records, size_t n, const laz::Vlr& vlr
   Written w;
   tbb::task_arena(threads).execute([&] {
     w.data = WriteCopcNodes(
-        options, records.data(), n, vlr.record_length(), kScale, Eigen::Vector3d::Zero(), nullptr,
-        vlr, 1000,
+        options, InMemory(records, n, vlr), kScale, Eigen::Vector3d::Zero(), nullptr, vlr, 1000,
         [&](const uint8_t* p, size_t size) { w.bytes.insert(w.bytes.end(), p, p + size); });
   });
   return w;
@@ -109,7 +116,7 @@ TEST(CopcChunks, ASinkThatFailsEndsTheWritingThere) {
   for (int threads : {1, 2}) {
     int calls = 0;
     tbb::task_arena(threads).execute([&] {
-      EXPECT_THROW(WriteCopcNodes(options, records.data(), n, vlr.record_length(), kScale,
+      EXPECT_THROW(WriteCopcNodes(options, InMemory(records, n, vlr), kScale,
                                   Eigen::Vector3d::Zero(), nullptr, vlr, 0,
                                   [&](const uint8_t*, size_t) {
                                     if (++calls == 3) throw std::runtime_error("disk full");

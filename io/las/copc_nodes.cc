@@ -12,12 +12,16 @@
 #include <memory>
 #include <mutex>
 #include <numeric>
+#include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "core/binary_file.h"
 #include "core/check.h"
 #include "core/parallel.h"
+#include "core/spill_file.h"
+#include "io/las/copc_buckets.h"
 #include "io/las/copc_octree.h"
 #include "io/las/copc_octree_internal.h"
 
@@ -27,150 +31,15 @@ namespace {
 
 using namespace copc_internal;
 
-// Buckets are nodes of levels 0..kBucketLevel; the points' cells there are counted. A node above
-// a bucket (level < kBucketLevel) has its cells (kCellBits levels down) whole in the bucket.
-constexpr int kBucketLevel = 7;
-static_assert(kBucketLevel <= kCellBits);
-constexpr uint32_t kCells = uint32_t{1} << (3 * kBucketLevel);
-
-// The nodes that can be above a bucket (levels 0..kBucketLevel - 1) by a flat index: level k's
-// 8^k (by Morton code) after the levels above.
-uint32_t LevelStart(int level) { return ((uint32_t{1} << (3 * level)) - 1) / 7; }
-constexpr uint32_t kAboveNodes = (kCells - 1) / 7;
-uint32_t AboveIndex(int level, uint32_t code) { return LevelStart(level) + code; }
-int LevelOfIndex(uint32_t index) {
-  int level = 0;
-  while (level + 1 < kBucketLevel && LevelStart(level + 1) <= index) ++level;
-  return level;
-}
-
 // node_of of a point that a node above its bucket keeps, at level k: kAbove + k.
 constexpr uint32_t kAbove = 0xFFFFFF00u;
-constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
-
-// The key of the node of Morton code `code` at `level` (its octants, level 1's highest).
-CopcKey KeyOf(int level, uint32_t code) {
-  CopcKey key{level, 0, 0, 0};
-  for (int l = level - 1; l >= 0; --l) {
-    const uint32_t o = code >> (3 * l) & 7;
-    key.x = 2 * key.x + static_cast<int32_t>(o & 1);
-    key.y = 2 * key.y + static_cast<int32_t>(o >> 1 & 1);
-    key.z = 2 * key.z + static_cast<int32_t>(o >> 2 & 1);
-  }
-  return key;
-}
-
-// A bucket: node (level, code) and its points, list[begin, end) in input order.
-struct Bucket {
-  int level = 0;
-  uint32_t code = 0;
-  size_t begin = 0, end = 0;
-  size_t size() const { return end - begin; }
-};
-
-// The code of the bucket's ancestor at `level` (<= its level).
-uint32_t AncestorCode(const Bucket& b, int level) { return b.code >> (3 * (b.level - level)); }
-
-// The records' X, Y, Z.
-void LoadXyz(const uint8_t* record, int32_t* xyz) {
-  for (int k = 0; k < 3; ++k) xyz[k] = LoadLE<int32_t>(record + 4 * k);
-}
-
-// The deepest level a bucket may have: kBucketLevel, or the first level whose cells are
-// narrower than a LAS unit (whose nodes keep all their points: no node above a bucket may).
-int DeepestBucketLevel(const CopcOctree& tree, double min_scale) {
-  for (int level = 0; level < kBucketLevel; ++level) {
-    if (std::ldexp(tree.spacing, -level) < min_scale) return level;
-  }
-  return kBucketLevel;
-}
-
-// Cuts the n points into buckets (in Morton order): every point's cell at kBucketLevel counted
-// (by parallel blocks into each thread's counts), the nodes of more than max_points points split
-// down to max_level; their points listed into `list` in input order.
-std::vector<Bucket> CutBuckets(const uint8_t* records, size_t n, size_t length, const Cube& cube,
-                               size_t max_points, int max_level, uint32_t* list,
-                               const std::function<void(uint64_t, uint64_t)>& progress) {
-  const std::unique_ptr<uint32_t[]> cells(new uint32_t[n]);
-  tbb::enumerable_thread_specific<std::vector<uint32_t>> local_counts(
-      [] { return std::vector<uint32_t>(kCells, 0); });
-  ParallelFor(size_t{0}, (n + kBlock - 1) / kBlock, [&](size_t b) {
-    std::vector<uint32_t>& counts = local_counts.local();
-    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
-      int32_t xyz[3];
-      LoadXyz(records + i * length, xyz);
-      const uint32_t c =
-          static_cast<uint32_t>(MortonCode(cube(xyz), 0) >> (3 * (kKeyLevels - kBucketLevel)));
-      cells[i] = c;
-      ++counts[c];
-    }
-  });
-  if (progress) progress(n / 3, n);
-  // Each level's counts, from the deepest up.
-  std::array<std::vector<uint64_t>, kBucketLevel + 1> counts;
-  counts[kBucketLevel].assign(kCells, 0);
-  for (const std::vector<uint32_t>& c : local_counts) {
-    for (uint32_t u = 0; u < kCells; ++u) counts[kBucketLevel][u] += c[u];
-  }
-  for (int level = kBucketLevel - 1; level >= 0; --level) {
-    counts[level].assign(size_t{1} << (3 * level), 0);
-    for (size_t u = 0; u < counts[level + 1].size(); ++u)
-      counts[level][u >> 3] += counts[level + 1][u];
-  }
-  std::vector<Bucket> buckets;
-  auto cut = [&](auto&& self, int level, uint32_t code) -> void {
-    const uint64_t c = counts[level][code];
-    if (c == 0) return;
-    if (level == max_level || c <= max_points) {
-      buckets.push_back({level, code, 0, 0});
-      return;
-    }
-    for (uint32_t o = 0; o < 8; ++o) self(self, level + 1, code << 3 | o);
-  };
-  cut(cut, 0, 0);
-  std::vector<uint32_t> bucket_of(kCells, kNone);
-  for (size_t j = 0; j < buckets.size(); ++j) {
-    const int shift = 3 * (kBucketLevel - buckets[j].level);
-    std::fill(bucket_of.begin() + (size_t{buckets[j].code} << shift),
-              bucket_of.begin() + (size_t{buckets[j].code + 1} << shift), static_cast<uint32_t>(j));
-  }
-  // The lists: blocks' counts of each bucket, then each block's points to their places (a
-  // bucket's points in input order, whatever the thread count). At most 64 blocks, so the
-  // counts (blocks x buckets) stay small however large n is.
-  const size_t block = std::max(size_t{1} << 20, (n + 63) / 64);
-  const size_t blocks = (n + block - 1) / block, m = buckets.size();
-  std::vector<uint64_t> at(blocks * m, 0);
-  ParallelFor(size_t{0}, blocks, [&](size_t b) {
-    uint64_t* count = at.data() + b * m;
-    for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) ++count[bucket_of[cells[i]]];
-  });
-  size_t next = 0;
-  for (size_t j = 0; j < m; ++j) {
-    buckets[j].begin = next;
-    for (size_t b = 0; b < blocks; ++b) {
-      const uint64_t c = at[b * m + j];
-      at[b * m + j] = next;
-      next += c;
-    }
-    buckets[j].end = next;
-  }
-  CANDI_CHECK_EQ(next, n) << "COPC buckets";
-  if (progress) progress(2 * (n / 3), n);
-  ParallelFor(size_t{0}, blocks, [&](size_t b) {
-    uint64_t* to = at.data() + b * m;
-    for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {
-      list[to[bucket_of[cells[i]]]++] = static_cast<uint32_t>(i);
-    }
-  });
-  return buckets;
-}
 
 // A bucket's working memory (its records, their elements and nodes, the records in node order),
 // kept from bucket to bucket; a pool hands each bucket in the works its own.
 struct Scratch {
   std::unique_ptr<uint8_t[]> records, ordered;
   std::unique_ptr<Element[]> elements;
-  std::unique_ptr<uint32_t[]> node_of, indices;
+  std::unique_ptr<uint32_t[]> node_of, indices, at;  // at: where in the group each record is
   size_t capacity = 0, record_bytes = 0;
   void Reserve(size_t points, size_t length) {
     if (points > capacity) {
@@ -178,6 +47,7 @@ struct Scratch {
       elements.reset(new Element[capacity]);
       node_of.reset(new uint32_t[capacity]);
       indices.reset(new uint32_t[capacity]);
+      at.reset(new uint32_t[capacity]);
     }
     if (points * length > record_bytes) {
       record_bytes = std::max(points * length, record_bytes + record_bytes / 2);
@@ -206,18 +76,27 @@ class ScratchPool {
   std::vector<std::unique_ptr<Scratch>> free_;
 };
 
+// A point that a node above the buckets keeps (or may yet take): key = the node's AboveIndex <<
+// 32 | the point's index (in input order); `at`, where its record is (an index into the group's
+// records while its bucket is built, then into the records the nodes above are read from).
+struct AboveEntry {
+  uint64_t key;
+  uint64_t at;
+  bool operator<(const AboveEntry& o) const { return key < o.key; }
+};
+
 // A bucket built: its own nodes (level by level, each level by (x, y, z)) encoded, the points
 // that nodes above it keep, and what the rules above need.
 struct BucketNodes {
   std::vector<CopcKey> keys;
   std::vector<uint64_t> sizes;
   std::vector<std::vector<uint8_t>> encoded;
-  std::vector<uint64_t> above;  // AboveIndex << 32 | point index, of each point kept above
+  std::vector<AboveEntry> above;              // each point kept above
   std::array<uint64_t, kBucketLevel> kept{};  // points kept at each level above the bucket
   // Held: a node above may yet fold the bucket's points into itself; then its nodes' points
-  // (local, in node order) go there too.
+  // (key: the point's index alone, in node order) go there too.
   bool held = false;
-  std::vector<uint32_t> local;
+  std::vector<AboveEntry> local;
 };
 
 // Buckets of at least this many points are built on several threads.
@@ -225,18 +104,23 @@ constexpr size_t kParallelBucket = size_t{1} << 20;
 
 class NodeBuilder {
  public:
-  NodeBuilder(const CopcOctreeOptions& options, const uint8_t* records, size_t length,
-              const Cube& cube, const CopcOctree& tree, double min_scale, const uint32_t* list,
-              const CopcNodeEncoder& encode)
+  NodeBuilder(const CopcOctreeOptions& options, size_t length, const Cube& cube,
+              const CopcOctree& tree, double min_scale, const CopcNodeEncoder& encode)
       : options_(options),
-        records_(records),
         length_(length),
         cube_(cube),
         tree_(tree),
         min_scale_(min_scale),
-        list_(list),
         encode_(encode),
         sort_(options.sort_scratch_points) {}
+
+  // The group of buckets built next: its records, its buckets' lists (indices into records) and
+  // each record's index in input order (null: the records are all n, in input order).
+  void SetGroup(const uint8_t* records, const uint32_t* list, const uint32_t* global) {
+    records_ = records;
+    list_ = list;
+    global_ = global;
+  }
 
   // Builds bucket `b` into *out.
   void Build(const Bucket& b, BucketNodes* out) {
@@ -287,7 +171,10 @@ class NodeBuilder {
       encode_(out->keys[j], s->ordered.get() + first[j] * length_, s->indices.get() + first[j],
               out->sizes[j], &out->encoded[j]);
     });
-    if (out->held) out->local.assign(s->indices.get(), s->indices.get() + first[nodes]);
+    if (out->held) {
+      out->local.resize(first[nodes]);
+      for (size_t j = 0; j < first[nodes]; ++j) out->local[j] = {s->indices[j], s->at[j]};
+    }
     pool_.Give(std::move(s));
   }
 
@@ -343,15 +230,16 @@ class NodeBuilder {
     for (size_t j = 0; j < nodes; ++j) next[j + 1] = next[j] + out->sizes[j];
     const uint32_t* index = list_ + b.begin;
     for (size_t j = 0; j < m; ++j) {
-      const uint32_t id = s.node_of[j];
+      const uint32_t id = s.node_of[j], i = global_ ? global_[index[j]] : index[j];
       if (id >= kAbove) {
         const int k = static_cast<int>(id - kAbove);
-        out->above.push_back(uint64_t{AboveIndex(k, AncestorCode(b, k))} << 32 | index[j]);
+        out->above.push_back({uint64_t{AboveIndex(k, AncestorCode(b, k))} << 32 | i, index[j]});
         continue;
       }
       const size_t at = next[id]++;
       std::memcpy(s.ordered.get() + at * length_, s.records.get() + j * length_, length_);
-      s.indices[at] = index[j];
+      s.indices[at] = i;
+      s.at[at] = index[j];
     }
   }
 
@@ -365,13 +253,13 @@ class NodeBuilder {
   }
 
   const CopcOctreeOptions& options_;
-  const uint8_t* const records_;
   const size_t length_;
   const Cube cube_;
   const CopcOctree& tree_;
   const double min_scale_;
-  const uint32_t* const list_;
   const CopcNodeEncoder& encode_;
+  const uint8_t* records_ = nullptr;
+  const uint32_t *list_ = nullptr, *global_ = nullptr;
   Sorter sort_;
   ScratchPool pool_;
 };
@@ -414,10 +302,10 @@ std::vector<uint32_t> FoldsAbove(const CopcOctreeOptions& options,
   return fold;
 }
 
-// The nodes above the buckets (their points: `above`, sorted), encoded by parallel batches and
-// handed on level by level, each level in Morton order.
+// The nodes above the buckets (their points: `above`, sorted; a point's record at records + at *
+// length), encoded by parallel batches and handed on level by level, each level in Morton order.
 void EncodeAbove(const CopcOctreeOptions& options, const uint8_t* records, size_t length,
-                 const std::vector<uint64_t>& above, const CopcNodeEncoder& encode,
+                 const std::vector<AboveEntry>& above, const CopcNodeEncoder& encode,
                  ScratchPool* pool,
                  const std::function<void(const CopcKey&, uint64_t, std::vector<uint8_t>*)>& sink) {
   struct Group {
@@ -426,12 +314,16 @@ void EncodeAbove(const CopcOctreeOptions& options, const uint8_t* records, size_
   };
   std::vector<Group> groups;
   for (size_t a = 0; a < above.size();) {
-    const uint32_t node = static_cast<uint32_t>(above[a] >> 32);
+    const uint32_t node = static_cast<uint32_t>(above[a].key >> 32);
     size_t b = a;
-    while (b < above.size() && static_cast<uint32_t>(above[b] >> 32) == node) ++b;
+    while (b < above.size() && static_cast<uint32_t>(above[b].key >> 32) == node) ++b;
     groups.push_back({node, a, b});
     a = b;
   }
+  auto key_of = [](uint32_t node) {
+    const int level = LevelOfIndex(node);
+    return KeyOf(level, node - LevelStart(level));
+  };
   std::vector<std::vector<uint8_t>> encoded;
   for (size_t first = 0, count = 0; first < groups.size(); first += count) {
     size_t points = 0;
@@ -445,24 +337,264 @@ void EncodeAbove(const CopcOctreeOptions& options, const uint8_t* records, size_
       std::unique_ptr<Scratch> s = pool->Take();
       s->Reserve(m, length);
       for (size_t k = 0; k < m; ++k) {
-        const uint32_t i = static_cast<uint32_t>(above[g.begin + k]);
-        s->indices[k] = i;
-        std::memcpy(s->ordered.get() + k * length, records + size_t{i} * length, length);
+        const AboveEntry& e = above[g.begin + k];
+        s->indices[k] = static_cast<uint32_t>(e.key);
+        std::memcpy(s->ordered.get() + k * length, records + e.at * length, length);
       }
-      const int level = LevelOfIndex(g.node);
-      encode(KeyOf(level, g.node - LevelStart(level)), s->ordered.get(), s->indices.get(), m,
-             &encoded[j]);
+      encode(key_of(g.node), s->ordered.get(), s->indices.get(), m, &encoded[j]);
       pool->Give(std::move(s));
     });
     for (size_t j = 0; j < count; ++j) {
       const Group& g = groups[first + j];
-      const int level = LevelOfIndex(g.node);
-      sink(KeyOf(level, g.node - LevelStart(level)), g.end - g.begin, &encoded[j]);
+      sink(key_of(g.node), g.end - g.begin, &encoded[j]);
     }
   }
 }
 
+// The build, by groups of consecutive buckets (one of all of them when the records are in
+// memory): each group's buckets built in parallel batches and handed on in order, except those
+// held; then the rules above the buckets, the held buckets, and the nodes above.
+class Pipeline {
+ public:
+  Pipeline(const CopcOctreeOptions& options, size_t length, const Cube& cube, CopcOctree* tree,
+           double min_scale, const CopcNodeEncoder& encode, const CopcNodeSink& sink,
+           const std::function<void(uint64_t, uint64_t)>& encoding, size_t n)
+      : options_(options),
+        length_(length),
+        tree_(tree),
+        encode_(encode),
+        sink_(sink),
+        encoding_(encoding),
+        n_(n),
+        builder_(options, length, cube, *tree, min_scale, encode),
+        reached_(kAboveNodes, 0),
+        is_above_(kAboveNodes, 0) {}
+
+  // Builds buckets[0, count) of a group (records, list and global as NodeBuilder::SetGroup).
+  // store: where the records of points the nodes above keep, or may take, are copied (null: they
+  // are read where they are at the end, `records` being all n in input order).
+  void Group(const uint8_t* records, const uint32_t* list, const uint32_t* global,
+             const Bucket* buckets, size_t count, SpillFile* store) {
+    builder_.SetGroup(records, list, global);
+    if (encoding_) encoding_(settled_, n_);
+    std::vector<BucketNodes> built;
+    for (size_t first = 0, batch = 0; first < count; first += batch) {
+      size_t points = 0;
+      for (batch = 0; first + batch < count && points < options_.batch_points; ++batch) {
+        points += buckets[first + batch].size();
+      }
+      built.assign(batch, {});
+      ParallelFor(size_t{0}, batch,
+                  [&](size_t j) { builder_.Build(buckets[first + j], &built[j]); });
+      for (size_t j = 0; j < batch; ++j) Take(buckets[first + j], &built[j], records, store);
+      if (encoding_) encoding_(settled_, n_);
+    }
+  }
+
+  // The rules above the buckets, the held buckets, then the nodes above (their records at
+  // records + at * length).
+  void Finish(const uint8_t* records) {
+    const std::vector<uint32_t> fold = FoldsAbove(options_, reached_, is_above_);
+    auto folded_at = [&](const Bucket& b) {  // the outermost level above b that folds, or -1
+      for (int k = 0; k < b.level; ++k) {
+        if (fold[AboveIndex(k, AncestorCode(b, k))] != kNone) return k;
+      }
+      return -1;
+    };
+    for (const Bucket& b : written_) {
+      CANDI_CHECK(folded_at(b) < 0)
+          << "COPC bucket " << b.level << "-" << b.code << " written before a node above it folded";
+    }
+    for (auto& [b, nodes] : held_) {
+      const int k = folded_at(b);
+      if (k < 0) {
+        HandOn(&nodes);
+        continue;
+      }
+      // Every point of the bucket reaching level k goes to the node its fold names.
+      const uint64_t to = uint64_t{fold[AboveIndex(k, AncestorCode(b, k))]} << 32;
+      for (const AboveEntry& e : nodes.above) {
+        const bool higher = LevelOfIndex(static_cast<uint32_t>(e.key >> 32)) < k;
+        above_.push_back(higher ? e : AboveEntry{to | (e.key & 0xFFFFFFFFu), e.at});
+      }
+      for (const AboveEntry& e : nodes.local) above_.push_back({to | e.key, e.at});
+    }
+    held_.clear();
+    if (encoding_) encoding_(settled_, n_);
+    // Distinct keys: one order on any thread count.
+    tbb::parallel_sort(above_.begin(), above_.end());
+    EncodeAbove(options_, records, length_, above_, encode_, builder_.pool(),
+                [&](const CopcKey& key, uint64_t count, std::vector<uint8_t>* encoded) {
+                  tree_->nodes.push_back({key, count, {}});
+                  sink_(key, count, encoded);
+                  settled_ += count;
+                  if (encoding_) encoding_(settled_, n_);
+                });
+    CANDI_CHECK_EQ(settled_, uint64_t{n_}) << "COPC octree points";
+  }
+
+ private:
+  // A bucket built: its counts into the rules above; its nodes handed on, or the whole held.
+  void Take(const Bucket& b, BucketNodes* nodes, const uint8_t* records, SpillFile* store) {
+    uint64_t reaching = b.size();
+    for (int k = 0; k < b.level; ++k) {
+      const uint32_t i = AboveIndex(k, AncestorCode(b, k));
+      is_above_[i] = 1;
+      reached_[i] += reaching;
+      reaching -= nodes->kept[k];
+    }
+    Store(&nodes->above, records, store);
+    if (nodes->held) {
+      Store(&nodes->local, records, store);
+      held_.emplace_back(b, std::move(*nodes));
+      return;
+    }
+    written_.push_back(b);
+    HandOn(nodes);
+  }
+
+  void HandOn(BucketNodes* nodes) {
+    for (size_t k = 0; k < nodes->keys.size(); ++k) {
+      tree_->nodes.push_back({nodes->keys[k], nodes->sizes[k], {}});
+      sink_(nodes->keys[k], nodes->sizes[k], &nodes->encoded[k]);
+      settled_ += nodes->sizes[k];
+    }
+    above_.insert(above_.end(), nodes->above.begin(), nodes->above.end());
+  }
+
+  // The entries' records copied to the store (their `at` then where they are in it).
+  void Store(std::vector<AboveEntry>* entries, const uint8_t* records, SpillFile* store) {
+    if (!store) return;
+    std::vector<uint8_t> copied(entries->size() * length_);
+    for (size_t k = 0; k < entries->size(); ++k) {
+      AboveEntry& e = (*entries)[k];
+      std::memcpy(copied.data() + k * length_, records + e.at * length_, length_);
+      e.at = store->size() / length_ + k;
+    }
+    store->Append(copied.data(), copied.size());
+  }
+
+  const CopcOctreeOptions& options_;
+  const size_t length_;
+  CopcOctree* const tree_;
+  const CopcNodeEncoder& encode_;
+  const CopcNodeSink& sink_;
+  const std::function<void(uint64_t, uint64_t)>& encoding_;
+  const size_t n_;
+  NodeBuilder builder_;
+  // What the rules above the buckets need: the points reaching each node above one, and which
+  // nodes are above one.
+  std::vector<uint64_t> reached_;
+  std::vector<uint8_t> is_above_;
+  std::vector<AboveEntry> above_;
+  std::vector<std::pair<Bucket, BucketNodes>> held_;
+  std::vector<Bucket> written_;
+  uint64_t settled_ = 0;
+};
+
 }  // namespace
+
+CopcOctree BuildCopcNodes(const CopcOctreeOptions& options, const CopcRecords& input,
+                          const Eigen::Vector3d& scale, const Eigen::Vector3d& offset,
+                          const CopcXyzBounds* xyz_bounds, const CopcNodeEncoder& encode,
+                          const CopcNodeSink& sink,
+                          const std::function<void(uint64_t, uint64_t)>& bucketing,
+                          const std::function<void(uint64_t, uint64_t)>& encoding) {
+  options.Check();
+  const size_t n = input.n, length = input.record_length;
+  CANDI_CHECK(n <= size_t{std::numeric_limits<uint32_t>::max()})
+      << "a COPC octree of " << n << " points (at most 2^32 - 1)";
+  CANDI_CHECK((input.data != nullptr) != (input.spill != nullptr) || n == 0)
+      << "COPC records: in memory or spilled";
+  CopcOctree tree;
+  CANDI_CHECK(!input.spill || input.spill->size() == uint64_t{n} * length) << "COPC spill size";
+  // A spill's bounds, when not given, from a pass over its runs.
+  CopcXyzBounds spill_bounds;
+  if (input.spill && !xyz_bounds && n > 0) {
+    spill_bounds[0].fill(std::numeric_limits<int32_t>::max());
+    spill_bounds[1].fill(std::numeric_limits<int32_t>::min());
+    SpillRuns runs(input.spill, length, /*discard=*/false);
+    const uint8_t* run;
+    size_t first, m;
+    while (runs.Next(&run, &first, &m)) {
+      for (size_t i = 0; i < m; ++i) {
+        int32_t xyz[3];
+        LoadXyz(run + i * length, xyz);
+        for (int k = 0; k < 3; ++k) {
+          spill_bounds[0][k] = std::min(spill_bounds[0][k], xyz[k]);
+          spill_bounds[1][k] = std::max(spill_bounds[1][k], xyz[k]);
+        }
+      }
+    }
+    xyz_bounds = &spill_bounds;
+  }
+  const uint8_t* all = input.data;
+  const Cube cube = RecordsCube(all, n, length, scale, offset, xyz_bounds, &tree);
+  if (n == 0) return tree;
+  const double min_scale = scale.cwiseAbs().minCoeff();
+  const int deepest = DeepestBucketLevel(tree, min_scale);
+  if (bucketing) bucketing(0, n);
+  Pipeline pipeline(options, length, cube, &tree, min_scale, encode, sink, encoding, n);
+  if (!input.spill) {
+    const std::unique_ptr<uint32_t[]> list(new uint32_t[n]);
+    std::vector<Bucket> buckets;
+    if (n <= options.bucket_points || deepest == 0) {
+      buckets.push_back({0, 0, 0, n});
+      std::iota(list.get(), list.get() + n, uint32_t{0});
+    } else {
+      const std::unique_ptr<uint32_t[]> cells(new uint32_t[n]);
+      std::vector<uint32_t> bucket_of;
+      CellCounter counter(cube);
+      counter.Add(all, n, length, cells.get());
+      buckets = ChooseBuckets(counter.Counts(), options.bucket_points, deepest, &bucket_of);
+      if (bucketing) bucketing(n / 2, n);
+      ListByBucket(cells.get(), n, bucket_of, 0, buckets.size(), buckets.data(), list.get());
+    }
+    if (bucketing) bucketing(n, n);
+    pipeline.Group(all, list.get(), nullptr, buckets.data(), buckets.size(), nullptr);
+    pipeline.Finish(all);
+    return tree;
+  }
+  // Spilled: the buckets from every cell's count, then group by group from files of their own.
+  CANDI_CHECK(input.memory_points > 0 && !input.spill_dir.empty()) << "COPC spill: no memory";
+  std::vector<uint32_t> bucket_of;
+  std::vector<Bucket> buckets;
+  {
+    CellCounter counter(cube);
+    SpillRuns runs(input.spill, length, /*discard=*/false);
+    const uint8_t* run;
+    size_t first, m;
+    while (runs.Next(&run, &first, &m)) counter.Add(run, m, length, nullptr);
+    buckets = ChooseBuckets(counter.Counts(), options.bucket_points, deepest, &bucket_of);
+  }
+  if (bucketing) bucketing(n / 3, n);
+  std::vector<GroupFiles> groups = RouteToGroups(input.spill, length, cube, buckets, bucket_of,
+                                                 input.memory_points, input.spill_dir);
+  if (bucketing) bucketing(n, n);
+  SpillFile above(input.spill_dir + "/above.records");
+  for (GroupFiles& g : groups) {
+    const SpillFile::Mapping records = g.records->Map(), indices = g.indices->Map();
+    const size_t m = records.size() / length;
+    std::unique_ptr<uint32_t[]> list(new uint32_t[m]);
+    {
+      const std::unique_ptr<uint32_t[]> cells(new uint32_t[m]);
+      ParallelFor(size_t{0}, (m + kBlock - 1) / kBlock, [&](size_t b) {
+        for (size_t i = b * kBlock; i < std::min(m, (b + 1) * kBlock); ++i) {
+          cells[i] = CellOf(records.data() + i * length, cube);
+        }
+      });
+      ListByBucket(cells.get(), m, bucket_of, g.first, g.count, buckets.data() + g.first,
+                   list.get());
+    }
+    pipeline.Group(records.data(), list.get(), reinterpret_cast<const uint32_t*>(indices.data()),
+                   buckets.data() + g.first, g.count, &above);
+    g.records.reset();
+    g.indices.reset();
+  }
+  const SpillFile::Mapping above_records = above.Map();
+  pipeline.Finish(above_records.data());
+  return tree;
+}
 
 CopcOctree BuildCopcNodes(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
                           size_t record_length, const Eigen::Vector3d& scale,
@@ -470,122 +602,20 @@ CopcOctree BuildCopcNodes(const CopcOctreeOptions& options, const uint8_t* recor
                           const CopcNodeEncoder& encode, const CopcNodeSink& sink,
                           const std::function<void(uint64_t, uint64_t)>& bucketing,
                           const std::function<void(uint64_t, uint64_t)>& encoding) {
-  options.Check();
-  CANDI_CHECK(n <= size_t{std::numeric_limits<uint32_t>::max()})
-      << "a COPC octree of " << n << " points (at most 2^32 - 1)";
-  CopcOctree tree;
-  const Cube cube = RecordsCube(records, n, record_length, scale, offset, xyz_bounds, &tree);
-  if (n == 0) return tree;
-  const double min_scale = scale.cwiseAbs().minCoeff();
-  if (bucketing) bucketing(0, n);
-  const std::unique_ptr<uint32_t[]> list(new uint32_t[n]);
-  const int deepest = DeepestBucketLevel(tree, min_scale);
-  std::vector<Bucket> buckets;
-  if (n <= options.bucket_points || deepest == 0) {
-    buckets.push_back({0, 0, 0, n});
-    std::iota(list.get(), list.get() + n, uint32_t{0});
-  } else {
-    buckets = CutBuckets(records, n, record_length, cube, options.bucket_points, deepest,
-                         list.get(), bucketing);
-  }
-  if (bucketing) bucketing(n, n);
-
-  auto hand_on = [&](const CopcKey& key, uint64_t count, std::vector<uint8_t>* encoded) {
-    tree.nodes.push_back({key, count, {}});
-    sink(key, count, encoded);
-  };
-  NodeBuilder builder(options, records, record_length, cube, tree, min_scale, list.get(), encode);
-  // What the rules above the buckets need: the points reaching each node above one, and which
-  // nodes are above one.
-  std::vector<uint64_t> reached(kAboveNodes, 0);
-  std::vector<uint8_t> is_above(kAboveNodes, 0);
-  std::vector<uint64_t> above;  // AboveIndex << 32 | point index
-  std::vector<std::pair<size_t, BucketNodes>> held;
-  std::vector<uint8_t> was_held(buckets.size(), 0);
-  uint64_t settled = 0;
-  if (encoding) encoding(0, n);
-  std::vector<BucketNodes> built;
-  for (size_t first = 0, count = 0; first < buckets.size(); first += count) {
-    size_t points = 0;
-    for (count = 0; first + count < buckets.size() && points < options.batch_points; ++count) {
-      points += buckets[first + count].size();
-    }
-    built.assign(count, {});
-    ParallelFor(size_t{0}, count, [&](size_t j) { builder.Build(buckets[first + j], &built[j]); });
-    for (size_t j = 0; j < count; ++j) {
-      const Bucket& b = buckets[first + j];
-      BucketNodes& nodes = built[j];
-      uint64_t reaching = b.size();
-      for (int k = 0; k < b.level; ++k) {
-        const uint32_t i = AboveIndex(k, AncestorCode(b, k));
-        is_above[i] = 1;
-        reached[i] += reaching;
-        reaching -= nodes.kept[k];
-      }
-      if (nodes.held) {
-        was_held[first + j] = 1;
-        held.emplace_back(first + j, std::move(nodes));
-        continue;
-      }
-      for (size_t k = 0; k < nodes.keys.size(); ++k) {
-        hand_on(nodes.keys[k], nodes.sizes[k], &nodes.encoded[k]);
-        settled += nodes.sizes[k];
-      }
-      above.insert(above.end(), nodes.above.begin(), nodes.above.end());
-    }
-    built.clear();
-    if (encoding) encoding(settled, n);
-  }
-  // The rules above the buckets. Only a held bucket can lie in a node that folds.
-  const std::vector<uint32_t> fold = FoldsAbove(options, reached, is_above);
-  auto folded_at = [&](const Bucket& b) {  // the outermost level above b that folds, or -1
-    for (int k = 0; k < b.level; ++k) {
-      if (fold[AboveIndex(k, AncestorCode(b, k))] != kNone) return k;
-    }
-    return -1;
-  };
-  for (size_t j = 0; j < buckets.size(); ++j) {
-    CANDI_CHECK(was_held[j] || folded_at(buckets[j]) < 0)
-        << "COPC bucket " << j << " written before a node above it folded";
-  }
-  for (auto& [j, nodes] : held) {
-    const Bucket& b = buckets[j];
-    const int k = folded_at(b);
-    if (k < 0) {
-      for (size_t i = 0; i < nodes.keys.size(); ++i) {
-        hand_on(nodes.keys[i], nodes.sizes[i], &nodes.encoded[i]);
-        settled += nodes.sizes[i];
-      }
-      above.insert(above.end(), nodes.above.begin(), nodes.above.end());
-      continue;
-    }
-    // Every point of the bucket reaching level k goes to the node its fold names.
-    const uint64_t to = uint64_t{fold[AboveIndex(k, AncestorCode(b, k))]} << 32;
-    for (uint64_t a : nodes.above) {
-      const bool higher = LevelOfIndex(static_cast<uint32_t>(a >> 32)) < k;
-      above.push_back(higher ? a : to | (a & 0xFFFFFFFFu));
-    }
-    for (uint32_t i : nodes.local) above.push_back(to | i);
-  }
-  if (encoding) encoding(settled, n);
-  held.clear();
-  tbb::parallel_sort(above.begin(), above.end());  // distinct values: one order on any threads
-  EncodeAbove(options, records, record_length, above, encode, builder.pool(),
-              [&](const CopcKey& key, uint64_t count, std::vector<uint8_t>* encoded) {
-                hand_on(key, count, encoded);
-                settled += count;
-                if (encoding) encoding(settled, n);
-              });
-  CANDI_CHECK_EQ(settled, uint64_t{n}) << "COPC octree points";
-  return tree;
+  CopcRecords input;
+  input.data = records;
+  input.n = n;
+  input.record_length = record_length;
+  return BuildCopcNodes(options, input, scale, offset, xyz_bounds, encode, sink, bucketing,
+                        encoding);
 }
 
-CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
-                           size_t record_length, const Eigen::Vector3d& scale,
-                           const Eigen::Vector3d& offset, const CopcXyzBounds* xyz_bounds) {
+CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const CopcRecords& input,
+                           const Eigen::Vector3d& scale, const Eigen::Vector3d& offset,
+                           const CopcXyzBounds* xyz_bounds) {
   std::vector<std::vector<uint64_t>> points;
   CopcOctree tree = BuildCopcNodes(
-      options, records, n, record_length, scale, offset, xyz_bounds,
+      options, input, scale, offset, xyz_bounds,
       [](const CopcKey&, const uint8_t*, const uint32_t* indices, size_t count,
          std::vector<uint8_t>* out) {
         out->resize(count * sizeof(uint32_t));
@@ -605,6 +635,16 @@ CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const uint8_t* reco
            std::tie(b.key.level, b.key.x, b.key.y, b.key.z);
   });
   return tree;
+}
+
+CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
+                           size_t record_length, const Eigen::Vector3d& scale,
+                           const Eigen::Vector3d& offset, const CopcXyzBounds* xyz_bounds) {
+  CopcRecords input;
+  input.data = records;
+  input.n = n;
+  input.record_length = record_length;
+  return BuildCopcOctree(options, input, scale, offset, xyz_bounds);
 }
 
 }  // namespace candi::io

@@ -45,9 +45,14 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
+
+namespace candi {
+class SpillFile;  // core/spill_file.h
+}  // namespace candi
 
 namespace candi::io {
 
@@ -107,13 +112,36 @@ using CopcNodeEncoder =
 using CopcNodeSink =
     std::function<void(const CopcKey& key, uint64_t count, std::vector<uint8_t>* encoded)>;
 
-// Builds the octree of n LAS records (record_length bytes each, X, Y, Z int32 at bytes 0, 4, 8)
-// with the header's scale and offset, encodes each node and hands it to `sink`; returns the cube
+// The n records of a build (record_length bytes each, X, Y, Z int32 at bytes 0, 4, 8): in memory,
+// or spilled to a file in input order, for a cloud larger than memory. A spilled build holds at
+// most memory_points of them at a time (and each point kept above the buckets, 16 bytes): the
+// buckets are cut from every cell's count (the spill read once, in order), then the records go
+// to groups of consecutive buckets of at most memory_points points (files in spill_dir: about
+// the spill's size again, whose blocks are given back as it is read), each group built as the
+// records in memory are; the records of points above the buckets are copied to one more file.
+// The nodes, their points and their order are those of the records in memory.
+struct CopcRecords {
+  const uint8_t* data = nullptr;  // in memory, or
+  SpillFile* spill = nullptr;     // spilled (the build consumes it)
+  size_t n = 0, record_length = 0;
+  size_t memory_points = 0;  // spilled: > 0
+  std::string spill_dir;     // spilled: a temporary folder for the build's own files
+};
+
+// Builds the octree of the records with the header's scale and offset, encodes each node and
+// hands it to `sink`; returns the cube
 // and the nodes (without their points lists) in the sink's order. `xyz_bounds` (may be null):
 // the records' least and greatest X, Y, Z, when the caller has them (a writer tracks them),
 // which saves a pass over the records; the tree is the same. `bucketing` and `encoding` (may be
 // null): (done, n) as the buckets are cut (points placed) and as nodes are handed on (points
 // settled). CANDI_CHECK: n < 2^32.
+CopcOctree BuildCopcNodes(const CopcOctreeOptions& options, const CopcRecords& records,
+                          const Eigen::Vector3d& scale, const Eigen::Vector3d& offset,
+                          const CopcXyzBounds* xyz_bounds, const CopcNodeEncoder& encode,
+                          const CopcNodeSink& sink,
+                          const std::function<void(uint64_t, uint64_t)>& bucketing = {},
+                          const std::function<void(uint64_t, uint64_t)>& encoding = {});
+// The same, n records in memory.
 CopcOctree BuildCopcNodes(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
                           size_t record_length, const Eigen::Vector3d& scale,
                           const Eigen::Vector3d& offset, const CopcXyzBounds* xyz_bounds,
@@ -126,6 +154,9 @@ CopcOctree BuildCopcNodes(const CopcOctreeOptions& options, const uint8_t* recor
 CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
                            size_t record_length, const Eigen::Vector3d& scale,
                            const Eigen::Vector3d& offset,
+                           const CopcXyzBounds* xyz_bounds = nullptr);
+CopcOctree BuildCopcOctree(const CopcOctreeOptions& options, const CopcRecords& records,
+                           const Eigen::Vector3d& scale, const Eigen::Vector3d& offset,
                            const CopcXyzBounds* xyz_bounds = nullptr);
 
 }  // namespace candi::io

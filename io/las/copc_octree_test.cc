@@ -10,8 +10,10 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
 #include <random>
 #include <set>
 #include <stdexcept>
@@ -20,9 +22,13 @@
 #include <vector>
 
 #include "core/binary_file.h"
+#include "core/spill_file.h"
+#include "tests/util/test_util.h"
 
 namespace candi::io {
 namespace {
+
+namespace util = ::candi::testing;
 
 constexpr size_t kLength = 30;  // format 6
 const Eigen::Vector3d kScale = Eigen::Vector3d::Constant(0.001);
@@ -513,6 +519,73 @@ TEST(CopcOctree, TheNodesComeBucketByBucketThenTheNodesAbove) {
   ASSERT_LT(root, order.size());
   for (size_t j = root + 1; j < order.size(); ++j) EXPECT_GE(order[j].level, order[j - 1].level);
   EXPECT_GT(root, 0u) << "the buckets' nodes first";
+}
+
+// The records spilled to a file in dir, as a writer spills them.
+struct Spilled {
+  std::unique_ptr<SpillFile> file;
+  CopcRecords input;
+};
+Spilled Spill(const std::vector<uint8_t>& records, size_t n, const std::string& dir,
+              size_t memory_points) {
+  Spilled s;
+  s.file = std::make_unique<SpillFile>(dir + "/records.spill");
+  s.file->Append(records.data(), n * kLength);
+  s.input.spill = s.file.get();
+  s.input.n = n;
+  s.input.record_length = kLength;
+  s.input.memory_points = memory_points;
+  s.input.spill_dir = dir;
+  return s;
+}
+
+// The nodes BuildCopcNodes hands on, in order: key, count and what the encoder made of them.
+std::vector<std::tuple<int, int, int, int, uint64_t, std::vector<uint8_t>>> HandedOn(
+    const CopcOctreeOptions& options, const CopcRecords& input, const Eigen::Vector3d& offset) {
+  std::vector<std::tuple<int, int, int, int, uint64_t, std::vector<uint8_t>>> out;
+  BuildCopcNodes(
+      options, input, kScale, offset, nullptr,
+      [](const CopcKey&, const uint8_t* node_records, const uint32_t* indices, size_t count,
+         std::vector<uint8_t>* bytes) {
+        bytes->assign(node_records, node_records + count * kLength);
+        const uint8_t* i = reinterpret_cast<const uint8_t*>(indices);
+        bytes->insert(bytes->end(), i, i + 4 * count);
+      },
+      [&](const CopcKey& key, uint64_t count, std::vector<uint8_t>* bytes) {
+        out.emplace_back(key.level, key.x, key.y, key.z, count, std::move(*bytes));
+      });
+  return out;
+}
+
+TEST(CopcOctree, ASpilledBuildHandsOnTheNodesOfTheBuildInMemory) {
+  // Groups of at most 1, 3,000 or 25,000 points (a group of one bucket where a bucket is
+  // larger): the same nodes, records and indices, in the same order, as the records in memory;
+  // with folds above the buckets (the far cluster) too. The build's files are gone after it.
+  util::TempDir dir;
+  for (const bool far : {false, true}) {
+    const size_t n = far ? 20000 : 60000;
+    const std::vector<uint8_t> records = far ? FarClusterRecords(n, 300) : ClusteredRecords(n, 31);
+    const Eigen::Vector3d offset = far ? Eigen::Vector3d::Zero() : kOffset;
+    CopcOctreeOptions options;
+    options.bucket_points = far ? 16 : 2000;
+    CopcRecords in_memory;
+    in_memory.data = records.data();
+    in_memory.n = n;
+    in_memory.record_length = kLength;
+    const auto expected = HandedOn(options, in_memory, offset);
+    ASSERT_GT(expected.size(), 10u);
+    for (const size_t memory : {size_t{1}, size_t{3000}, size_t{25000}}) {
+      SCOPED_TRACE(::testing::Message()
+                   << (far ? "far cluster, " : "") << memory << " points a group");
+      Spilled s = Spill(records, n, dir.path(), memory);
+      const auto spilled = HandedOn(options, s.input, offset);
+      ASSERT_EQ(spilled.size(), expected.size());
+      for (size_t j = 0; j < expected.size(); ++j)
+        ASSERT_TRUE(spilled[j] == expected[j]) << "node " << j;
+      s.file.reset();
+      EXPECT_TRUE(std::filesystem::is_empty(dir.path())) << "the build's files are left behind";
+    }
+  }
 }
 
 }  // namespace

@@ -177,43 +177,45 @@ CopcHierarchy EncodeCopcHierarchyPages(const CopcWriteOptions& options,
   return PageWriter(options, entries, payload_offset).Write();
 }
 
-std::array<double, 2> CopcGpsTimeRange(const uint8_t* records, size_t n, size_t record_length,
-                                       size_t gps_offset) {
+void ExtendCopcGpsTimeRange(const uint8_t* records, size_t n, size_t record_length,
+                            size_t gps_offset, std::array<double, 2>* range) {
   constexpr size_t kBlock = size_t{1} << 20;
   const size_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<std::array<double, 2>> range(blocks, {INFINITY, -INFINITY});
+  std::vector<std::array<double, 2>> block_range(blocks, {INFINITY, -INFINITY});
   ParallelFor(size_t{0}, blocks, [&](size_t b) {
     for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
       const double t = LoadLE<double>(records + i * record_length + gps_offset);
       if (std::isnan(t)) continue;
-      range[b][0] = std::min(range[b][0], t);
-      range[b][1] = std::max(range[b][1], t);
+      block_range[b][0] = std::min(block_range[b][0], t);
+      block_range[b][1] = std::max(block_range[b][1], t);
     }
   });
-  std::array<double, 2> all{INFINITY, -INFINITY};
-  for (const std::array<double, 2>& r : range) {
-    all[0] = std::min(all[0], r[0]);
-    all[1] = std::max(all[1], r[1]);
+  for (const std::array<double, 2>& r : block_range) {
+    (*range)[0] = std::min((*range)[0], r[0]);
+    (*range)[1] = std::max((*range)[1], r[1]);
   }
-  if (!(all[0] <= all[1])) all = {0.0, 0.0};  // no time, or none but NaN
-  return all;
 }
 
-CopcPointData WriteCopcNodes(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
-                             size_t record_length, const Eigen::Vector3d& scale,
-                             const Eigen::Vector3d& offset, const CopcXyzBounds* xyz_bounds,
+std::array<double, 2> CopcGpsTimes(const std::array<double, 2>& range) {
+  if (!(range[0] <= range[1])) return {0.0, 0.0};  // no time, or none but NaN
+  return range;
+}
+
+CopcPointData WriteCopcNodes(const CopcOctreeOptions& options, const CopcRecords& records,
+                             const Eigen::Vector3d& scale, const Eigen::Vector3d& offset,
+                             const CopcXyzBounds* xyz_bounds,
                              const laz::Vlr& vlr, uint64_t first_chunk,
                              const std::function<void(const uint8_t*, size_t)>& sink,
                              const std::function<void(uint64_t, uint64_t)>& bucketing,
                              const std::function<void(uint64_t, uint64_t)>& chunks) {
   CANDI_CHECK(vlr.compressor == laz::kLayeredChunked &&
-              record_length == static_cast<size_t>(vlr.record_length()))
+              records.record_length == static_cast<size_t>(vlr.record_length()))
       << "COPC chunks are layered, with the record's items";
   CopcPointData data;
   std::vector<uint32_t> bytes, points;
   uint64_t offset_in_file = first_chunk;
   data.tree = BuildCopcNodes(
-      options, records, n, record_length, scale, offset, xyz_bounds,
+      options, records, scale, offset, xyz_bounds,
       [&vlr](const CopcKey&, const uint8_t* node_records, const uint32_t*, size_t count,
              std::vector<uint8_t>* out) {
         laz::EncodeLayeredChunk(vlr.items, node_records, static_cast<uint32_t>(count), out);

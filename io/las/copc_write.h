@@ -71,24 +71,26 @@ struct CopcPointData {
   std::vector<CopcEntry> entries;    // one a node, in the order of their chunks
   std::vector<uint8_t> chunk_table;  // LASzip's, variable chunks
 };
-// Builds the octree of n records (record_length bytes each: io/las/copc_octree.h's
-// BuildCopcNodes) and compresses each node's records (in input order) into one chunk with the
+// Builds the octree of the records (in memory or spilled: io/las/copc_octree.h's BuildCopcNodes) and compresses each node's records (in input order) into one chunk with the
 // items of `vlr` (layered), handing the chunks to `sink` in the order the octree hands the nodes
 // on; the first chunk starts at file offset `first_chunk`. The chunks are compressed on several
 // threads, bucket by bucket, with the same bytes on any thread count. An exception from the sink
 // ends the writing and is rethrown; no chunk is handed on after it.
 // `bucketing`, `chunks` (may be null): (done, n) as the buckets are cut and as chunks are written.
-CopcPointData WriteCopcNodes(const CopcOctreeOptions& options, const uint8_t* records, size_t n,
-                             size_t record_length, const Eigen::Vector3d& scale,
-                             const Eigen::Vector3d& offset, const CopcXyzBounds* xyz_bounds,
+CopcPointData WriteCopcNodes(const CopcOctreeOptions& options, const CopcRecords& records,
+                             const Eigen::Vector3d& scale, const Eigen::Vector3d& offset,
+                             const CopcXyzBounds* xyz_bounds,
                              const laz::Vlr& vlr, uint64_t first_chunk,
                              const std::function<void(const uint8_t*, size_t)>& sink,
                              const std::function<void(uint64_t, uint64_t)>& bucketing = {},
                              const std::function<void(uint64_t, uint64_t)>& chunks = {});
 
-// The least and the greatest GPS time of n records (the double at byte gps_offset of each), NaN
-// times left out, by parallel blocks (no order matters); {0, 0} when there is none.
-std::array<double, 2> CopcGpsTimeRange(const uint8_t* records, size_t n, size_t record_length,
-                                       size_t gps_offset);
+// The least and the greatest GPS time of n records (the double at byte gps_offset of each) and
+// of *range, NaN times left out, by parallel blocks (no order matters): a writer extends it as
+// the records come, from {inf, -inf}. CopcGpsTimes: the info VLR's range, {0, 0} when it holds
+// no time.
+void ExtendCopcGpsTimeRange(const uint8_t* records, size_t n, size_t record_length,
+                            size_t gps_offset, std::array<double, 2>* range);
+std::array<double, 2> CopcGpsTimes(const std::array<double, 2>& range);
 
 }  // namespace candi::io

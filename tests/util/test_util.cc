@@ -1,5 +1,7 @@
 #include "tests/util/test_util.h"
 
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -33,6 +35,23 @@ std::string NodeWith(const std::string& package, std::string* why) {
     return "";
   }
   return node;
+}
+
+FileSizeLimit::FileSizeLimit(uint64_t bytes) {
+  struct rlimit limit;
+  getrlimit(RLIMIT_FSIZE, &limit);
+  old_soft_ = limit.rlim_cur;
+  old_handler_ = signal(SIGXFSZ, SIG_IGN);
+  limit.rlim_cur = bytes;
+  setrlimit(RLIMIT_FSIZE, &limit);
+}
+
+FileSizeLimit::~FileSizeLimit() {
+  struct rlimit limit;
+  getrlimit(RLIMIT_FSIZE, &limit);
+  limit.rlim_cur = old_soft_;
+  setrlimit(RLIMIT_FSIZE, &limit);
+  signal(SIGXFSZ, old_handler_);
 }
 
 TempDir::TempDir() {

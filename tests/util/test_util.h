@@ -17,6 +17,20 @@ std::string SharedDataPath(const std::string& relative);
 // absent (the test then skips, saying why).
 std::string NodeWith(const std::string& package, std::string* why);
 
+// While it lives, this process's writes past `bytes` of a file fail (EFBIG, SIGXFSZ ignored)
+// the way they do on a full disk (ENOSPC), as any user; the limit and handler are restored after.
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(uint64_t bytes);
+  ~FileSizeLimit();
+  FileSizeLimit(const FileSizeLimit&) = delete;
+  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+
+ private:
+  uint64_t old_soft_ = 0;
+  void (*old_handler_)(int) = nullptr;
+};
+
 // A fresh directory under $TMPDIR, removed with its contents on destruction.
 class TempDir {
  public:
