@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <string>
@@ -60,11 +61,39 @@ inline void LoadXyz(const uint8_t* record, int32_t* xyz) {
 // narrower than a LAS unit (whose nodes keep all their points: no node above a bucket may).
 int DeepestBucketLevel(const CopcOctree& tree, double min_scale);
 
-// A record's cell at kBucketLevel.
+// A record's cell at kBucketLevel: the top 7 bits of each axis's place, floor(t * 128) clamped
+// (the place's bits 55-61: t is computed as the Cube computes it, and t * 2^7 is exact), spread
+// by a table into a Morton code.
+struct CellTable {
+  uint32_t spread[1 << kBucketLevel];
+  CellTable() {
+    for (uint32_t v = 0; v < (1u << kBucketLevel); ++v) {
+      spread[v] = static_cast<uint32_t>(MortonSpread21(v));
+    }
+  }
+};
+inline const CellTable kCellTable;
 inline uint32_t CellOf(const uint8_t* record, const Cube& cube) {
-  int32_t xyz[3];
-  LoadXyz(record, xyz);
-  return static_cast<uint32_t>(MortonCode(cube(xyz), 0) >> (3 * (kKeyLevels - kBucketLevel)));
+  uint32_t cell = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double t =
+        (LoadLE<int32_t>(record + 4 * k) * cube.scale[k] + cube.offset[k] - cube.min[k]) /
+        cube.width;
+    const double u = t * double{1 << kBucketLevel};
+    const uint32_t q = !(u > 0.0)                       ? 0u
+                       : u >= double{1 << kBucketLevel} ? (1u << kBucketLevel) - 1
+                                                        : static_cast<uint32_t>(u);
+    cell |= kCellTable.spread[q] << k;
+  }
+  return cell;
+}
+
+// A record's bytes copied (length >= 8, whatever it is: in 8-byte words, the last overlapping),
+// without a call.
+inline void CopyRecord(uint8_t* to, const uint8_t* from, size_t length) {
+  size_t k = 0;
+  for (; k + 8 <= length; k += 8) std::memcpy(to + k, from + k, 8);
+  if (k < length) std::memcpy(to + length - 8, from + length - 8, 8);
 }
 
 // The points of each cell at kBucketLevel, counted run by run of records, by parallel blocks

@@ -34,10 +34,10 @@ using namespace copc_internal;
 // node_of of a point that a node above its bucket keeps, at level k: kAbove + k.
 constexpr uint32_t kAbove = 0xFFFFFF00u;
 
-// A bucket's working memory (its records, their elements and nodes, the records in node order),
-// kept from bucket to bucket; a pool hands each bucket in the works its own.
+// A bucket's working memory (its points' elements and nodes, its records in node order), kept
+// from bucket to bucket; a pool hands each bucket in the works its own.
 struct Scratch {
-  std::unique_ptr<uint8_t[]> records, ordered;
+  std::unique_ptr<uint8_t[]> ordered;
   std::unique_ptr<Element[]> elements;
   std::unique_ptr<uint32_t[]> node_of, indices, at;  // at: where in the group each record is
   size_t capacity = 0, record_bytes = 0;
@@ -51,7 +51,6 @@ struct Scratch {
     }
     if (points * length > record_bytes) {
       record_bytes = std::max(points * length, record_bytes + record_bytes / 2);
-      records.reset(new uint8_t[record_bytes]);
       ordered.reset(new uint8_t[record_bytes]);
     }
   }
@@ -132,15 +131,14 @@ class NodeBuilder {
     Loop(parallel, (m + kBlock - 1) / kBlock, [&](size_t block) {
       for (size_t j = block * kBlock; j < std::min(m, (block + 1) * kBlock); ++j) {
         if (j + 16 < m) __builtin_prefetch(records_ + size_t{index[j + 16]} * length_);
-        uint8_t* r = s->records.get() + j * length_;
-        std::memcpy(r, records_ + size_t{index[j]} * length_, length_);
         Element& e = s->elements[j];
-        LoadXyz(r, e.xyz);
+        LoadXyz(records_ + size_t{index[j]} * length_, e.xyz);
         e.key = MortonCode(cube_(e.xyz), 0);
         e.index = static_cast<uint32_t>(j);
       }
     });
-    sort_(s->elements.get(), m, 3 * kKeyLevels);
+    // The bucket's keys share the octants of the levels down to its own.
+    sort_(s->elements.get(), m, 3 * (kKeyLevels - b.level));
     Builder builder(options_, cube_, &sort_, s->elements.get(), s->node_of.get());
     // The levels above the bucket: the nearest point of each of their cells, no rule (counts
     // across buckets decide those). What passes on reaches the bucket's own node.
@@ -237,7 +235,7 @@ class NodeBuilder {
         continue;
       }
       const size_t at = next[id]++;
-      std::memcpy(s.ordered.get() + at * length_, s.records.get() + j * length_, length_);
+      CopyRecord(s.ordered.get() + at * length_, records_ + size_t{index[j]} * length_, length_);
       s.indices[at] = i;
       s.at[at] = index[j];
     }
@@ -339,7 +337,7 @@ void EncodeAbove(const CopcOctreeOptions& options, const uint8_t* records, size_
       for (size_t k = 0; k < m; ++k) {
         const AboveEntry& e = above[g.begin + k];
         s->indices[k] = static_cast<uint32_t>(e.key);
-        std::memcpy(s->ordered.get() + k * length, records + e.at * length, length);
+        CopyRecord(s->ordered.get() + k * length, records + e.at * length, length);
       }
       encode(key_of(g.node), s->ordered.get(), s->indices.get(), m, &encoded[j]);
       pool->Give(std::move(s));
@@ -468,7 +466,7 @@ class Pipeline {
     std::vector<uint8_t> copied(entries->size() * length_);
     for (size_t k = 0; k < entries->size(); ++k) {
       AboveEntry& e = (*entries)[k];
-      std::memcpy(copied.data() + k * length_, records + e.at * length_, length_);
+      CopyRecord(copied.data() + k * length_, records + e.at * length_, length_);
       e.at = store->size() / length_ + k;
     }
     store->Append(copied.data(), copied.size());
