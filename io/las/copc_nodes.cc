@@ -121,11 +121,12 @@ class NodeBuilder {
     global_ = global;
   }
 
-  // Builds bucket `b` into *out.
-  void Build(const Bucket& b, BucketNodes* out) {
+  // Builds bucket `b` into *out; on several threads when it is large or `alone` (the only one
+  // in the works).
+  void Build(const Bucket& b, bool alone, BucketNodes* out) {
     std::unique_ptr<Scratch> s = pool_.Take();
     const size_t m = b.size();
-    const bool parallel = m >= kParallelBucket;
+    const bool parallel = alone || m >= kParallelBucket;
     s->Reserve(m, length_);
     const uint32_t* index = list_ + b.begin;
     Loop(parallel, (m + kBlock - 1) / kBlock, [&](size_t block) {
@@ -383,7 +384,7 @@ class Pipeline {
       }
       built.assign(batch, {});
       ParallelFor(size_t{0}, batch,
-                  [&](size_t j) { builder_.Build(buckets[first + j], &built[j]); });
+                  [&](size_t j) { builder_.Build(buckets[first + j], batch == 1, &built[j]); });
       for (size_t j = 0; j < batch; ++j) Take(buckets[first + j], &built[j], records, store);
       if (encoding_) encoding_(settled_, n_);
     }
@@ -502,6 +503,7 @@ CopcOctree BuildCopcNodes(const CopcOctreeOptions& options, const CopcRecords& i
   const size_t n = input.n, length = input.record_length;
   CANDI_CHECK(n <= size_t{std::numeric_limits<uint32_t>::max()})
       << "a COPC octree of " << n << " points (at most 2^32 - 1)";
+  CANDI_CHECK(length >= 12) << "COPC records of " << length << " bytes (X, Y, Z take 12)";
   CANDI_CHECK((input.data != nullptr) != (input.spill != nullptr) || n == 0)
       << "COPC records: in memory or spilled";
   CopcOctree tree;

@@ -233,6 +233,9 @@ CopcPointData WriteCopcNodes(const CopcOctreeOptions& options, const CopcRecords
         std::vector<uint8_t>().swap(*chunk);  // written: its memory back
       },
       bucketing, chunks);
+  // No point: the hierarchy is the root alone, of no point and no chunk (COPC allows a node of
+  // point count 0), so the file is valid and reads as empty.
+  if (data.entries.empty()) data.entries.push_back({CopcKey{}, 0, 0, 0});
   data.chunk_table = EncodeLazChunkTable(bytes, points);
   return data;
 }

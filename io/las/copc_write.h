@@ -75,7 +75,8 @@ struct CopcPointData {
 // items of `vlr` (layered), handing the chunks to `sink` in the order the octree hands the nodes
 // on; the first chunk starts at file offset `first_chunk`. The chunks are compressed on several
 // threads, bucket by bucket, with the same bytes on any thread count. An exception from the sink
-// ends the writing and is rethrown; no chunk is handed on after it.
+// ends the writing and is rethrown; no chunk is handed on after it. No record: the entries are
+// the root alone, of 0 points, and no chunk.
 // `bucketing`, `chunks` (may be null): (done, n) as the buckets are cut and as chunks are written.
 CopcPointData WriteCopcNodes(const CopcOctreeOptions& options, const CopcRecords& records,
                              const Eigen::Vector3d& scale, const Eigen::Vector3d& offset,

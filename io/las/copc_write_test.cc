@@ -408,11 +408,13 @@ TEST(CopcWrite, CopcJsReadsCandisCopc) {
   std::string why;
   const std::string node = util::NodeWith("copc", &why);
   if (node.empty()) GTEST_SKIP() << why << ": candi's COPC is not checked by copc.js";
-  for (int format : {6, 7, 8}) {
+  for (int format : {6, 7, 8, 0}) {  // 0: a file of no point, format 6
     SCOPED_TRACE("point format " + std::to_string(format));
     TempDir dir;
-    PointCloud cloud =
-        format == 7 ? FloorCloud(80000, 21) : RandomCloud(format, 30001, 50 + format);
+    PointCloud cloud = format == 7   ? FloorCloud(80000, 21)
+                       : format == 0 ? RandomCloud(6, 0, 1)
+                                     : RandomCloud(format, 30001, 50 + format);
+    if (format == 0) format = 6;
     WritePointCloud(dir.File("a.las"), cloud, OptionsFor(format));
     ConvertPointFile({}, dir.File("a.las"), dir.File("b.copc.laz"));
     ExpectCopcJsReads(node, dir, format);
@@ -673,6 +675,22 @@ TEST(CopcWrite, RecordsBeyondTheMemoryBudgetAreSpilledAndGiveTheSameBytes) {
   EXPECT_EQ(entries, 3u);
   TempDir cut;
   EXPECT_TRUE(util::InterruptedWriteLeavesNothing(cut, "cut.copc.laz", cloud, spilled));
+}
+
+TEST(CopcWrite, AnEmptyCloudIsAValidCopcFileThatReadsAsEmpty) {
+  // An empty layer of a build written as COPC: the hierarchy is the root alone, of 0 points.
+  TempDir dir;
+  PointCloud cloud = RandomCloud(7, 10, 5);
+  cloud.Resize(0);
+  const std::string path = dir.File("empty.copc.laz");
+  WritePointCloud(path, cloud);
+  const CopcFile f = ReadCopc(path);
+  ASSERT_EQ(f.entries.size(), 1u);
+  EXPECT_EQ(f.entries[0].key.level, 0);
+  EXPECT_EQ(f.entries[0].points, 0);
+  EXPECT_EQ(f.entries[0].bytes, 0);
+  EXPECT_GT(f.info.halfsize, 0.0);
+  EXPECT_EQ(ReadPointCloud(path).size(), 0u);
 }
 
 TEST(CopcWrite, InterruptedWriteLeavesNoPartialFile) {

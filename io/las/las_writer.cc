@@ -269,8 +269,10 @@ void LasWriter::ChooseCopcStore() {
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
   const double physical =
       pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 0.0;
+  // Half the machine's memory unless given; where the machine does not say, all of it can be.
   copc_memory_ = copc_options_.memory_bytes > 0 ? copc_options_.memory_bytes
-                                                : static_cast<uint64_t>(physical / 2);
+                 : physical > 0                 ? static_cast<uint64_t>(physical / 2)
+                                                : std::numeric_limits<uint64_t>::max();
   if (spec_.count == kUnknownCount) return;  // in memory until they no longer fit
   // In memory: the records, each point's cell then its place in its bucket's list, and the
   // points of the nodes above the buckets (io/las/copc_octree.h).
