@@ -177,7 +177,8 @@ int main(int argc, char** argv) {
     else if (a == "--threads" && has_value) threads_text = argv[++i];
     else if (a == "--formats" && has_value) formats_text = argv[++i];
     else if (a == "--dir" && has_value) dir = argv[++i];
-    else if (a == "--copc-memory" && has_value) copc_memory = static_cast<uint64_t>(std::stod(argv[++i]) * 1048576.0);
+    else if (a == "--copc-memory" && has_value)
+      copc_memory = static_cast<uint64_t>(std::stod(argv[++i]) * 1048576.0);
     else if (a == "--keep") keep = true;
     else {
       std::fprintf(stderr,

@@ -8,25 +8,21 @@
 #include <cmath>
 #include <cstring>
 #include <ctime>
-#include <filesystem>
 #include <functional>
 #include <limits>
 #include <stdexcept>
 
-#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include "core/atomic_file.h"
 #include "core/binary_file.h"
 #include "core/check.h"
-#include "core/fresh_memory.h"
-#include "core/interrupt.h"
 #include "core/log.h"
 #include "core/parallel.h"
-#include "core/spill_file.h"
 #include "core/text_format.h"
 #include "io/crs.h"
 #include "io/las/copc_octree.h"
+#include "io/las/copc_store.h"
 #include "io/las/copc_write.h"
 #include "io/las/las_columns.h"
 #include "io/las/las_crs.h"
@@ -161,12 +157,6 @@ class LasWriter : public PointWriter {
   void BindSource(const char* name, LasColumn* c, std::vector<bool>* used) const;
   void AddExtraBytes(const std::string& name, ScalarType type, int scalar, int axis, int* offset);
   void SplitVlrs();
-  // A COPC file holds every record until Close(): in memory while they fit its budget, else in a
-  // spill beside the file, whose disk must hold about twice the records (a stated count beyond
-  // it is refused before anything is written).
-  void ChooseCopcStore();
-  void StartCopcSpill();
-  void AddCopcRecords(const uint8_t* records, size_t n);
   void AddCrsVlr();
   void WriteHeaderAndVlrs();
   std::string EncodedHeader() const;
@@ -200,20 +190,13 @@ class LasWriter : public PointWriter {
   std::array<int32_t, 3> min_, max_;
   std::array<uint64_t, 15> by_return_{};
   std::vector<uint8_t> buffer_;
-  // COPC (a .copc.laz name): every record is held until Close() builds the octree, in memory
-  // (copc_records_, up to copc_memory_ bytes) or spilled (copc_spill_, in a folder of its own).
+  // COPC (a .copc.laz name): every record is held until Close() builds the octree, in memory or
+  // spilled beside the file (io/las/copc_store.h; a stated count the disk cannot hold is
+  // refused before anything is written).
   bool copc_ = false;
   CopcWriteOptions copc_options_;
   StageProgressCallback close_progress_;
-  FreshBuffer copc_records_;
-  uint64_t copc_memory_ = 0;
-  struct TempFolder {
-    std::string path;
-    int interrupt_id = -1;  // core/interrupt.h: removed if the process is interrupted
-    ~TempFolder();
-  } copc_spill_dir_;
-  std::unique_ptr<SpillFile> copc_spill_;
-  std::array<double, 2> copc_gps_{INFINITY, -INFINITY};
+  std::unique_ptr<CopcRecordStore> copc_records_;
   std::unique_ptr<AtomicFile> file_;  // created last: a rejected spec creates nothing
   // LAZ (a .laz name): the records go through the chunk writer; the point data starts with the
   // chunk table's offset, patched by Close().
@@ -253,79 +236,12 @@ LasWriter::LasWriter(const std::string& path, const PointWriteSpec& spec,
   InitHeader(copc_ ? CopcChoice(choice) : choice, options);
   BuildColumns();
   SplitVlrs();
-  if (copc_) ChooseCopcStore();
+  if (copc_) {
+    copc_records_ = std::make_unique<CopcRecordStore>(path, header_.record_length,
+                                                      layout_.gps_offset, options.copc, spec.count);
+  }
   file_ = std::make_unique<AtomicFile>(path);
   WriteHeaderAndVlrs();
-}
-
-LasWriter::TempFolder::~TempFolder() {
-  if (path.empty()) return;
-  std::error_code ignored;
-  std::filesystem::remove_all(path, ignored);
-  UnregisterTempPath(interrupt_id);
-}
-
-void LasWriter::ChooseCopcStore() {
-  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-  const double physical =
-      pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 0.0;
-  // Half the machine's memory unless given; where the machine does not say, all of it can be.
-  copc_memory_ = copc_options_.memory_bytes > 0 ? copc_options_.memory_bytes
-                 : physical > 0                 ? static_cast<uint64_t>(physical / 2)
-                                                : std::numeric_limits<uint64_t>::max();
-  if (spec_.count == kUnknownCount) return;  // in memory until they no longer fit
-  // In memory: the records, each point's cell then its place in its bucket's list, and the
-  // points of the nodes above the buckets (io/las/copc_octree.h).
-  const double length = header_.record_length;
-  const double count = static_cast<double>(spec_.count);
-  if (count * (length + 16) <= static_cast<double>(copc_memory_)) return;
-  StartCopcSpill();
-  // Spilled: the records, then their groups (the spill's blocks given back as they are read,
-  // where the filesystem can) and the points above the buckets: twice the records at most.
-  struct statvfs disk;
-  if (statvfs(copc_spill_dir_.path.c_str(), &disk) != 0) return;
-  const double free = static_cast<double>(disk.f_bavail) * static_cast<double>(disk.f_frsize);
-  const double needed = 2.0 * count * length;
-  if (needed <= free) return;
-  constexpr double kGiB = double(uint64_t{1} << 30);
-  throw InputError(path_, "",
-                   "a COPC file of " + std::to_string(spec_.count) + " points holds its " +
-                       "records until its octree is built: more than the memory it may take (" +
-                       FormatSignificant(static_cast<double>(copc_memory_) / kGiB, 3) +
-                       " GiB), and spilled beside the file they need about " +
-                       FormatSignificant(needed / kGiB, 3) + " GiB of disk, where " +
-                       FormatSignificant(free / kGiB, 3) +
-                       " GiB are free: write LAZ (a .laz name), or fewer points a file");
-}
-
-// A folder beside the file, for the records and the octree's own files.
-void LasWriter::StartCopcSpill() {
-  const std::filesystem::path target(path_);
-  const std::filesystem::path folder =
-      target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
-  std::string pattern = (folder / (target.filename().string() + ".candi-tmp-copc-XXXXXX")).string();
-  const int id = MakeTempDirectory(&pattern);
-  if (id < 0) {
-    throw InputError(pattern, "", std::string("cannot create the COPC file's spill folder: ") +
-                                      std::strerror(errno));
-  }
-  copc_spill_dir_.path = pattern;
-  copc_spill_dir_.interrupt_id = id;
-  copc_spill_ = std::make_unique<SpillFile>(pattern + "/records");
-  if (copc_records_.size() > 0) {
-    copc_spill_->Append(copc_records_.data(), copc_records_.size());
-    copc_records_.Release();
-  }
-}
-
-void LasWriter::AddCopcRecords(const uint8_t* records, size_t n) {
-  ExtendCopcGpsTimeRange(records, n, header_.record_length, layout_.gps_offset, &copc_gps_);
-  if (copc_spill_) {
-    copc_spill_->Append(records, n * header_.record_length);
-  } else if (copc_records_.size() / header_.record_length * (header_.record_length + 16) >
-             copc_memory_) {
-    StartCopcSpill();  // a count not stated beforehand: no longer in memory
-  }
 }
 
 void SetCreationDateToday(LasHeader* header) {
@@ -543,9 +459,6 @@ void LasWriter::WriteHeaderAndVlrs() {
   }
   header_.number_of_vlrs = static_cast<uint32_t>(vlrs_.size());
   header_.offset_to_point_data = static_cast<uint32_t>(point_offset);
-  if (spec_.count != kUnknownCount && copc_ && !copc_spill_) {
-    copc_records_.Reserve(spec_.count * header_.record_length);
-  }
   if (spec_.count != kUnknownCount && !compressed_) {
     file_->Reserve(point_offset + spec_.count * header_.record_length);
   }
@@ -576,10 +489,10 @@ void LasWriter::Write(const PointCloud& chunk) {
   const size_t length = header_.record_length;
   const size_t blocks = (n + kLasBlockRecords - 1) / kLasBlockRecords;
   failed_ = true;  // until the chunk is complete: a throw leaves a partial chunk behind
-  if (copc_ && !copc_spill_) {  // straight into the records held for Close()
-    uint8_t* records = copc_records_.Extend(n * length);
+  if (copc_ && !copc_records_->spilled()) {  // straight into the records held for Close()
+    uint8_t* records = copc_records_->Extend(n);
     EncodeBlocks(chunk, 0, blocks, records);
-    AddCopcRecords(records, n);
+    copc_records_->Add(records, n);
   } else {
     // A round of blocks through one buffer that stays in the cache, and no chunk-sized buffer
     // is faulted in.
@@ -590,7 +503,7 @@ void LasWriter::Write(const PointCloud& chunk) {
       EncodeBlocks(chunk, begin, end, buffer_.data());
       const size_t records = std::min(n, end * kLasBlockRecords) - begin * kLasBlockRecords;
       if (copc_) {
-        AddCopcRecords(buffer_.data(), records);
+        copc_records_->Add(buffer_.data(), records);
       } else if (laz_) {
         laz_->Add(buffer_.data(), records);
       } else {
@@ -705,23 +618,11 @@ void LasWriter::WriteLazPointData() {
 // The octree's nodes as chunks, the chunk table, then the hierarchy as the first EVLR (its pages)
 // and the info VLR completed in place.
 void LasWriter::WriteCopcPointData() {
-  const size_t length = header_.record_length;
   auto stage = [this](const char* name) -> ProgressCallback {
     if (!close_progress_) return {};
     return [this, name](uint64_t done, uint64_t total) { close_progress_(name, done, total); };
   };
-  CopcRecords records;
-  records.record_length = length;
-  if (copc_spill_) {
-    records.spill = copc_spill_.get();
-    records.n = copc_spill_->size() / length;
-    records.spill_dir = copc_spill_dir_.path;
-    // A group's records (mapped from its file), their lists and cells.
-    records.memory_points = std::max<uint64_t>(1, copc_memory_ / (length + 8));
-  } else {
-    records.data = copc_records_.data();
-    records.n = copc_records_.size() / length;
-  }
+  const CopcRecords records = copc_records_->Records();
   const CopcXyzBounds xyz_bounds{min_, max_};  // what the records hold, when n > 0
   const laz::Vlr vlr = laz::ParseVlr(vlrs_.back().data);
   const CopcPointData data = WriteCopcNodes(
@@ -729,8 +630,7 @@ void LasWriter::WriteCopcPointData() {
       [this](const uint8_t* bytes, size_t size) { file_->Write(bytes, size); }, stage("octree"),
       stage("chunks"));
   const CopcOctree& tree = data.tree;
-  copc_records_.Release();
-  copc_spill_.reset();
+  copc_records_->Release();
   WriteChunkTable(file_.get(), header_.offset_to_point_data, data.chunk_table);
   CopcInfo info;
   info.center = tree.center;
@@ -741,7 +641,7 @@ void LasWriter::WriteCopcPointData() {
   CopcHierarchy hierarchy = EncodeCopcHierarchyPages(copc_options_, data.entries, payload);
   info.root_hier_offset = payload + hierarchy.root_offset;
   info.root_hier_size = hierarchy.root_size;
-  const std::array<double, 2> gps = CopcGpsTimes(copc_gps_);
+  const std::array<double, 2> gps = copc_records_->GpsTimes();
   info.gpstime_minimum = gps[0];
   info.gpstime_maximum = gps[1];
   const std::string encoded = EncodeCopcInfo(info);
