@@ -29,15 +29,16 @@
 // Morton code does not rule it out, and flagged as kept in place): the levels above the bucket
 // first, whose cells (7 levels below a node of level < 7) lie whole in it, then its own subtree,
 // whose records are gathered in node order and encoded while the bucket is in the cache. The
-// rules above the buckets need counts across them: a node above that its subtree's points or its
-// octant's would fold (fewer than the minimums below) can only cover buckets with fewer points
-// than the minimums at their parent's level, which are held until every bucket's counts are in.
-// The nodes above the buckets are encoded last, their points gathered from the records in input
-// order. A key holds 21 levels; nodes more than 14 levels below the level it was made for are
-// keyed again from their own level. Memory: the records, 8 bytes a point (each point's cell while
-// the buckets are cut, then each bucket's list) and 8 for each point of a node above the buckets;
-// each bucket in the works ~100 bytes a point. Deterministic: the nodes, their points and the
-// order they are handed on do not depend on the thread count. Thread-safety: a pure function.
+// rules above the buckets need counts across them: a node above whose subtree or octant folds
+// (fewer points reach it than the minimums below) can only hold buckets of which fewer than the
+// larger minimum reach their parent's level; those are held, their nodes not handed on, until
+// every bucket's counts are in. The nodes above the buckets are encoded last, their points
+// gathered from the records in input order. A key holds 21 levels; nodes more than 14 levels
+// below the level it was made for are keyed again from their own level. Memory: the records, 8
+// bytes a point (each point's cell while the buckets are cut, then each bucket's list), 16 for
+// each point of a node above the buckets, and each bucket in the works ~70 bytes a point (spilled
+// records: CopcRecords). Deterministic: the nodes, their points and the order they are handed on
+// do not depend on the thread count. Thread-safety: a pure function.
 #pragma once
 
 #include <array>
