@@ -417,11 +417,19 @@ TEST(Fault, LazAndCopcIntoAFolderThatRefusesFilesAreRefusedByName) {
     fs::create_directories(folder);
     chmod(folder.c_str(), 0555);
   }
-  for (const std::string name : {"candi_fault_test.laz", "candi_fault_test.copc.laz"}) {
+  // The last: a COPC file spilled from the start (a budget of 0.001 MB), whose spill folder
+  // cannot be made there either.
+  for (const std::string name :
+       {"candi_fault_test.laz", "candi_fault_test.copc.laz", "candi_fault_spilled.copc.laz"}) {
     const std::string out = folder + "/" + name;
-    const auto [code, err] = RunToEnd({"convert", dir.File("in.ply"), out}, LogDir(dir));
+    std::vector<std::string> args{"convert", dir.File("in.ply"), out};
+    if (name == "candi_fault_spilled.copc.laz") args.insert(args.end(), {"--copc-memory", "0.001"});
+    const auto [code, err] = RunToEnd(args, LogDir(dir));
     EXPECT_EQ(code, 2) << err;
     EXPECT_TRUE(Contains(err, out) || Contains(err, folder)) << err;
+    if (args.size() > 3) {
+      EXPECT_TRUE(Contains(err, "cannot create the COPC file's spill folder")) << err;
+    }
     EXPECT_FALSE(fs::exists(out));
   }
   if (geteuid() != 0) {
