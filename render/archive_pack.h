@@ -11,7 +11,8 @@
 // into up to 512 cell files on disk (16 bytes a point when every input point is a float in one
 // frame shared by the inputs, as in binary PLY with float x, y, z, or all inputs are LAS with one
 // scale and offset; else 28), then each cell, in
-// Morton order, is sorted in memory (a cell still too large is bucketed again by the next bits),
+// Morton order, is sorted in memory, only as far as the chunk cut looks (render/morton_sort.h's
+// `coarse`: a chunk is shuffled anyway; a cell still too large is bucketed again by the next bits),
 // so memory stays ~ 100 bytes x memory_points (400 MB by default) whatever the input size.
 // Each layer (PackInput::layer) is sorted and chunked on its own, so a chunk holds one layer.
 // Sorted points are cut into chunks of consecutive points sharing a Morton prefix

@@ -63,11 +63,13 @@ std::vector<uint64_t> StableBucketOffsets(std::vector<uint64_t>* counts, size_t 
   return start;
 }
 
-void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits) {
+void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_t coarse) {
   CANDI_CHECK(bits <= 64) << "SortByCode: " << bits << " bits";
+  CANDI_CHECK(coarse == 0 || bits % 3 == 0) << "SortByCode: coarse, " << bits << " bits";
   const size_t n = keys->size();
-  if (bits <= 0 || n < 2) return;
-  constexpr int kTopBits = 11;
+  if (bits <= 0 || n < 2 || n <= coarse) return;
+  // Coarse: the top bits whole levels (bits is a multiple of 3, so is the shift below them).
+  const int kTopBits = coarse > 0 ? 12 : 11;
   const int top = std::min(kTopBits, bits), shift = bits - top;
   const size_t buckets = size_t{1} << top;
   constexpr size_t kSlices = 16;
@@ -93,7 +95,7 @@ void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits)
     for (size_t k = r.begin(); k < r.end(); ++k) {
       const size_t a = bucket_start[k], m = bucket_start[k + 1] - a;
       if (m == 0) continue;
-      LocalRadixSort(out + a, result + a, m, shift);  // sorted in out + a ...
+      if (m > coarse) LocalRadixSort(out + a, result + a, m, shift);  // sorted in out + a ...
       std::copy(out + a, out + a + m, result + a);     // ... then moved into keys
     }
   });

@@ -32,6 +32,13 @@ std::vector<uint64_t> StableBucketOffsets(std::vector<uint64_t>* counts, size_t 
 
 // Sorts *keys stably by code & (2^bits - 1) (the bits above must be equal: they are not looked
 // at); *scratch is resized and used as scratch. bits in [0, 64].
-void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits);
+//
+// `coarse` > 0 (bits a multiple of 3, Morton levels of 3 bits): sorts only as far as a cut into
+// nodes of at most `coarse` keys looks. The keys are bucketed, stably, by their next 4 levels
+// (12 bits); a bucket of more than `coarse` keys is then sorted whole, the others keep their
+// input order. So every node with more than `coarse` keys is a contiguous range whose children
+// follow in Morton order. The archive's packer, whose chunks (at most `coarse` points) are
+// shuffled after the cut, needs no more.
+void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_t coarse = 0);
 
 }  // namespace candi::render

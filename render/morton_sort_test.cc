@@ -4,6 +4,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <map>
 #include <vector>
 
 #include "core/rng.h"
@@ -54,6 +55,58 @@ TEST(SortByCode, EqualsAStableSortForAnyBitsSizeAndThreads) {
       tbb::task_arena(threads).execute([&] { SortByCode(&keys, &scratch, c.bits); });
       EXPECT_TRUE(Same(keys, expected)) << c.n << " keys, " << c.bits << " bits, " << c.values << " values, "
                                         << threads << " threads";
+    }
+  }
+}
+
+TEST(SortByCode, CoarseSortOrdersEveryNodeOfMoreKeysThanCoarse) {
+  // Clustered codes (few values in the low levels for some keys) so that nodes of every size
+  // occur, at 12 to 63 bits; coarse around the node sizes.
+  for (const int bits : {12, 27, 63}) {
+    for (const size_t coarse : {size_t{1}, size_t{40}, size_t{700}}) {
+      std::vector<Keyed> input = RandomKeys(20000, bits, 0, 5 + bits + coarse);
+      for (size_t i = 0; i < input.size(); i += 3) input[i].code &= ~uint64_t{0} << (bits > 15 ? bits - 15 : 0);
+      std::vector<Keyed> keys = input, scratch, again = input;
+      SortByCode(&keys, &scratch, bits, coarse);
+      tbb::task_arena(1).execute([&] { SortByCode(&again, &scratch, bits, coarse); });
+      const std::string what = std::to_string(bits) + " bits, coarse " + std::to_string(coarse);
+      EXPECT_TRUE(Same(keys, again)) << what << ": 1 thread and default differ";
+      // A permutation of the input.
+      std::vector<uint32_t> seen;
+      for (const Keyed& k : keys) seen.push_back(k.index);
+      std::sort(seen.begin(), seen.end());
+      for (size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], i) << what;
+      for (const Keyed& k : keys) ASSERT_EQ(k.code, input[k.index].code) << what;
+      // Level by level: within every node of more than `coarse` keys (contiguous, by the level
+      // above), its children's prefixes never decrease; equal codes keep their input order.
+      for (int level = 1; level <= bits / 3; ++level) {
+        auto prefix = [&](const Keyed& k, int l) { return l == 0 ? 0 : k.code >> (bits - 3 * l); };
+        std::map<uint64_t, size_t> parent_size;
+        for (const Keyed& k : keys) ++parent_size[prefix(k, level - 1)];
+        for (size_t i = 0; i + 1 < keys.size(); ++i) {
+          if (prefix(keys[i], level - 1) != prefix(keys[i + 1], level - 1)) continue;
+          if (parent_size[prefix(keys[i], level - 1)] <= coarse) continue;
+          ASSERT_LE(prefix(keys[i], level), prefix(keys[i + 1], level)) << what << ", level " << level << ", key " << i;
+        }
+        // Nodes of more than `coarse` keys are contiguous.
+        std::map<uint64_t, std::pair<size_t, size_t>> span;
+        for (size_t i = 0; i < keys.size(); ++i) {
+          const auto it = span.try_emplace(prefix(keys[i], level), i, i).first;
+          it->second.second = i;
+        }
+        std::map<uint64_t, size_t> size;
+        for (const Keyed& k : keys) ++size[prefix(k, level)];
+        for (const auto& [p, s] : span) {
+          if (size[p] > coarse) {
+            ASSERT_EQ(s.second - s.first + 1, size[p]) << what << ", level " << level;
+          }
+        }
+      }
+      for (size_t i = 0; i + 1 < keys.size(); ++i) {
+        if (keys[i].code == keys[i + 1].code) {
+          ASSERT_LT(keys[i].index, keys[i + 1].index) << what;
+        }
+      }
     }
   }
 }
