@@ -438,14 +438,16 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
         floats = false;  // its points are not read here
         continue;
       }
-      if (direct && layout->coordinates == io::PointRecordLayout::Coordinates::kFloat32) {
+      if (direct && (layout->coordinates == io::PointRecordLayout::Coordinates::kFloat32 ||
+                     layout->coordinates == io::PointRecordLayout::Coordinates::kFloat64)) {
+        // Binary PLY: the bounds, whether every coordinate is a float, and the hash, in one read.
         const RecordScan scan = ScanRecords(reader->path(), *layout, info.frame);
         hashes[k] = scan.hash;
         hashed_bytes[k] = scan.bytes;
         counts[k] = layout->count;
         if (layout->count == 0) continue;
         if (!shared_origin) shared_origin = info.frame.origin;
-        floats = floats && info.frame.origin == *shared_origin;
+        floats = floats && scan.floats && info.frame.origin == *shared_origin;
         world.Extend(scan.world);
         continue;
       }

@@ -2,8 +2,9 @@
 //
 // Pass 1 finds the bounds (LAS headers, else a read of the points) and the archive's frame (the
 // render frame: origin at the centre, rounded to metres). Files of records are read directly
-// (render/pack_input.h): for binary PLY of floats one read gives the bounds and the manifest's
-// hash, and pass 2 takes the records without widening them to doubles; LAS (bounds from its
+// (render/pack_input.h): for binary PLY one read gives the bounds and the manifest's hash (and,
+// for doubles, whether each is a float), and pass 2 takes records of floats without widening
+// them to doubles; LAS (bounds from its
 // header) is sorted as its integers when all inputs share a scale and offset. Other inputs, and
 // LAS, are hashed on another thread. Pass 2 reads the points once more and
 // computes 63-bit Morton codes (21 bits per axis over the bounds). Inputs of at most

@@ -42,18 +42,20 @@ constexpr size_t kRecordBlock = size_t{1} << 14;
 // carries into the sign bit.
 inline uint32_t NonFiniteBit(uint32_t bits) { return ((bits & 0x7f800000u) + 0x00800000u) & 0x80000000u; }
 
-inline float LoadFloat(const uint8_t* p) {
-  float v;
-  std::memcpy(&v, p, 4);
+template <typename T>
+inline T LoadCoordinate(const uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
   return v;
 }
 
-// The first record in [0, n) with a NaN or infinite coordinate, or n.
+// The first record in [0, n) with a NaN or infinite coordinate (of type T), or n.
+template <typename T>
 size_t FirstNonFinite(const io::PointRecordLayout& l, const uint8_t* records, size_t n) {
   for (size_t i = 0; i < n; ++i) {
     const uint8_t* r = records + i * l.stride;
     for (int a = 0; a < 3; ++a) {
-      if (!std::isfinite(LoadFloat(r + l.xyz[a]))) return i;
+      if (!std::isfinite(LoadCoordinate<T>(r + l.xyz[a]))) return i;
     }
   }
   return n;
@@ -72,29 +74,40 @@ void CheckHoldsRecords(const std::string& path, const io::PointRecordLayout& l, 
                    "file ends inside vertex " + std::to_string(whole) + " of " + std::to_string(l.count));
 }
 
-// Min and max of the records' coordinates (floats), and whether any is NaN or infinite.
-struct FloatBox {
-  float lo[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
-                 std::numeric_limits<float>::infinity()};
-  float hi[3] = {-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
-                 -std::numeric_limits<float>::infinity()};
+// Min and max of the records' coordinates (T: float or double), whether any is NaN or infinite,
+// and whether every one is a float (doubles that a float holds exactly; floats are).
+template <typename T>
+struct CoordinateBox {
+  T lo[3] = {std::numeric_limits<T>::infinity(), std::numeric_limits<T>::infinity(),
+             std::numeric_limits<T>::infinity()};
+  T hi[3] = {-std::numeric_limits<T>::infinity(), -std::numeric_limits<T>::infinity(),
+             -std::numeric_limits<T>::infinity()};
   bool bad = false;
+  bool floats = true;
 };
-FloatBox BoxOfRecords(const io::PointRecordLayout& l, const uint8_t* records, size_t n) {
-  FloatBox box;
+template <typename T>
+CoordinateBox<T> BoxOfRecords(const io::PointRecordLayout& l, const uint8_t* records, size_t n) {
+  CoordinateBox<T> box;
   uint32_t bad = 0;
+  bool floats = true;
   for (size_t i = 0; i < n; ++i) {
     const uint8_t* r = records + i * l.stride;
     for (int a = 0; a < 3; ++a) {
-      uint32_t bits;
-      std::memcpy(&bits, r + l.xyz[a], 4);
-      bad |= NonFiniteBit(bits);
-      const float v = LoadFloat(r + l.xyz[a]);
+      const T v = LoadCoordinate<T>(r + l.xyz[a]);
+      if constexpr (std::is_same_v<T, float>) {
+        uint32_t bits;
+        std::memcpy(&bits, r + l.xyz[a], 4);
+        bad |= NonFiniteBit(bits);
+      } else {
+        bad |= std::isfinite(v) ? 0u : 1u;
+        floats &= IsFloat(v);
+      }
       box.lo[a] = std::min(box.lo[a], v);
       box.hi[a] = std::max(box.hi[a], v);
     }
   }
   box.bad = bad != 0;
+  box.floats = floats;
   return box;
 }
 
@@ -130,7 +143,10 @@ size_t RecordFile::Next(size_t max_points, const uint8_t** records) {
   return n;
 }
 
-RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& l, const LocalFrame& frame) {
+namespace {
+
+template <typename T>
+RecordScan ScanRecordsOf(const std::string& path, const io::PointRecordLayout& l, const LocalFrame& frame) {
   const MappedFile map(path);
   RecordScan scan;
   scan.bytes = map.size();
@@ -138,7 +154,7 @@ RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& l, 
   const uint64_t end = l.first_byte + l.count * l.stride;
   // HashFile's blocks, each with the start of the record that crosses its end.
   std::vector<uint64_t> hashes;
-  FloatBox total;
+  CoordinateBox<T> total;
   for (uint64_t at = 0; at < scan.bytes; at += kHashBlock) {
     const size_t block = static_cast<size_t>(std::min<uint64_t>(kHashBlock, scan.bytes - at));
     const size_t want = static_cast<size_t>(std::min<uint64_t>(kHashBlock + l.stride, scan.bytes - at));
@@ -152,7 +168,7 @@ RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& l, 
     const uint64_t r0 = first_at_or_after(at), r1 = first_at_or_after(std::min<uint64_t>(at + block, end));
     const size_t n = static_cast<size_t>(r1 - r0), parts = (n + kRecordBlock - 1) / kRecordBlock;
     const uint8_t* records = bytes + (l.first_byte + r0 * l.stride - at);
-    std::vector<FloatBox> boxes(parts);
+    std::vector<CoordinateBox<T>> boxes(parts);
     uint64_t hash = 0;
     // Task 0 hashes the block while the others take the bounds of its records.
     ParallelFor(size_t{0}, parts + 1, [&](size_t t) {
@@ -161,12 +177,13 @@ RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& l, 
         return;
       }
       const size_t a = (t - 1) * kRecordBlock;
-      boxes[t - 1] = BoxOfRecords(l, records + a * l.stride, std::min(kRecordBlock, n - a));
+      boxes[t - 1] = BoxOfRecords<T>(l, records + a * l.stride, std::min(kRecordBlock, n - a));
     });
     hashes.push_back(hash);
     for (size_t p = 0; p < parts; ++p) {
       const size_t a = p * kRecordBlock;
-      if (boxes[p].bad) FailNonFinite(path, r0 + a + FirstNonFinite(l, records + a * l.stride, std::min(kRecordBlock, n - a)));
+      if (boxes[p].bad) FailNonFinite(path, r0 + a + FirstNonFinite<T>(l, records + a * l.stride, std::min(kRecordBlock, n - a)));
+      total.floats = total.floats && boxes[p].floats;
       for (int a = 0; a < 3; ++a) {
         total.lo[a] = std::min(total.lo[a], boxes[p].lo[a]);
         total.hi[a] = std::max(total.hi[a], boxes[p].hi[a]);
@@ -174,6 +191,7 @@ RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& l, 
     }
   }
   scan.hash = ArchiveHash(hashes.data(), 8 * hashes.size(), scan.bytes);
+  scan.floats = total.floats;
   if (l.count > 0) {
     // frame.ToWorld is monotonic on each axis, so the bounds of the world positions are those of
     // the float bounds, the same doubles as a point-by-point pass.
@@ -181,6 +199,15 @@ RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& l, 
     scan.world.Extend(frame.ToWorld(Eigen::Vector3d(total.hi[0], total.hi[1], total.hi[2])));
   }
   return scan;
+}
+
+}  // namespace
+
+RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& l, const LocalFrame& frame) {
+  using Coordinates = io::PointRecordLayout::Coordinates;
+  CANDI_CHECK(l.coordinates != Coordinates::kLasInt32) << "ScanRecords: " << path << " holds LAS integers";
+  return l.coordinates == Coordinates::kFloat64 ? ScanRecordsOf<double>(path, l, frame)
+                                                : ScanRecordsOf<float>(path, l, frame);
 }
 
 template <typename P>
@@ -229,7 +256,7 @@ bool InputBatches<P>::ReadRecords(UninitVector<P>* out) {
     }
     if (nonfinite) bad = true;
   });
-  if (bad) FailNonFinite(inputs_[next_ - 1].name, index_ + FirstNonFinite(l, records, n));
+  if (bad) FailNonFinite(inputs_[next_ - 1].name, index_ + FirstNonFinite<float>(l, records, n));
   index_ += n;
   return true;
 }

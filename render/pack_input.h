@@ -43,11 +43,13 @@ class RecordFile {
   uint64_t next_ = 0;
 };
 
-// Pass 1 over a file of records: the world bounds of its finite points (world = frame origin +
-// position), and HashFile's hash and size, from one read. A NaN or infinite coordinate is
-// refused as the readers refuse it ("vertex N: coordinate is NaN or infinite").
+// Pass 1 over a file of records of floats or doubles (binary PLY): the world bounds of its
+// points (world = frame origin + position), whether every coordinate is a float (doubles that a
+// float holds exactly), and HashFile's hash and size, from one read. A NaN or infinite
+// coordinate is refused as the readers refuse it ("vertex N: coordinate is NaN or infinite").
 struct RecordScan {
   Box3d world;
+  bool floats = true;
   uint64_t hash = 0, bytes = 0;
 };
 RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& layout, const LocalFrame& frame);

@@ -136,6 +136,51 @@ TEST(PackDirect, PlyRecordsGiveTheSameArchiveAsThePointReaders) {
   ExpectSameArchive(dir.File("dm"), dir.File("rm"), "mixed frames");
 }
 
+TEST(PackDirect, PlyOfDoublesIsScannedInOneReadForTheArchiveOfThePointReaders) {
+  TempDir dir;
+  io::PointWriteOptions doubles;
+  doubles.precision = io::PositionPrecision::kFloat64;
+  // Doubles a float does not hold (28-byte records), and doubles that are all floats (16-byte
+  // records): the bounds, the hash and the archive of the readers' pass.
+  PointCloud wide = Scene(20000, 21, true, false), exact = Scene(9000, 22, false, false);
+  for (Eigen::Vector3d& p : exact.positions) p = p.cast<float>().cast<double>();
+  io::WritePointCloud(dir.File("wide.ply"), wide, doubles);
+  io::WritePointCloud(dir.File("exact.ply"), exact, doubles);
+  for (const std::string name : {"wide.ply", "exact.ply"}) {
+    ASSERT_EQ(io::OpenPointReader(dir.File(name))->record_layout()->coordinates,
+              io::PointRecordLayout::Coordinates::kFloat64) << name;
+  }
+  PackOptions o;
+  o.chunk_points = 512;
+  o.file_bytes = 64 * 1024;
+  for (const std::string name : {"wide.ply", "exact.ply"}) {
+    for (uint64_t memory : {uint64_t{1} << 20, uint64_t{2048}}) {
+      o.memory_points = memory;
+      const std::string tag = name + std::to_string(memory);
+      o.direct_reads = true;
+      const PackSummary direct = PackArchive(o, {PackInputFromFile(dir.File(name))}, dir.File("d" + tag));
+      o.direct_reads = false;
+      const PackSummary read = PackArchive(o, {PackInputFromFile(dir.File(name))}, dir.File("r" + tag));
+      const size_t bytes = name == std::string("wide.ply") ? 28u : 16u;
+      EXPECT_EQ(direct.record_bytes, bytes) << tag;
+      EXPECT_EQ(read.record_bytes, bytes) << tag;
+      EXPECT_EQ(direct.hash_seconds, 0.0) << tag << ": hashed in pass 1's read, not on another thread";
+      ExpectSameArchive(dir.File("d" + tag), dir.File("r" + tag), tag);
+    }
+  }
+  // A NaN, then an infinity: refused naming the first vertex, as the PLY reader does.
+  wide.positions[15000].x() = std::numeric_limits<double>::quiet_NaN();
+  wide.positions[17000].z() = -std::numeric_limits<double>::infinity();
+  io::WritePointCloud(dir.File("nan.ply"), wide, doubles);
+  try {
+    PackArchive({}, {PackInputFromFile(dir.File("nan.ply"))}, dir.File("out"));
+    ADD_FAILURE() << "nan.ply accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 15000: coordinate is NaN or infinite"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.File("out")));
+}
+
 TEST(PackDirect, LasRecordsGiveTheSameArchiveAsThePointReaders) {
   TempDir dir;
   // Survey coordinates in LAS (world, int32 with scale and offset): a decimal scale, then one
