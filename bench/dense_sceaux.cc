@@ -95,15 +95,7 @@ int RunDenseSceaux(const BenchOptions& args) {
   }
   const pg::ColmapModel model = pg::ReadColmapModel(sparse);
   const std::string temp = (fs::temp_directory_path() / ("candi_bench_sceaux_" + std::to_string(::getpid()))).string();
-  struct Cleanup {  // removed at the end, by an exception, or by an interrupt (core/interrupt.h)
-    std::string dir;
-    int id;
-    ~Cleanup() {
-      UnregisterTempPath(id);
-      std::error_code ec;
-      fs::remove_all(dir, ec);
-    }
-  } cleanup{temp, RegisterTempPath(temp)};
+  const TempFolder cleanup(temp, RegisterTempPath(temp));  // removed at the end, by an exception or an interrupt
 
   Stopwatch watch;
   const std::string workspace = PrepareWorkspace(model, photos, sparse, temp);

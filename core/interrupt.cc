@@ -132,6 +132,18 @@ void UnregisterTempPath(int id) {
   r.temps.erase(id);
 }
 
+TempFolder::~TempFolder() { Reset("", -1); }
+
+void TempFolder::Reset(std::string path, int id) {
+  if (!path_.empty()) {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  if (id_ >= 0) UnregisterTempPath(id_);
+  path_ = std::move(path);
+  id_ = id;
+}
+
 int RegisterChild(pid_t pid) {
   Registry& r = Reg();
   std::lock_guard<std::mutex> lock(r.mutex);

@@ -15,6 +15,7 @@
 #include <functional>
 #include <string>
 #include <system_error>
+#include <utility>
 
 namespace candi {
 
@@ -46,5 +47,27 @@ void UnregisterChild(int id);
 // unregisters `id` (also when `step` throws): the handler sees either the temporary or the
 // finished file, never half of the step.
 void CommitTempPath(int id, const std::function<void()>& step);
+
+// A registered temporary folder (CreateTempDirectory, MakeTempDirectory, RegisterTempPath) that
+// is removed, with everything in it, and unregistered when this is destroyed: at the end, by an
+// exception, or (registered) by an interrupt. Keep() after the folder was renamed into place.
+class TempFolder {
+ public:
+  TempFolder() = default;
+  TempFolder(std::string path, int id) : path_(std::move(path)), id_(id) {}
+  ~TempFolder();
+  TempFolder(const TempFolder&) = delete;
+  TempFolder& operator=(const TempFolder&) = delete;
+  // Takes `path` and `id` (the folder held before, if any, is removed first).
+  void Reset(std::string path, int id);
+  const std::string& path() const { return path_; }
+  int id() const { return id_; }
+  // Not removed when this is destroyed (only unregistered).
+  void Keep() { path_.clear(); }
+
+ private:
+  std::string path_;
+  int id_ = -1;
+};
 
 }  // namespace candi

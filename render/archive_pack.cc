@@ -501,15 +501,7 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   // Created and registered in one step: an interrupt removes it, or comes before it exists.
   const int interrupt_id = CreateTempDirectory(temp, &ec);
   if (interrupt_id < 0) throw InputError(temp, "", "cannot create the archive's build directory: " + ec.message());
-  struct Cleanup {
-    std::string dir;
-    int interrupt_id;  // core/interrupt.h: the folder is removed if the process is interrupted
-    ~Cleanup() {
-      std::error_code ignored;
-      if (!dir.empty()) fs::remove_all(dir, ignored);
-      UnregisterTempPath(interrupt_id);
-    }
-  } cleanup{temp, interrupt_id};
+  TempFolder cleanup(temp, interrupt_id);
 
   auto pack = [&](auto point_type) {
     using P = decltype(point_type);
@@ -574,9 +566,9 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
     manifest.sources.push_back(src);
   }
   WriteFileAtomic(temp + "/" + kArchiveManifest, manifest.ToJson());
-  CommitTempPath(cleanup.interrupt_id, [&] {
+  CommitTempPath(cleanup.id(), [&] {
     ReplaceFolder(temp, out_path.string(), IsArchive, "a candi render archive");
-    cleanup.dir.clear();
+    cleanup.Keep();
   });
 
   summary.points = manifest.points;

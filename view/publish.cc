@@ -173,15 +173,7 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
   // Created and registered in one step: an interrupt removes it, or comes before it exists.
   const int interrupt_id = CreateTempDirectory(temp, &ec);
   if (interrupt_id < 0) throw InputError(temp, "", "cannot create the site's build folder: " + ec.message());
-  struct Cleanup {
-    std::string dir;
-    int interrupt_id;
-    ~Cleanup() {
-      std::error_code ignored;
-      if (!dir.empty()) fs::remove_all(dir, ignored);
-      UnregisterTempPath(interrupt_id);
-    }
-  } cleanup{temp, interrupt_id};
+  TempFolder cleanup(temp, interrupt_id);
   if (!fs::create_directory(fs::path(temp) / "data", ec) || ec) {
     throw InputError(temp, "", "cannot create the site's build folder: " + ec.message());
   }
@@ -304,9 +296,9 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
     if (e.is_regular_file()) stats.site_bytes += e.file_size();
   }
 
-  CommitTempPath(cleanup.interrupt_id, [&] {
+  CommitTempPath(cleanup.id(), [&] {
     ReplaceFolder(temp, out.string(), IsSite, "a candi site");
-    cleanup.dir.clear();
+    cleanup.Keep();
   });
   stats.seconds = watch.Seconds();
   return stats;

@@ -17,13 +17,6 @@
 
 namespace candi::io {
 
-CopcRecordStore::Folder::~Folder() {
-  if (path.empty()) return;
-  std::error_code ignored;
-  std::filesystem::remove_all(path, ignored);
-  UnregisterTempPath(interrupt_id);
-}
-
 CopcRecordStore::CopcRecordStore(const std::string& path, size_t record_length, size_t gps_offset,
                                  const CopcWriteOptions& options, uint64_t stated)
     : path_(path), length_(record_length), gps_offset_(gps_offset) {
@@ -46,7 +39,7 @@ CopcRecordStore::CopcRecordStore(const std::string& path, size_t record_length, 
   // Spilled: the records, then their groups (the spill's blocks given back as they are read,
   // where the filesystem can) and the points above the buckets: twice the records at most.
   struct statvfs disk;
-  if (statvfs(folder_.path.c_str(), &disk) != 0) return;
+  if (statvfs(folder_.path().c_str(), &disk) != 0) return;
   const double free = static_cast<double>(disk.f_bavail) * static_cast<double>(disk.f_frsize);
   const double needed = 2.0 * count * length;
   if (needed <= free) return;
@@ -74,8 +67,7 @@ void CopcRecordStore::Spill() {
         pattern, "",
         std::string("cannot create the COPC file's spill folder: ") + std::strerror(errno));
   }
-  folder_.path = pattern;
-  folder_.interrupt_id = id;
+  folder_.Reset(pattern, id);
   spill_ = std::make_unique<SpillFile>(pattern + "/records");
   if (records_.size() > 0) {
     spill_->Append(records_.data(), records_.size());
@@ -102,7 +94,7 @@ CopcRecords CopcRecordStore::Records() {
   if (spilled()) {
     records.spill = spill_.get();
     records.n = spill_->size() / length_;
-    records.spill_dir = folder_.path;
+    records.spill_dir = folder_.path();
     // A group's records (mapped from its file), their lists and cells.
     records.memory_points = std::max<uint64_t>(1, memory_ / (length_ + 8));
   } else {

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "core/fresh_memory.h"
+#include "core/interrupt.h"
 #include "core/spill_file.h"
 #include "io/las/copc_octree.h"
 #include "io/point_file.h"
@@ -48,11 +49,7 @@ class CopcRecordStore {
   const size_t length_, gps_offset_;
   uint64_t memory_ = 0;
   FreshBuffer records_;
-  struct Folder {
-    std::string path;
-    int interrupt_id = -1;
-    ~Folder();
-  } folder_;
+  TempFolder folder_;  // the spill's, once spilled
   std::unique_ptr<SpillFile> spill_;
   std::array<double, 2> gps_{INFINITY, -INFINITY};
 };
