@@ -108,7 +108,7 @@ void AddPack(Command& root) {
   PackArgs& a = root.Keep<PackArgs>();
   Command c = root.Add("pack", "Pack point files into a render archive: Morton-ordered chunks, 8 bytes a point, "
                                "memory-mapped by `candi render ARCHIVE`");
-  c.Option("inputs", a.inputs, "Point files (.ply .las .xyz .pts)").Required();
+  c.Option("inputs", a.inputs, "Point files " CANDI_POINT_FILES_READ).Required();
   c.Option("-o,--output", a.output, "Archive directory (replaced if it is an archive)").Required();
   c.Option("--chunk-points", a.options.chunk_points, "Points per chunk at most").Range(64, 1 << 24);
   c.Option("--memory", a.memory_mb, "MB for sorting (larger inputs are bucketed on disk)");

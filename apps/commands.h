@@ -22,6 +22,11 @@
 
 namespace candi::apps {
 
+// The point files the commands read and write, as their options' help lists them (the formats
+// are io/point_io.h's; COPC is written for a name ending in .copc.laz and read as LAZ).
+#define CANDI_POINT_FILES_READ "(.ply .las .laz .e57 .xyz .pts)"
+#define CANDI_POINT_FILES_WRITTEN "(.ply .las .laz .copc.laz .e57 .xyz .pts)"
+
 void AddInspectCommands(Command& root);   // info, convert, compare (inspect.cc)
 void AddDigitizeCommands(Command& root);  // sfm, dense, georef, register, register-scans, clean, colorcorrect, foundation,
                                           // relief (digitize.cc, relief.cc)

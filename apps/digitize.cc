@@ -116,7 +116,7 @@ void AddDense(Command& root) {
                                 "depth and normal maps (written to stereo/ for COLMAP's stereo_fusion), fused into "
                                 "coloured points with normals");
   c.Option("workspace", a.workspace, "COLMAP dense workspace (e.g. from candi sfm)").Required();
-  c.Option("-o,--output", a.output, "Point file (.ply .las .xyz .pts)").Required();
+  c.Option("-o,--output", a.output, "Point file " CANDI_POINT_FILES_WRITTEN).Required();
   c.Option("--resolution-scale", s.resolution_scale, "Resample images by this factor (0, 1]");
   c.Option("--iterations", s.iterations, "PatchMatch rounds (propagation + refinement)");
   c.Option("--window", s.window_radius, "Matching window radius, pixels");
@@ -309,7 +309,7 @@ void AddRegisterScans(Command& root) {
            "needs, [0, 1] (lower only for scans sharing less than half their points)");
   c.Option("--coarse-iterations", a.coarse_options.max_iterations, "With --coarse: RANSAC iterations");
   c.Option("--seed", a.coarse_options.seed, "With --coarse: the seed of RANSAC's sampling");
-  c.Option("--format", a.format, "Extension of the moved scans (ply, las, laz, e57, xyz; default: each scan's own)");
+  c.Option("--format", a.format, "Extension of the moved scans (ply, las, laz, copc.laz, e57, xyz; default: each scan's own)");
   c.Run([&a] { return RunRegisterScans(a); });
   c.Footer("Example: candi register-scans st1.las st2.las st3.las st4.las -o registered --targets targets.csv\n"
            "         (then candi compare registered/st1.las registered/st2.las -o overlap.las --method m3c2)");
@@ -523,7 +523,7 @@ void AddFoundation(Command& root) {
   Command c = root.Add("foundation", "Foundation layers from a CAD section drawing (DXF): profiles, Hermite "
                                      "resampling, rotational blending or sweep, mesh, uniform points");
   c.Option("drawing", a.input, "Section drawing (ASCII DXF)").Required();
-  c.Option("-o,--output", a.output, "Point file (.ply .las .xyz .pts): merged with a layer field, or one per layer "
+  c.Option("-o,--output", a.output, "Point file " CANDI_POINT_FILES_WRITTEN ": merged with a layer field, or one per layer "
            "with --split").Required();
   c.Option("--layers", a.options.layers, "Layers to build, e.g. A,B,C,D (default: all with a section)").Delimiter(',');
   c.Option("--samples-per-side", s.profile.samples_per_side, "N: Hermite samples per side (>= 2)");

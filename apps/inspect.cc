@@ -206,7 +206,7 @@ int RunConvert(const ConvertArgs& args) {
 void AddConvert(Command& root) {
   ConvertArgs& a = root.Keep<ConvertArgs>();
   io::ConvertOptions& o = a.options;
-  Command c = root.Add("convert", "Convert between PLY, LAS, E57, XYZ and PTS (and read LAZ), streaming; reproject "
+  Command c = root.Add("convert", "Convert between PLY, LAS, LAZ, COPC, E57, XYZ and PTS, streaming; reproject "
                                   "with PROJ");
   c.Option("input", a.input, "Input point file").Required();
   c.Option("output", a.output, "Output point file; format from its extension").Required();
@@ -226,8 +226,10 @@ void AddConvert(Command& root) {
             {"double", io::PositionPrecision::kFloat64}},
            "PLY/XYZ positions: auto, float or double");
   c.Option("--las-scale", a.las_scale, "LAS output scale, s or sx,sy,sz (default: keep, else 0.001)");
-  c.Option("--las-format", o.write.las_point_format, "LAS output point format: 0-3 or 6-8");
-  c.Option("--las-version", o.write.las_version_minor, "LAS output minor version: 2, 3 or 4");
+  c.Option("--las-format", o.write.las_point_format,
+           "LAS/LAZ output point format: 0-3 or 6-8 (COPC holds 6-8: 0/1 are written as 6, 2/3 as 7)");
+  c.Option("--las-version", o.write.las_version_minor,
+           "LAS/LAZ output minor version: 2, 3 or 4 (COPC is always LAS 1.4)");
   c.Option("--copc-memory", a.copc_memory_mb,
            "COPC output: the memory (MB) its records may take until the file is complete; "
            "beyond it they are spilled beside the file (default 0: half of this machine's)");
@@ -235,7 +237,9 @@ void AddConvert(Command& root) {
   c.Option("--to-crs", o.to_crs, "Reproject into this CRS with PROJ (e.g. EPSG:32749)");
   c.Run([&a] { return RunConvert(a); });
   c.Footer("Examples: candi convert scan.las scan.ply --shift auto\n"
-           "          candi convert gnss_wgs84.laz site_utm.las --to-crs EPSG:32749");
+           "          candi convert gnss_wgs84.laz site_utm.las --to-crs EPSG:32749\n"
+           "          candi convert scan.ply scan.laz --las-format 7\n"
+           "          candi convert scan.las scan.copc.laz   (for Potree, QGIS, CloudCompare)");
 }
 
 struct CompareArgs {

@@ -248,7 +248,7 @@ void AddRender(Command& root) {
   pipeline::RenderOptions& o = a.options;
   Command c = root.Add("render", "Render point files see-through with SPBR (stochastic point-based rendering), "
                                  "merged into one image");
-  c.Option("inputs", a.inputs, "Point files (.ply .las .xyz .pts), or one archive (candi pack, a build directory "
+  c.Option("inputs", a.inputs, "Point files " CANDI_POINT_FILES_READ ", or one archive (candi pack, a build directory "
            "or a demo's output); under mpirun the ranks share the ensembles").Required();
   c.Option("-o,--output", a.outputs.png, "Output PNG (8-bit)").Required();
   c.Option("--png16", a.outputs.png16, "Also write a 16-bit PNG (for analysis)");

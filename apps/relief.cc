@@ -35,7 +35,7 @@ void AddDataset(Command& relief) {
   pipeline::ReliefDatasetOptions& o = a.options;
   Command c = relief.Add("dataset", "Training pairs from scans of visible panels (or from synthetic panels): "
                                     "orthographic render, patches");
-  c.Option("inputs", a.inputs, "Scans (.ply .las .xyz .pts), panel photos (*_photo.png) or folders of them")
+  c.Option("inputs", a.inputs, "Scans " CANDI_POINT_FILES_READ ", panel photos (*_photo.png) or folders of them")
       .Required();
   c.Option("-o,--output", a.output_dir, "Output folder (train/, val/, dataset.txt)").Required();
   c.Option("--pixels-per-m", o.raster.pixels_per_m, "Render resolution, pixels per metre");
@@ -121,7 +121,7 @@ void AddPoints(Command& relief) {
                                    "wall, y up, z out)");
   c.Option("photo", a.photo, "Photo (grey becomes the colour)").Required();
   c.Option("depth", a.depth, "Depth PNG (levels)").Required();
-  c.Option("-o,--output", a.output, "Point file (.ply .las .xyz .pts)").Required();
+  c.Option("-o,--output", a.output, "Point file " CANDI_POINT_FILES_WRITTEN).Required();
   c.Option("--width-m", a.options.width_m, "Panel width, m");
   c.Option("--height-m", a.options.height_m, "Panel height, m");
   c.Option("--depth-m", a.options.depth_m, "Relief depth: level 0 is this far out of the wall, m");
