@@ -5,7 +5,9 @@
 // Each case runs in a child process of its own, so its peak RSS (getrusage) is its own; the
 // seconds are those of the writer's Write and Close calls (the generation is not counted), and
 // split: "in" the Write calls, then Close: for COPC its "octree" (until the writer reports its
-// chunks stage) and "chunks" (the rest), for LAS and LAZ all "chunks".
+// chunks stage) and "chunks" (the rest), for LAS and LAZ all "chunks". "user" and "sys" are the
+// CPU seconds of the process's threads in those calls (getrusage): sys is mostly the kernel's
+// first touch of fresh memory and page cache, which on a VM varies several-fold from run to run.
 //
 // --copc-memory MB: the memory a COPC file's records may take before they are spilled beside it
 // (io::CopcWriteOptions::memory_bytes; default: half the machine's).
@@ -24,6 +26,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/rng.h"
@@ -80,8 +83,24 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
 
 struct Split {
   double in = 0.0, octree = 0.0, chunks = 0.0;
+  double user = 0.0, sys = 0.0;  // CPU seconds in the writer's calls, all threads
   double Total() const { return in + octree + chunks; }
 };
+
+// The process's user and system CPU seconds so far.
+std::pair<double, double> CpuSeconds() {
+  struct rusage u;
+  getrusage(RUSAGE_SELF, &u);
+  auto s = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+  return {s(u.ru_utime), s(u.ru_stime)};
+}
+
+// Adds the CPU seconds since `from` to split's.
+void AddCpu(const std::pair<double, double>& from, Split* split) {
+  const std::pair<double, double> now = CpuSeconds();
+  split->user += now.first - from.first;
+  split->sys += now.second - from.second;
+}
 
 // Writes `points` points of the scan to `path` on `threads` threads; the writer's seconds.
 Split WriteScan(const std::string& path, uint64_t points, int threads, uint64_t copc_memory) {
@@ -106,19 +125,25 @@ Split WriteScan(const std::string& path, uint64_t points, int threads, uint64_t 
   };
   Rng rng(1);
   Split split;
+  auto cpu0 = CpuSeconds();
   auto t0 = std::chrono::steady_clock::now();
   const std::unique_ptr<io::PointWriter> writer = io::OpenPointWriter(path, spec, options);
   split.in += Seconds(t0);
+  AddCpu(cpu0, &split);
   for (uint64_t first = 0; first < points; first += kChunkPoints) {
     ScanChunk(first, static_cast<size_t>(std::min<uint64_t>(kChunkPoints, points - first)), &rng,
               &chunk);
+    cpu0 = CpuSeconds();
     t0 = std::chrono::steady_clock::now();
     writer->Write(chunk);
     split.in += Seconds(t0);
+    AddCpu(cpu0, &split);
   }
+  cpu0 = CpuSeconds();
   t0 = std::chrono::steady_clock::now();
   writer->Close();
   const double close = Seconds(t0);
+  AddCpu(cpu0, &split);
   split.chunks = chunks_started ? Seconds(chunks_t0) : close;
   split.octree = close - split.chunks;
   return split;
@@ -137,10 +162,10 @@ void RunCase(const std::string& path, uint64_t points, int threads, uint64_t cop
     const double bytes = static_cast<double>(fs::file_size(path));
     const double n = static_cast<double>(points);
     const std::string name = fs::path(path).filename().string();
-    std::printf("%-14s %12llu %4d %10.2f %10.2f %12.2f %12.2f %7.2f %7.2f %7.2f\n",
+    std::printf("%-14s %12llu %4d %10.2f %10.2f %12.2f %12.2f %7.2f %7.2f %7.2f %7.2f %7.2f\n",
                 name.substr(name.find('.') + 1).c_str(), static_cast<unsigned long long>(points),
                 threads, s, n * 1e-6 / s, usage.ru_maxrss / 1048576.0, bytes / n, split.in,
-                split.octree, split.chunks);
+                split.octree, split.chunks, split.user, split.sys);
     std::fflush(stdout);
     if (!keep) fs::remove(path);
     std::_Exit(0);
@@ -189,8 +214,9 @@ int main(int argc, char** argv) {
   }
   fs::create_directories(dir);
   std::printf("copc_bench: a generated airborne scan written through io::OpenPointWriter\n");
-  std::printf("%-14s %12s %4s %10s %10s %12s %12s %7s %7s %7s\n", "format", "points", "thr",
-              "seconds", "M pts/s", "peak RSS GiB", "bytes/point", "in s", "octree", "chunks");
+  std::printf("%-14s %12s %4s %10s %10s %12s %12s %7s %7s %7s %7s %7s\n", "format", "points", "thr",
+              "seconds", "M pts/s", "peak RSS GiB", "bytes/point", "in s", "octree", "chunks",
+              "user s", "sys s");
   for (const std::string& p : SplitList(points_text)) {
     const uint64_t points = static_cast<uint64_t>(std::stod(p));
     for (const std::string& format : SplitList(formats_text)) {
