@@ -23,11 +23,14 @@ namespace {
 struct BuildArgs {
   std::string scene;  // scene JSON (pipeline/scene.h)
   pipeline::BuildOptions options;
+  double copc_memory_mb = 0;
 };
 
 int RunBuild(const BuildArgs& a) {
+  pipeline::BuildOptions o = a.options;
+  o.copc_memory_bytes = CopcMemoryBytes(a.copc_memory_mb);
   const pipeline::Scene scene = pipeline::LoadScene(a.scene);
-  PrintBuildSummary(a.options.output, pipeline::Build(a.options, scene));
+  PrintBuildSummary(o.output, pipeline::Build(o, scene));
   return kOk;
 }
 
@@ -64,6 +67,7 @@ void AddBuild(Command& root) {
   c.Option("--threads", a.options.threads, "Threads (0: all)").Range(0, 256);
   c.Flag("--resume", a.options.resume, "Reuse what an earlier build into the same folder finished (its digitized "
          "layers, archive and renders) where their inputs are unchanged");
+  AddCopcMemory(c, a.copc_memory_mb);
   c.Run([&a] { return RunBuild(a); });
   c.Footer("Example: candi build examples/borobudur/scene.json -o borobudur_archive");
 }
@@ -121,7 +125,14 @@ void AddPack(Command& root) {
            "legend)");
 }
 
-int RunExportCopc(const pipeline::CopcExportOptions& o) {
+struct ExportCopcArgs {
+  pipeline::CopcExportOptions options;
+  double copc_memory_mb = 0;
+};
+
+int RunExportCopc(const ExportCopcArgs& a) {
+  pipeline::CopcExportOptions o = a.options;
+  o.copc.memory_bytes = CopcMemoryBytes(a.copc_memory_mb);
   std::optional<ConsoleProgress> progress;  // from the first point: no bar before an error
   StagedProgress closing("copc");            // each file's octree and chunks, once all is read
   const std::vector<pipeline::CopcFile> files = pipeline::ExportCopc(
@@ -145,14 +156,16 @@ int RunExportCopc(const pipeline::CopcExportOptions& o) {
 void AddExport(Command& root) {
   Command e = root.Add("export", "Write a finished build's layers in another format, without rebuilding");
   e.RequireSubcommand();
-  pipeline::CopcExportOptions& o = root.Keep<pipeline::CopcExportOptions>();
+  ExportCopcArgs& a = root.Keep<ExportCopcArgs>();
+  pipeline::CopcExportOptions& o = a.options;
   Command c = e.Add("copc", "COPC (cloud-optimized LAZ) of a finished build, for Potree, QGIS and CloudCompare: "
                             "every layer in one file, the layer as point source ID, and with --layers each layer "
                             "beside its PLY (what a scene's \"copc\" makes candi build write)");
   c.Option("build", o.build, "A finished build's folder (archive.json, layers/)").Required();
   c.Option("-o,--out", o.out, "The whole scene's file (default: BUILD/copc/<scene>.copc.laz)");
   c.Flag("--layers", o.copc.layers, "Also each layer as BUILD/layers/<name>.copc.laz");
-  c.Run([&o] { return RunExportCopc(o); });
+  AddCopcMemory(c, a.copc_memory_mb);
+  c.Run([&a] { return RunExportCopc(a); });
   c.Footer("Example: candi export copc borobudur_archive --layers   (then open "
            "borobudur_archive/copc/borobudur.copc.laz in QGIS, or with Potree)");
 }

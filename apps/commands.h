@@ -27,6 +27,12 @@ namespace candi::apps {
 #define CANDI_POINT_FILES_READ "(.ply .las .laz .e57 .xyz .pts)"
 #define CANDI_POINT_FILES_WRITTEN "(.ply .las .laz .copc.laz .e57 .xyz .pts)"
 
+// --copc-memory MB (convert, build, export copc; inspect.cc): the memory a COPC file's records
+// may take until it is complete, beyond which they are spilled beside it (0: half this
+// machine's). CopcMemoryBytes: its bytes; std::invalid_argument for a negative or NaN value.
+void AddCopcMemory(Command& c, double& mb);
+uint64_t CopcMemoryBytes(double mb);
+
 void AddInspectCommands(Command& root);   // info, convert, compare (inspect.cc)
 void AddDigitizeCommands(Command& root);  // sfm, dense, georef, register, register-scans, clean, colorcorrect, foundation,
                                           // relief (digitize.cc, relief.cc)

@@ -172,11 +172,7 @@ Eigen::Vector3d ParseScale(const std::string& text) {
 int RunConvert(const ConvertArgs& args) {
   io::ConvertOptions o = args.options;
   if (!args.las_scale.empty()) o.write.las_scale = ParseScale(args.las_scale);
-  if (!(args.copc_memory_mb >= 0)) {
-    throw std::invalid_argument("--copc-memory " + FormatSignificant(args.copc_memory_mb, 6) +
-                                ": must be >= 0 (MB; 0: half of this machine's memory)");
-  }
-  o.write.copc.memory_bytes = static_cast<uint64_t>(args.copc_memory_mb * 1048576.0);
+  o.write.copc.memory_bytes = CopcMemoryBytes(args.copc_memory_mb);
   if (args.shift == "auto") {
     o.shift = io::ShiftChoice::kAuto;
   } else if (args.shift == "none") {
@@ -202,6 +198,24 @@ int RunConvert(const ConvertArgs& args) {
   if (progress) progress->Finish();
   return kOk;
 }
+
+}  // namespace
+
+void AddCopcMemory(Command& c, double& mb) {
+  c.Option("--copc-memory", mb,
+           "COPC output: the memory (MB) its records may take until the file is complete; "
+           "beyond it they are spilled beside the file (default 0: half of this machine's)");
+}
+
+uint64_t CopcMemoryBytes(double mb) {
+  if (!(mb >= 0)) {
+    throw std::invalid_argument("--copc-memory " + FormatSignificant(mb, 6) +
+                                ": must be >= 0 (MB; 0: half of this machine's memory)");
+  }
+  return static_cast<uint64_t>(mb * 1048576.0);
+}
+
+namespace {
 
 void AddConvert(Command& root) {
   ConvertArgs& a = root.Keep<ConvertArgs>();
@@ -230,9 +244,7 @@ void AddConvert(Command& root) {
            "LAS/LAZ output point format: 0-3 or 6-8 (COPC holds 6-8: 0/1 are written as 6, 2/3 as 7)");
   c.Option("--las-version", o.write.las_version_minor,
            "LAS/LAZ output minor version: 2, 3 or 4 (COPC is always LAS 1.4)");
-  c.Option("--copc-memory", a.copc_memory_mb,
-           "COPC output: the memory (MB) its records may take until the file is complete; "
-           "beyond it they are spilled beside the file (default 0: half of this machine's)");
+  AddCopcMemory(c, a.copc_memory_mb);
   c.Option("--crs", o.crs, "The input's CRS (e.g. EPSG:4979), for files that state none; carried into the output");
   c.Option("--to-crs", o.to_crs, "Reproject into this CRS with PROJ (e.g. EPSG:32749)");
   c.Run([&a] { return RunConvert(a); });

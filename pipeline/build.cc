@@ -267,8 +267,9 @@ json RenderViews(const BuildOptions& options, const Scene& scene, const json& sc
 // 5. The COPC files the scene asks for (copc_export.h), from the layer files (key: the layers'
 // keys, the scene's "copc", name, CRS and origin). Returns archive.json's "copc" (null when none
 // is asked for); the seconds go to `timings`.
-json WriteSceneCopc(const Scene& scene, const json& scene_json, const fs::path& out, const Checkpoints& checkpoints,
-                    const Layers& layers, const LocalFrame& frame, const std::string& scene_crs, json* timings) {
+json WriteSceneCopc(const BuildOptions& options, const Scene& scene, const json& scene_json, const fs::path& out,
+                    const Checkpoints& checkpoints, const Layers& layers, const LocalFrame& frame,
+                    const std::string& scene_crs, json* timings) {
   if (!scene.copc.layers && !scene.copc.scene) return json();
   const Eigen::Vector3d& o = frame.origin;
   std::vector<std::string> parts = {"copc", scene_json["copc"].dump(), scene.name, scene_crs,
@@ -291,8 +292,10 @@ json WriteSceneCopc(const Scene& scene, const json& scene_json, const fs::path& 
     const Stopwatch watch;
     ConsoleProgress progress("copc");
     StagedProgress closing("copc");  // each file's octree and chunks, once every point is read
+    CopcOptions copc = scene.copc;
+    copc.memory_bytes = options.copc_memory_bytes;
     const std::vector<CopcFile> files = WriteCopc(
-        scene.copc, source, (out / scene_file).string(),
+        copc, source, (out / scene_file).string(),
         [&](uint64_t done, uint64_t total) {
           progress.Update(done, total);
           if (total > 0 && done >= total) progress.Finish();  // all read: the files close next
@@ -417,7 +420,7 @@ BuildSummary Build(const BuildOptions& options, const Scene& scene) {
   std::string pack_key;
   const auto [pack_seconds, pack_resumed] = PackLayers(options, scene_json, out, checkpoints, layers, &pack_key);
   const json views = RenderViews(options, scene, scene_json, out, checkpoints, hashes, layers, pack_key, &timings);
-  const json copc = WriteSceneCopc(scene, scene_json, out, checkpoints, layers, frame, scene_crs, &timings);
+  const json copc = WriteSceneCopc(options, scene, scene_json, out, checkpoints, layers, frame, scene_crs, &timings);
 
   // 6. MeshLab project, provenance.
   WriteMeshlab(scene, layers.clouds, (out / "meshlab").string());

@@ -74,6 +74,7 @@ struct BuildOptions {
   std::string output;          // the build folder (created; its parent must exist)
   int threads = 0;             // renders, packing, sampling: [0, 256], 0 = all
   bool resume = false;         // reuse the stages an earlier (interrupted) build finished
+  uint64_t copc_memory_bytes = 0;  // the scene's COPC files: CopcOptions::memory_bytes
   ReliefPanelRunner relief;    // empty: ReliefInChildProcesses()
   void Check() const;
 };

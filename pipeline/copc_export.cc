@@ -61,10 +61,12 @@ void ToCopcChunk(const PointCloud& chunk, uint16_t id, PointCloud* out) {
   }
 }
 
-// A writer's options whose Close() reports its stages as "<file name> <stage>".
-io::PointWriteOptions WriteOptionsFor(const std::string& path,
+// A writer's options: the records' memory budget, and Close() reporting its stages as
+// "<file name> <stage>".
+io::PointWriteOptions WriteOptionsFor(const std::string& path, const CopcOptions& copc,
                                       const StageProgressCallback& close_progress) {
   io::PointWriteOptions o;
+  o.copc.memory_bytes = copc.memory_bytes;
   if (close_progress) {
     const std::string name = fs::path(path).filename().string();
     o.close_progress = [name, close_progress](const std::string& stage, uint64_t done,
@@ -142,7 +144,7 @@ std::vector<CopcFile> WriteCopc(const CopcOptions& options, const CopcSource& so
     if (!parent.empty()) fs::create_directories(parent, ec);
     if (ec) throw InputError(scene_file, "", "cannot create its folder: " + ec.message());
     scene = io::OpenPointWriter(scene_file, {CopcSchema(), LocalFrame(), meta, total},
-                                WriteOptionsFor(scene_file, close_progress));
+                                WriteOptionsFor(scene_file, options, close_progress));
   }
   PointCloud chunk, copc;
   copc.SetSchema(CopcSchema());
@@ -153,7 +155,7 @@ std::vector<CopcFile> WriteCopc(const CopcOptions& options, const CopcSource& so
             .string();
     const io::PointWriteSpec spec{CopcSchema(), LocalFrame(), meta, readers[k]->info().count};
     std::unique_ptr<io::PointWriter> layer;
-    if (options.layers) layer = io::OpenPointWriter(path, spec, WriteOptionsFor(path, close_progress));
+    if (options.layers) layer = io::OpenPointWriter(path, spec, WriteOptionsFor(path, options, close_progress));
     uint64_t points = 0;
     while (const size_t n = readers[k]->Read(kChunkPoints, &chunk)) {
       ToCopcChunk(chunk, static_cast<uint16_t>(k), &copc);

@@ -44,6 +44,10 @@ inline constexpr uint16_t kCopcLayersRecord = 1;  // the "candi" VLR naming the 
 struct CopcOptions {
   bool layers = false;  // each layer as layers/<name>.copc.laz
   bool scene = false;   // every layer in one file, copc/<scene>.copc.laz
+  // The memory each file's records may take until it is complete, beyond which they are spilled
+  // beside it (io::CopcWriteOptions::memory_bytes; 0: half this machine's). Not the scene file's
+  // (`candi build --copc-memory`, `candi export copc --copc-memory`); the bytes do not depend on it.
+  uint64_t memory_bytes = 0;
   void Check() const {}
 };
 

@@ -16,6 +16,7 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
+#include "core/log.h"
 #include "io/crs.h"
 #include "io/las/las_io.h"
 #include "io/point_io.h"
@@ -78,13 +79,15 @@ class CopcBuild : public ::testing::Test {
     return j;
   }
 
-  json BuildInto(const std::string& out, int threads, bool resume = false) const {
+  json BuildInto(const std::string& out, int threads, bool resume = false,
+                 uint64_t copc_memory_bytes = 0) const {
     const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     testing::WriteBytes(dir_.File("scene.json"), SceneJson().dump(2));
     BuildOptions o;
     o.output = dir_.File(out);
     o.threads = threads;
     o.resume = resume;
+    o.copc_memory_bytes = copc_memory_bytes;
     Build(o, LoadScene(dir_.File("scene.json")));
     return json::parse(ReadFileToString(dir_.File(out + "/archive.json")));
   }
@@ -185,6 +188,46 @@ TEST_F(CopcBuild, SameBytesFromEveryWay) {
   json one = json::parse(ReadFileToString(dir_.File("one/archive.json")));
   one["pack_resumed"] = true;  // the only difference
   EXPECT_EQ(one, a);
+}
+
+// The files whose records were spilled, by the writers' log lines, while f runs.
+template <typename F>
+std::vector<std::string> SpilledWhile(const F& f) {
+  std::vector<std::string> spilled;
+  const LogSink old = SetLogSink([&](LogLevel, const std::string& m) {
+    const size_t at = m.find(": the COPC file's records pass its memory budget");
+    if (at != std::string::npos) spilled.push_back(fs::path(m.substr(0, at)).filename().string());
+  });
+  f();
+  SetLogSink(old);
+  std::sort(spilled.begin(), spilled.end());
+  return spilled;
+}
+
+// A build's and an export's memory budget reach every COPC file's writer: beyond it (here 1 KB)
+// the records are spilled beside the file, and the files are the same bytes.
+TEST_F(CopcBuild, TheMemoryBudgetSpillsEveryFilesRecordsAndKeepsItsBytes) {
+  const std::vector<std::string> files = {"layers/ground.copc.laz", "layers/wall.copc.laz",
+                                          "copc/site_one.copc.laz"};
+  const std::vector<std::string> all = {"ground.copc.laz", "site_one.copc.laz", "wall.copc.laz"};
+  EXPECT_TRUE(SpilledWhile([&] { BuildInto("memory", 2); }).empty());
+  EXPECT_EQ(SpilledWhile([&] { BuildInto("spilled", 2, false, 1024); }), all);
+  for (const std::string& f : files) {
+    EXPECT_EQ(ReadFileToString(dir_.File("spilled/" + f)), ReadFileToString(dir_.File("memory/" + f)))
+        << f;
+  }
+  CopcExportOptions e;
+  e.build = dir_.File("memory");
+  e.out = dir_.File("exported.copc.laz");
+  e.copc.layers = true;
+  e.copc.memory_bytes = 1024;
+  EXPECT_EQ(SpilledWhile([&] { ExportCopc(e); }),
+            (std::vector<std::string>{"exported.copc.laz", "ground.copc.laz", "wall.copc.laz"}));
+  EXPECT_EQ(ReadFileToString(e.out), ReadFileToString(dir_.File("spilled/copc/site_one.copc.laz")));
+  for (const auto& entry : fs::recursive_directory_iterator(dir_.path())) {
+    EXPECT_EQ(entry.path().filename().string().find(".candi-tmp-copc-"), std::string::npos)
+        << "a spill folder left: " << entry.path();
+  }
 }
 
 TEST_F(CopcBuild, AFolderThatIsNotABuildIsNamed) {

@@ -164,14 +164,20 @@ TEST(CliErrors, MissingInputUnwritableOutputAndBadOptionValueForEveryCommand) {
       EXPECT_NE(r.output.find(row.option), std::string::npos) << "names the option: " << r.output;
     }
   }
-  // convert's COPC memory budget: a size in MB, never negative or not a number.
+  // The COPC memory budget of convert, build and export copc: a size in MB, never negative or
+  // not a number, refused before anything is read or written.
   for (const char* bad : {"-1", "nan"}) {
-    const Result r = RunCandi("convert " + dir.File("in.ply") + " " + dir.File("o.copc.laz") +
-                              " --copc-memory " + bad);
-    EXPECT_EQ(r.code, 1) << r.output;
-    EXPECT_NE(r.output.find("--copc-memory " + std::string(bad) + ": must be >= 0"), std::string::npos)
-        << r.output;
-    EXPECT_FALSE(fs::exists(dir.File("o.copc.laz")));
+    for (const std::string& command :
+         {"convert " + dir.File("in.ply") + " " + dir.File("o.copc.laz"),
+          "build " + dir.File("no_scene.json") + " -o " + dir.File("cb"),
+          "export copc " + dir.File("cb") + " -o " + dir.File("o.copc.laz")}) {
+      const Result r = RunCandi(command + " --copc-memory " + bad);
+      EXPECT_EQ(r.code, 1) << command << ": " << r.output;
+      EXPECT_NE(r.output.find("--copc-memory " + std::string(bad) + ": must be >= 0"), std::string::npos)
+          << command << ": " << r.output;
+      EXPECT_FALSE(fs::exists(dir.File("o.copc.laz")));
+      EXPECT_FALSE(fs::exists(dir.File("cb")));
+    }
   }
   // Nothing was left behind by the failed commands: only the inputs are in the folder.
   for (const char* output : {"o.ply", "o.png", "arc", "f.ply", "b", "w", "d.ply", "g.ply", "c.png", "c.ply", "p.json", "r.ply", "demo"})

@@ -12,6 +12,7 @@
 
 #include "core/check.h"
 #include "core/interrupt.h"
+#include "core/log.h"
 #include "core/text_format.h"
 #include "io/las/copc_write.h"
 
@@ -68,6 +69,9 @@ void CopcRecordStore::Spill() {
         std::string("cannot create the COPC file's spill folder: ") + std::strerror(errno));
   }
   folder_.Reset(pattern, id);
+  LogInfo(path_ + ": the COPC file's records pass its memory budget (" +
+          FormatSignificant(static_cast<double>(memory_) / 1048576.0, 4) + " MB): spilled to " +
+          pattern + " until the file is complete");
   spill_ = std::make_unique<SpillFile>(pattern + "/records");
   if (records_.size() > 0) {
     spill_->Append(records_.data(), records_.size());
