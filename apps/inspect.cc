@@ -12,6 +12,7 @@
 #include "core/text_format.h"
 #include "io/convert.h"
 #include "io/crs.h"
+#include "io/las/copc_read.h"
 #include "io/point_io.h"
 #include "pipeline/compare.h"
 
@@ -57,7 +58,14 @@ std::string Extent(const Eigen::Vector3d& v) {
 
 nlohmann::json JsonVec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
-nlohmann::json ToJson(const io::PointFileInfo& info, const io::PointScan* scan, const std::string& path) {
+std::string Counts(const std::vector<uint64_t>& v) {
+  std::string text;
+  for (uint64_t c : v) text += (text.empty() ? "" : " ") + std::to_string(c);
+  return text;
+}
+
+nlohmann::json ToJson(const io::PointFileInfo& info, const io::PointScan* scan, const std::optional<io::CopcSummary>& copc,
+                      const std::string& path) {
   nlohmann::json j;
   j["file"] = path;
   j["format"] = info.description;
@@ -83,10 +91,23 @@ nlohmann::json ToJson(const io::PointFileInfo& info, const io::PointScan* scan, 
                 {"color_16bit", las.color_16bit},
                 {"vlrs", las.vlrs.size()}};
   }
+  if (copc) {
+    j["copc"] = {{"center", JsonVec(copc->info.center)},
+                 {"halfsize", copc->info.halfsize},
+                 {"spacing", copc->info.spacing},
+                 {"gps_time", {copc->info.gpstime_minimum, copc->info.gpstime_maximum}},
+                 {"pages", copc->pages},
+                 {"nodes", copc->nodes},
+                 {"empty_nodes", copc->empty_nodes},
+                 {"points", copc->points},
+                 {"nodes_by_level", copc->nodes_by_level},
+                 {"points_by_level", copc->points_by_level}};
+  }
   return j;
 }
 
-void PrintText(const io::PointFileInfo& info, const io::PointScan* scan, const std::string& path) {
+void PrintText(const io::PointFileInfo& info, const io::PointScan* scan, const std::optional<io::CopcSummary>& copc,
+               const std::string& path) {
   std::printf("file      %s\n", path.c_str());
   std::printf("format    %s\n", info.description.c_str());
   const uint64_t count = scan ? scan->count : info.count;
@@ -113,6 +134,19 @@ void PrintText(const io::PointFileInfo& info, const io::PointScan* scan, const s
     std::printf("las       scale %s, offset %s, %zu VLR/EVLR, colour %s\n", Vec(las.scale).c_str(),
                 Vec(las.offset).c_str(), las.vlrs.size(), las.color_16bit ? "16-bit" : "8-bit values");
   }
+  if (copc) {
+    std::printf("copc      COPC 1.0: %llu nodes (%llu empty) in %llu hierarchy page(s), levels 0-%zu, root spacing %s m; "
+                "cube centre %s, half-width %s\n",
+                static_cast<unsigned long long>(copc->nodes), static_cast<unsigned long long>(copc->empty_nodes),
+                static_cast<unsigned long long>(copc->pages),
+                copc->nodes_by_level.empty() ? size_t{0} : copc->nodes_by_level.size() - 1,
+                FormatSignificant(copc->info.spacing, 6).c_str(),
+                (FormatSignificant(copc->info.center.x(), 10) + " " + FormatSignificant(copc->info.center.y(), 10) +
+                 " " + FormatSignificant(copc->info.center.z(), 10)).c_str(),
+                FormatSignificant(copc->info.halfsize, 10).c_str());
+    std::printf("          nodes by level %s\n          points by level %s\n", Counts(copc->nodes_by_level).c_str(),
+                Counts(copc->points_by_level).c_str());
+  }
 }
 
 int RunInfo(const InfoArgs& args) {
@@ -131,10 +165,19 @@ int RunInfo(const InfoArgs& args) {
     if (!inside) std::fprintf(stderr, "[warning] %s: points lie outside the header's bounds\n", args.input.c_str());
   }
   const io::PointScan* scanned = scan ? &*scan : nullptr;
+  // A COPC file's hierarchy, as COPC readers walk it; its counts must add up to the points.
+  std::optional<io::CopcSummary> copc;
+  if (info.meta.las.present) copc = io::ReadCopcSummary(reader->path(), info.meta.las);
+  const uint64_t count = scan ? scan->count : info.count;
+  if (copc && count != io::kUnknownCount && copc->points != count) {
+    std::fprintf(stderr, "[warning] %s: the COPC hierarchy's nodes hold %llu points, the file %llu\n",
+                 args.input.c_str(), static_cast<unsigned long long>(copc->points),
+                 static_cast<unsigned long long>(count));
+  }
   if (args.json) {
-    std::printf("%s\n", ToJson(info, scanned, args.input).dump(2).c_str());
+    std::printf("%s\n", ToJson(info, scanned, copc, args.input).dump(2).c_str());
   } else {
-    PrintText(info, scanned, args.input);
+    PrintText(info, scanned, copc, args.input);
   }
   return kOk;
 }
@@ -142,7 +185,7 @@ int RunInfo(const InfoArgs& args) {
 void AddInfo(Command& root) {
   InfoArgs& a = root.Keep<InfoArgs>();
   Command c = root.Add("info", "Print a point file's count, bounds (world), fields, format (LAZ: its compressor), shift "
-                               "and CRS");
+                               "and CRS, and a COPC file's hierarchy (nodes and points by level)");
   c.Option("file", a.input, "Point file (.ply .las .laz .e57 .xyz .txt .pts)").Required();
   c.Option("--columns", a.read.columns, "XYZ/PTS column spec, e.g. x,y,z,r,g,b");
   c.Flag("--json", a.json, "Print JSON instead of text");

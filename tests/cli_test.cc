@@ -212,5 +212,32 @@ TEST(Cli, ConvertToALazNameWritesLaz) {
   EXPECT_FALSE(FileExists("/proc/candi_cli_test.laz"));
 }
 
+TEST(Cli, InfoWalksACopcFilesHierarchy) {
+  CANDI_REQUIRE_SHARED_DATA(autzen, "las/autzen_trim.las");
+  TempDir dir;
+  Result r = RunCandi("-q convert " + autzen + " " + dir.File("a.copc.laz"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = RunCandi("-q info --json " + dir.File("a.copc.laz"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.out);
+  const auto& copc = j.at("copc");
+  EXPECT_EQ(copc.at("points"), 110000);
+  EXPECT_EQ(copc.at("nodes_by_level").at(0), 1);
+  uint64_t nodes = 0, points = 0;
+  for (const auto& n : copc.at("nodes_by_level")) nodes += n.get<uint64_t>();
+  for (const auto& p : copc.at("points_by_level")) points += p.get<uint64_t>();
+  EXPECT_EQ(nodes, copc.at("nodes").get<uint64_t>());
+  EXPECT_EQ(points, 110000u);
+  // The spacing halves a level from the root's, the cube's width / 128.
+  EXPECT_DOUBLE_EQ(copc.at("spacing").get<double>(), 2 * copc.at("halfsize").get<double>() / 128);
+  r = RunCandi("info " + dir.File("a.copc.laz"));
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("copc      COPC 1.0: " + std::to_string(nodes) + " nodes"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("[warning]"), std::string::npos) << r.output;
+  // Not COPC: no such line.
+  r = RunCandi("-q info --json " + autzen);
+  EXPECT_FALSE(nlohmann::json::parse(r.out).contains("copc"));
+}
+
 }  // namespace
 }  // namespace candi::testing
