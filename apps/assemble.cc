@@ -91,7 +91,7 @@ int RunPack(const PackArgs& a) {
       render::PackFiles(o, a.inputs, a.columns, a.output, progress.Callback(), colour_by);
   progress.Finish();
   std::printf("%s: %llu points in %llu chunks, %llu data file(s), %.2f bytes/point, %.1f s (%.1f M points/s: "
-              "bounds %.1f s, sort and write %.1f s; input hashes %.1f s during the bounds)%s, %zu-byte records; "
+              "bounds %.1f s, sort and write %.1f s; input hashes %.1f s on another thread meanwhile)%s, %zu-byte records; "
               "largest quantization error %.3g, %.3g, %.3g mm\n",
               a.output.c_str(), static_cast<unsigned long long>(s.points), static_cast<unsigned long long>(s.chunks),
               static_cast<unsigned long long>(s.files), s.points ? static_cast<double>(s.bytes) / s.points : 0.0,

@@ -80,7 +80,8 @@ struct PackSummary {
   size_t record_bytes = 0;      // bytes a point while sorting: 16 (floats in one frame) or 28
   double seconds = 0;           // whole pack, including bounds and hashing
   // Its stages: the bounds (pass 1), reading, sorting and writing the chunks (pass 2), and
-  // hashing the input files for the manifest (on another thread, during pass 1).
+  // hashing the input files for the manifest (on another thread, during both passes; binary PLY
+  // is hashed by pass 1 itself and not counted here).
   double bounds_seconds = 0, sort_seconds = 0, hash_seconds = 0;
   double max_error[3] = {0, 0, 0};  // largest quantization step / 2 over the chunks, m
   std::optional<FieldLegend> colour_by;  // the colouring by a field the manifest records
