@@ -8,6 +8,7 @@
 
 #include "apps/arg_parse.h"
 #include "apps/commands.h"
+#include "core/check.h"
 #include "core/progress.h"
 #include "core/text_format.h"
 #include "io/convert.h"
@@ -165,9 +166,15 @@ int RunInfo(const InfoArgs& args) {
     if (!inside) std::fprintf(stderr, "[warning] %s: points lie outside the header's bounds\n", args.input.c_str());
   }
   const io::PointScan* scanned = scan ? &*scan : nullptr;
-  // A COPC file's hierarchy, as COPC readers walk it; its counts must add up to the points.
+  // A COPC file's hierarchy, as COPC readers walk it; its counts must add up to the points. A
+  // malformed one is a warning: the points read as LAZ all the same (a LAS file may carry a copc
+  // VLR that a conversion forwarded).
   std::optional<io::CopcSummary> copc;
-  if (info.meta.las.present) copc = io::ReadCopcSummary(reader->path(), info.meta.las);
+  try {
+    if (info.meta.las.present) copc = io::ReadCopcSummary(reader->path(), info.meta.las);
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "[warning] not a valid COPC hierarchy: %s\n", e.what());
+  }
   const uint64_t count = scan ? scan->count : info.count;
   if (copc && count != io::kUnknownCount && copc->points != count) {
     std::fprintf(stderr, "[warning] %s: the COPC hierarchy's nodes hold %llu points, the file %llu\n",

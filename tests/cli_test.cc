@@ -234,6 +234,20 @@ TEST(Cli, InfoWalksACopcFilesHierarchy) {
   EXPECT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("copc      COPC 1.0: " + std::to_string(nodes) + " nodes"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("[warning]"), std::string::npos) << r.output;
+  // A root page past the file's end (the info VLR's root_hier_offset, 40 bytes into its payload
+  // after LAS 1.4's 375-byte header and the VLR's 54): the points still read, with a warning.
+  std::string bytes = ReadBytes(dir.File("a.copc.laz"));
+  const uint64_t past = bytes.size() + 1000;
+  for (int i = 0; i < 8; ++i) bytes[375 + 54 + 40 + i] = static_cast<char>(past >> (8 * i));
+  WriteBytes(dir.File("b.copc.laz"), bytes);
+  r = RunCandi("info " + dir.File("b.copc.laz"));
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("[warning] not a valid COPC hierarchy: " + dir.File("b.copc.laz") + ": byte " +
+                          std::to_string(past)),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("points    110000"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("copc      COPC"), std::string::npos) << r.output;
   // Not COPC: no such line.
   r = RunCandi("-q info --json " + autzen);
   EXPECT_FALSE(nlohmann::json::parse(r.out).contains("copc"));
