@@ -376,18 +376,33 @@ class Pipeline {
              const Bucket* buckets, size_t count, SpillFile* store) {
     builder_.SetGroup(records, list, global);
     if (encoding_) encoding_(settled_, n_);
-    std::vector<BucketNodes> built;
+    // Each batch's nodes are handed on (by one task) while the next batch is built: in order,
+    // and by one thread at a time, as when they were handed on between the batches.
+    std::vector<BucketNodes> built, built_last;
+    size_t first_last = 0;
+    auto hand_on_last = [&] {
+      for (size_t j = 0; j < built_last.size(); ++j) {
+        Take(buckets[first_last + j], &built_last[j], records, store);
+      }
+      built_last.clear();
+    };
     for (size_t first = 0, batch = 0; first < count; first += batch) {
       size_t points = 0;
       for (batch = 0; first + batch < count && points < options_.batch_points; ++batch) {
         points += buckets[first + batch].size();
       }
       built.assign(batch, {});
-      ParallelFor(size_t{0}, batch,
-                  [&](size_t j) { builder_.Build(buckets[first + j], batch == 1, &built[j]); });
-      for (size_t j = 0; j < batch; ++j) Take(buckets[first + j], &built[j], records, store);
+      const size_t tasks = built_last.empty() ? 0 : 1;
+      ParallelFor(size_t{0}, tasks + batch, [&](size_t j) {
+        if (j < tasks) return hand_on_last();
+        builder_.Build(buckets[first + j - tasks], batch == 1, &built[j - tasks]);
+      });
       if (encoding_) encoding_(settled_, n_);
+      std::swap(built, built_last);
+      first_last = first;
     }
+    hand_on_last();
+    if (encoding_) encoding_(settled_, n_);
   }
 
   // The rules above the buckets, the held buckets, then the nodes above (their records at
