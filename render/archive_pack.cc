@@ -186,16 +186,9 @@ class Packer {
       at.assign(pieces * cells, 0);
       ParallelFor(size_t{0}, pieces, [&](size_t piece) {
         uint64_t* count = &at[piece * cells];
-        uint64_t codes[256];
-        const int below = 3 * (kMortonBits - level - k);  // the code's bits below the child's
-        for (size_t a = piece * kRoutePiece; a < std::min(n, (piece + 1) * kRoutePiece); a += 256) {
-          const size_t m = std::min<size_t>(256, n - a);
-          MortonCodes(grid_, frame_, batch.data() + a, m, codes);
-          for (size_t i = 0; i < m; ++i) {
-            cell[a + i] = static_cast<uint16_t>((codes[i] >> below) & (cells - 1));
-            ++count[cell[a + i]];
-          }
-        }
+        const size_t a = piece * kRoutePiece, m = std::min(n, a + kRoutePiece) - a;
+        MortonCells(grid_, frame_, batch.data() + a, m, kMortonBits - level - k, k, &cell[a]);
+        for (size_t i = a; i < a + m; ++i) ++count[cell[i]];
       });
       const std::vector<uint64_t> start = StableBucketOffsets(&at, pieces, cells);
       grouped.resize(n);

@@ -234,24 +234,34 @@ bool InputBatches<P>::ReadRecords(UninitVector<P>* out) {
   const uint32_t fallback = PackColor(default_color_);
   std::atomic<bool> bad{false};
   ParallelFor(size_t{0}, (n + kRecordBlock - 1) / kRecordBlock, [&](size_t b) {
+    // The layout in the task's own locals: the records' stores could alias it (and the captured
+    // references), so the compiler would reload every field for every record.
+    const size_t stride = l.stride;
+    const size_t ox = l.xyz[0], oy = l.xyz[1], oz = l.xyz[2];
+    const bool has_rgb = l.rgb[0] >= 0;
+    const size_t o0 = has_rgb ? l.rgb[0] : 0, o1 = has_rgb ? l.rgb[1] : 0, o2 = has_rgb ? l.rgb[2] : 0;
+    const int color_shift = l.color_shift;
+    const uint32_t fallback_rgb = fallback;
+    const uint8_t* const in = records;
+    P* const points = out->data();
+    const size_t end = std::min(n, (b + 1) * kRecordBlock);
     uint32_t nonfinite = 0;
-    for (size_t i = b * kRecordBlock; i < std::min(n, (b + 1) * kRecordBlock); ++i) {
-      const uint8_t* r = records + i * l.stride;
-      P& p = (*out)[i];
+    for (size_t i = b * kRecordBlock; i < end; ++i) {
+      const uint8_t* r = in + i * stride;
+      P& p = points[i];
       if constexpr (!std::is_same_v<P, WidePoint>) {
-        std::memcpy(&p.x, r + l.xyz[0], 4);
-        std::memcpy(&p.y, r + l.xyz[1], 4);
-        std::memcpy(&p.z, r + l.xyz[2], 4);
+        std::memcpy(&p.x, r + ox, 4);
+        std::memcpy(&p.y, r + oy, 4);
+        std::memcpy(&p.z, r + oz, 4);
       }
       if constexpr (std::is_same_v<P, CompactPoint>) {
         uint32_t bits[3];
         std::memcpy(bits, &p, 12);
         nonfinite |= NonFiniteBit(bits[0]) | NonFiniteBit(bits[1]) | NonFiniteBit(bits[2]);
-        p.rgb = l.rgb[0] < 0 ? fallback
-                             : uint32_t{r[l.rgb[0]]} << 16 | uint32_t{r[l.rgb[1]]} << 8 | uint32_t{r[l.rgb[2]]};
+        p.rgb = !has_rgb ? fallback_rgb : uint32_t{r[o0]} << 16 | uint32_t{r[o1]} << 8 | uint32_t{r[o2]};
       } else if constexpr (std::is_same_v<P, LasPoint>) {  // 16-bit colour >> color_shift, as the reader
-        auto channel = [&](int c) { return uint32_t{static_cast<uint8_t>(LoadLE<uint16_t>(r + l.rgb[c]) >> l.color_shift)}; };
-        p.rgb = l.rgb[0] < 0 ? fallback : channel(0) << 16 | channel(1) << 8 | channel(2);
+        auto channel = [&](size_t o) { return uint32_t{static_cast<uint8_t>(LoadLE<uint16_t>(r + o) >> color_shift)}; };
+        p.rgb = !has_rgb ? fallback_rgb : channel(o0) << 16 | channel(o1) << 8 | channel(o2);
       }
     }
     if (nonfinite) bad = true;

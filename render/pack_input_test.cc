@@ -51,7 +51,7 @@ void ExpectSameArchive(const std::string& a, const std::string& b, const std::st
   EXPECT_EQ(ReadFileToString(a + "/manifest.json"), ReadFileToString(b + "/manifest.json")) << what;
 }
 
-TEST(PackRecords, VectorizedMortonCodesEqualTheGridsCode) {
+TEST(PackRecords, VectorizedKernelsEqualTheGridsCodeAndTheQuantizersEncode) {
   // Survey-scale shift, points beyond the grid on both sides (clamped), a count that is not a
   // multiple of the 256-point blocks; floats, doubles, and LAS integers with a decimal scale and
   // with another.
@@ -68,10 +68,12 @@ TEST(PackRecords, VectorizedMortonCodesEqualTheGridsCode) {
   std::vector<LasPoint> las(n);
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d p(rng.Uniform(244.0, 256.0), rng.Uniform(-1.6, -1.4), rng.Uniform(-9.0, 9.0));
-    compact[i] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), 0};
+    const uint32_t rgb = static_cast<uint32_t>(rng.Next());  // the top byte is not a colour's
+    compact[i] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), rgb};
     const Eigen::Vector3d q = compact[i].Position(frame);
-    wide[i] = {q.x(), q.y(), q.z(), 0};
-    las[i] = {static_cast<int32_t>(p.x() * 1000), static_cast<int32_t>(p.y() * 1000), static_cast<int32_t>(p.z() * 1000), 0};
+    wide[i] = {q.x(), q.y(), q.z(), rgb};
+    las[i] = {static_cast<int32_t>(p.x() * 1000), static_cast<int32_t>(p.y() * 1000), static_cast<int32_t>(p.z() * 1000),
+              rgb};
   }
   // Each record type against Code of its Position, and how many were clamped on x.
   auto check = [&](const RecordFrame& f, const auto& points, const char* what) {
@@ -88,6 +90,34 @@ TEST(PackRecords, VectorizedMortonCodesEqualTheGridsCode) {
     }
     EXPECT_GT(low, 0u) << what;
     EXPECT_GT(high, 0u) << what;
+    // The routing's cells: the codes' bits `levels` below a node `shift` levels above the finest.
+    std::vector<uint16_t> cells(n);
+    for (int levels = 1; levels <= 3; ++levels) {
+      for (int shift : {0, 1, 7, kMortonBits - 3 - levels, kMortonBits - levels}) {
+        MortonCells(grid, f, points.data(), n, shift, levels, cells.data());
+        const uint64_t mask = (uint64_t{1} << (3 * levels)) - 1;
+        for (size_t i = 0; i < n; ++i) {
+          ASSERT_EQ(cells[i], (codes[i] >> (3 * shift)) & mask) << what << " levels " << levels << " shift " << shift;
+        }
+      }
+    }
+    // The block encoder against ChunkQuantizer::Encode, on a box that clamps points on both
+    // sides of x and y, and on one flat on z (no bits for it).
+    Box3d box;
+    for (size_t i = 0; i < n; ++i) box.Extend(points[i].Position(f));
+    const Eigen::Vector3d mid = box.Center(), half = 0.3 * box.Extent();
+    for (const bool flat : {false, true}) {
+      Box3d inner;
+      inner.Extend(Eigen::Vector3d(mid.x() - half.x(), mid.y() - half.y(), flat ? mid.z() : box.min.z()));
+      inner.Extend(Eigen::Vector3d(mid.x() + half.x(), mid.y() + half.y(), flat ? mid.z() : box.max.z()));
+      const ChunkQuantizer q = ChunkQuantizer::ForBox(inner);
+      ASSERT_EQ(q.bits[2] == 0, flat);
+      std::vector<uint64_t> words(n);
+      Encode(q, f, points.data(), n, words.data());
+      for (size_t i = 0; i < n; ++i) {
+        ASSERT_EQ(words[i], q.Encode(points[i].Position(f), points[i].rgb)) << what << " point " << i;
+      }
+    }
   };
   check(frame, compact, "floats");
   check(RecordFrame(), wide, "doubles");
