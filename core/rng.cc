@@ -6,30 +6,6 @@
 
 namespace candi {
 
-namespace {
-inline uint64_t Rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
-}  // namespace
-
-Rng::Rng(uint64_t seed) {
-  uint64_t z = seed;
-  for (auto& s : s_) {
-    z += 0x9e3779b97f4a7c15ULL;
-    s = Mix64(z);
-  }
-}
-
-uint64_t Rng::Next() {
-  const uint64_t result = Rotl(s_[1] * 5, 7) * 9;
-  const uint64_t t = s_[1] << 17;
-  s_[2] ^= s_[0];
-  s_[3] ^= s_[1];
-  s_[1] ^= s_[2];
-  s_[0] ^= s_[3];
-  s_[2] ^= t;
-  s_[3] = Rotl(s_[3], 45);
-  return result;
-}
-
 uint64_t Rng::Below(uint64_t n) {
   CANDI_CHECK(n > 0);
   // Lemire's nearly divisionless method with rejection: exact uniformity.

@@ -31,16 +31,35 @@ inline double ToUnit(uint64_t bits) { return static_cast<double>(bits >> 11) * 0
 
 // A sequential generator (xoshiro256**), seeded through SplitMix64. Not thread-safe: give each
 // task its own, seeded from HashIndex(seed, task).
+// Construction and Next are inline: shuffles and samplers call them in their inner loops.
 class Rng {
  public:
-  explicit Rng(uint64_t seed);
-  uint64_t Next();
+  explicit Rng(uint64_t seed) {
+    uint64_t z = seed;
+    for (auto& s : s_) {
+      z += 0x9e3779b97f4a7c15ULL;
+      s = Mix64(z);
+    }
+  }
+  uint64_t Next() {
+    const uint64_t result = Rotl(s_[1] * 5, 7) * 9;
+    const uint64_t t = s_[1] << 17;
+    s_[2] ^= s_[0];
+    s_[3] ^= s_[1];
+    s_[1] ^= s_[2];
+    s_[0] ^= s_[3];
+    s_[2] ^= t;
+    s_[3] = Rotl(s_[3], 45);
+    return result;
+  }
   double Uniform() { return ToUnit(Next()); }             // [0, 1)
   double Uniform(double lo, double hi) { return lo + (hi - lo) * Uniform(); }
   uint64_t Below(uint64_t n);                              // [0, n), unbiased; n > 0
   double Normal();                                         // standard normal (Box-Muller)
 
  private:
+  static uint64_t Rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+
   uint64_t s_[4];
   bool has_spare_ = false;
   double spare_ = 0.0;

@@ -193,10 +193,13 @@ class Packer {
       const std::vector<uint64_t> start = StableBucketOffsets(&at, pieces, cells);
       grouped.resize(n);
       ParallelFor(size_t{0}, pieces, [&](size_t piece) {
+        // In locals: the counters' stores could alias what the lambda captures by reference.
         uint64_t* next = &at[piece * cells];
-        for (size_t i = piece * kRoutePiece; i < std::min(n, (piece + 1) * kRoutePiece); ++i) {
-          grouped[next[cell[i]]++] = batch[i];
-        }
+        const uint16_t* const to = cell.data();
+        const P* const from = batch.data();
+        P* const out = grouped.data();
+        const size_t end = std::min(n, (piece + 1) * kRoutePiece);
+        for (size_t i = piece * kRoutePiece; i < end; ++i) out[next[to[i]]++] = from[i];
       });
       // The page-cache copies of different cells run in parallel.
       ParallelFor(size_t{0}, cells, [&](size_t c) {
