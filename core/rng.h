@@ -30,8 +30,8 @@ inline uint64_t HashIndex(uint64_t seed, uint64_t index, uint64_t stream = 0) {
 inline double ToUnit(uint64_t bits) { return static_cast<double>(bits >> 11) * 0x1.0p-53; }
 
 // A sequential generator (xoshiro256**), seeded through SplitMix64. Not thread-safe: give each
-// task its own, seeded from HashIndex(seed, task).
-// Construction and Next are inline: shuffles and samplers call them in their inner loops.
+// task its own, seeded from HashIndex(seed, task). Construction and Next are inline: shuffles and
+// samplers call them in their inner loops.
 class Rng {
  public:
   explicit Rng(uint64_t seed) {
