@@ -142,12 +142,10 @@ class Packer {
         for (size_t i = 0; i < m; ++i) keys_[a + i] = {codes[i], static_cast<uint32_t>(a + i)};
       }
     });
-    // Sorted only as far as Cut looks: chunks of at most chunk_points are shuffled anyway.
-    SortByCode(&keys_, &scratch_, 63 - 3 * level, o_.chunk_points);
+    // Sorted only as far as Cut looks: chunks of at most chunk_points are shuffled anyway. The
+    // records move with their keys.
     sorted_.resize(n);
-    ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) sorted_[i] = points[keys_[i].index];
-    });
+    SortByCode(&keys_, &scratch_, 63 - 3 * level, o_.chunk_points, points, sizeof(P), sorted_.data());
     ranges_.clear();
     Cut(0, n, level);
     WriteChunks();

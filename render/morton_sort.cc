@@ -63,11 +63,41 @@ std::vector<uint64_t> StableBucketOffsets(std::vector<uint64_t>* counts, size_t 
   return start;
 }
 
-void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_t coarse) {
+namespace {
+
+// What moves with the keys: nothing, records of a fixed size, or of any size. carry(from, to)
+// puts the record of input position `from` at sorted place `to`.
+struct NoRecords {
+  void operator()(size_t /*from*/, size_t /*to*/) const {}
+};
+template <size_t B>
+struct FixedRecords {
+  struct Record {
+    unsigned char bytes[B];
+  };
+  const Record* in;
+  Record* out;
+  void operator()(size_t from, size_t to) const { out[to] = in[from]; }
+};
+struct AnyRecords {
+  const unsigned char* in;
+  unsigned char* out;
+  size_t bytes;
+  void operator()(size_t from, size_t to) const { std::memcpy(out + to * bytes, in + from * bytes, bytes); }
+};
+
+template <typename Carry>
+void Sort(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_t coarse, const Carry& carry) {
   CANDI_CHECK(bits <= 64) << "SortByCode: " << bits << " bits";
   CANDI_CHECK(coarse == 0 || bits % 3 == 0) << "SortByCode: coarse, " << bits << " bits";
   const size_t n = keys->size();
-  if (bits <= 0 || n < 2 || n <= coarse) return;
+  if (bits <= 0 || n < 2 || n <= coarse) {  // in order already: the records follow their keys
+    const Keyed* k = keys->data();
+    ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) carry(k[i].index, i);
+    });
+    return;
+  }
   // Coarse: the top bits whole levels (bits is a multiple of 3, so is the shift below them).
   const int kTopBits = coarse > 0 ? 12 : 11;
   const int top = std::min(kTopBits, bits), shift = bits - top;
@@ -83,23 +113,60 @@ void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits,
     for (size_t i = a; i < b; ++i) ++c[(in[i].code >> shift) & (buckets - 1)];
   });
   const std::vector<uint64_t> bucket_start = StableBucketOffsets(&count, kSlices, buckets);
+  // The keys bucketed into scratch, and their records beside them: read in input order, each
+  // written to its bucket's next place (a few thousand places advancing in step, where reading
+  // them by the sorted keys' indices would be a cache miss for every record).
   Keyed* out = scratch->data();
   ParallelFor(size_t{0}, kSlices, [&](size_t s) {
     const auto [a, b] = slice(s);
     uint64_t* c = &count[s * buckets];
-    for (size_t i = a; i < b; ++i) out[c[(in[i].code >> shift) & (buckets - 1)]++] = in[i];
+    for (size_t i = a; i < b; ++i) {
+      const size_t to = c[(in[i].code >> shift) & (buckets - 1)]++;
+      out[to] = in[i];
+      carry(in[i].index, to);
+    }
   });
-  // Each bucket sorted from scratch back into keys.
-  Keyed* result = keys->data();
+  // Each bucket sorted where it lies in scratch (keys its temporary), which then becomes keys:
+  // no copy back. A coarse sort touches only the buckets of more than `coarse` keys, whose
+  // records are then gathered again in their new order.
+  Keyed* temp = keys->data();
   ParallelFor(tbb::blocked_range<size_t>(0, buckets, 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k < r.end(); ++k) {
       const size_t a = bucket_start[k], m = bucket_start[k + 1] - a;
-      if (m == 0) continue;
-      if (m > coarse) LocalRadixSort(out + a, result + a, m, shift);  // sorted in out + a ...
-      std::copy(out + a, out + a + m, result + a);     // ... then moved into keys
+      if (m < 2 || m <= coarse) continue;
+      LocalRadixSort(out + a, temp + a, m, shift);
+      for (size_t i = a; i < a + m; ++i) carry(out[i].index, i);
     }
   });
+  keys->swap(*scratch);
 }
 
+}  // namespace
+
+void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_t coarse) {
+  Sort(keys, scratch, bits, coarse, NoRecords{});
+}
+
+void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_t coarse,
+                const void* records, size_t record_bytes, void* sorted_records) {
+  CANDI_CHECK(record_bytes > 0 && (keys->empty() || (records != nullptr && sorted_records != nullptr)))
+      << "SortByCode: records of " << record_bytes << " bytes";
+  const auto* in = static_cast<const unsigned char*>(records);
+  auto* out = static_cast<unsigned char*>(sorted_records);
+  switch (record_bytes) {
+    case 16: {
+      using R = FixedRecords<16>;
+      Sort(keys, scratch, bits, coarse, R{reinterpret_cast<const R::Record*>(in), reinterpret_cast<R::Record*>(out)});
+      break;
+    }
+    case 28: {
+      using R = FixedRecords<28>;
+      Sort(keys, scratch, bits, coarse, R{reinterpret_cast<const R::Record*>(in), reinterpret_cast<R::Record*>(out)});
+      break;
+    }
+    default:
+      Sort(keys, scratch, bits, coarse, AnyRecords{in, out, record_bytes});
+  }
+}
 
 }  // namespace candi::render

@@ -31,7 +31,8 @@ static_assert(sizeof(Keyed) == 12, "Keyed must be 12 bytes");
 std::vector<uint64_t> StableBucketOffsets(std::vector<uint64_t>* counts, size_t slices, size_t buckets);
 
 // Sorts *keys stably by code & (2^bits - 1) (the bits above must be equal: they are not looked
-// at); *scratch is resized and used as scratch. bits in [0, 64].
+// at); *scratch is resized and used as scratch (the two vectors may trade their storage: the
+// sorted keys are left where they were bucketed). bits in [0, 64].
 //
 // `coarse` > 0 (bits a multiple of 3, Morton levels of 3 bits): sorts only as far as a cut into
 // nodes of at most `coarse` keys looks. The keys are bucketed, stably, by their next 4 levels
@@ -40,5 +41,13 @@ std::vector<uint64_t> StableBucketOffsets(std::vector<uint64_t>* counts, size_t 
 // follow in Morton order. The archive's packer, whose chunks (at most `coarse` points) are
 // shuffled after the cut, needs no more.
 void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_t coarse = 0);
+
+// As SortByCode, and records move with their keys: sorted_records ends holding, for the j-th
+// sorted key k, the record of input position k.index (records and sorted_records: distinct
+// arrays of record_bytes-byte records). The records are moved as the keys are bucketed, read in
+// their input order, so that keys whose index is their input position (the packer's) get them
+// without a random read each; only buckets sorted further are gathered by index again.
+void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_t coarse,
+                const void* records, size_t record_bytes, void* sorted_records);
 
 }  // namespace candi::render

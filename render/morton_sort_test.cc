@@ -4,7 +4,9 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cstring>
 #include <map>
+#include <string>
 #include <vector>
 
 #include "core/rng.h"
@@ -117,6 +119,48 @@ TEST(SortByCode, LooksOnlyAtTheLowBits) {
   SortByCode(&keys, &scratch, 8);
   const std::vector<uint64_t> order = {0, 2, 1, 3};
   for (size_t i = 0; i < keys.size(); ++i) EXPECT_EQ(keys[i].index, order[i]) << i;
+}
+
+TEST(SortByCode, RecordsFollowTheirKeys) {
+  // Records of 16, 28 and 12 bytes (the fixed sizes and any other), each filled from its input
+  // position; keys whose index is their position (the packer's) or a permutation of it; full,
+  // coarse and no sorts (too few keys, no bits), on 1 and 2 threads.
+  struct Case {
+    size_t n;
+    int bits;
+    size_t coarse;
+  };
+  for (const Case& c : {Case{30000, 54, 0}, Case{30000, 63, 40}, Case{20000, 27, 700}, Case{500, 27, 700},
+                        Case{3000, 0, 0}, Case{1, 54, 0}}) {
+    for (const size_t bytes : {size_t{16}, size_t{28}, size_t{12}}) {
+      for (const bool permuted : {false, true}) {
+        std::vector<Keyed> input = RandomKeys(c.n, c.bits, c.n / 20, 3 + c.n + bytes);
+        // Clustered low levels for a third of the keys, so that some coarse buckets are sorted.
+        for (size_t i = 0; i < input.size(); i += 3) input[i].code &= ~uint64_t{0} << (c.bits > 15 ? c.bits - 15 : 0);
+        if (permuted) {
+          Rng rng(c.n + bytes);
+          for (size_t i = input.size(); i > 1; --i) std::swap(input[i - 1].index, input[rng.Below(i)].index);
+        }
+        std::vector<unsigned char> records(c.n * bytes);
+        for (size_t i = 0; i < records.size(); ++i) records[i] = static_cast<unsigned char>(HashIndex(bytes, i));
+        std::vector<Keyed> expected = input, scratch;
+        SortByCode(&expected, &scratch, c.bits, c.coarse);
+        for (int threads : {1, 2}) {
+          std::vector<Keyed> keys = input;
+          std::vector<unsigned char> sorted(records.size(), 0);
+          tbb::task_arena(threads).execute(
+              [&] { SortByCode(&keys, &scratch, c.bits, c.coarse, records.data(), bytes, sorted.data()); });
+          const std::string what = std::to_string(c.n) + " keys, " + std::to_string(c.bits) + " bits, coarse " +
+                                   std::to_string(c.coarse) + ", " + std::to_string(bytes) + "-byte records, " +
+                                   (permuted ? "permuted" : "in order") + ", " + std::to_string(threads) + " threads";
+          ASSERT_TRUE(Same(keys, expected)) << what;
+          for (size_t j = 0; j < keys.size(); ++j) {
+            ASSERT_EQ(0, std::memcmp(&sorted[j * bytes], &records[keys[j].index * bytes], bytes)) << what << ", key " << j;
+          }
+        }
+      }
+    }
+  }
 }
 
 }  // namespace
