@@ -135,16 +135,16 @@ __attribute__((always_inline)) inline void CellsRun(const MortonGrid& g, const R
 }  // namespace
 
 #define CANDI_PACK_RECORD_KERNELS(P)                                                                     \
-  CANDI_TARGET_CLONES_AVX2                                                                               \
+  CANDI_TARGET_CLONES_AVX512                                                                             \
   void MortonCodes(const MortonGrid& g, const RecordFrame& f, const P* points, size_t n, uint64_t* codes) { \
     CodesRun(g, f, points, n, codes);                                                                    \
   }                                                                                                      \
-  CANDI_TARGET_CLONES_AVX2                                                                               \
+  CANDI_TARGET_CLONES_AVX512                                                                             \
   void MortonCells(const MortonGrid& g, const RecordFrame& f, const P* points, size_t n, int shift, int levels, \
                    uint16_t* cells) {                                                                    \
     CellsRun(g, f, points, n, shift, levels, cells);                                                     \
   }                                                                                                      \
-  CANDI_TARGET_CLONES_AVX2                                                                               \
+  CANDI_TARGET_CLONES_AVX512                                                                             \
   void Encode(const ChunkQuantizer& q, const RecordFrame& f, const P* points, size_t n, uint64_t* words) { \
     EncodeRun(q, f, points, n, words);                                                                   \
   }
