@@ -349,7 +349,7 @@ class Packer {
   ProgressCallback progress_;
   std::vector<Keyed> keys_, scratch_;
   UninitVector<P> sorted_;
-  std::vector<uint64_t> words_;
+  UninitVector<uint64_t> words_;  // every word is written before it is read
   std::vector<std::pair<size_t, size_t>> ranges_;
   std::vector<ArchiveChunk> chunks_;
   std::vector<ArchiveFile> files_;

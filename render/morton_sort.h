@@ -17,6 +17,8 @@ namespace candi::render {
 // 12 bytes (4-byte aligned): the sort moves a quarter fewer bytes than with a 64-bit index.
 #pragma pack(push, 4)
 struct Keyed {
+  Keyed() {}  // uninitialized: the sort's vectors grow without zeroing what is written next
+  Keyed(uint64_t code, uint32_t index) : code(code), index(index) {}
   uint64_t code;
   uint32_t index;  // the key's position in the input, say
 };
