@@ -32,6 +32,13 @@ void FaultInParallel(void* p, size_t bytes) {
   });
 }
 
+void AdviseHugePages(void* p, size_t bytes) {
+  constexpr uintptr_t kHuge = uintptr_t{2} << 20;
+  const uintptr_t begin = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) / kHuge * kHuge;
+  const uintptr_t end = (reinterpret_cast<uintptr_t>(p) + bytes) / kHuge * kHuge;
+  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice only
+}
+
 void FreshBuffer::Reserve(size_t bytes) {
   if (bytes <= capacity_) return;
   std::unique_ptr<uint8_t[]> grown(new uint8_t[bytes]);

@@ -43,5 +43,29 @@ TEST(FaultInParallel, LeavesTheBytesAroundItsRangeAlone) {
   FaultInParallel(bytes.data(), 0);  // nothing
 }
 
+TEST(ReserveHuge, GrowsOnlyWhenNeededAndTheMemoryHoldsWhatIsWritten) {
+  std::vector<uint64_t> v;
+  ReserveHuge(&v, 0);
+  ReserveHuge(&v, 3'000'000);  // 24 MB: whole 2 MiB pages inside, advised
+  ASSERT_GE(v.capacity(), 3'000'000u);
+  const uint64_t* const first = v.data();
+  v.resize(3'000'000);
+  for (size_t i = 0; i < v.size(); ++i) v[i] = i * 0x9E3779B97F4A7C15ull;
+  ReserveHuge(&v, 3'500'000);  // within the quarter more: kept, contents and all
+  EXPECT_EQ(v.data(), first);
+  EXPECT_EQ(v.size(), 3'000'000u);
+  for (size_t i = 0; i < v.size(); i += 4099) ASSERT_EQ(v[i], i * 0x9E3779B97F4A7C15ull) << i;
+  ReserveHuge(&v, 5'000'000);  // grown: its elements dropped
+  EXPECT_GE(v.capacity(), 5'000'000u);
+  EXPECT_TRUE(v.empty());
+  v.assign(5'000'000, 7);
+  EXPECT_EQ(v[4'999'999], 7u);
+  // Ranges with no whole huge page, or none at all, are left alone.
+  uint8_t small[100] = {1};
+  AdviseHugePages(small, sizeof(small));
+  AdviseHugePages(nullptr, 0);
+  EXPECT_EQ(small[0], 1);
+}
+
 }  // namespace
 }  // namespace candi

@@ -17,6 +17,7 @@
 #include "core/atomic_file.h"
 #include "core/binary_file.h"
 #include "core/check.h"
+#include "core/fresh_memory.h"
 #include "core/interrupt.h"
 #include "core/parallel.h"
 #include "core/rng.h"
@@ -133,6 +134,10 @@ class Packer {
   // Sorts points (all of one cell at `level`) in memory and writes their chunks.
   void AddCell(const P* points, size_t n, int level) {
     if (n == 0) return;
+    // The sort writes its keys and records to thousands of buckets at once: on huge pages.
+    ReserveHuge(&keys_, n);
+    ReserveHuge(&scratch_, n);
+    ReserveHuge(&sorted_, n);
     keys_.resize(n);
     ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
       uint64_t codes[256];
