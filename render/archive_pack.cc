@@ -247,6 +247,7 @@ class Packer {
 
   // Closes the last data file; returns the manifest's chunks and files.
   void Finish(ArchiveManifest* m) {
+    WaitForWrites();
     CloseFile();
     m->chunks = std::move(chunks_);
     m->files = std::move(files_);
@@ -297,7 +298,7 @@ class Packer {
     const size_t n = ranges_.size();
     std::vector<ArchiveChunk> made(n);
     words_.resize(sorted_.size());
-    const uint64_t base = chunks_.size();
+    const uint64_t base = chunks_made_;
     ParallelFor(size_t{0}, n, [&](size_t k) {
       const auto [a, b] = ranges_[k];
       const Box3d box = ChunkBox(&sorted_[a], b - a, frame_);
@@ -317,18 +318,31 @@ class Packer {
       }
       c.hash = ArchiveHash(&words_[a], 8 * (b - a));
     });
-    for (size_t k = 0; k < n; ++k) {
-      const auto [a, b] = ranges_[k];
-      if (!file_ || file_->Tell() >= o_.file_bytes) OpenFile();
-      ArchiveChunk& c = made[k];
-      c.file = static_cast<int>(files_.size() - 1);
-      c.offset = file_->Tell();
-      c.first = written_;
-      file_->Write(&words_[a], 8 * (b - a));
-      written_ += c.count;
-      for (int ax = 0; ax < 3; ++ax) max_error_[ax] = std::max(max_error_[ax], c.quantizer.ErrorBound(ax));
-      chunks_.push_back(c);
-    }
+    chunks_made_ += n;
+    // The chunks go into the data file on a thread of their own while the next cell is sorted
+    // and encoded (into the other words buffer), in order: the last cell's first.
+    WaitForWrites();
+    words_.swap(writing_);
+    writes_ = std::async(std::launch::async, [this, made = std::move(made), ranges = ranges_]() mutable {
+      for (size_t k = 0; k < made.size(); ++k) {
+        const auto [a, b] = ranges[k];
+        if (!file_ || file_->Tell() >= o_.file_bytes) OpenFile();
+        ArchiveChunk& c = made[k];
+        c.file = static_cast<int>(files_.size() - 1);
+        c.offset = file_->Tell();
+        c.first = written_;
+        file_->Write(&writing_[a], 8 * (b - a));
+        written_ += c.count;
+        for (int ax = 0; ax < 3; ++ax) max_error_[ax] = std::max(max_error_[ax], c.quantizer.ErrorBound(ax));
+        chunks_.push_back(c);
+      }
+    });
+  }
+
+  // Waits for the chunks being written, and rethrows what the writing threw.
+  void WaitForWrites() {
+    if (!writes_.valid()) return;
+    writes_.get();
     if (progress_) progress_(written_, total_);
   }
 
@@ -359,9 +373,14 @@ class Packer {
   std::vector<ArchiveChunk> chunks_;
   std::vector<ArchiveFile> files_;
   std::unique_ptr<AtomicFile> file_;
-  uint64_t written_ = 0, spilled_ = 0;
+  uint64_t written_ = 0, spilled_ = 0, chunks_made_ = 0;
   int spill_id_ = 0, layer_ = 0;
   double max_error_[3] = {0, 0, 0};
+  // The words of the cell being written, and its writing: from WriteChunks until WaitForWrites,
+  // only that thread touches file_, files_, chunks_, written_ and max_error_. Last, so that it
+  // is destroyed (its destructor waits for the thread) before what the thread uses.
+  UninitVector<uint64_t> writing_;
+  std::future<void> writes_;
 };
 
 }  // namespace

@@ -226,6 +226,25 @@ TEST(Fault, AFileSizeLimitDuringBuildKeepsTheEarlierArchive) {
   EXPECT_TRUE(Temporaries(dir.path()).empty());
 }
 
+// The packer writes its data files on a thread of its own while it sorts the next cell: a
+// write failing there still stops the pack with the file's error, and the earlier archive stays.
+TEST(Fault, AFileSizeLimitDuringPackKeepsTheEarlierArchive) {
+  TempDir dir;
+  WriteCloud(dir.File("cloud.ply"), 20000, 3);
+  const auto [packed, packed_err] = RunToEnd({"pack", dir.File("cloud.ply"), "-o", dir.File("out.archive")}, LogDir(dir));
+  ASSERT_EQ(packed, 0) << packed_err;
+  const std::string manifest = ReadBytes(dir.File("out.archive/manifest.json"));
+
+  WriteCloud(dir.File("cloud.ply"), 400000, 4);  // 3.2 MB of chunks: beyond the limit
+  const auto [code, err] =
+      RunToEnd({"pack", dir.File("cloud.ply"), "-o", dir.File("out.archive")}, LogDir(dir), {}, LimitFileSize);
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_TRUE(Contains(err, "data-00000.bin")) << err;
+  EXPECT_TRUE(Contains(err, "File too large")) << err;
+  EXPECT_EQ(ReadBytes(dir.File("out.archive/manifest.json")), manifest);
+  EXPECT_TRUE(Temporaries(dir.path()).empty());
+}
+
 // The pid of a child of `parent` whose command line holds `word`, or 0.
 pid_t FindChild(pid_t parent, const std::string& word) {
   for (const auto& e : fs::directory_iterator("/proc")) {
