@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <type_traits>
 #include <utility>
 
 #include "core/check.h"
@@ -70,14 +71,11 @@ namespace {
 struct NoRecords {
   void operator()(size_t /*from*/, size_t /*to*/) const {}
 };
-template <size_t B>
+template <size_t B>  // a constant size: the copy is one or two moves
 struct FixedRecords {
-  struct Record {
-    unsigned char bytes[B];
-  };
-  const Record* in;
-  Record* out;
-  void operator()(size_t from, size_t to) const { out[to] = in[from]; }
+  const unsigned char* in;
+  unsigned char* out;
+  void operator()(size_t from, size_t to) const { std::memcpy(out + to * B, in + from * B, B); }
 };
 struct AnyRecords {
   const unsigned char* in;
@@ -92,10 +90,12 @@ void Sort(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_
   CANDI_CHECK(coarse == 0 || bits % 3 == 0) << "SortByCode: coarse, " << bits << " bits";
   const size_t n = keys->size();
   if (bits <= 0 || n < 2 || n <= coarse) {  // in order already: the records follow their keys
-    const Keyed* k = keys->data();
-    ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) carry(k[i].index, i);
-    });
+    if constexpr (!std::is_same_v<Carry, NoRecords>) {
+      const Keyed* k = keys->data();
+      ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) carry(k[i].index, i);
+      });
+    }
     return;
   }
   // Coarse: the top bits whole levels (bits is a multiple of 3, so is the shift below them).
@@ -154,16 +154,12 @@ void SortByCode(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits,
   const auto* in = static_cast<const unsigned char*>(records);
   auto* out = static_cast<unsigned char*>(sorted_records);
   switch (record_bytes) {
-    case 16: {
-      using R = FixedRecords<16>;
-      Sort(keys, scratch, bits, coarse, R{reinterpret_cast<const R::Record*>(in), reinterpret_cast<R::Record*>(out)});
+    case 16:
+      Sort(keys, scratch, bits, coarse, FixedRecords<16>{in, out});
       break;
-    }
-    case 28: {
-      using R = FixedRecords<28>;
-      Sort(keys, scratch, bits, coarse, R{reinterpret_cast<const R::Record*>(in), reinterpret_cast<R::Record*>(out)});
+    case 28:
+      Sort(keys, scratch, bits, coarse, FixedRecords<28>{in, out});
       break;
-    }
     default:
       Sort(keys, scratch, bits, coarse, AnyRecords{in, out, record_bytes});
   }
