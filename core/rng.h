@@ -9,6 +9,9 @@
 
 namespace candi {
 
+// x rotated left by k bits, 0 < k < 64 (compiles to one rotate instruction).
+inline uint64_t Rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+
 // SplitMix64 finaliser: a bijective 64-bit mix with full avalanche.
 inline uint64_t Mix64(uint64_t z) {
   z += 0x9e3779b97f4a7c15ULL;
@@ -58,8 +61,6 @@ class Rng {
   double Normal();                                         // standard normal (Box-Muller)
 
  private:
-  static uint64_t Rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
-
   uint64_t s_[4];
   bool has_spare_ = false;
   double spare_ = 0.0;
