@@ -93,7 +93,9 @@ void Sort(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_
     if constexpr (!std::is_same_v<Carry, NoRecords>) {
       const Keyed* k = keys->data();
       ParallelFor(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i < r.end(); ++i) carry(k[i].index, i);
+        const Keyed* const sorted = k;
+        const Carry move = carry;  // in a local: the records' byte stores could alias the capture
+        for (size_t i = r.begin(); i < r.end(); ++i) move(sorted[i].index, i);
       });
     }
     return;
@@ -107,10 +109,15 @@ void Sort(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_
   std::vector<uint64_t> count(kSlices * buckets, 0);
   auto slice = [&](size_t s) { return std::pair<size_t, size_t>{n * s / kSlices, n * (s + 1) / kSlices}; };
   const Keyed* in = keys->data();
+  // The loops below keep what they read of the captures in locals: their stores (the counters,
+  // the keys) could otherwise alias the captures, which would be reloaded at every key.
   ParallelFor(size_t{0}, kSlices, [&](size_t s) {
     const auto [a, b] = slice(s);
-    uint64_t* c = &count[s * buckets];
-    for (size_t i = a; i < b; ++i) ++c[(in[i].code >> shift) & (buckets - 1)];
+    uint64_t* const c = &count[s * buckets];
+    const Keyed* const from = in;
+    const int right = shift;
+    const uint64_t mask = buckets - 1;
+    for (size_t i = a; i < b; ++i) ++c[(from[i].code >> right) & mask];
   });
   const std::vector<uint64_t> bucket_start = StableBucketOffsets(&count, kSlices, buckets);
   // The keys bucketed into scratch, and their records beside them: read in input order, each
@@ -119,11 +126,17 @@ void Sort(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_
   Keyed* out = scratch->data();
   ParallelFor(size_t{0}, kSlices, [&](size_t s) {
     const auto [a, b] = slice(s);
-    uint64_t* c = &count[s * buckets];
+    uint64_t* const c = &count[s * buckets];
+    const Keyed* const from = in;
+    Keyed* const to_keys = out;
+    const Carry move = carry;
+    const int right = shift;
+    const uint64_t mask = buckets - 1;
     for (size_t i = a; i < b; ++i) {
-      const size_t to = c[(in[i].code >> shift) & (buckets - 1)]++;
-      out[to] = in[i];
-      carry(in[i].index, to);
+      const Keyed k = from[i];
+      const size_t to = c[(k.code >> right) & mask]++;
+      to_keys[to] = k;
+      move(k.index, to);
     }
   });
   // Each bucket sorted where it lies in scratch (keys its temporary), which then becomes keys:
@@ -131,11 +144,13 @@ void Sort(std::vector<Keyed>* keys, std::vector<Keyed>* scratch, int bits, size_
   // records are then gathered again in their new order.
   Keyed* temp = keys->data();
   ParallelFor(tbb::blocked_range<size_t>(0, buckets, 16), [&](const tbb::blocked_range<size_t>& r) {
+    Keyed* const sorted = out;
+    const Carry move = carry;
     for (size_t k = r.begin(); k < r.end(); ++k) {
       const size_t a = bucket_start[k], m = bucket_start[k + 1] - a;
       if (m < 2 || m <= coarse) continue;
-      LocalRadixSort(out + a, temp + a, m, shift);
-      for (size_t i = a; i < a + m; ++i) carry(out[i].index, i);
+      LocalRadixSort(sorted + a, temp + a, m, shift);
+      for (size_t i = a; i < a + m; ++i) move(sorted[i].index, i);
     }
   });
   keys->swap(*scratch);
