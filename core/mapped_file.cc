@@ -12,6 +12,8 @@
 #include <cerrno>
 #include <cstring>
 #include <limits>
+#include <mutex>
+#include <utility>
 
 #include "core/binary_file.h"
 #include "core/check.h"
@@ -107,6 +109,12 @@ MappedFile::MappedFile(const std::string& path) : path_(path) {
   if (p != MAP_FAILED) {
     data_ = static_cast<const uint8_t*>(p);
     mapped_ = true;
+    struct stat st;
+    if (fstat(fd_, &st) == 0) {
+      device_ = static_cast<uint64_t>(st.st_dev);
+      inode_ = static_cast<uint64_t>(st.st_ino);
+      modified_ns_ = int64_t{st.st_mtim.tv_sec} * 1'000'000'000 + st.st_mtim.tv_nsec;
+    }
     range_ = RegisterRange(data_, size_, path_);
     madvise(p, static_cast<size_t>(size_), MADV_SEQUENTIAL);  // readers call WillNeed per range
   } else {
@@ -156,6 +164,32 @@ void MappedFile::CheckSize(uint64_t end, const std::string& what) const {
                    "the file shrank from " + std::to_string(size_) + " to " +
                        std::to_string(st.st_size) + " bytes while it was read (needed " +
                        std::to_string(end) + " bytes for " + what + ")");
+}
+
+std::shared_ptr<const MappedFile> MapShared(const std::string& path) {
+  static std::mutex mutex;
+  static std::vector<std::weak_ptr<const MappedFile>> live;
+  struct stat st;
+  const bool known = stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+  if (known) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    for (const std::weak_ptr<const MappedFile>& w : live) {
+      std::shared_ptr<const MappedFile> m = w.lock();
+      if (m && m->mapped_ && m->path_ == path && m->device_ == static_cast<uint64_t>(st.st_dev) &&
+          m->inode_ == static_cast<uint64_t>(st.st_ino) && m->size_ == static_cast<uint64_t>(st.st_size) &&
+          m->modified_ns_ == int64_t{st.st_mtim.tv_sec} * 1'000'000'000 + st.st_mtim.tv_nsec) {
+        return m;
+      }
+    }
+  }
+  // Mapped outside the lock (a read into memory can take long), then published.
+  auto m = std::make_shared<const MappedFile>(path);
+  if (m->mapped_) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    live.erase(std::remove_if(live.begin(), live.end(), [](const auto& w) { return w.expired(); }), live.end());
+    live.push_back(m);
+  }
+  return m;
 }
 
 void MappedFile::WillNeed(uint64_t offset, uint64_t n) const {

@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -52,14 +53,26 @@ class MappedFile {
  private:
   void ReadIntoMemory();
 
+  friend std::shared_ptr<const MappedFile> MapShared(const std::string& path);
+
   std::string path_;
   int fd_ = -1;
+  uint64_t device_ = 0, inode_ = 0;
+  int64_t modified_ns_ = 0;      // the file's identity when it was mapped
   const uint8_t* data_ = nullptr;
   uint64_t size_ = 0;
   bool mapped_ = false;
   int range_ = -1;               // its slot in the SIGBUS handler's table
   std::vector<uint8_t> memory_;  // the bytes when not mapped
 };
+
+// The mapping of `path` that another holder still has, if the file is still the one it mapped
+// (the same device, inode, size and modification time), else a new MappedFile. Passes that read
+// one file at the same time (the packer's hash of an input and its records, on two threads) then
+// map its pages once: mapping and unmapping a 2.6 GB file costs ~0.3 CPU-s on the project's VM
+// (page tables set up by fault-around, then torn down). Only mapped regular files are shared; a
+// pipe read into memory is not (it can be read once). Thread-safe.
+std::shared_ptr<const MappedFile> MapShared(const std::string& path);
 
 // Installs the SIGBUS handler described above (idempotent). Faults outside every mapped file
 // keep the default action.

@@ -7,6 +7,7 @@
 
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <thread>
 
@@ -103,6 +104,51 @@ TEST(MappedFile, AFaultUnderTheMapIsAnErrorNamingTheFileAndByte) {
   EXPECT_EQ(WEXITSTATUS(status), 2) << message;
   EXPECT_EQ(message, path + ": byte 12295: the file was cut short or could not be read from the disk while it was "
                             "read; the outputs are as they were\n");
+}
+
+TEST(MapShared, ALiveMapOfTheSameFileIsSharedAndAChangedFileIsMappedAfresh) {
+  TempDir dir;
+  const std::string path = dir.File("a.bin");
+  WriteBytes(path, std::string(50000, 'a'));
+  std::shared_ptr<const MappedFile> first = MapShared(path);
+  EXPECT_EQ(MapShared(path), first);  // held: the same map
+  const uint8_t* const data = first->data();
+  // Replaced under the same name (a new inode): its own map, with the new bytes.
+  WriteBytes(dir.File("tmp"), std::string(50000, 'b'));
+  std::filesystem::rename(dir.File("tmp"), path);
+  std::shared_ptr<const MappedFile> second = MapShared(path);
+  EXPECT_NE(second, first);
+  EXPECT_EQ(second->data()[0], 'b');
+  EXPECT_EQ(first->data(), data);
+  EXPECT_EQ(first->data()[0], 'a');  // the old map still holds the old file
+  // Rewritten to another size: not shared either.
+  WriteBytes(path, std::string(60000, 'c'));
+  std::shared_ptr<const MappedFile> third = MapShared(path);
+  EXPECT_NE(third, second);
+  EXPECT_EQ(third->size(), 60000u);
+  // Released: nothing keeps it alive, and the next call maps the file again.
+  std::weak_ptr<const MappedFile> gone = third;
+  third.reset();
+  EXPECT_TRUE(gone.expired());
+  EXPECT_EQ(MapShared(path)->size(), 60000u);
+}
+
+TEST(MapShared, APipeIsNotShared) {
+  TempDir dir;
+  const std::string fifo = dir.File("fifo");
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  auto read_one = [&](const std::string& bytes) {
+    std::thread writer([&] { WriteBytes(fifo, bytes); });
+    std::shared_ptr<const MappedFile> map = MapShared(fifo);
+    writer.join();
+    return map;
+  };
+  const std::shared_ptr<const MappedFile> a = read_one("first bytes");
+  const std::shared_ptr<const MappedFile> b = read_one("second bytes");  // a still held: not shared
+  EXPECT_FALSE(a->mapped());
+  EXPECT_NE(a, b);
+  EXPECT_EQ(std::string(reinterpret_cast<const char*>(a->data()), a->size()), "first bytes");
+  EXPECT_EQ(std::string(reinterpret_cast<const char*>(b->data()), b->size()), "second bytes");
 }
 
 TEST(MappedFile, MissingFileAndDirectoryAreErrorsNamingThePath) {

@@ -55,6 +55,9 @@ inline constexpr const char* kArchiveManifest = "manifest.json";
 
 // A 64-bit content hash (xxHash64's round function over 8-byte words, little-endian).
 uint64_t ArchiveHash(const void* data, size_t bytes, uint64_t seed = 0);
+// ArchiveHash (seed 0) of `count` (0 to 4) blocks of `bytes` bytes each, into out[0, count):
+// the same values, the blocks hashed together where the CPU has AVX-512 (HashFile's blocks).
+void ArchiveHashBlocks(const uint8_t* const* blocks, int count, size_t bytes, uint64_t* out);
 
 // Quantization of one chunk's box.
 struct ChunkQuantizer {

@@ -1,6 +1,8 @@
 // The packer's direct reading of binary PLY records (render/pack_input.h): the same archive as
 // through the point readers, the manifest's hash from the same read, bad files refused.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <limits>
@@ -11,6 +13,7 @@
 #include "io/point_io.h"
 #include "render/archive.h"
 #include "render/archive_pack.h"
+#include "render/pack_input.h"
 #include "render/pack_records.h"
 #include "render/synthetic_scene.h"
 #include "tests/util/test_util.h"
@@ -277,6 +280,34 @@ TEST(PackDirect, HashOfAFileOfSeveralBlocksIsHashFiles) {
   const Box3d world = io::ReadPointCloud(dir.File("big.ply")).WorldBounds();
   EXPECT_EQ(archive.manifest().bounds.max, world.Translated(-archive.manifest().frame.origin).max);
   EXPECT_EQ(archive.manifest().bounds.min, world.Translated(-archive.manifest().frame.origin).min);
+}
+
+TEST(PackDirect, HashFileIsTheHashOfItsBlocksHashes) {
+  // Six whole 64 MiB blocks (hashed four together, then two) and a tail, against the
+  // definition. The file is sparse except for a distinct page in every block, so it costs no
+  // disk and crossed blocks show.
+  TempDir dir;
+  const std::string path = dir.File("sparse.bin");
+  constexpr uint64_t kBlock = pack_internal::kHashBlock;
+  const uint64_t size = 6 * kBlock + 5000;
+  const int fd = open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  ASSERT_GE(fd, 0);
+  for (uint64_t b = 0; b <= 6; ++b) {
+    std::vector<uint8_t> page(4096);
+    for (size_t i = 0; i < page.size(); ++i) page[i] = static_cast<uint8_t>(31 * b + i);
+    ASSERT_EQ(pwrite(fd, page.data(), page.size(), static_cast<off_t>(b * kBlock + 1000 * b)), 4096);
+  }
+  ASSERT_EQ(ftruncate(fd, static_cast<off_t>(size)), 0);
+  close(fd);
+  const std::string bytes = candi::testing::ReadBytes(path);
+  ASSERT_EQ(bytes.size(), size);
+  std::vector<uint64_t> blocks;
+  for (uint64_t at = 0; at < size; at += kBlock) {
+    blocks.push_back(ArchiveHash(bytes.data() + at, static_cast<size_t>(std::min(kBlock, size - at))));
+  }
+  uint64_t hashed = 0;
+  EXPECT_EQ(HashFile(path, &hashed), ArchiveHash(blocks.data(), 8 * blocks.size(), size));
+  EXPECT_EQ(hashed, size);
 }
 
 TEST(PackDirect, NanAndTruncatedFilesAreRefusedNamingTheVertex) {
