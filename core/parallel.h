@@ -13,6 +13,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <atomic>
 #include <cstddef>
@@ -81,12 +82,21 @@ struct Wrapped {
 
 }  // namespace parallel_internal
 
+// Each loop runs in a context of its own (tbb::task_group_context::isolated). A body that
+// throws cancels its loop: the bodies not yet started are skipped, and the exception reaches the
+// caller once the running ones end. With TBB's default, bound contexts, the cancellation would
+// also reach the loops nested in those running bodies, which would return early, as if done,
+// with part of their work skipped; code after them would then read what was never written
+// (a COPC bucket being built when the file's sink failed read unset node ids and crashed). In
+// its own context a nested loop finishes whatever happens beside it.
+
 // Over a range (tbb::blocked_range): body(const Range& subrange).
 template <typename Range, typename Body>
 void ParallelFor(const Range& range, const Body& body) {
   char join = 0;
   const parallel_internal::Finally joined{&join, &parallel_internal::Acquire};
-  tbb::parallel_for(range, parallel_internal::Wrapped<Body>(&body, &join));
+  tbb::task_group_context own(tbb::task_group_context::isolated);
+  tbb::parallel_for(range, parallel_internal::Wrapped<Body>(&body, &join), own);
 }
 
 // Over indices [first, last): body(index).
@@ -94,7 +104,8 @@ template <typename Index, typename Body>
 void ParallelFor(Index first, Index last, const Body& body) {
   char join = 0;
   const parallel_internal::Finally joined{&join, &parallel_internal::Acquire};
-  tbb::parallel_for(first, last, parallel_internal::Wrapped<Body>(&body, &join));
+  tbb::task_group_context own(tbb::task_group_context::isolated);
+  tbb::parallel_for(first, last, parallel_internal::Wrapped<Body>(&body, &join), own);
 }
 
 // body(begin, end) over [0, n) in blocks of `block` on at most `threads` workers (0 = TBB's
