@@ -452,6 +452,7 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
   bool las = options.direct_reads;
   std::optional<Eigen::Vector3d> las_origin;
   io::LasPositionDecoder las_decoder;
+  std::shared_ptr<const MappedFile> first_map;
   auto pass1 = [&] {
     for (size_t k = 0; k < inputs.size(); ++k) {
       auto reader = inputs[k].open();
@@ -475,7 +476,11 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
       if (direct && (layout->coordinates == io::PointRecordLayout::Coordinates::kFloat32 ||
                      layout->coordinates == io::PointRecordLayout::Coordinates::kFloat64)) {
         // Binary PLY: the bounds, whether every coordinate is a float, and the hash, in one read.
-        const RecordScan scan = ScanRecords(reader->path(), *layout, info.frame);
+        RecordScan scan = ScanRecords(reader->path(), *layout, info.frame);
+        // Pass 2 reads input 0 first (its layer is the first): its map is kept for pass 2 to
+        // share, so that its pages are mapped once (~0.3 CPU-s for 2.7 GB). Only the first, so
+        // that the maps held do not grow with the inputs.
+        if (k == 0) first_map = std::move(scan.map);
         hashes[k] = scan.hash;
         hashed_bytes[k] = scan.bytes;
         counts[k] = layout->count;

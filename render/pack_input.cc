@@ -162,8 +162,9 @@ namespace {
 
 template <typename T>
 RecordScan ScanRecordsOf(const std::string& path, const io::PointRecordLayout& l, const LocalFrame& frame) {
-  const MappedFile map(path);
   RecordScan scan;
+  scan.map = MapShared(path);
+  const MappedFile& map = *scan.map;
   scan.bytes = map.size();
   CheckHoldsRecords(path, l, scan.bytes);
   const uint64_t end = l.first_byte + l.count * l.stride;

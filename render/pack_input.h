@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "core/box.h"
+#include "core/mapped_file.h"
 #include "io/las/las_columns.h"
 #include "io/point_io.h"
 #include "render/archive_pack.h"
@@ -51,6 +52,7 @@ struct RecordScan {
   Box3d world;
   bool floats = true;
   uint64_t hash = 0, bytes = 0;
+  std::shared_ptr<const MappedFile> map;  // the file's map, which pass 2 shares while it is held
 };
 RecordScan ScanRecords(const std::string& path, const io::PointRecordLayout& layout, const LocalFrame& frame);
 

@@ -51,7 +51,9 @@ class LasReader : public PointReader {
   LasFormatLayout layout_;
   std::vector<LasColumn> columns_;
   int color_shift_ = 8;
-  std::unique_ptr<MappedFile> map_;  // uncompressed: the file, decoded in place
+  // Uncompressed: the file, decoded in place, shared with any other pass that has it mapped
+  // (MapShared: the packer's hash of its inputs).
+  std::shared_ptr<const MappedFile> map_;
   // LAZ: point-format bits 6-7 set; the laszip VLR and the decoded chunks.
   bool compressed_ = false;
   laz::Vlr laz_;
@@ -75,7 +77,7 @@ LasReader::LasReader(const std::string& path, const PointReadOptions& options)
         header_.record_length);
   } else {
     CheckPointDataSize();
-    map_ = std::make_unique<MappedFile>(path);
+    map_ = MapShared(path);
   }
   for (LasVlr& evlr : ReadLasEvlrs(&file_, header_)) vlrs.push_back(std::move(evlr));
   BuildSchema(FillInfo(std::move(vlrs)));

@@ -67,7 +67,9 @@ class PlyReader : public PointReader {
   std::vector<Column> columns_;  // one per vertex property (lists: kSkip)
   size_t compact_stride_ = 0;
   bool swap_ = false;
-  std::unique_ptr<MappedFile> map_;  // binary: the file, read in place (stream_ reads from it)
+  // Binary: the file, read in place (stream_ reads from it), shared with any other pass that has
+  // it mapped (MapShared: the packer's scan of the bounds and hash).
+  std::shared_ptr<const MappedFile> map_;
   std::unique_ptr<ByteStream> stream_;
   std::vector<uint8_t> compact_;
   uint64_t line_ = 0;  // ASCII: the current line number
@@ -101,7 +103,7 @@ PlyReader::PlyReader(const std::string& path, const PointReadOptions& options)
     stream_ = std::make_unique<ByteStream>(file_);  // lines of at most 1 MiB, in a buffer
   } else {
     // Binary records are decoded where the page cache holds them: no copy into a buffer.
-    map_ = std::make_unique<MappedFile>(path);
+    map_ = MapShared(path);
     stream_ = std::make_unique<ByteStream>(*map_, std::min(file_.position(), map_->size()));
   }
   for (int e = 0; e < vertex_element_; ++e) SkipElement(header_.elements[e]);
