@@ -559,13 +559,20 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
       if (group_total == 0) continue;
       packer.SetLayer(static_cast<int>(l));
       InputBatches<P> batches(group, manifest.frame, options.default_color, origin, las_decoder, options.direct_reads);
+      // Once the first batch is read, input 0's reader holds the map it shares: pass 1's hold
+      // is let go, so the map lasts as long as that reader.
+      auto next = [&batches, &first_map](UninitVector<P>* out) {
+        const bool more = batches(out);
+        first_map.reset();
+        return more;
+      };
       if (group_total <= options.memory_points) {
         UninitVector<P> all, batch;
         all.reserve(group_total);
-        while (batches(&batch)) all.insert(all.end(), batch.begin(), batch.end());
+        while (next(&batch)) all.insert(all.end(), batch.begin(), batch.end());
         packer.AddCell(all.data(), all.size(), 0);
       } else {
-        packer.Spill([&batches](UninitVector<P>* out) { return batches(out); }, group_total, 0);
+        packer.Spill(next, group_total, 0);
       }
     }
     packer.Finish(&manifest);
