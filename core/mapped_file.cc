@@ -83,6 +83,11 @@ void OnBusError(int sig, siginfo_t* info, void*) {
   signal(sig, SIG_DFL);  // not a mapped file's: the default action (the fault repeats)
 }
 
+// A file's modification time in nanoseconds, part of what MapShared compares.
+int64_t ModifiedNs(const struct stat& st) {
+  return int64_t{st.st_mtim.tv_sec} * 1'000'000'000 + st.st_mtim.tv_nsec;
+}
+
 }  // namespace
 
 void InstallMappedFileFaultHandler() {
@@ -113,7 +118,7 @@ MappedFile::MappedFile(const std::string& path) : path_(path) {
     if (fstat(fd_, &st) == 0) {
       device_ = static_cast<uint64_t>(st.st_dev);
       inode_ = static_cast<uint64_t>(st.st_ino);
-      modified_ns_ = int64_t{st.st_mtim.tv_sec} * 1'000'000'000 + st.st_mtim.tv_nsec;
+      modified_ns_ = ModifiedNs(st);
     }
     range_ = RegisterRange(data_, size_, path_);
     madvise(p, static_cast<size_t>(size_), MADV_SEQUENTIAL);  // readers call WillNeed per range
@@ -176,8 +181,8 @@ std::shared_ptr<const MappedFile> MapShared(const std::string& path) {
     for (const std::weak_ptr<const MappedFile>& w : live) {
       std::shared_ptr<const MappedFile> m = w.lock();
       if (m && m->mapped_ && m->path_ == path && m->device_ == static_cast<uint64_t>(st.st_dev) &&
-          m->inode_ == static_cast<uint64_t>(st.st_ino) && m->size_ == static_cast<uint64_t>(st.st_size) &&
-          m->modified_ns_ == int64_t{st.st_mtim.tv_sec} * 1'000'000'000 + st.st_mtim.tv_nsec) {
+          m->inode_ == static_cast<uint64_t>(st.st_ino) &&
+          m->size_ == static_cast<uint64_t>(st.st_size) && m->modified_ns_ == ModifiedNs(st)) {
         return m;
       }
     }
@@ -186,7 +191,8 @@ std::shared_ptr<const MappedFile> MapShared(const std::string& path) {
   auto m = std::make_shared<const MappedFile>(path);
   if (m->mapped_) {
     const std::lock_guard<std::mutex> lock(mutex);
-    live.erase(std::remove_if(live.begin(), live.end(), [](const auto& w) { return w.expired(); }), live.end());
+    live.erase(std::remove_if(live.begin(), live.end(), [](const auto& w) { return w.expired(); }),
+               live.end());
     live.push_back(m);
   }
   return m;

@@ -58,7 +58,7 @@ class MappedFile {
   std::string path_;
   int fd_ = -1;
   uint64_t device_ = 0, inode_ = 0;
-  int64_t modified_ns_ = 0;      // the file's identity when it was mapped
+  int64_t modified_ns_ = 0;  // the file's identity when it was mapped
   const uint8_t* data_ = nullptr;
   uint64_t size_ = 0;
   bool mapped_ = false;

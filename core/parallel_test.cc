@@ -61,9 +61,8 @@ TEST(ParallelFor, RunsEveryIndexAndRangeOnce) {
   ParallelFor(0, 1000, [&](int i) { sum += i; });
   EXPECT_EQ(sum.load(), 999 * 1000 / 2);
   std::atomic<size_t> covered{0};
-  ParallelFor(tbb::blocked_range<size_t>(0, 5000, 7), [&](const tbb::blocked_range<size_t>& r) {
-    covered += r.size();
-  });
+  ParallelFor(tbb::blocked_range<size_t>(0, 5000, 7),
+              [&](const tbb::blocked_range<size_t>& r) { covered += r.size(); });
   EXPECT_EQ(covered.load(), 5000u);
 }
 

@@ -53,7 +53,8 @@ namespace {
 
 // xxHash64's end for an input of `bytes` bytes: its four lanes merged (v: null for an input of
 // fewer than 32 bytes), the tail [p, end) and the avalanche.
-uint64_t Finish(const uint64_t* v, const uint8_t* p, const uint8_t* end, uint64_t bytes, uint64_t seed) {
+uint64_t Finish(const uint64_t* v, const uint8_t* p, const uint8_t* end, uint64_t bytes,
+                uint64_t seed) {
   uint64_t h;
   if (v != nullptr) {
     h = Rotl(v[0], 1) + Rotl(v[1], 7) + Rotl(v[2], 12) + Rotl(v[3], 18);
@@ -84,12 +85,14 @@ uint64_t Finish(const uint64_t* v, const uint8_t* p, const uint8_t* end, uint64_
 // input's lanes are a chain of two dependent multiplications a stripe, so one input at a time
 // waits on them; four at a time keep the multipliers busy (2.5x the bytes a second, mapped
 // pages included, on the project's Zen 4 VM).
-__attribute__((target("avx512f,avx512dq,avx512vl"))) void Lanes4Avx512(const uint8_t* const* in, size_t stripes,
-                                                                        uint64_t* v) {
+__attribute__((target("avx512f,avx512dq,avx512vl"))) void Lanes4Avx512(const uint8_t* const* in,
+                                                                       size_t stripes,
+                                                                       uint64_t* v) {
   const __m256i p1 = _mm256_set1_epi64x(static_cast<long long>(kP1));
   const __m256i p2 = _mm256_set1_epi64x(static_cast<long long>(kP2));
-  const __m256i start = _mm256_setr_epi64x(static_cast<long long>(kP1 + kP2), static_cast<long long>(kP2), 0,
-                                           static_cast<long long>(0 - kP1));
+  const __m256i start =
+      _mm256_setr_epi64x(static_cast<long long>(kP1 + kP2), static_cast<long long>(kP2), 0,
+                         static_cast<long long>(0 - kP1));
   __m256i acc[4] = {start, start, start, start};
   const uint8_t* const i0 = in[0];
   const uint8_t* const i1 = in[1];
@@ -102,20 +105,21 @@ __attribute__((target("avx512f,avx512dq,avx512vl"))) void Lanes4Avx512(const uin
                           _mm256_loadu_si256(reinterpret_cast<const __m256i*>(i2 + o)),
                           _mm256_loadu_si256(reinterpret_cast<const __m256i*>(i3 + o))};
     for (int k = 0; k < 4; ++k) {
-      acc[k] = _mm256_mullo_epi64(_mm256_rol_epi64(_mm256_add_epi64(acc[k], _mm256_mullo_epi64(x[k], p2)), 31), p1);
+      acc[k] = _mm256_mullo_epi64(
+          _mm256_rol_epi64(_mm256_add_epi64(acc[k], _mm256_mullo_epi64(x[k], p2)), 31), p1);
     }
   }
   for (int k = 0; k < 4; ++k) _mm256_storeu_si256(reinterpret_cast<__m256i*>(v + 4 * k), acc[k]);
 }
 
-bool HasAvx512Dq() {
+bool HasAvx512DqVl() {
   static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
                           __builtin_cpu_supports("avx512vl");
   return has;
 }
 #else
 void Lanes4Avx512(const uint8_t* const*, size_t, uint64_t*) {}
-bool HasAvx512Dq() { return false; }
+bool HasAvx512DqVl() { return false; }
 #endif
 
 }  // namespace
@@ -139,16 +143,18 @@ uint64_t ArchiveHash(const void* data, size_t bytes, uint64_t seed) {
 
 void ArchiveHashBlocks(const uint8_t* const* blocks, int count, size_t bytes, uint64_t* out) {
   CANDI_CHECK(count >= 0 && count <= 4) << "ArchiveHashBlocks: " << count << " blocks";
-  if (count < 2 || bytes < 32 || !HasAvx512Dq()) {
+  if (count < 2 || bytes < 32 || !HasAvx512DqVl()) {
     for (int k = 0; k < count; ++k) out[k] = ArchiveHash(blocks[k], bytes);
     return;
   }
   const uint8_t* in[4];
-  for (int k = 0; k < 4; ++k) in[k] = blocks[k < count ? k : 0];  // a block twice: read from the cache
+  for (int k = 0; k < 4; ++k)
+    in[k] = blocks[k < count ? k : 0];  // a block twice: read from the cache
   const size_t stripes = bytes / 32;
   uint64_t v[16];
   Lanes4Avx512(in, stripes, v);
-  for (int k = 0; k < count; ++k) out[k] = Finish(&v[4 * k], in[k] + 32 * stripes, in[k] + bytes, bytes, 0);
+  for (int k = 0; k < count; ++k)
+    out[k] = Finish(&v[4 * k], in[k] + 32 * stripes, in[k] + bytes, bytes, 0);
 }
 
 ChunkQuantizer ChunkQuantizer::ForBox(const Box3d& box) {

@@ -48,15 +48,17 @@ TEST(ArchiveHash, BlocksHashedTogetherGiveEachBlocksOwnHash) {
   Rng rng(29);
   std::vector<uint8_t> bytes(4 * 5000);
   for (uint8_t& b : bytes) b = static_cast<uint8_t>(rng.Next() >> 56);
-  for (const size_t size : {size_t{0}, size_t{1}, size_t{31}, size_t{32}, size_t{33}, size_t{45}, size_t{64},
-                            size_t{100}, size_t{4999}}) {
+  for (const size_t size : {size_t{0}, size_t{1}, size_t{31}, size_t{32}, size_t{33}, size_t{45},
+                            size_t{64}, size_t{100}, size_t{4999}}) {
     for (int count = 0; count <= 4; ++count) {
       const uint8_t* blocks[4];
-      for (int k = 0; k < 4; ++k) blocks[k] = bytes.data() + 5000 * k + (k == 2 ? 3 : 0);  // one unaligned
+      for (int k = 0; k < 4; ++k)
+        blocks[k] = bytes.data() + 5000 * k + (k == 2 ? 3 : 0);  // one unaligned
       uint64_t out[4] = {1, 1, 1, 1};
       ArchiveHashBlocks(blocks, count, size, out);
       for (int k = 0; k < 4; ++k) {
-        EXPECT_EQ(out[k], k < count ? ArchiveHash(blocks[k], size) : 1u) << size << " bytes, " << count << " blocks";
+        EXPECT_EQ(out[k], k < count ? ArchiveHash(blocks[k], size) : 1u)
+            << size << " bytes, " << count << " blocks";
       }
     }
   }

@@ -295,7 +295,8 @@ TEST(PackDirect, HashFileIsTheHashOfItsBlocksHashes) {
   for (uint64_t b = 0; b <= 6; ++b) {
     std::vector<uint8_t> page(4096);
     for (size_t i = 0; i < page.size(); ++i) page[i] = static_cast<uint8_t>(31 * b + i);
-    ASSERT_EQ(pwrite(fd, page.data(), page.size(), static_cast<off_t>(b * kBlock + 1000 * b)), 4096);
+    ASSERT_EQ(pwrite(fd, page.data(), page.size(), static_cast<off_t>(b * kBlock + 1000 * b)),
+              4096);
   }
   ASSERT_EQ(ftruncate(fd, static_cast<off_t>(size)), 0);
   close(fd);
@@ -303,7 +304,8 @@ TEST(PackDirect, HashFileIsTheHashOfItsBlocksHashes) {
   ASSERT_EQ(bytes.size(), size);
   std::vector<uint64_t> blocks;
   for (uint64_t at = 0; at < size; at += kBlock) {
-    blocks.push_back(ArchiveHash(bytes.data() + at, static_cast<size_t>(std::min(kBlock, size - at))));
+    blocks.push_back(
+        ArchiveHash(bytes.data() + at, static_cast<size_t>(std::min(kBlock, size - at))));
   }
   uint64_t hashed = 0;
   EXPECT_EQ(HashFile(path, &hashed), ArchiveHash(blocks.data(), 8 * blocks.size(), size));
