@@ -15,6 +15,7 @@
 
 #include "core/check.h"
 #include "core/interrupt.h"
+#include "core/log.h"
 
 namespace candi {
 
@@ -156,10 +157,28 @@ void CheckOutputFolder(const std::string& output) {
   }
 }
 
+void CheckReplaceableFolder(const std::string& output, bool (*replaceable)(const std::string&),
+                            const std::string& what) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_symlink(output, ec)) {
+    throw InputError(output, "",
+                     "is a symbolic link (to " + fs::read_symlink(output, ec).string() +
+                         "); give the folder itself, not a link to it");
+  }
+  if (fs::exists(output, ec) && !replaceable(output)) {
+    throw InputError(output, "", "exists and is not " + what + "; not overwriting it");
+  }
+  CheckOutputFolder(output);
+}
+
 void ReplaceFolder(const std::string& temp, const std::string& output, bool (*replaceable)(const std::string&),
                    const std::string& what) {
   namespace fs = std::filesystem;
   std::error_code ec;
+  if (fs::is_symlink(output, ec)) {
+    throw InputError(output, "", "is a symbolic link; not replacing it (give the folder itself)");
+  }
   if (fs::exists(output, ec)) {
     if (!replaceable(output)) throw InputError(output, "", "exists and is not " + what + "; not overwriting it");
     const std::string old = output + ".candi-old-" + std::to_string(getpid());
@@ -171,7 +190,14 @@ void ReplaceFolder(const std::string& temp, const std::string& output, bool (*re
       fs::rename(old, output, ignored);
       throw InputError(output, "", "cannot rename the new " + what + " into place: " + ec.message());
     }
-    fs::remove_all(old, ec);
+    std::error_code removed, ignored;
+    fs::remove_all(old, removed);
+    if (removed || fs::exists(old, ignored)) {
+      LogWarning(output + ": the new " + what +
+                 " is in place, but the old one could not be removed: it is left as " + old + " (" +
+                 (removed ? removed.message() : std::string("still there")) +
+                 "); remove it by hand");
+    }
     return;
   }
   fs::rename(temp, output, ec);

@@ -56,10 +56,18 @@ std::string ReadFileToString(const std::string& path);
 // check, so that a long command fails before its work, not after it.
 void CheckOutputFolder(const std::string& output);
 
+// Throws InputError naming `output` unless ReplaceFolder could put a folder there: `output` may
+// be absent or what `replaceable` accepts, never a symbolic link (the link would be replaced by a
+// real folder while the folder it points to kept its old contents), and its folder must be
+// writable. An early check, so that a long command fails before its work.
+void CheckReplaceableFolder(const std::string& output, bool (*replaceable)(const std::string&),
+                            const std::string& what);
+
 // Renames the folder `temp` (built beside `output`) to `output`. Something already at `output`
-// is replaced only when `replaceable(output)` says it is what this command writes (moved aside,
-// the new one renamed in, the old one removed; put back if the rename fails); anything else is
-// refused with InputError "exists and is not <what>; not overwriting it".
+// is replaced only when `replaceable(output)` says it is what this command writes (moved aside
+// as "<output>.candi-old-<pid>", the new one renamed in, the old one removed; put back if the
+// rename fails); anything else, and a symbolic link, is refused with InputError. When the old
+// one cannot be removed, a warning names the copy left behind.
 void ReplaceFolder(const std::string& temp, const std::string& output, bool (*replaceable)(const std::string&),
                    const std::string& what);
 

@@ -50,6 +50,49 @@ TEST(AtomicFile, FailuresNameThePath) {
   EXPECT_THROW(AtomicFile f(dir.path()), InputError);  // a directory
 }
 
+// A folder of this command's (here: one holding "mine") replaced; anything else refused; a
+// symbolic link refused early and late, so the folder it points to is never left stale behind a
+// new real folder.
+bool HoldsMine(const std::string& p) { return std::filesystem::exists(p + "/mine"); }
+
+TEST(ReplaceFolder, ReplacesItsOwnRefusesOthersAndLinks) {
+  namespace fs = std::filesystem;
+  TempDir dir;
+  const std::string out = dir.File("out");
+  auto build = [&](const std::string& text) {
+    fs::create_directories(dir.File("tmp"));
+    WriteFileAtomic(dir.File("tmp/mine"), text);
+  };
+  build("1");
+  CheckReplaceableFolder(out, HoldsMine, "mine");
+  ReplaceFolder(dir.File("tmp"), out, HoldsMine, "mine");
+  build("2");
+  CheckReplaceableFolder(out, HoldsMine, "mine");
+  ReplaceFolder(dir.File("tmp"), out, HoldsMine, "mine");
+  EXPECT_EQ(ReadBytes(out + "/mine"), "2");
+  for (const auto& e : fs::directory_iterator(dir.path())) {
+    EXPECT_EQ(e.path().filename().string().find(".candi-old-"), std::string::npos) << e.path();
+  }
+  fs::create_directories(dir.File("other"));
+  EXPECT_THROW(CheckReplaceableFolder(dir.File("other"), HoldsMine, "mine"), InputError);
+  fs::create_directory_symlink(out, dir.File("link"));
+  build("3");
+  for (int late = 0; late < 2; ++late) {
+    try {
+      if (late) {
+        ReplaceFolder(dir.File("tmp"), dir.File("link"), HoldsMine, "mine");
+      } else {
+        CheckReplaceableFolder(dir.File("link"), HoldsMine, "mine");
+      }
+      ADD_FAILURE() << "a link was replaced";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("symbolic link"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_TRUE(fs::is_symlink(dir.File("link")));
+  EXPECT_EQ(ReadBytes(out + "/mine"), "2");
+}
+
 TEST(AtomicFile, AFailedWriteIsReportedAndTheDestinationKept) {
   // A file-size limit makes writes fail (EFBIG) the way a full disk does (ENOSPC), as any user.
   TempDir dir;

@@ -405,6 +405,8 @@ PackSummary PackArchive(const PackOptions& options, const std::vector<PackInput>
                         const std::string& output_dir, const ProgressCallback& progress) {
   options.Check();
   if (inputs.empty()) throw std::invalid_argument("PackArchive: no inputs");
+  // What the rename at the end would refuse, refused before the work.
+  CheckReplaceableFolder(fs::absolute(output_dir).string(), IsArchive, "a candi render archive");
   const auto start = std::chrono::steady_clock::now();
   std::unique_ptr<tbb::task_arena> arena;
   if (options.threads > 0) arena = std::make_unique<tbb::task_arena>(options.threads);

@@ -6,6 +6,10 @@
 // and mmap() of such a range fails with ENODEV, as on a filesystem that refuses mapping: the
 // readers that map files (core/mapped_file.h) then read them, and meet the failing read. (A real
 // I/O error under a mapping is a SIGBUS, which this library cannot simulate.)
+//
+// CANDI_FAULT_REMOVE=<text>  every unlink(), unlinkat(), rmdir() and remove() of a path holding
+// the text fails with EBUSY, as removing a folder a process still uses on a network share can: a
+// removal that runs as root cannot be refused by permissions alone.
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <errno.h>
@@ -84,4 +88,58 @@ void* mmap(void* addr, size_t length, int prot, int flags, int fd, off_t offset)
 void* mmap64(void* addr, size_t length, int prot, int flags, int fd, off_t offset) {
   static MmapFn real = NULL;
   return FaultyMmap(&real, "mmap64", addr, length, prot, flags, fd, offset);
+}
+
+// ---- CANDI_FAULT_REMOVE ----------------------------------------------------------------------
+
+#include <fcntl.h>
+
+static int Unremovable(int dirfd, const char* path) {
+  const char* text = getenv("CANDI_FAULT_REMOVE");
+  if (text == NULL || *text == '\0' || path == NULL) return 0;
+  if (strstr(path, text) != NULL) return 1;
+  if (path[0] == '/' || dirfd == AT_FDCWD) return 0;
+  char link[64], dir[4096];
+  snprintf(link, sizeof(link), "/proc/self/fd/%d", dirfd);
+  const ssize_t n = readlink(link, dir, sizeof(dir) - 1);
+  if (n < 0) return 0;
+  dir[n] = '\0';
+  return strstr(dir, text) != NULL;
+}
+
+typedef int (*PathFn)(const char*);
+typedef int (*AtFn)(int, const char*, int);
+
+static int Remove(const char* name, PathFn* real, const char* path) {
+  if (*real == NULL) *real = (PathFn)dlsym(RTLD_NEXT, name);
+  if (Unremovable(AT_FDCWD, path)) {
+    errno = EBUSY;
+    return -1;
+  }
+  return (*real)(path);
+}
+
+int unlink(const char* path) {
+  static PathFn real = NULL;
+  return Remove("unlink", &real, path);
+}
+
+int rmdir(const char* path) {
+  static PathFn real = NULL;
+  return Remove("rmdir", &real, path);
+}
+
+int remove(const char* path) {
+  static PathFn real = NULL;
+  return Remove("remove", &real, path);
+}
+
+int unlinkat(int dirfd, const char* path, int flags) {
+  static AtFn real = NULL;
+  if (real == NULL) real = (AtFn)dlsym(RTLD_NEXT, "unlinkat");
+  if (Unremovable(dirfd, path)) {
+    errno = EBUSY;
+    return -1;
+  }
+  return real(dirfd, path, flags);
 }
