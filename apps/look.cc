@@ -543,7 +543,10 @@ void AddPublish(Command& root) {
                                   "the visitor's browser with WebGL2: no server-side code, any static host");
   c.Option("input", a.input, "A build directory (candi build), a demo's output, or a render archive (candi pack)")
       .Required();
-  c.Option("-o,--output", a.output, "The site's folder (created; an earlier site there is replaced)").Required();
+  c.Option("-o,--output", a.output,
+           "The site's folder (created; an earlier site there is updated in place, "
+           "keeping every file publish did not write; a link is followed)")
+      .Required();
   c.Option("-L,--repeat-level", o.repeat_level, "L of the data's pages and the page's default L (0: the scene's "
            "render setting, else 100)");
   c.Option("--group-points", o.group_points, "Points of consecutive chunks stored together (a file holds about "

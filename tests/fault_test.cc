@@ -7,7 +7,9 @@
 //     (RLIMIT_FSIZE, any user; writes fail with EFBIG the way they do with ENOSPC);
 //   - COLMAP killed (SIGKILL) in the middle of a stage of `candi sfm`;
 //   - SIGINT during `candi build`, then `candi build --resume` finishing the same archive;
-//   - LAZ and COPC writes on a full disk, into a folder that refuses files, and interrupted.
+//   - LAZ and COPC writes on a full disk, into a folder that refuses files, and interrupted;
+//   - the old copy a replaced archive or republished site leaves that cannot be removed (the
+//     preloaded library fails unlink()/rmdir() of paths holding a text with EBUSY): named.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -455,6 +457,54 @@ TEST(Fault, LazAndCopcIntoAFolderThatRefusesFilesAreRefusedByName) {
     chmod(folder.c_str(), 0755);
     EXPECT_TRUE(fs::is_empty(folder));
   }
+}
+
+// What replacing an archive or republishing a site leaves that cannot be removed is named on
+// stderr (the command still succeeds: the new output is in place), never left without a word.
+TEST(Fault, AnOldCopyThatCannotBeRemovedIsNamed) {
+  TempDir dir;
+  WriteCloud(dir.File("cloud.ply"), 5000, 5);
+  const std::string archive = dir.File("out.archive");
+  ASSERT_EQ(RunToEnd({"pack", dir.File("cloud.ply"), "-o", archive}, LogDir(dir)).first, 0);
+  const std::vector<std::string> keep_old = {
+      "LD_PRELOAD=" CANDI_FAULT_INJECT_LIB, "CANDI_FAULT_REMOVE=.candi-old-",
+      std::string("ASAN_OPTIONS=verify_asan_link_order=0:") +
+          (getenv("ASAN_OPTIONS") ? getenv("ASAN_OPTIONS") : "")};
+  const auto [code, err] =
+      RunToEnd({"pack", dir.File("cloud.ply"), "-o", archive}, LogDir(dir), keep_old);
+  EXPECT_EQ(code, 0) << err;
+  std::vector<std::string> old;
+  for (const auto& e : fs::directory_iterator(dir.path())) {
+    if (Contains(e.path().filename().string(), ".candi-old-")) old.push_back(e.path().string());
+  }
+  ASSERT_EQ(old.size(), 1u) << "the injected fault kept the old archive";
+  EXPECT_TRUE(Contains(err, old[0]) && Contains(err, "remove it by hand")) << err;
+  fs::remove_all(old[0]);
+
+  // A republished site: the old data, moved into the build folder inside the site, stays.
+  const std::string site = dir.File("site");
+  ASSERT_EQ(RunToEnd({"publish", archive, "-o", site, "-L", "4"}, LogDir(dir)).first, 0);
+  std::vector<std::string> keep_build = keep_old;
+  keep_build[1] = "CANDI_FAULT_REMOVE=.candi-publish-";
+  const auto [again, again_err] =
+      RunToEnd({"publish", archive, "-o", site, "-L", "3"}, LogDir(dir), keep_build);
+  EXPECT_EQ(again, 0) << again_err;
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(site)) {
+    if (Contains(e.path().filename().string(), ".candi-publish-"))
+      left.push_back(e.path().string());
+  }
+  ASSERT_EQ(left.size(), 1u);
+  EXPECT_TRUE(Contains(again_err, left[0]) && Contains(again_err, "remove it by hand"))
+      << again_err;
+  EXPECT_TRUE(fs::exists(left[0] + "/data/0/3.bin")) << "what is left is the old data (L = 4)";
+  EXPECT_FALSE(fs::exists(site + "/data/0/3.bin")) << "the site's data is the new (L = 3)";
+  // The next publish removes what an earlier one left (its process is gone), and says so.
+  const auto [third, third_err] =
+      RunToEnd({"publish", archive, "-o", site, "-L", "3"}, LogDir(dir));
+  EXPECT_EQ(third, 0) << third_err;
+  EXPECT_FALSE(fs::exists(left[0]));
+  EXPECT_TRUE(Contains(third_err, left[0])) << third_err;
 }
 
 }  // namespace

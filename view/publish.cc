@@ -1,23 +1,27 @@
 #include "view/publish.h"
 
+#include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 #include <zlib.h>
 
+#include <tbb/task_arena.h>
 #include <algorithm>
-#include <cmath>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <memory>
 #include <mutex>
-#include <stdexcept>
 #include <nlohmann/json.hpp>
-#include <tbb/task_arena.h>
+#include <set>
+#include <stdexcept>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/interrupt.h"
+#include "core/log.h"
 #include "core/parallel.h"
 #include "core/timer.h"
 #include "render/archive.h"
@@ -111,6 +115,128 @@ std::string PageName(size_t group, int page) {
   return name;
 }
 
+// The files publish writes at the top of a site: the page's, then site.json (renamed into place
+// last, so a visitor's new index names pages that are there).
+std::vector<std::string> TopFiles() {
+  std::vector<std::string> names;
+  for (size_t i = 0; i < WebAssetCount(); ++i) {
+    const std::string name = std::string(WebAssetAt(i).path).substr(1);
+    if (name != "viewer.js") names.push_back(name);
+  }
+  names.push_back(kSiteIndex);
+  return names;
+}
+
+// The paths under an earlier site's data/ that its site.json does not list (data/<g> and
+// data/<g>/<k>.bin of its groups and pages): someone else's, which replacing data/ would delete.
+std::vector<std::string> UnlistedDataPaths(const fs::path& site) {
+  std::set<std::string> listed;
+  try {
+    const json j = json::parse(ReadFileToString((site / kSiteIndex).string()));
+    const json& groups = j.at("data").at("groups");
+    for (size_t g = 0; g < groups.size(); ++g) {
+      listed.insert("data/" + std::to_string(g));
+      const size_t pages = groups[g].at("pages").size();
+      for (size_t k = 0; k < pages; ++k) listed.insert(PageName(g, static_cast<int>(k)));
+    }
+  } catch (const std::exception&) {
+    // A damaged index lists nothing: every file under data/ is named.
+  }
+  std::vector<std::string> unlisted;
+  std::error_code ec;
+  const fs::path data = site / "data";
+  if (!fs::exists(fs::symlink_status(data, ec))) return unlisted;
+  if (!fs::is_directory(fs::symlink_status(data, ec))) return {"data"};
+  for (fs::recursive_directory_iterator it(data, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string rel = it->path().lexically_relative(site).generic_string();
+    const fs::file_status st = it->symlink_status(ec);
+    const bool ours =
+        listed.count(rel) &&
+        (rel.size() > 4 && rel.compare(rel.size() - 4, 4, ".bin") == 0 ? fs::is_regular_file(st)
+                                                                       : fs::is_directory(st));
+    if (!ours) {
+      unlisted.push_back(rel);
+      if (fs::is_directory(st)) it.disable_recursion_pending();
+    }
+  }
+  if (ec) unlisted.push_back("data (cannot be read: " + ec.message() + ")");
+  return unlisted;
+}
+
+std::string ListSome(const std::vector<std::string>& names) {
+  std::string text;
+  for (size_t i = 0; i < names.size() && i < 5; ++i) text += (i ? ", " : "") + names[i];
+  if (names.size() > 5) text += " and " + std::to_string(names.size() - 5) + " more";
+  return text;
+}
+
+// Where the site goes, the link followed: `site_dir` absolute, without a trailing separator.
+fs::path SiteTarget(const std::string& site_dir) {
+  fs::path out = fs::absolute(site_dir).lexically_normal();
+  if (out.filename().empty()) out = out.parent_path();
+  std::error_code ec;
+  if (!fs::is_symlink(out, ec)) return out;
+  const fs::path linked = fs::canonical(out, ec);
+  if (ec) {
+    throw InputError(site_dir, "",
+                     "is a symbolic link to " + fs::read_symlink(out, ec).string() +
+                         ", which does not exist; create that folder or give another");
+  }
+  return linked;
+}
+
+// Earlier publishes' build folders inside `site` whose process is gone (killed before it could
+// remove them): publish's own, removed.
+void RemoveStaleBuildFolders(const fs::path& site) {
+  std::error_code ec;
+  const std::string prefix = ".candi-publish-";
+  for (fs::directory_iterator it(site, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    const long pid = std::strtol(name.c_str() + prefix.size(), nullptr, 10);
+    if (pid <= 0 || pid == getpid() || kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH)
+      continue;
+    std::error_code removed;
+    fs::remove_all(it->path(), removed);
+    LogWarning(it->path().string() + ": " +
+               (removed ? "an interrupted publish's build folder; could not remove it (" +
+                              removed.message() + ")"
+                        : "removed an interrupted publish's build folder"));
+  }
+}
+
+// Moves the new site's files from `temp` (a folder inside `site`) into `site`, each file renamed
+// over its old self (atomic per file) and data/ exchanged whole, so nothing else in `site` is
+// touched: a .git folder, CNAME, .nojekyll or any file of the owner's stays. The old data/ ends
+// in `temp`, which the caller removes.
+void MoveIntoPlace(const fs::path& temp, const fs::path& site) {
+  auto move = [&](const fs::path& from, const fs::path& to) {
+    std::error_code ec;
+    fs::rename(from, to, ec);
+    if (ec)
+      throw InputError(to.string(), "",
+                       "cannot move the new site's file into place: " + ec.message());
+  };
+  const fs::path data = site / "data", fresh = temp / "data";
+  std::error_code ec;
+  if (fs::exists(fs::symlink_status(data, ec))) {
+    if (renameat2(AT_FDCWD, fresh.c_str(), AT_FDCWD, data.c_str(), RENAME_EXCHANGE) != 0) {
+      // A filesystem without the exchange: the old data/ aside first, put back if the new fails.
+      move(data, temp / "data.old");
+      std::error_code failed;
+      fs::rename(fresh, data, failed);
+      if (failed) {
+        fs::rename(temp / "data.old", data, ec);
+        throw InputError(data.string(), "",
+                         "cannot move the new site's data into place: " + failed.message());
+      }
+    }
+  } else {
+    move(fresh, data);
+  }
+  for (const std::string& name : TopFiles()) move(temp / name, site / name);
+}
+
 }  // namespace
 
 void PublishOptions::Check() const {
@@ -147,13 +273,36 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
   const int L = options.repeat_level > 0 ? options.repeat_level : std::clamp(source.settings.repeat_level, 1, 1000);
   const uint64_t seed = source.settings.seed;
 
-  // Refuse early what the rename would refuse late.
-  const fs::path out = fs::absolute(site_dir).lexically_normal();
+  // Refuse early what the moves would refuse late. A folder holding an earlier site (or an empty
+  // one) is updated in place; a symbolic link is followed to the folder it names.
+  const fs::path out = SiteTarget(site_dir);
   std::error_code ec;
-  if (fs::exists(out, ec) && !IsSite(out.string())) {
-    throw InputError(site_dir, "", "exists and is not a candi site; not overwriting it");
+  const bool in_place = fs::exists(out, ec);
+  if (in_place) {
+    if (!fs::is_directory(out, ec))
+      throw InputError(site_dir, "", "exists and is not a folder; not overwriting it");
+    if (!IsSite(out.string()) && !fs::is_empty(out, ec)) {
+      throw InputError(site_dir, "", "exists and is not a candi site; not overwriting it");
+    }
+    for (const std::string& name : TopFiles()) {
+      const fs::file_status st = fs::symlink_status(out / name, ec);
+      if (fs::exists(st) && !fs::is_regular_file(st)) {
+        throw InputError((out / name).string(), "",
+                         "is not a file; the site's own file goes there");
+      }
+    }
+    const std::vector<std::string> unlisted = UnlistedDataPaths(out);
+    if (!unlisted.empty()) {
+      throw InputError(site_dir, "",
+                       "its data/ holds what the earlier site.json does not list (" +
+                           ListSome(unlisted) +
+                           "); publish replaces data/ whole: move them out of data/ first");
+    }
+    if (::access(out.c_str(), W_OK) != 0) throw InputError(site_dir, "", "is not writable");
+    RemoveStaleBuildFolders(out);
+  } else {
+    CheckOutputFolder(out.string());
   }
-  CheckOutputFolder(out.string());
 
   // Groups: runs of consecutive chunks of at most group_points points (a chunk larger than that
   // is a group of its own).
@@ -168,7 +317,11 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
     c = end;
   }
 
-  const std::string temp = out.string() + ".candi-tmp-" + std::to_string(getpid());
+  // Built inside the folder it updates (the same filesystem, whatever is mounted where), or beside
+  // a new one.
+  const std::string temp = in_place
+                               ? (out / (".candi-publish-" + std::to_string(getpid()))).string()
+                               : out.string() + ".candi-tmp-" + std::to_string(getpid());
   fs::remove_all(temp, ec);
   // Created and registered in one step: an interrupt removes it, or comes before it exists.
   const int interrupt_id = CreateTempDirectory(temp, &ec);
@@ -283,7 +436,8 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
       const std::string from = "<script src=\"viewer.js\"></script>";
       const size_t at = content.find(from);
       CANDI_CHECK(at != std::string::npos) << "index.html has no " << from;
-      content.replace(at, from.size(), "<script src=\"site.js\"></script>");
+      content.replace(at, from.size(),
+                      "<script src=\"site_index.js\"></script><script src=\"site.js\"></script>");
       const std::string body = "<body>";
       const size_t b = content.find(body);
       CANDI_CHECK(b != std::string::npos) << "index.html has no <body>";
@@ -296,10 +450,27 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
     if (e.is_regular_file()) stats.site_bytes += e.file_size();
   }
 
-  CommitTempPath(cleanup.id(), [&] {
-    ReplaceFolder(temp, out.string(), IsSite, "a candi site");
+  if (in_place) {
+    CommitTempPath(cleanup.id(), [&] { MoveIntoPlace(temp, out); });
+    // The build folder now holds the old data/ (and nothing of the new site).
     cleanup.Keep();
-  });
+    std::error_code removed;
+    fs::remove_all(temp, removed);
+    if (removed || fs::exists(temp, ec)) {
+      LogWarning(site_dir +
+                 ": the new site is in place, but the old site's data could not be removed: it is "
+                 "left in " +
+                 temp + " (" + (removed ? removed.message() : std::string("still there")) +
+                 "); remove it by hand");
+    }
+  } else {
+    CommitTempPath(cleanup.id(), [&] {
+      fs::rename(temp, out, ec);
+      if (ec)
+        throw InputError(site_dir, "", "cannot rename the new site into place: " + ec.message());
+      cleanup.Keep();
+    });
+  }
   stats.seconds = watch.Seconds();
   return stats;
 }

@@ -3,8 +3,8 @@
 //
 // The site (docs/guide/publish.md):
 //   SITE/index.html, viewer.css, controls.js (the page's controls, shared with candi view),
-//        site.js (the WebGL2 renderer and the loader), site_worker.js (fetch and decode, off the
-//        main thread)
+//        site_index.js (site.json checked before use), site.js (the WebGL2 renderer and the
+//        loader), site_worker.js (decoding, off the main thread)
 //   SITE/site.json   the page's scene (ViewerSource::ToJson) and the data's index (below)
 //   SITE/data/<group>/<page>.bin
 // The data: the archive's chunks, grouped in runs of consecutive chunks (at most group_points
@@ -58,9 +58,14 @@ struct PublishStats {
 bool IsSite(const std::string& path);
 
 // Publishes `input` (a build directory, a demo's output holding one, or a render archive) as a
-// site in `site_dir`: built beside it and renamed into place, replacing an earlier site, refusing
-// anything else there (InputError naming the path). `orientation` orients the first view as in
-// candi view.
+// site in `site_dir`, a symbolic link followed to the folder it names. A new folder is built
+// beside its place and renamed into it. A folder holding an earlier site (or an empty one) is
+// updated in place: the new site is built in a folder inside it, then each of its files is
+// renamed over the old one (atomic per file) and data/ is exchanged whole; everything publish does
+// not write (.git, CNAME, .nojekyll, any other file or folder) is kept. Refused with InputError
+// naming the path: a folder that holds something else, a file where the site's own file goes,
+// files in data/ that the earlier site.json does not list, a link to nothing. `orientation`
+// orients the first view as in candi view.
 PublishStats PublishSite(const PublishOptions& options, const std::string& input, const std::string& site_dir,
                          const render::Orientation& orientation, const ProgressCallback& progress = nullptr);
 

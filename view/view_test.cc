@@ -3,11 +3,12 @@
 // archive renders, picking, the first view.
 #include <zlib.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
-#include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
 #include "io/point_io.h"
@@ -266,6 +267,142 @@ TEST(Publish, PagesHoldEachEnsemblesSlicesAndEveryPointOnce) {
   EXPECT_EQ(ReadFileToString(dir.File("mine/keep.txt")), "x");
   EXPECT_THROW(PublishSite(o, dir.path(), dir.File("site3"), render::Orientation()), InputError);
   EXPECT_FALSE(std::filesystem::exists(dir.File("site3")));
+}
+
+// The entries of `folder` (relative, sorted), recursively.
+std::vector<std::string> Listing(const std::string& folder) {
+  std::vector<std::string> out;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(folder)) {
+    out.push_back(e.path().lexically_relative(folder).generic_string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Anything a publish left beside or inside its target: a build folder, an old copy.
+std::vector<std::string> Leftovers(const std::string& folder) {
+  std::vector<std::string> out;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(folder)) {
+    const std::string name = e.path().filename().string();
+    if (name.find(".candi-") != std::string::npos) out.push_back(e.path().string());
+  }
+  return out;
+}
+
+// Options for a site of several groups of the demo output's archive, at `L`.
+PublishOptions SmallPages(int L) {
+  PublishOptions o;
+  o.repeat_level = L;
+  o.group_points = 1200;
+  return o;
+}
+
+// Republishing into a deployed site (a GitHub Pages folder) updates what publish wrote and keeps
+// everything else: .git, CNAME, .nojekyll, the owner's own files and folders. The site is then
+// the new one exactly: no page of the old L is left in data/.
+TEST(Publish, RepublishingKeepsEveryFileItDidNotWrite) {
+  namespace fs = std::filesystem;
+  TempDir dir;
+  const std::string demo = MakeDemoOutput(dir);
+  PublishOptions o = SmallPages(7);
+  const std::string site = dir.File("site");
+  PublishSite(o, demo, site, render::Orientation());
+  const std::vector<std::string> first = Listing(site);
+  fs::create_directories(site + "/.git/refs");
+  WriteFileAtomic(site + "/.git/HEAD", "ref: refs/heads/main\n");
+  WriteFileAtomic(site + "/CNAME", "archive.example.org\n");
+  WriteFileAtomic(site + "/.nojekyll", "");
+  fs::create_directories(site + "/about");
+  WriteFileAtomic(site + "/about/index.html", "<p>mine</p>");
+  o.repeat_level = 3;
+  PublishSite(o, demo, site, render::Orientation());
+  EXPECT_EQ(ReadFileToString(site + "/.git/HEAD"), "ref: refs/heads/main\n");
+  EXPECT_TRUE(fs::is_directory(site + "/.git/refs"));
+  EXPECT_EQ(ReadFileToString(site + "/CNAME"), "archive.example.org\n");
+  EXPECT_TRUE(fs::exists(site + "/.nojekyll"));
+  EXPECT_EQ(ReadFileToString(site + "/about/index.html"), "<p>mine</p>");
+  // The site itself: as a fresh publish of L = 3 writes it, byte for byte.
+  PublishSite(o, demo, dir.File("fresh"), render::Orientation());
+  std::vector<std::string> now = Listing(site);
+  now.erase(std::remove_if(now.begin(), now.end(),
+                           [](const std::string& p) {
+                             return p.rfind(".git", 0) == 0 || p == "CNAME" || p == ".nojekyll" ||
+                                    p.rfind("about", 0) == 0;
+                           }),
+            now.end());
+  EXPECT_EQ(now, Listing(dir.File("fresh")));
+  EXPECT_NE(now, first);
+  for (const std::string& p : now) {
+    if (fs::is_regular_file(site + "/" + p)) {
+      EXPECT_EQ(ReadFileToString(site + "/" + p), ReadFileToString(dir.File("fresh/" + p))) << p;
+    }
+  }
+  EXPECT_TRUE(Leftovers(dir.path()).empty()) << Leftovers(dir.path())[0];
+  // An empty folder (made for the site) is a place for one.
+  fs::create_directories(dir.File("empty"));
+  PublishSite(o, demo, dir.File("empty"), render::Orientation());
+  EXPECT_TRUE(IsSite(dir.File("empty")));
+}
+
+// What replacing data/ would delete is refused by name, before any work, and nothing changes.
+TEST(Publish, RefusesToDeleteFilesInDataOrToReplaceAFolderWithAFile) {
+  namespace fs = std::filesystem;
+  TempDir dir;
+  const std::string demo = MakeDemoOutput(dir);
+  PublishOptions o = SmallPages(4);
+  const std::string site = dir.File("site");
+  PublishSite(o, demo, site, render::Orientation());
+  const std::string index = ReadFileToString(site + "/site.json");
+  WriteFileAtomic(site + "/data/notes.txt", "mine");
+  fs::create_directories(site + "/data/0/extra");
+  for (const std::string& bad : {std::string("data/notes.txt"), std::string("data/0/extra")}) {
+    try {
+      PublishSite(o, demo, site, render::Orientation());
+      ADD_FAILURE() << "publish deleted " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+    fs::remove_all(site + "/" + bad);
+  }
+  EXPECT_EQ(ReadFileToString(site + "/site.json"), index);
+  // A folder where the site's own file goes.
+  fs::remove(site + "/viewer.css");
+  fs::create_directories(site + "/viewer.css");
+  EXPECT_THROW(PublishSite(o, demo, site, render::Orientation()), InputError);
+  EXPECT_TRUE(fs::is_directory(site + "/viewer.css"));
+  EXPECT_EQ(ReadFileToString(site + "/site.json"), index);
+  EXPECT_TRUE(Leftovers(dir.path()).empty());
+}
+
+// A symbolic link to the deployed folder: that folder is updated in place (the link stays a
+// link); a link to nothing is refused and nothing is made.
+TEST(Publish, FollowsASymbolicLinkToTheFolderItUpdates) {
+  namespace fs = std::filesystem;
+  TempDir dir;
+  const std::string demo = MakeDemoOutput(dir);
+  PublishOptions o = SmallPages(5);
+  fs::create_directories(dir.File("www"));
+  PublishSite(o, demo, dir.File("www/site"), render::Orientation());
+  WriteFileAtomic(dir.File("www/site/CNAME"), "x.org\n");
+  fs::create_directory_symlink(dir.File("www/site"), dir.File("link"));
+  o.repeat_level = 2;
+  PublishSite(o, demo, dir.File("link") + "/", render::Orientation());
+  EXPECT_TRUE(fs::is_symlink(dir.File("link")));
+  const nlohmann::json site =
+      nlohmann::json::parse(ReadFileToString(dir.File("www/site/site.json")));
+  EXPECT_EQ(site.at("data").at("repeat_level"), 2);
+  EXPECT_FALSE(fs::exists(dir.File("www/site/data/0/4.bin")));
+  EXPECT_EQ(ReadFileToString(dir.File("www/site/CNAME")), "x.org\n");
+  EXPECT_TRUE(Leftovers(dir.path()).empty());
+  fs::create_directory_symlink(dir.File("nowhere"), dir.File("dangling"));
+  try {
+    PublishSite(o, demo, dir.File("dangling"), render::Orientation());
+    ADD_FAILURE() << "a link to nothing was published into";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.File("nowhere")));
+  EXPECT_TRUE(Leftovers(dir.path()).empty());
 }
 
 render::Camera WorldView(const render::Archive& archive, render::Projection projection) {
