@@ -13,7 +13,8 @@
   bytes (page 0 of every group), not after the whole data; DevTools sees every page 0 requested
   before any later page.
 - A budget smaller than the data: the page holds at most it, before and after moving.
-- A damaged, a missing and a truncated data file: the page names each and draws the rest.
+- A damaged, a missing and a truncated data file: the page names each and draws the rest, and
+  never says "converged" (tests/browser/publish_hostile_test.py has the hostile cases).
 - A build in survey coordinates (10^6 m): the same image as candi render's; its licence,
   annotations and provenance (measured or reconstructed) reach the page.
 - Points packed coloured by a field: the legend on the page, and a pick's value on the client
@@ -268,17 +269,28 @@ def check(work):
             failures.append("the shared address did not reopen the same image")
 
         # 3. A budget smaller than the data: the page holds at most it, draws what it holds, and
-        # keeps within it as the camera moves (dropping the finest pages of far groups first).
-        browser.call("Page.navigate", url=served.url("?memory_mb=1"))
+        # keeps within it as the camera moves (dropping the finest pages of far groups first). The
+        # smallest budget the page takes is 16 MB (1 M points): a site of 1.6 M points.
+        big = os.path.join(work, "big")
+        os.makedirs(big)
+        big_archive = vb.foundation_archive(big, 1600000)
+        vb.run("publish", big_archive, "-o", os.path.join(site, "big"), "-L", str(L), "--group-points", "200000")
+        with open(os.path.join(site, "big", "site.json")) as f:
+            big_index = json.load(f)
+        browser.call("Page.navigate", url=served.url("big/?memory_mb=16"))
         time.sleep(1)
         browser.wait_for("window.candiViewer && typeof window.candiViewer.progress === 'function'", 120, "budget page")
         converged(browser, "the image within a budget")
         held = browser.evaluate("window.candiViewer.progress()")
-        print("budget of %d points: %d held" % (held["budgetPoints"], held["heldPoints"]))
-        if not 0 < held["heldPoints"] <= held["budgetPoints"] < index["scene"]["points"]:
+        status = browser.evaluate("window.candiViewer.status()")
+        print("budget of %d points: %d held of %d; %s" % (held["budgetPoints"], held["heldPoints"],
+                                                         big_index["scene"]["points"], status))
+        if not 0 < held["heldPoints"] <= held["budgetPoints"] < big_index["scene"]["points"]:
             failures.append("budget: %s" % held)
+        if "within the memory budget" not in status:
+            failures.append("the status does not say the image is the budget's: %r" % status)
         camera = browser.evaluate("window.candiViewer.camera()")
-        corner = index["scene"]["bounds"]["min"]
+        corner = big_index["scene"]["bounds"]["min"]
         browser.evaluate("window.candiViewer.setCamera({target: %s, eye: %s})"
                          % (json.dumps(corner), json.dumps([corner[k] + 0.3 * (camera["eye"][k] - camera["target"][k])
                                                            for k in range(3)])))
@@ -286,6 +298,7 @@ def check(work):
         moved = browser.evaluate("window.candiViewer.progress()")
         if not 0 < moved["heldPoints"] <= moved["budgetPoints"] or browser.evaluate("window.candiViewer.errors().length"):
             failures.append("budget after moving: %s, errors %s" % (moved, browser.evaluate("window.candiViewer.errors()")))
+        shutil.rmtree(os.path.join(site, "big"))
 
         # 4. Damaged, missing and truncated files.
         broken = os.path.join(work, "broken")
@@ -305,7 +318,13 @@ def check(work):
             browser.call("Page.navigate", url=served2.url())
             browser.wait_for("window.candiViewer && window.candiViewer.progress && "
                              "window.candiViewer.progress().pagesFailed >= 3", 300, "three failed pages")
-            converged(browser, "the damaged site's image")
+            # Settled, never "converged": pages are missing.
+            time.sleep(0.3)
+            browser.wait_for("window.candiViewer.progress().settled && !window.candiViewer.dirty()", 300,
+                             "the damaged site's image")
+            status = browser.evaluate("window.candiViewer.status()")
+            if "converged" in status or browser.evaluate("window.candiViewer.progress().converged"):
+                failures.append("the damaged site says converged: %r" % status)
             errors = browser.evaluate("window.candiViewer.errors()")
             shown = browser.evaluate("document.getElementById('errors').textContent")
             print("damaged site: " + " | ".join(errors))

@@ -25,42 +25,8 @@
     return;
   }
 
-  // ---- 64-bit hashes (core/rng.h), for the slices each ensemble draws --------------------------
-  const M64 = (1n << 64n) - 1n;
-  function mix64(z) {
-    z = (z + 0x9e3779b97f4a7c15n) & M64;
-    z = ((z ^ (z >> 30n)) * 0xbf58476d1ce4e5b9n) & M64;
-    z = ((z ^ (z >> 27n)) * 0x94d049bb133111ebn) & M64;
-    return z ^ (z >> 31n);
-  }
-  const streamKey = (seed, stream) => mix64(BigInt(seed) ^ mix64(BigInt(stream)));
-  const KEY_SLICE = {}, KEY_SHARE = {};
-  function keyFor(cache, seed, stream) {
-    if (!(seed in cache)) cache[seed] = streamKey(seed, stream);
-    return cache[seed];
-  }
-  // render/archive.cc's EnsembleSlices: the runs [begin, end) of a chunk that ensemble e draws.
-  function ensembleSlices(chunk, L, seed, e, fraction, out) {
-    const n = chunk.count;
-    if (!(fraction > 0) || n === 0) return;
-    const key = chunk.hashes[seed + ':' + L] || (chunk.hashes[seed + ':' + L] =
-      Number(mix64(keyFor(KEY_SLICE, seed, 0x5EED511CEn) ^ BigInt(chunk.first)) % BigInt(L)));
-    const r = key;
-    const bound = (s) => Math.floor(s * n / L);  // exact: s * n < 2^53
-    for (let j = 0; j < Math.ceil(fraction) && j < L; ++j) {
-      const s = (e + r + j) % L;
-      const begin = bound(s), end = bound(s + 1);
-      const share = Math.min(1, fraction - j);
-      let take = end - begin;
-      if (share < 1) {
-        const x = share * (end - begin);
-        const h = mix64(keyFor(KEY_SHARE, seed, 0xF4AC7n) ^ ((BigInt(chunk.first) * 131n + BigInt(s)) & M64));
-        const u = Number(h >> 11n) * 2 ** -53;
-        take = Math.floor(x) + ((x - Math.floor(x)) > u ? 1 : 0);
-      }
-      if (take > 0) out.push(begin, begin + take);
-    }
-  }
+  // The slices each ensemble draws (render/archive.cc's EnsembleSlices): site_index.js.
+  const ensembleSlices = window.CandiSiteIndex.ensembleSlices;
 
   // ---- GL programs -------------------------------------------------------------------------
   function compile(vs, fs) {
@@ -178,6 +144,31 @@
     return new Promise((resolve) => { const id = nextId++; waiting.set(id, resolve); worker.postMessage({ id, name, buffer, points, bytes }, [buffer]); });
   }
   const pageName = (g, k) => 'data/' + g + '/' + k + '.bin';
+  // A response's body, read until it holds more than `most` bytes (then the download is stopped:
+  // a file larger than site.json says is not this site's page, whatever it would grow to).
+  async function readAtMost(r, most) {
+    const declared = Number(r.headers.get('Content-Length'));
+    if (r.headers.get('Content-Encoding') === null && declared > most) {
+      throw new Error('is ' + declared + ' bytes, more than the ' + most + ' site.json allows: not this site\'s page');
+    }
+    const reader = r.body.getReader(), parts = [];
+    let n = 0;
+    for (;;) {
+      const { done, value } = await reader.read();
+      if (done) break;
+      n += value.length;
+      bytesReceived += value.length;
+      if (n > most) {
+        reader.cancel().catch(() => {});
+        throw new Error('is more than the ' + most + ' bytes site.json allows: not this site\'s page (download stopped)');
+      }
+      parts.push(value);
+    }
+    const out = new Uint8Array(n);
+    let at = 0;
+    for (const part of parts) { out.set(part, at); at += part.length; }
+    return out.buffer;
+  }
   // Page k of group g: chunk-relative runs, one per chunk, in the file's order.
   function pageRuns(g, k) {
     const runs = [];
@@ -198,9 +189,9 @@
     const name = pageName(g, k);
     return fetch(name).then((r) => {
       if (!r.ok) throw new Error(name + ': HTTP ' + r.status + ' ' + r.statusText);
-      return r.arrayBuffer();
+      // The gzip file, or its planes where a server decompressed them on the way.
+      return readAtMost(r, Math.max(page.bytes, 8 * page.points));
     }).then((buffer) => {
-      bytesReceived += buffer.byteLength;
       return decode(name, buffer, page.points, page.bytes);
     }).then((m) => {
       landed();
@@ -259,53 +250,95 @@
     for (let c = groups[g].chunks[0]; c < groups[g].chunks[1]; ++c) if (!f || f[chunks[c].layer] > 0) return true;
     return false;
   }
-  let order = [];
+  // The loading order, ensemble by ensemble (page k of every shown group before any page k + 1),
+  // the shown groups in rank order; walked from the first ensemble with a page still to load, so
+  // a pump costs what it loads, not L x groups.
+  let shownOrder = [], firstOpen = 0;
   function planOrder() {
     if (!state) return;
     const rank = groups.map((_, g) => ({ g, shown: layerShown(g), view: groupInView(g), d: groupDistance(g) }));
     rank.sort((a, b) => (b.shown - a.shown) || (b.view - a.view) || (a.d - b.d));
     const pos = new Array(groups.length);
     rank.forEach((r, i) => { pos[r.g] = i; groups[r.g].wanted = r.shown; });
-    order = [];
-    for (let k = 0; k < site.data.repeat_level; ++k) for (const r of rank) if (r.shown) order.push([r.g, k]);
+    shownOrder = rank.filter((r) => r.shown).map((r) => r.g);
+    firstOpen = 0;
     groups.forEach((gr, g) => { gr.rank = pos[g]; });
   }
   const priority = (g, k) => k * groups.length + groups[g].rank;
   function pump() {
     if (!state) return;
     let evictable = null;  // loaded pages, the lowest priority (hidden layers, then finest and far) last
-    for (const [g, k] of order) {
-      if (requests >= 4) break;  // a few pages at a time, in the order planned
-      const page = groups[g].pages[k];
-      if (page.state !== 'none') continue;
-      if (heldPoints + inFlight + page.points > budgetPoints) {
-        // Drop the finest pages of far groups first, while they rank below this one.
-        if (!evictable) {
-          evictable = [];
-          groups.forEach((gr, h) => gr.pages.forEach((p, j) => {
-            if (p.state === 'loaded') evictable.push({ p, q: gr.wanted ? priority(h, j) : Infinity });
-          }));
-          evictable.sort((a, b) => a.q - b.q);
+    const L = site.data.repeat_level;
+    // (An evicted page ranks below the one loaded instead: it never lies before firstOpen.)
+    ensembles: for (let k = firstOpen; k < L; ++k) {
+      let open = false;
+      for (const g of shownOrder) {
+        const page = groups[g].pages[k];
+        if (page.state !== 'none') continue;
+        open = true;
+        if (requests >= 4) break ensembles;  // a few pages at a time, in the order planned
+        if (page.points > budgetPoints) {
+          // It can never fit: named once with the group's other such pages, and the pages after
+          // it still load.
+          let n = 0, most = 0;
+          for (const p of groups[g].pages) {
+            if (p.points > budgetPoints && p.state === 'none') { p.state = 'too large'; n += 1; most = Math.max(most, p.points); }
+          }
+          fail('data/' + g + '/: ' + n + (n === 1 ? ' page' : ' pages') + ' of up to ' + (most / 1e6).toFixed(2) +
+            ' M points, more than the memory budget holds (' + (budgetPoints / 1e6).toFixed(2) + ' M): not loaded');
+          continue;
         }
-        const wp = priority(g, k);
-        while (heldPoints + inFlight + page.points > budgetPoints && evictable.length &&
-               evictable[evictable.length - 1].q > wp) {
-          evict(evictable.pop().p);
-          restart();
+        if (heldPoints + inFlight + page.points > budgetPoints) {
+          // Drop the finest pages of far groups first, while they rank below this one.
+          if (!evictable) {
+            evictable = [];
+            groups.forEach((gr, h) => gr.pages.forEach((p, j) => {
+              if (p.state === 'loaded') evictable.push({ p, q: gr.wanted ? priority(h, j) : Infinity });
+            }));
+            evictable.sort((a, b) => a.q - b.q);
+          }
+          const wp = priority(g, k);
+          while (heldPoints + inFlight + page.points > budgetPoints && evictable.length &&
+                 evictable[evictable.length - 1].q > wp) {
+            evict(evictable.pop().p);
+            restart();
+          }
+          if (heldPoints + inFlight + page.points > budgetPoints) break ensembles;  // the rest ranks lower still
         }
-        if (heldPoints + inFlight + page.points > budgetPoints) break;  // the rest ranks lower still
+        loadPage(g, k);
       }
-      loadPage(g, k);
+      if (!open && k === firstOpen) firstOpen = k + 1;
     }
     showProgress();
   }
+  // Pages the image lacks that no wait brings: failed, larger than the budget, or in groups
+  // site.json describes wrongly; as text, or '' when there are none.
+  function missingPages() {
+    let failed = 0, dropped = 0;
+    for (const gr of groups) {
+      if (gr.dropped) dropped += 1;
+      else if (gr.wanted) for (const p of gr.pages) if (p.state === 'failed' || p.state === 'too large') failed += 1;
+    }
+    return [failed ? failed + (failed === 1 ? ' page' : ' pages') : '', dropped ? dropped + (dropped === 1 ? ' group' : ' groups') : '']
+      .filter((t) => t).join(' and ');
+  }
+  let budgetReached = false;
   function showProgress() {
-    let want = 0, have = 0;
-    for (const gr of groups) if (gr.wanted) for (const p of gr.pages) { want += p.points; if (p.state === 'loaded') have += p.points; }
+    let want = 0, have = 0, loadable = 0;
+    for (const gr of groups) {
+      if (!gr.wanted) continue;
+      for (const p of gr.pages) {
+        want += p.points;
+        if (p.state === 'loaded') have += p.points;
+        if (p.state !== 'failed' && p.state !== 'too large') loadable += p.points;
+      }
+    }
     $('bar').style.width = (want ? 100 * have / want : 100).toFixed(1) + '%';
     if (want && (have === want || heldPoints + inFlight >= budgetPoints) && !inFlight && allLoadedAt === null) allLoadedAt = performance.now();
+    // Pages that could load but wait for room: the image is what the budget holds.
+    budgetReached = have < loadable && !inFlight;
     progressText = (have === want ? 'all ' : '') + (have / 1e6).toFixed(2) + ' of ' + (want / 1e6).toFixed(2) + ' M points loaded (' +
-      (bytesReceived / 1e6).toFixed(1) + ' MB)' + (heldPoints + inFlight >= budgetPoints && have < want ? ' · memory budget reached' : '');
+      (bytesReceived / 1e6).toFixed(1) + ' MB)' + (budgetReached ? ' · memory budget reached' : '');
   }
   let progressText = '';
 
@@ -375,6 +408,7 @@
     const L = effectiveL(), f = state.settings.layers, runs = [];
     for (let c = 0; c < chunks.length; ++c) {
       const ch = chunks[c];
+      if (!ch) continue;
       const share = f ? f[ch.layer] : 1;
       if (!(share > 0) || !ch.segments.length || !ch.visible) continue;
       runs.length = 0;
@@ -520,7 +554,7 @@
         gl.bindFramebuffer(gl.FRAMEBUFFER, accFbo[accIndex]);
         gl.clearColor(0, 0, 0, 0);
         gl.clear(gl.COLOR_BUFFER_BIT);
-        for (let c = 0; c < chunks.length; ++c) chunks[c].visible = chunkVisible(c);
+        for (let c = 0; c < chunks.length; ++c) if (chunks[c]) chunks[c].visible = chunkVisible(c);
       }
       drawEnsemble(drawn);
       drawn += 1;
@@ -531,8 +565,11 @@
     if (!any) return;
     show(drawn);
     if (firstImageAt === null) { firstImageAt = performance.now(); firstImageBytes = bytesReceived; }
-    if (drawn === L) convergedAt = performance.now();
-    $('status').textContent = (drawn === L ? 'converged: ' : 'converging: ') + drawn + ' / ' + L + ' ensembles · gain ' +
+    // "converged" only when every page the image wants is in (or left out by the memory budget).
+    const missing = missingPages();
+    if (drawn === L && !missing) convergedAt = performance.now();
+    $('status').textContent = (drawn < L ? 'converging: ' : missing ? 'incomplete, ' + missing + ' missing (named below): '
+      : budgetReached ? 'converged within the memory budget: ' : 'converged: ') + drawn + ' / ' + L + ' ensembles · gain ' +
       gain.toFixed(2) + ' · ' + progressText;
   }
   requestAnimationFrame(frame);
@@ -579,6 +616,7 @@
     const runs = [];
     for (let c = 0; c < chunks.length; ++c) {
       const ch = chunks[c];
+      if (!ch) continue;
       const share = f ? f[ch.layer] : 1;
       if (!(share > 0) || !ch.segments.length || !chunkVisible(c)) continue;
       runs.length = 0;
@@ -641,34 +679,46 @@
   window.CandiPage({
     load: () => fetch('site.json').then((r) => {
       if (!r.ok) throw new Error('site.json: HTTP ' + r.status + ': this folder is not a candi site');
-      return r.json();
-    }).then((s) => {
-      if (s.format !== 'candi site' || s.version !== 1) throw new Error('site.json: not a candi site of version 1');
+      return readAtMost(r, 256e6).catch((e) => { throw new Error('site.json ' + e.message); });
+    }).then((buffer) => {
+      let json;
+      try { json = JSON.parse(new TextDecoder().decode(buffer)); } catch (e) { throw new Error('site.json is not JSON: ' + e.message); }
+      // What is valid of it; one line on the page for each fault.
+      let checked;
+      try { checked = window.CandiSiteIndex.check(json); } catch (e) { (e.problems || []).forEach(fail); fail(e.message); throw e; }
+      checked.problems.forEach(fail);
+      const s = checked.site, d = s.data;
       site = s;
       origin = s.scene.origin;
-      const d = s.data;
-      const F = Object.fromEntries(d.chunk_fields.map((n, i) => [n, i]));
-      chunks = d.chunks.map((a) => ({ layer: a[F.layer], count: a[F.count], first: a[F.first], group: a[F.group],
-        min: [a[F.min_x], a[F.min_y], a[F.min_z]], max: [a[F.max_x], a[F.max_y], a[F.max_z]],
-        step: [a[F.step_x], a[F.step_y], a[F.step_z]], bits: [a[F.bits_x], a[F.bits_y], a[F.bits_z]], segments: [], hashes: {}, visible: true }));
+      chunks = d.chunks;  // null where a chunk is bad
       groups = d.groups.map((g, gi) => {
         const box = { min: [Infinity, Infinity, Infinity], max: [-Infinity, -Infinity, -Infinity] };
         for (let c = g.chunks[0]; c < g.chunks[1]; ++c) for (let a = 0; a < 3; ++a) {
           box.min[a] = Math.min(box.min[a], chunks[c].min[a]); box.max[a] = Math.max(box.max[a], chunks[c].max[a]);
         }
-        return { chunks: g.chunks, box, wanted: true, rank: 0,
-          pages: g.pages.map(([bytes, points]) => ({ bytes, points, state: 'none', group: gi })) };
+        return { chunks: g.chunks, box, wanted: !g.dropped, dropped: g.dropped, rank: 0,
+          pages: g.pages.map(({ bytes, points }) => ({ bytes, points, state: 'none', group: gi })) };
       });
-      const mb = Number(new URLSearchParams(location.search).get('memory_mb')) || d.memory_mb;
-      budgetPoints = Math.floor(mb * 1e6 / 16);
+      // The budget: the address's (a shared link's) when it is in the field's range, else the site's.
+      const setBudget = (mb) => {
+        budgetPoints = Math.floor(mb * 1e6 / 16);
+        for (const gr of groups) for (const p of gr.pages) if (p.state === 'too large' && p.points <= budgetPoints) p.state = 'none';
+      };
+      const asked = new URLSearchParams(location.search).get('memory_mb');
+      let mb = d.memory_mb;
+      if (asked !== null) {
+        const v = Number(asked);
+        if (Number.isFinite(v) && v >= 16 && v <= 65536) mb = v;
+        else fail('the address\'s memory_mb=' + asked.slice(0, 40) + ' is not in [16, 65536] MB: the site\'s ' + mb + ' MB is used');
+      }
+      setBudget(mb);
       $('memory-mb').value = mb;
       $('memory-mb').addEventListener('change', () => {
         const v = Number($('memory-mb').value);
-        if (v >= 16 && v <= 65536) { budgetPoints = Math.floor(v * 1e6 / 16); planOrder(); pump(); }
+        if (v >= 16 && v <= 65536) { setBudget(v); planOrder(); pump(); }
+        else $('memory-mb').value = budgetPoints * 16 / 1e6;
       });
-      const scene = s.scene;
-      scene.settings.repeat_level = d.repeat_level;
-      return scene;
+      return s.scene;
     }),
     update: (camera, settings) => {
       const before = state;
@@ -687,7 +737,9 @@
       webgl2: true,
       errors: () => errors.slice(),
       imageRgb,
+      // settled: nothing more will be drawn; converged: and nothing is missing.
       progress: () => ({ drawn, L: state ? effectiveL() : 0, converged: !!state && drawn >= effectiveL() && !!convergedAt,
+        settled: !!state && drawn >= effectiveL() && !inFlight, missing: groups.length ? missingPages() : '',
         firstImageAt, firstImageBytes, convergedAt, allLoadedAt, bytesReceived, pagesLoaded, heldPoints, budgetPoints,
         pagesFailed: groups.reduce((n, g) => n + g.pages.filter((p) => p.state === 'failed').length, 0) }),
       stats,
