@@ -28,6 +28,7 @@
 #include "pipeline/render.h"
 #include "pipeline/section.h"
 #include "render/archive.h"
+#include "render/build_record.h"
 #include "render/mpi/archive_ranks.h"
 #include "render/mpi/mpi_session.h"
 #include "render/view_json.h"
@@ -120,25 +121,23 @@ struct RenderArgs {
   OrientationArgs orientation;
   ClipArgs clip;
   FieldArgs field;
+  pipeline::GivenImageSettings given;  // the rest comes from a build's record
 };
 
-// -1: automatic; otherwise the gain.
-double ParseBrightness(const std::string& text) {
-  if (text == "auto") return -1;
-  if (text == "none") return 1;
-  const std::vector<double> v = ParseNumbers(text, ',', "--brightness");
-  if (v.size() != 1 || !(v[0] > 0 && v[0] <= 100)) {
-    throw std::invalid_argument("--brightness '" + text + "': expected auto, none or a gain in (0, 100]");
+Brightness ParseBrightness(const std::string& text) {
+  try {
+    return Brightness::Parse(text);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--brightness ") + e.what());
   }
-  return v[0];
 }
 
 pipeline::RenderOptions RenderOptionsOf(const RenderArgs& a) {
   pipeline::RenderOptions o = a.options;
   o.clip = ParseClip(a.clip.box, a.clip.planes);
-  ParseSize(a.size, "--size", &o.width, &o.height);
-  o.background = ParseColour(a.background, "--background");
-  o.brightness = ParseBrightness(a.brightness);
+  ParseSize(a.size, "--size", &o.image.width, &o.image.height);
+  o.image.background = ParseColour(a.background, "--background");
+  o.image.brightness = ParseBrightness(a.brightness);
   o.colour_by = ParseFieldColouring(a.field);
   if (!o.alpha.empty() && o.alpha.size() != 1 && o.alpha.size() != a.inputs.size()) {
     throw std::invalid_argument("--alpha: give one value, or one per input (" + std::to_string(a.inputs.size()) + ")");
@@ -222,12 +221,22 @@ int RenderArchive(const RenderArgs& a, pipeline::RenderOptions o) {
 }
 
 int RunRender(const RenderArgs& a) {
-  const pipeline::RenderOptions o = RenderOptionsOf(a);
+  pipeline::RenderOptions o = RenderOptionsOf(a);
   for (const std::string& in : a.inputs) {
-    // An archive, a build directory or a demo's output: what a page (candi view, a site) shows.
+    // An archive, a build directory or a demo's output: what a page (candi view, a site) shows;
+    // a build draws with its own settings where no flag says otherwise.
     const std::string archive = render::FindArchive(in);
     if (archive.empty()) continue;
     if (a.inputs.size() > 1) throw std::invalid_argument(in + " is an archive: render it alone");
+    const std::string build = render::FindBuild(in);
+    if (!build.empty() && pipeline::TakeBuildRenderSettings(render::ReadBuildRecord(build), a.given, &o)) {
+      const ImageSettings& s = o.image;
+      LogInfo("the build's render settings: L=" + std::to_string(s.spbr.repeat_level) + ", seed " +
+              std::to_string(s.spbr.seed) + ", " + std::to_string(s.width) + "x" + std::to_string(s.height) +
+              ", background " + std::to_string(s.background.r) + "," + std::to_string(s.background.g) + "," +
+              std::to_string(s.background.b) + ", brightness " + s.brightness.ToString());
+      o.Check();
+    }
     RenderArgs one = a;
     one.inputs = {archive};
     return RenderArchive(one, o);
@@ -252,18 +261,21 @@ void AddRender(Command& root) {
            "or a demo's output); under mpirun the ranks share the ensembles").Required();
   c.Option("-o,--output", a.outputs.png, "Output PNG (8-bit)").Required();
   c.Option("--png16", a.outputs.png16, "Also write a 16-bit PNG (for analysis)");
-  c.Option("-L,--repeat-level", o.repeat_level, "Ensembles averaged (more: less noise, slower)");
-  c.Option("--seed", o.seed, "Seed of the ensemble assignment");
-  c.Option("--size", a.size, "Image size WxH").OnGiven([&o] { o.size_given = true; });
+  pipeline::GivenImageSettings& given = a.given;
+  c.Option("-L,--repeat-level", o.image.spbr.repeat_level, "Ensembles averaged (more: less noise, slower)")
+      .OnGiven([&given] { given.repeat_level = true; });
+  c.Option("--seed", o.image.spbr.seed, "Seed of the ensemble assignment").OnGiven([&given] { given.seed = true; });
+  c.Option("--size", a.size, "Image size WxH").OnGiven([&o, &given] { o.size_given = given.size = true; });
   c.Option("--view", a.view, "View JSON (world coordinates) to render from; a page's saved view also sets the "
            "layers' shares and the clipping");
   c.Option("--save-view", a.outputs.save_view, "Write the view used as JSON (to repeat the render)");
-  c.Option("--background", a.background, "Background colour r,g,b");
-  c.Option("--brightness", a.brightness, "auto, none, or a gain (transparent images get dark)");
+  c.Option("--background", a.background, "Background colour r,g,b").OnGiven([&given] { given.background = true; });
+  c.Option("--brightness", a.brightness, "auto, none, or a gain (transparent images get dark)")
+      .OnGiven([&given] { given.brightness = true; });
   c.Option("--alpha", o.alpha, "Target opacity per input (one value for all, or one each)").Delimiter(',');
-  c.Flag("--opaque", o.opaque, "Opaque rendering (L = 1, one point per pixel)");
+  c.Flag("--opaque", o.image.spbr.opaque, "Opaque rendering (L = 1, one point per pixel)");
   c.Option("--threads", o.threads, "Threads (0: all)").Range(0, 256);
-  c.Option("--point-size", o.point_size, "Point size in pixels (>= 1; stochastic rounding)");
+  c.Option("--point-size", o.image.spbr.point_size, "Point size in pixels (>= 1; stochastic rounding)");
   c.Option("--preview", o.preview, "Render only the first k ensembles (progressive preview)");
   c.Option("--mode", a.mode, "auto, memory (fast, 10 B/point) or stream (bounded memory)");
   c.Option("--memory-budget", a.memory_mb, "Stream mode and archives: MB of z-buffers resident per pass (12 B per "
@@ -647,9 +659,9 @@ void AddSection(Command& root) {
   c.Option("--max-gap", o.max_gap, "Section lines: a gap in the data longer than this breaks a line (0: automatic)");
   c.Option("--width", o.width, "Image width in pixels");
   c.Option("--pixel", o.pixel, "Image: metres per pixel (overrides --width)");
-  c.Option("-L,--repeat-level", o.repeat_level, "Image: SPBR ensembles");
-  c.Option("--seed", o.seed, "Image: seed of the ensembles");
-  c.Option("--point-size", o.point_size, "Image: point size in pixels");
+  c.Option("-L,--repeat-level", o.spbr.repeat_level, "Image: SPBR ensembles");
+  c.Option("--seed", o.spbr.seed, "Image: seed of the ensembles");
+  c.Option("--point-size", o.spbr.point_size, "Image: point size in pixels");
   c.Option("--opacity", o.opacity, "Image: opacity of a pixel one point covers, (0, 1]; overlapping layers blend as "
            "SPBR blends");
   c.Option("--colours", a.colours, "Image colours: layer (one per layer) or data (the points' own)");

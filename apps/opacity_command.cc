@@ -19,10 +19,10 @@ namespace {
 
 std::string Comment(const sampling::OpacityOptions& o, const sampling::OpacitySummary& s) {
   return "candi_opacity alpha=" + FormatDouble(o.alpha) +
-         " repeat_level=" + std::to_string(o.repeat_level) +
+         " repeat_level=" + std::to_string(o.spbr.repeat_level) +
          " pixel_size=" + FormatDouble(s.pixel_size) +
          (o.image_size > 0 ? " image_size=" + std::to_string(o.image_size) : std::string()) +
-         " seed=" + std::to_string(o.seed) + " method=" + sampling::DensityMethodName(o.density.method) +
+         " seed=" + std::to_string(o.spbr.seed) + " method=" + sampling::DensityMethodName(o.density.method) +
          " radius=" + FormatDouble(s.radius);
 }
 
@@ -40,7 +40,7 @@ void PrintSummary(const sampling::OpacityOptions& o, const sampling::OpacitySumm
   std::printf("removed          %zu (%s)\n", s.removed, Percent(s.removed, s.points_in).c_str());
   std::printf("replicated       %zu (%s)\n", s.replicated,
               Percent(s.replicated, s.points_in).c_str());
-  std::printf("capped at L=%-5d %zu (%s)\n", o.repeat_level, s.capped,
+  std::printf("capped at L=%-5d %zu (%s)\n", o.spbr.repeat_level, s.capped,
               Percent(s.capped, s.points_in).c_str());
   std::printf("ratio n'/n       min %.4g  median %.4g  max %.4g\n", s.ratio_min, s.ratio_median,
               s.ratio_max);
@@ -59,7 +59,7 @@ struct OpacityArgs {
 
 int RunOpacity(const OpacityArgs& args) {
   sampling::OpacityOptions options = args.options;
-  options.density.seed = options.seed;
+  options.density.seed = options.spbr.seed;
   options.Check();  // bad values: std::invalid_argument, exit 1
   io::OutputPointFormat(args.output);  // a known extension, and a writable folder, before the work
   CheckOutputFolder(args.output);
@@ -85,10 +85,10 @@ void AddOpacity(Command& root) {
   c.Option("input", a.input, "Input point file").Required();
   c.Option("output", a.output, "Output point file; format from its extension").Required();
   c.Option("--alpha", o.alpha, "Target opacity, 0..1").Required();
-  c.Option("--repeat-level", o.repeat_level, "L, the number of ensembles the renderer averages").Required();
+  c.Option("--repeat-level", o.spbr.repeat_level, "L, the number of ensembles the renderer averages").Required();
   c.Option("--image-size", o.image_size, "Pixels across the cloud's largest extent");
   c.Option("--pixel-size", o.pixel_size, "Or: the pixel footprint's side, metres");
-  c.Option("--seed", o.seed, "Random seed");
+  c.Option("--seed", o.spbr.seed, "Random seed");
   Arg k = c.Option("--neighbours", o.density.target_neighbours, "Neighbours of the median point for the automatic "
                    "density radius (default 32)");
   c.Option("--radius", o.density.radius, "Density radius, metres (default: automatic)").Excludes(k);

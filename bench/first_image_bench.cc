@@ -182,7 +182,7 @@ int main(int argc, char** argv) {
       };
       if (memory) {
         render::SplatCloudOptions so;
-        so.repeat_level = 100;
+        so.spbr.repeat_level = 100;
         render::SplatCloud splats;
         prepare_s = Timed(runs, [&] { splats = render::BuildSplatCloud(so, {&cloud}); });
         render::Camera camera = render::FirstView(cloud.WorldBounds(), 1024, 768, render::Orientation());

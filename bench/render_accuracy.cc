@@ -40,14 +40,14 @@ int RunRenderAccuracy(const BenchOptions& args) {
   for (int L : {1, 4, 16, 64, 256, 1024}) {
     sampling::OpacityOptions opacity;
     opacity.alpha = 0.5;
-    opacity.repeat_level = L;
+    opacity.spbr.repeat_level = L;
     opacity.image_size = std::max(args.width, args.height);
     opacity.density.threads = args.threads;
     auto t0 = std::chrono::steady_clock::now();
     const PointCloud adjusted = sampling::AdjustOpacity(opacity, scene).cloud;
     const double opacity_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     render::SplatCloudOptions build;
-    build.repeat_level = L;
+    build.spbr.repeat_level = L;
     t0 = std::chrono::steady_clock::now();
     const render::SplatCloud splats = render::BuildSplatCloud(build, {&adjusted});
     const double build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -56,7 +56,7 @@ int RunRenderAccuracy(const BenchOptions& args) {
     options.threads = args.threads;
     const render::SpbrResult result = render::RenderSpbr(options, camera, splats);
     render::ReferenceOptions ref;
-    ref.repeat_level = L;
+    ref.spbr.repeat_level = L;
     const ImageF exact = render::RenderSortedBlend(ref, camera, splats.frame, {&adjusted});
     const double rmse = render::Rmse(render::AverageImage(result, {0, 0, 0}), exact);
     std::printf("%6d %12llu %12.1f %12.1f %12.1f %10.2f\n", L, static_cast<unsigned long long>(result.copies),

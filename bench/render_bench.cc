@@ -39,8 +39,8 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
 
 SplatCloud Build(const PointCloud& cloud, int L, uint64_t seed = 1) {
   SplatCloudOptions o;
-  o.repeat_level = L;
-  o.seed = seed;
+  o.spbr.repeat_level = L;
+  o.spbr.seed = seed;
   return BuildSplatCloud(o, {&cloud});
 }
 
@@ -97,7 +97,7 @@ void AgainstReferences(uint64_t n, int L) {
   const SplatCloud splats = Build(cloud, L);
   const Camera camera = ObliqueView(splats.bounds, 1024, 1024);
   ReferenceOptions ref;
-  ref.repeat_level = L;
+  ref.spbr.repeat_level = L;
   auto t0 = std::chrono::steady_clock::now();
   const ImageF exact = RenderSortedBlend(ref, camera, splats.frame, {&cloud});
   const double exact_ms = 1e3 * Seconds(t0);

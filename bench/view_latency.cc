@@ -67,7 +67,7 @@ int RunViewBench(const ViewBenchOptions& args) {
     }
     width = static_cast<int>(v[0]), height = static_cast<int>(v[1]);
   }
-  if (args.repeat_level < 1 || args.repeat_level > view::kMaxRepeatLevel) {
+  if (args.repeat_level < 1 || args.repeat_level > view::kMaxViewRepeatLevel) {
     throw std::invalid_argument("-L: in [1, 10000]");
   }
   if (args.orbit_frames < 2) throw std::invalid_argument("--orbit-frames: at least 2");
@@ -88,7 +88,7 @@ int RunViewBench(const ViewBenchOptions& args) {
     const Box3d world = m.bounds.Translated(m.frame.origin);
     view::ViewState state;
     state.camera = render::FirstView(world, width, height, render::Orientation());
-    state.settings.repeat_level = args.repeat_level;
+    state.settings.spbr.repeat_level = args.repeat_level;
     view::ProgressiveImage image(archive, view::LocalRangeRenderer(archive), args.threads);
 
     // The orbit: the camera turns by 3 degrees a frame; each frame is the first step of its image.

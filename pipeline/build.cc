@@ -24,6 +24,7 @@
 #include "pipeline/render.h"
 #include "render/archive.h"
 #include "render/archive_pack.h"
+#include "render/build_record.h"
 #include "render/view_json.h"
 
 namespace candi::pipeline {
@@ -81,13 +82,6 @@ void WriteMeshlab(const Scene& scene, const std::vector<PointCloud>& clouds, con
   WriteFileAtomic((fs::path(dir) / "shift.txt").string(), shift);
 }
 
-// The scene's "brightness" as a render gain: -1 automatic, 1 none, else the gain.
-double SceneBrightness(const Scene& scene) {
-  if (scene.brightness == "auto") return -1;
-  if (scene.brightness == "none") return 1;
-  return std::strtod(scene.brightness.c_str(), nullptr);
-}
-
 // What the build has digitized and placed so far.
 struct Layers {
   std::vector<LayerResult> results;
@@ -102,12 +96,12 @@ struct Layers {
 
 // 1. Every layer digitized (or resumed), in world coordinates, into the scene's CRS. A layer's
 // key: its JSON, the seed, its inputs.
-void DigitizeLayers(const BuildOptions& options, const Scene& scene, const json& scene_json, const fs::path& out,
+void DigitizeLayers(const BuildOptions& options, const Scene& scene, const fs::path& out,
                     const Checkpoints& checkpoints, FileHashes& hashes, Layers* layers, Box3d* world_box) {
   const std::string seed = std::to_string(scene.seed);
   for (size_t k = 0; k < scene.layers.size(); ++k) {
     const SceneLayer& l = scene.layers[k];
-    std::vector<std::string> parts = {"layer", scene_json["layers"][k].dump(), seed};
+    std::vector<std::string> parts = {"layer", l.key_json, seed};
     for (const std::string& s : l.Sources()) parts.push_back(hashes(s));
     if (!l.workspace.empty()) parts.push_back(FolderFingerprint(l.workspace));
     layers->keys.push_back(Key(parts));
@@ -172,10 +166,10 @@ void PlaceLayers(const Scene& scene, const LocalFrame& frame, const fs::path& ou
 // 3. The render archive of every layer from the layer files (key: the layers' keys and the scene's
 // origin; the archive format's version too, so a build resumed by a newer candi repacks).
 // Returns the pack's seconds and whether it was resumed.
-std::pair<double, bool> PackLayers(const BuildOptions& options, const json& scene_json, const fs::path& out,
+std::pair<double, bool> PackLayers(const BuildOptions& options, const Scene& scene, const fs::path& out,
                                    const Checkpoints& checkpoints, const Layers& layers, std::string* pack_key) {
   std::vector<std::string> parts = {"pack", "archive v" + std::to_string(render::kArchiveVersion),
-                                    scene_json.value("origin", json()).dump()};
+                                    scene.origin_json};
   parts.insert(parts.end(), layers.keys.begin(), layers.keys.end());
   *pack_key = Key(parts);
   const std::string archive = (out / "archive").string();
@@ -196,19 +190,18 @@ std::pair<double, bool> PackLayers(const BuildOptions& options, const json& scen
 }
 
 // 4. One render per view, from the layers in memory (key: the view's and the render settings'
-// JSON, the seed, the archive's key). Returns archive.json's views; their seconds go to `timings`.
-json RenderViews(const BuildOptions& options, const Scene& scene, const json& scene_json, const fs::path& out,
-                 const Checkpoints& checkpoints, FileHashes& hashes, const Layers& layers, const std::string& pack_key,
-                 json* timings) {
+// JSON, the seed, the archive's key): the scene's render settings, the view's opaque and point
+// size. Returns the record's views; their seconds go to `timings`.
+std::vector<render::BuildViewRecord> RenderViews(const BuildOptions& options, const Scene& scene, const fs::path& out,
+                                                 const Checkpoints& checkpoints, FileHashes& hashes,
+                                                 const Layers& layers, const std::string& pack_key, json* timings) {
   std::vector<PointCloud> world;  // as the layer files hold them
   for (const PointCloud& c : layers.clouds) world.push_back(InWorld(c));
   DensityCache densities;         // a layer's density serves every view
-  json views = json::array();
-  for (size_t vi = 0; vi < scene.views.size(); ++vi) {
-    const SceneView& v = scene.views[vi];
+  std::vector<render::BuildViewRecord> views;
+  for (const SceneView& v : scene.views) {
     const Stopwatch watch;
-    std::vector<std::string> parts = {"view", scene_json["views"][vi].dump(), scene_json.value("render", json()).dump(),
-                                      std::to_string(scene.seed), pack_key};
+    std::vector<std::string> parts = {"view", v.key_json, scene.render_json, std::to_string(scene.seed), pack_key};
     if (!v.camera_file.empty()) parts.push_back(hashes(v.camera_file));
     RenderOptions r;
     std::vector<const PointCloud*> clouds;
@@ -221,15 +214,10 @@ json RenderViews(const BuildOptions& options, const Scene& scene, const json& sc
       keys.push_back("layer " + std::to_string(k));
       if (!v.opaque) r.alpha.push_back(ViewOpacity(v, l));
     }
-    r.repeat_level = scene.repeat_level;
-    r.seed = scene.seed;
-    r.width = scene.width;
-    r.height = scene.height;
+    r.image = scene.render;
+    r.image.spbr.opaque = v.opaque;
+    r.image.spbr.point_size = v.point_size;
     r.size_given = true;
-    r.background = scene.background;
-    r.brightness = SceneBrightness(scene);
-    r.opaque = v.opaque;
-    r.point_size = v.point_size;
     r.mode = RenderMode::kMemory;
     r.threads = options.threads;
     RenderOutputs outputs;
@@ -237,9 +225,9 @@ json RenderViews(const BuildOptions& options, const Scene& scene, const json& sc
     outputs.inputs = names;
     const std::string view_file = (out / "renders" / (v.name + ".view.json")).string();
     if (!v.camera_file.empty()) r.view = render::LoadView(v.camera_file);
-    if (!v.camera_json.empty()) {
-      WriteFileAtomic(view_file, v.camera_json + "\n");
-      r.view = render::LoadView(view_file);
+    if (v.camera) {
+      render::SaveView(view_file, *v.camera);
+      r.view = v.camera;
     }
     if (!r.view) outputs.save_view = view_file;
     const std::string key = Key(parts), stage = "view_" + v.name;
@@ -255,24 +243,28 @@ json RenderViews(const BuildOptions& options, const Scene& scene, const json& sc
       seconds = watch.Seconds();
       checkpoints.Save(stage, key, {{"seconds", seconds}});
     }
-    json alphas = json::object();
-    for (size_t k = 0; k < r.alpha.size(); ++k) alphas[fs::path(names[k]).stem().string()] = r.alpha[k];
-    views.push_back({{"name", v.name}, {"png", "renders/" + v.name + ".png"}, {"opaque", v.opaque},
-                     {"opacity", alphas}, {"resumed", checkpoint.has_value()}});
+    render::BuildViewRecord record;
+    record.name = v.name;
+    record.png = "renders/" + v.name + ".png";
+    record.opaque = v.opaque;
+    for (size_t k = 0; k < r.alpha.size(); ++k) record.opacity.push_back({fs::path(names[k]).stem().string(), r.alpha[k]});
+    record.resumed = checkpoint.has_value();
+    views.push_back(record);
     (*timings)["views"][v.name] = seconds;
   }
   return views;
 }
 
 // 5. The COPC files the scene asks for (copc_export.h), from the layer files (key: the layers'
-// keys, the scene's "copc", name, CRS and origin). Returns archive.json's "copc" (null when none
-// is asked for); the seconds go to `timings`.
-json WriteSceneCopc(const BuildOptions& options, const Scene& scene, const json& scene_json, const fs::path& out,
-                    const Checkpoints& checkpoints, const Layers& layers, const LocalFrame& frame,
-                    const std::string& scene_crs, json* timings) {
-  if (!scene.copc.layers && !scene.copc.scene) return json();
+// keys, the scene's "copc", name, CRS and origin). Returns the record's "copc" (none when none is
+// asked for); the seconds go to `timings`.
+std::optional<render::BuildCopcRecord> WriteSceneCopc(const BuildOptions& options, const Scene& scene,
+                                                      const fs::path& out, const Checkpoints& checkpoints,
+                                                      const Layers& layers, const LocalFrame& frame,
+                                                      const std::string& scene_crs, json* timings) {
+  if (!scene.copc.layers && !scene.copc.scene) return std::nullopt;
   const Eigen::Vector3d& o = frame.origin;
-  std::vector<std::string> parts = {"copc", scene_json["copc"].dump(), scene.name, scene_crs,
+  std::vector<std::string> parts = {"copc", scene.copc_json, scene.name, scene_crs,
                                     json::array({o.x(), o.y(), o.z()}).dump()};
   parts.insert(parts.end(), layers.keys.begin(), layers.keys.end());
   const std::string key = Key(parts);
@@ -286,16 +278,18 @@ json WriteSceneCopc(const BuildOptions& options, const Scene& scene, const json&
   if (scene.copc.scene) outputs.push_back(out / scene_file);
   std::optional<json> checkpoint = checkpoints.Find("copc", key, outputs);
   const bool resumed = checkpoint.has_value();
+  render::BuildCopcRecord copc;
   if (resumed) {
     LogInfo("COPC: resumed");
+    copc = render::CopcFilesFromJson(checkpoint->at("files").dump(), (out / "work" / "checkpoints").string());
   } else {
     const Stopwatch watch;
     ConsoleProgress progress("copc");
     StagedProgress closing("copc");  // each file's octree and chunks, once every point is read
-    CopcOptions copc = scene.copc;
-    copc.memory_bytes = options.copc_memory_bytes;
+    CopcOptions options_copc = scene.copc;
+    options_copc.memory_bytes = options.copc_memory_bytes;
     const std::vector<CopcFile> files = WriteCopc(
-        copc, source, (out / scene_file).string(),
+        options_copc, source, (out / scene_file).string(),
         [&](uint64_t done, uint64_t total) {
           progress.Update(done, total);
           if (total > 0 && done >= total) progress.Finish();  // all read: the files close next
@@ -303,88 +297,64 @@ json WriteSceneCopc(const BuildOptions& options, const Scene& scene, const json&
         closing.Callback());
     closing.Finish();
     progress.Finish();
-    json list = {{"layers", json::array()}};
     for (const CopcFile& f : files) {
-      const json record = {{"path", fs::path(f.path).lexically_relative(out).generic_string()},
-                           {"points", f.points}, {"bytes", f.bytes}};
-      if (f.layer.empty()) {
-        list["scene"] = record;
-      } else {
-        list["layers"].push_back(record);
-        list["layers"].back()["name"] = f.layer;
-      }
+      const render::BuildCopcFileRecord record{fs::path(f.path).lexically_relative(out).generic_string(), f.points,
+                                               f.bytes, f.layer};
+      if (f.layer.empty()) copc.scene = record;
+      else copc.layers.push_back(record);
     }
-    checkpoint = {{"seconds", watch.Seconds()}, {"files", list}};
+    checkpoint = {{"seconds", watch.Seconds()}, {"files", json::parse(render::CopcFilesToJson(copc))}};
     checkpoints.Save("copc", key, *checkpoint);
   }
   (*timings)["copc"] = checkpoint->at("seconds");
-  json copc = checkpoint->at("files");
-  copc["point_source_id"] = "the layer's index in \"layers\" (0-based); the files' \"candi\" VLR names them";
-  copc["scale_m"] = kCopcScale;
-  copc["resumed"] = resumed;
+  copc.scale_m = kCopcScale;
+  copc.resumed = resumed;
   return copc;
 }
 
-json LayersJson(const Scene& scene, FileHashes& hashes, const Layers& layers, json* timings) {
-  json out = json::array();
+std::vector<render::BuildLayerRecord> LayerRecords(const Scene& scene, FileHashes& hashes, const Layers& layers,
+                                                   json* timings) {
+  std::vector<render::BuildLayerRecord> out;
   for (size_t k = 0; k < scene.layers.size(); ++k) {
     const SceneLayer& l = scene.layers[k];
-    json sources = json::array();
-    for (const std::string& s : l.Sources()) {
-      sources.push_back({{"path", s}, {"sha256", hashes(s)}, {"bytes", fs::file_size(s)}});
+    render::BuildLayerRecord r;
+    r.name = l.name;
+    r.kind = LayerKindName(l.kind);
+    r.scanned = l.kind == LayerKind::kPoints || l.kind == LayerKind::kPhotogrammetry;
+    r.method = layers.results[k].method;
+    r.parameters_json = layers.results[k].parameters.dump();
+    for (const std::string& src : l.Sources()) r.sources.push_back({src, hashes(src), fs::file_size(src)});
+    r.world_from_layer = l.world_from_layer.ToMatrix();
+    r.opacity = l.opacity;
+    r.highlight = l.highlight;
+    r.points = layers.clouds[k].size();
+    r.dropped_nan = layers.dropped[k];
+    r.replaces = l.replaces;
+    for (auto it = layers.replaced[k].begin(); it != layers.replaced[k].end(); ++it) {
+      r.replaced_by.push_back({it.key(), it.value().get<uint64_t>()});
     }
-    const Eigen::Matrix4d m = l.world_from_layer.ToMatrix();
-    json matrix = json::array();
-    for (int r = 0; r < 4; ++r) matrix.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
-    out.push_back({{"name", l.name}, {"kind", LayerKindName(l.kind)},
-                   {"scanned", l.kind == LayerKind::kPoints || l.kind == LayerKind::kPhotogrammetry},
-                   {"method", layers.results[k].method}, {"parameters", layers.results[k].parameters},
-                   {"sources", sources}, {"world_from_layer", matrix}, {"opacity", l.opacity},
-                   {"highlight", l.highlight}, {"points", layers.clouds[k].size()}, {"dropped_nan", layers.dropped[k]},
-                   {"replaces", l.replaces}, {"replaced_by", layers.replaced[k]}, {"crs", layers.crs_records[k]},
-                   {"file", "layers/" + l.name + ".ply"}, {"resumed", static_cast<bool>(layers.resumed[k])}});
+    r.crs_json = layers.crs_records[k].dump();
+    r.file = "layers/" + l.name + ".ply";
+    r.resumed = layers.resumed[k];
+    out.push_back(r);
     (*timings)["layers"][l.name] = layers.results[k].seconds;
   }
   return out;
 }
 
-json Provenance(const Scene& scene, const LocalFrame& frame, const std::string& scene_crs, uint64_t total,
-                const json& layers, bool pack_resumed, const json& views, const json& comparisons,
-                const json& copc) {
-  json p = {{"candi_version", kVersion}, {"scene", {{"path", scene.path}, {"sha256", Sha256Hex(scene.text)}}},
-          {"name", scene.name}, {"seed", scene.seed},
-          {"frame", {{"origin", {frame.origin.x(), frame.origin.y(), frame.origin.z()}}}},
-          {"crs", scene_crs.empty() ? json() : json({{"definition", scene_crs}, {"label", io::CrsLabel(scene_crs)}})},
-          {"points", total}, {"layers", layers}, {"archive", "archive"},
-          {"pack_resumed", pack_resumed},
-          {"views", views}, {"meshlab", "meshlab/scene.mlp"},
-          {"reproducibility",
-           {{"seed", scene.seed},
-            {"same_bytes", "the same sources (their SHA-256 above), scene, seed, candi version and COLMAP build on the "
-                           "same machine give byte-identical layers/, archive/, renders/, meshlab/ and this file, for "
-                           "any thread count; run times are kept apart, in timings.json"},
-            {"how", "every random step draws from the scene's seed; parallel work is split and reduced in a fixed "
-                    "order; photos: COLMAP's image ids follow the photo names, candi matches the features exactly "
-                    "(brute force), COLMAP verifies and maps on one thread with its random seed fixed"},
-            {"across_machines", "not guaranteed: another CPU or C library can round floating point differently "
-                                "(COLMAP's SIFT, Ceres, libm), and one differing bit can change what COLMAP's "
-                                "mapper registers (README, Reproducibility)"}}}};
-  // What a published page shows besides the layers (only when the scene gives them, so that
-  // earlier scenes' archive.json keep their bytes).
-  if (!scene.licence.empty()) p["licence"] = scene.licence;
-  if (!scene.annotations.empty()) {
-    json list = json::array();
-    for (const SceneAnnotation& a : scene.annotations) {
-      json e = {{"title", a.title}, {"text", a.text}, {"position", {a.position.x(), a.position.y(), a.position.z()}}};
-      if (!a.view.empty()) e["view"] = a.view;
-      if (!a.camera_json.empty()) e["view"] = json::parse(a.camera_json);
-      list.push_back(e);
-    }
-    p["annotations"] = list;
-  }
-  if (!comparisons.empty()) p["comparisons"] = comparisons;
-  if (!copc.is_null()) p["copc"] = copc;
-  return p;
+render::BuildRecord Record(const Scene& scene, const LocalFrame& frame, const std::string& scene_crs) {
+  render::BuildRecord r;
+  r.candi_version = kVersion;
+  r.scene_path = scene.path;
+  r.scene_sha256 = Sha256Hex(scene.text);
+  r.name = scene.name;
+  r.seed = scene.seed;
+  r.origin = frame.origin;
+  if (!scene_crs.empty()) r.crs_definition = scene_crs, r.crs_label = io::CrsLabel(scene_crs);
+  r.render = scene.render;
+  r.licence = scene.licence;
+  for (const SceneAnnotation& a : scene.annotations) r.annotations.push_back({a.title, a.text, a.position, a.view, a.camera});
+  return r;
 }
 
 }  // namespace
@@ -405,44 +375,40 @@ BuildSummary Build(const BuildOptions& options, const Scene& scene) {
   for (const char* sub : {"work", "layers", "renders"}) fs::create_directories(out / sub);
   const Checkpoints checkpoints(out / "work" / "checkpoints", options.resume);
   FileHashes hashes;
-  const json scene_json = json::parse(scene.text);  // valid: LoadScene parsed it
 
   Layers layers;
   Box3d world_box;
-  DigitizeLayers(options, scene, scene_json, out, checkpoints, hashes, &layers, &world_box);
+  DigitizeLayers(options, scene, out, checkpoints, hashes, &layers, &world_box);
   const LocalFrame frame = scene.origin ? LocalFrame{*scene.origin} : LocalFrame::Auto(world_box);
   std::vector<PointCloud*> digitized;
   for (LayerResult& r : layers.results) digitized.push_back(&r.cloud);
   const std::string scene_crs = CommonCrs(scene, digitized);
   PlaceLayers(scene, frame, out, &layers);
   json timings = {{"layers", json::object()}, {"views", json::object()}};  // seconds, apart from archive.json
-  const json comparisons = RunComparisons(options, scene, scene_json, out, checkpoints, hashes, layers.files, &timings);
+  render::BuildRecord record = Record(scene, frame, scene_crs);
+  record.comparisons = RunComparisons(options, scene, out, checkpoints, hashes, layers.files, &timings);
   std::string pack_key;
-  const auto [pack_seconds, pack_resumed] = PackLayers(options, scene_json, out, checkpoints, layers, &pack_key);
-  const json views = RenderViews(options, scene, scene_json, out, checkpoints, hashes, layers, pack_key, &timings);
-  const json copc = WriteSceneCopc(options, scene, scene_json, out, checkpoints, layers, frame, scene_crs, &timings);
+  const auto [pack_seconds, pack_resumed] = PackLayers(options, scene, out, checkpoints, layers, &pack_key);
+  record.pack_resumed = pack_resumed;
+  record.views = RenderViews(options, scene, out, checkpoints, hashes, layers, pack_key, &timings);
+  record.copc = WriteSceneCopc(options, scene, out, checkpoints, layers, frame, scene_crs, &timings);
 
   // 6. MeshLab project, provenance.
   WriteMeshlab(scene, layers.clouds, (out / "meshlab").string());
-  const json layers_json = LayersJson(scene, hashes, layers, &timings);
+  record.layers = LayerRecords(scene, hashes, layers, &timings);
   BuildSummary summary;
   for (size_t k = 0; k < scene.layers.size(); ++k) {
     const SceneLayer& l = scene.layers[k];
-    summary.layers.push_back({l.name, l.kind, layers.clouds[k].size(), l.opacity,
-                              layers_json[k]["scanned"].get<bool>(), layers.results[k].seconds});
+    summary.layers.push_back({l.name, l.kind, layers.clouds[k].size(), l.opacity, record.layers[k].scanned,
+                              layers.results[k].seconds});
     summary.points += layers.clouds[k].size();
   }
-  WriteFileAtomic((out / "archive.json").string(),
-                  Provenance(scene, frame, scene_crs, summary.points, layers_json, pack_resumed, views, comparisons,
-                             copc).dump(2) + "\n");
+  record.points = summary.points;
+  render::WriteBuildRecord(out.string(), record);
   summary.frame = frame;
-  summary.views = views.size();
-  auto figure = [](const json& v) { return v.is_number() ? v.get<double>() : NAN; };
-  for (const json& c : comparisons) {
-    summary.comparisons.push_back({c.at("name").get<std::string>(), c.at("method").get<std::string>(),
-                                   c.at("count").get<uint64_t>(), figure(c.at("mean_m")), figure(c.at("rms_m")),
-                                   c.at("tolerance_m").get<double>(), figure(c.at("within_tolerance")),
-                                   c.at("resumed").get<bool>()});
+  summary.views = record.views.size();
+  for (const render::BuildComparisonRecord& c : record.comparisons) {
+    summary.comparisons.push_back({c.name, c.method, c.count, c.mean, c.rms, c.tolerance, c.within_tolerance, c.resumed});
   }
   summary.seconds = watch.Seconds();
   timings["pack"] = pack_seconds;

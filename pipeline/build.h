@@ -51,6 +51,7 @@
 
 #include "core/local_frame.h"
 #include "pipeline/scene.h"
+#include "reconstruction/relief/panel_size.h"
 
 namespace candi::pipeline {
 
@@ -59,7 +60,7 @@ namespace candi::pipeline {
 struct ReliefPanelJob {
   std::string photo, model;
   double predict_width_m = 0;  // the panel's width in the photo for the network (0: the photo's own resolution)
-  double width_m = 2.7;        // the panel's width for its points, m
+  double width_m = relief::kPanelWidthM;  // the panel's width for its points, m
   std::string depth;           // the depth map to write (8-bit PNG levels)
   std::string points;          // the panel's points to write (PLY)
   std::string log_base;        // <work>/<layer>_<panel>: child processes' logs

@@ -17,6 +17,7 @@
 #include "core/point_cloud.h"
 #include "pipeline/build.h"
 #include "pipeline/scene.h"
+#include "render/build_record.h"
 
 namespace candi::pipeline::internal {
 
@@ -84,10 +85,12 @@ LayerResult LoadLayer(const nlohmann::json& checkpoint, const std::filesystem::p
 
 // The scene's comparisons (build_compare.cc), each the compared layer's file in `layer_files`
 // (layers/<name>.ply, in scene order) against its reference, written to <out>/compare/ or
-// resumed (key: the comparison's JSON, the bytes of both inputs). Returns archive.json's
-// "comparisons"; each one's seconds go to (*timings)["comparisons"].
-nlohmann::json RunComparisons(const BuildOptions& options, const Scene& scene, const nlohmann::json& scene_json,
-                              const std::filesystem::path& out, const Checkpoints& checkpoints, FileHashes& hashes,
-                              const std::vector<std::string>& layer_files, nlohmann::json* timings);
+// resumed (key: the comparison's JSON, the bytes of both inputs). Returns the record's
+// comparisons; each one's seconds go to (*timings)["comparisons"].
+std::vector<render::BuildComparisonRecord> RunComparisons(const BuildOptions& options, const Scene& scene,
+                                                          const std::filesystem::path& out,
+                                                          const Checkpoints& checkpoints, FileHashes& hashes,
+                                                          const std::vector<std::string>& layer_files,
+                                                          nlohmann::json* timings);
 
 }  // namespace candi::pipeline::internal

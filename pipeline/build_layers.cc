@@ -44,16 +44,7 @@ void RunChild(const std::vector<std::string>& argv, const std::string& log, cons
 }
 
 LayerResult Foundation(const BuildOptions& options, const Scene& scene, const SceneLayer& l, const std::string& work) {
-  FoundationPointsOptions f;
-  f.layers = l.sections;
-  if (l.samples_per_side) f.surface.profile.samples_per_side = l.samples_per_side;
-  if (l.angular_steps) f.surface.revolve.angular_steps = l.angular_steps;
-  f.surface.revolve.mode = mesh::ParseRevolveMode(l.mode);
-  if (l.count > 0) {
-    f.sample.count = l.count;
-  } else {
-    f.sample.density = l.density > 0 ? l.density : kDefaultFoundationDensity;
-  }
+  FoundationPointsOptions f = l.foundation;
   f.sample.seed = scene.seed;
   f.sample.threads = options.threads;
   const FoundationPoints points = DigitizeFoundation(f, l.dxf);
@@ -62,10 +53,11 @@ LayerResult Foundation(const BuildOptions& options, const Scene& scene, const Sc
   LayerResult r;
   r.cloud = points.Merged();
   r.method = "reconstructed: CAD sections -> Hermite profiles -> rotational blending / sweep -> mesh -> uniform samples";
-  r.parameters = {{"sections", l.sections}, {"samples_per_side", f.surface.profile.samples_per_side},
-                  {"angular_steps", f.surface.revolve.angular_steps}, {"mode", l.mode}, {"seed", scene.seed}};
-  if (l.count) r.parameters["count"] = l.count;
-  else r.parameters["density"] = l.density > 0 ? l.density : kDefaultFoundationDensity;
+  r.parameters = {{"sections", f.layers}, {"samples_per_side", f.surface.profile.samples_per_side},
+                  {"angular_steps", f.surface.revolve.angular_steps},
+                  {"mode", mesh::RevolveModeName(f.surface.revolve.mode)}, {"seed", scene.seed}};
+  if (f.sample.count) r.parameters["count"] = f.sample.count;
+  else r.parameters["density"] = f.sample.density;
   return r;
 }
 
@@ -146,10 +138,8 @@ LayerResult Photogrammetry(const BuildOptions& options, const Scene& scene, cons
   LayerResult r;
   r.method = "scanned: photogrammetry (dense multi-view stereo)";
   if (!l.images.empty()) {
-    photogrammetry::SfmOptions sfm;
+    photogrammetry::SfmOptions sfm = l.sfm;
     sfm.colmap = ColmapExecutable(sfm.colmap);
-    sfm.max_image_size = l.max_image_size;
-    sfm.max_features = l.max_features;
     sfm.overwrite = true;
     const std::string sfm_dir = (fs::path(work) / (l.name + "_sfm")).string();
     const photogrammetry::SfmSummary report = StructureFromMotion(sfm, l.images, sfm_dir);
@@ -163,9 +153,8 @@ LayerResult Photogrammetry(const BuildOptions& options, const Scene& scene, cons
   }
   if (!workspace.empty()) {
     DenseOptions d;
+    d.stereo = l.stereo;
     d.stereo.seed = scene.seed;
-    d.stereo.resolution_scale = l.resolution_scale;
-    d.stereo.iterations = l.iterations;
     d.stereo.threads = options.threads;
     d.write_maps = false;
     DenseCloud dense = DenseStereo(d, workspace);

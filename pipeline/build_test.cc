@@ -18,9 +18,12 @@
 #include "core/rng.h"
 #include "io/ply/ply_io.h"
 #include "io/point_io.h"
+#include "render/build_record.h"
 #include "render/synthetic_scene.h"
 #include "tests/util/dxf_text.h"
 #include "tests/util/test_util.h"
+#include "view/publish.h"
+#include "view/source.h"
 
 namespace candi::pipeline {
 namespace {
@@ -173,6 +176,51 @@ TEST_F(BuildScene, EveryLayerInOneSurveyFrameWithItsOutputs) {
   EXPECT_NEAR(box.min.x(), kSite.x(), 0.05);
   EXPECT_NEAR(box.max.x(), kSite.x() + 5.7, 0.05);
   EXPECT_NEAR(box.min.z(), kSite.z() + 1, 0.05);
+}
+
+// The record keeps the render settings the build resolved: a build copied to another folder,
+// its scene file deleted, opens in candi view (view::OpenViewerSource) and candi publish with
+// its own L, image size, background, brightness and seed; nothing reads the scene file again.
+TEST_F(BuildScene, AMovedBuildKeepsItsRenderSettings) {
+  json j = SceneJson();
+  j["seed"] = 11;
+  j["render"] = {{"repeat_level", 12}, {"width", 200}, {"height", 150}, {"background", {10, 20, 30}},
+                 {"brightness", 1.5}};
+  BuildOptions o;
+  o.output = dir_.File("out");
+  o.threads = 2;
+  Build(o, WriteScene(j));
+  const render::BuildRecord record = render::ReadBuildRecord(dir_.File("out"));
+  ASSERT_TRUE(record.render.has_value());
+  EXPECT_EQ(record.render->spbr.repeat_level, 12);
+  EXPECT_EQ(record.render->spbr.seed, 11u);
+  // The record read and written again: the same bytes.
+  EXPECT_EQ(record.ToJson(), ReadFileToString(dir_.File("out/archive.json")));
+
+  fs::create_directories(dir_.File("elsewhere"));
+  fs::copy(dir_.File("out"), dir_.File("elsewhere/moved"), fs::copy_options::recursive);
+  fs::remove_all(dir_.File("out"));
+  fs::remove(dir_.File("scene.json"));
+  const view::ViewerSource source = view::OpenViewerSource(dir_.File("elsewhere/moved"), render::Orientation());
+  EXPECT_EQ(source.settings.spbr.repeat_level, 12);
+  EXPECT_EQ(source.settings.spbr.seed, 11u);
+  EXPECT_EQ(source.settings.background, (Rgb8{10, 20, 30}));
+  EXPECT_EQ(source.settings.brightness, Brightness::Gain(1.5));
+  EXPECT_EQ(source.first_view.width, 200);
+  EXPECT_EQ(source.first_view.height, 150);
+  EXPECT_EQ(source.views.size(), 2u);
+
+  view::PublishOptions p;
+  p.group_points = 4000;
+  view::PublishSite(p, dir_.File("elsewhere/moved"), dir_.File("site"), render::Orientation());
+  const json site = json::parse(ReadFileToString(dir_.File("site/site.json")));
+  EXPECT_EQ(site.at("data").at("repeat_level"), 12);
+  EXPECT_EQ(site.at("data").at("seed"), 11);
+  const json& settings = site.at("scene").at("settings");
+  EXPECT_EQ(settings.at("repeat_level"), 12);
+  EXPECT_EQ(settings.at("background"), json::array({10, 20, 30}));
+  EXPECT_EQ(settings.at("brightness"), 1.5);
+  EXPECT_EQ(site.at("scene").at("first_view").at("width"), 200);
 }
 
 // The same sources, scene and seed give the same bytes whatever the thread count. Both builds go

@@ -2,20 +2,19 @@
 
 #include <filesystem>
 #include <memory>
-#include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/log.h"
 #include "io/las/las_io.h"
 #include "io/point_io.h"
+#include "render/build_record.h"
 
 namespace candi::pipeline {
 
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 
 constexpr size_t kChunkPoints = 1 << 16;
 
@@ -81,21 +80,6 @@ CopcFile Closed(std::unique_ptr<io::PointWriter> writer, const std::string& path
                 const std::string& layer, uint64_t points) {
   writer->Close();
   return {path, layer, points, static_cast<uint64_t>(fs::file_size(path))};
-}
-
-const json& Key(const json& j, const char* key, const std::string& path, const std::string& at) {
-  if (!j.is_object() || !j.contains(key)) {
-    throw InputError(
-        path, at,
-        std::string("no \"") + key + "\": not the archive.json of a finished candi build");
-  }
-  return j[key];
-}
-
-std::string Text(const json& j, const char* key, const std::string& path, const std::string& at) {
-  const json& v = Key(j, key, path, at);
-  if (!v.is_string()) throw InputError(path, at + "/" + key, "expected a string");
-  return v.get<std::string>();
 }
 
 // [A-Za-z0-9_-]+, and '.' too when `dot`.
@@ -174,43 +158,22 @@ std::vector<CopcFile> WriteCopc(const CopcOptions& options, const CopcSource& so
 
 CopcSource ReadCopcSource(const std::string& build_dir) {
   const fs::path dir(build_dir);
-  const std::string path = (dir / "archive.json").string();
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw InputError(build_dir, "", "not a folder (a finished candi build's, with archive.json)");
-  if (!fs::exists(path, ec))
-    throw InputError(build_dir, "", "no archive.json: not a finished candi build");
-  json a;
-  try {
-    a = json::parse(ReadFileToString(path));
-  } catch (const json::parse_error& e) {
-    throw InputError(path, "byte " + std::to_string(e.byte),
-                     std::string("not valid JSON: ") + e.what());
-  } catch (const json::exception& e) {
-    throw InputError(path, "", std::string("not valid JSON: ") + e.what());
-  }
+  const std::string path = (dir / render::kBuildRecord).string();
+  const render::BuildRecord record = render::ReadBuildRecord(build_dir);
   CopcSource s;
-  s.name = Text(a, "name", path, "");
-  const json& crs = Key(a, "crs", path, "");
-  if (!crs.is_null()) s.crs = Text(crs, "definition", path, "/crs");
-  const json& origin = Key(Key(a, "frame", path, ""), "origin", path, "/frame");
-  if (!origin.is_array() || origin.size() != 3)
-    throw InputError(path, "/frame/origin", "expected [x, y, z]");
-  for (int i = 0; i < 3; ++i) {
-    if (!origin[i].is_number()) throw InputError(path, "/frame/origin", "expected [x, y, z]");
-    s.origin[i] = origin[i].get<double>();
-  }
-  const json& layers = Key(a, "layers", path, "");
-  if (!layers.is_array() || layers.empty())
-    throw InputError(path, "/layers", "expected a list of layers");
-  for (size_t k = 0; k < layers.size(); ++k) {
+  s.name = record.name;
+  s.crs = record.crs_definition;
+  s.origin = record.origin;
+  if (record.layers.empty()) throw InputError(path, "/layers", "expected a list of layers");
+  std::error_code ec;
+  for (size_t k = 0; k < record.layers.size(); ++k) {
     const std::string at = "/layers/" + std::to_string(k);
-    s.layer_names.push_back(Text(layers[k], "name", path, at));
+    s.layer_names.push_back(record.layers[k].name);
     // It names the layer's COPC file: a scene's layer names (scene.h), nothing that leaves layers/.
     if (!SafeName(s.layer_names.back(), false)) {
       throw InputError(path, at + "/name", "not a layer name ([A-Za-z0-9_-]+)");
     }
-    s.layer_files.push_back((dir / Text(layers[k], "file", path, at)).string());
+    s.layer_files.push_back((dir / record.layers[k].file).string());
     if (!fs::exists(s.layer_files.back(), ec)) {
       throw InputError(s.layer_files.back(), "",
                        "missing: the layer file archive.json lists (" + path + ", " + at + ")");

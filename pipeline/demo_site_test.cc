@@ -39,8 +39,8 @@ TEST(MakeDemoSite, TheQuickSitesInputsAndItsScene) {
   EXPECT_EQ(scene.layers[2].panels.size(), 12u);  // 8 hidden and 4 visible
   EXPECT_EQ(scene.layers[3].kind, LayerKind::kPhotogrammetry);
   EXPECT_EQ(scene.views.size(), 7u);
-  EXPECT_EQ(scene.repeat_level, 32);
-  EXPECT_EQ(scene.width, 160);
+  EXPECT_EQ(scene.render.spbr.repeat_level, 32);
+  EXPECT_EQ(scene.render.width, 160);
   for (const std::string& f : scene.layers[3].Sources()) EXPECT_TRUE(testing::FileExists(f)) << f;
 }
 

@@ -32,16 +32,14 @@ namespace {
 constexpr uint64_t kStreamThreshold = 50000000;
 constexpr uint64_t kStreamInPlaceThreshold = 1000000;
 
-int RepeatLevel(const RenderOptions& o) { return o.opaque ? 1 : o.repeat_level; }
-
 // The camera in world coordinates: the view given, or one that frames the data (clipped).
 render::Camera WorldCamera(const RenderOptions& o, const Box3d& world) {
   if (o.view) {
     render::Camera c = *o.view;
-    if (o.size_given) c.width = o.width, c.height = o.height;
+    if (o.size_given) c.width = o.image.width, c.height = o.image.height;
     return c;
   }
-  return render::FirstView(ClippedBounds(world, o.clip), o.width, o.height, o.orientation);
+  return render::FirstView(ClippedBounds(world, o.clip), o.image.width, o.image.height, o.orientation);
 }
 
 render::Camera InFrame(render::Camera c, const LocalFrame& frame) {
@@ -56,10 +54,9 @@ void AdjustCloud(const RenderOptions& o, const render::Camera& world_camera, siz
                  const std::string& density_key, DensityCache* cache, PointCloud* cloud) {
   sampling::OpacityOptions opacity;
   opacity.alpha = o.alpha.size() == 1 ? o.alpha[0] : o.alpha[k];
-  opacity.repeat_level = RepeatLevel(o);
+  opacity.spbr = o.image.spbr;
   opacity.image_size = 0;
   opacity.pixel_size = world_camera.PixelFootprint((world_camera.target - world_camera.eye).norm());
-  opacity.seed = o.seed;
   opacity.density.threads = o.threads;
   sampling::OpacityResult r = sampling::AdjustOpacity(opacity, *cloud, cache->Get(density_key, opacity, *cloud));
   LogInfo(name + ": opacity " + FormatDouble(opacity.alpha) + " at pixel " + FormatDouble(opacity.pixel_size) +
@@ -104,21 +101,18 @@ RenderedImage RenderOwnedClouds(const RenderOptions& o, std::vector<PointCloud>*
   std::vector<const PointCloud*> pointers;
   for (const PointCloud& c : *clouds) pointers.push_back(&c);
   render::SplatCloudOptions build;
-  build.repeat_level = RepeatLevel(o);
-  build.seed = o.seed;
-  build.use_multiplicity = !o.opaque;
+  build.spbr = o.image.spbr;
   ConsoleProgress building("render: preparing " + std::to_string(total) + " points");
   const render::SplatCloud splats = render::BuildSplatCloud(build, pointers, building.Callback());
   building.Finish();
   clouds->clear();
   if (splats.copies() == 0) LogInfo("every point was removed (alpha 0): the image shows the background");
   render::SpbrOptions spbr;
-  spbr.point_size = o.point_size;
   spbr.ensembles = o.preview;
   spbr.threads = o.threads;
   ConsoleProgressOptions po;
   po.unit = "ensembles";
-  ConsoleProgress progress("render: SPBR L=" + std::to_string(RepeatLevel(o)), po);
+  ConsoleProgress progress("render: SPBR L=" + std::to_string(o.image.spbr.EffectiveRepeatLevel()), po);
   image.result = render::RenderSpbr(spbr, InFrame(image.world_camera, splats.frame), splats, progress.Callback());
   progress.Finish();
   return image;
@@ -192,7 +186,7 @@ void StreamFile(const RenderOptions& o, const std::string& in, io::PointReadOpti
   io::PointReadOptions all = read;
   all.scalar_fields = true;
   auto r = io::OpenPointReader(in, all);
-  const bool multiplicity = !o.opaque && r->info().schema.ScalarIndex(render::kMultiplicityField) >= 0;
+  const bool multiplicity = !o.image.spbr.opaque && r->info().schema.ScalarIndex(render::kMultiplicityField) >= 0;
   if (!multiplicity) r = io::OpenPointReader(in, read);
   if (const std::optional<io::PointRecordLayout> layout = r->record_layout(); layout && o.clip.empty() && !multiplicity) {
     const MappedFile map(in);
@@ -233,15 +227,12 @@ RenderedImage RenderFilesStreaming(const RenderOptions& o, const std::vector<std
     throw std::invalid_argument("--mode stream draws perspective views; use --mode memory for orthographic views");
   }
   render::SpbrStreamOptions so;
-  so.repeat_level = RepeatLevel(o);
-  so.seed = o.seed;
-  so.point_size = o.point_size;
+  so.spbr = o.image.spbr;
   so.threads = o.threads;
   so.memory_budget = o.memory_budget;
-  so.use_multiplicity = !o.opaque;
   so.expected_points = total;  // few enough: gathered by ensemble, no L z-buffers held
   render::SpbrStreamRenderer renderer(so, InFrame(image.world_camera, frame), frame);
-  ConsoleProgress progress("render: SPBR L=" + std::to_string(RepeatLevel(o)) + " streaming, " +
+  ConsoleProgress progress("render: SPBR L=" + std::to_string(o.image.spbr.EffectiveRepeatLevel()) + " streaming, " +
                            std::to_string(renderer.passes()) + " pass(es)");
   uint64_t done = 0;
   for (int pass = 0; pass < renderer.passes(); ++pass) {
@@ -271,7 +262,7 @@ bool Streams(const RenderOptions& o, const std::vector<std::string>& files) {
     const auto r = io::OpenPointReader(in, read);
     const uint64_t count = r->info().count;
     if (count != io::kUnknownCount) stated += count;
-    in_place &= r->record_layout() && (o.opaque || r->info().schema.ScalarIndex(render::kMultiplicityField) < 0);
+    in_place &= r->record_layout() && (o.image.spbr.opaque || r->info().schema.ScalarIndex(render::kMultiplicityField) < 0);
   }
   return stated > (in_place ? kStreamInPlaceThreshold : kStreamThreshold);
 }
@@ -279,13 +270,10 @@ bool Streams(const RenderOptions& o, const std::vector<std::string>& files) {
 }  // namespace
 
 void RenderOptions::Check() const {
-  CANDI_CHECK_OPTION_IN(repeat_level, 1, 100000);
-  CANDI_CHECK_OPTION_IN(width, 1, 16384);
-  CANDI_CHECK_OPTION_IN(height, 1, 16384);
-  CANDI_CHECK_OPTION(brightness == -1 || (brightness > 0 && brightness <= 100), brightness,
-                     "-1 (automatic) or a gain in (0, 100]");
+  image.Check();
   for (double a : alpha) CANDI_CHECK_OPTION(a >= 0 && a <= 1, alpha, "in [0, 1] (each)");
-  CANDI_CHECK_OPTION(!(opaque && !alpha.empty()), opaque, "false when alpha is given (they exclude each other)");
+  CANDI_CHECK_OPTION(!(image.spbr.opaque && !alpha.empty()), image.spbr.opaque,
+                     "false when alpha is given (they exclude each other)");
   CANDI_CHECK_OPTION(!(mode == RenderMode::kStream && !alpha.empty()), alpha,
                      "empty in stream mode (opacity control needs the whole cloud)");
   CANDI_CHECK_OPTION(!(mode == RenderMode::kStream && preview > 0), preview,
@@ -295,7 +283,6 @@ void RenderOptions::Check() const {
     throw std::invalid_argument("colouring by a field needs memory mode: stream mode reads no scalar fields");
   }
   CANDI_CHECK_OPTION_IN(threads, 0, 256);
-  CANDI_CHECK_OPTION(point_size >= 1 && point_size <= 64, point_size, "in [1, 64]");
   CANDI_CHECK_OPTION_GE(preview, 0);
   CANDI_CHECK_OPTION_GT(memory_budget, 0);
   CANDI_CHECK_OPTION_GT(chunk_budget, 0);
@@ -365,12 +352,10 @@ RenderedImage RenderArchiveEnsembles(const RenderOptions& o, const render::Archi
   image.legend = m.colour_by;  // packed coloured by a field: the image carries its legend
   image.mode = ranks > 1 ? "archive, MPI" : "archive";
   image.world_camera = WorldCamera(o, m.bounds.Translated(m.frame.origin));
-  const int repeat_level = RepeatLevel(o);
+  const int repeat_level = o.image.spbr.EffectiveRepeatLevel();
   const int drawn = o.preview > 0 ? std::min(o.preview, repeat_level) : repeat_level;
   render::ArchiveRenderOptions ao;
-  ao.repeat_level = repeat_level;
-  ao.seed = o.seed;
-  ao.point_size = o.point_size;
+  ao.spbr = o.image.spbr;
   ao.threads = o.threads;
   ao.memory_budget = o.memory_budget;
   ao.chunk_budget = o.chunk_budget;
@@ -407,16 +392,28 @@ RenderedImage RenderArchiveEnsembles(const RenderOptions& o, const render::Archi
   }
   image.result.repeat_level = repeat_level;
   image.result.ensembles = drawn;
-  image.result.seed = o.seed;
+  image.result.seed = o.image.spbr.seed;
   return image;
+}
+
+bool TakeBuildRenderSettings(const render::BuildRecord& record, const GivenImageSettings& given,
+                             RenderOptions* options) {
+  if (!record.render) return false;
+  const ImageSettings& b = *record.render;
+  ImageSettings& o = options->image;
+  if (!given.repeat_level) o.spbr.repeat_level = b.spbr.repeat_level;
+  if (!given.seed) o.spbr.seed = b.spbr.seed;
+  if (!given.size) o.width = b.width, o.height = b.height;
+  if (!given.background) o.background = b.background;
+  if (!given.brightness) o.brightness = b.brightness;
+  return true;
 }
 
 double WriteRender(const RenderOptions& o, const RenderedImage& image, const RenderOutputs& out) {
   const render::SpbrResult& result = image.result;
-  const double gain =
-      o.brightness < 0 ? (result.ensembles > 1 ? render::AutoBrightnessGain(result) : 1.0) : o.brightness;
-  LogInfo("brightness gain " + std::to_string(gain) + (o.brightness < 0 ? " (auto)" : ""));
-  const ImageF average = render::AverageImage(result, o.background, gain);
+  const double gain = render::BrightnessGain(o.image.brightness, result);
+  LogInfo("brightness gain " + std::to_string(gain) + (o.image.brightness.automatic() ? " (auto)" : ""));
+  const ImageF average = render::AverageImage(result, o.image.background, gain);
   std::string inputs;
   for (const std::string& in : out.inputs) inputs += (inputs.empty() ? "" : " ") + in;
   io::PngText text = {{"Software", std::string("candi ") + kVersion},

@@ -21,8 +21,10 @@
 #include "core/field_colour.h"
 #include "core/point_cloud.h"
 #include "core/progress.h"
+#include "core/spbr_settings.h"
 #include "io/image/png_io.h"
 #include "render/archive.h"
+#include "render/build_record.h"
 #include "render/camera.h"
 #include "render/first_view.h"
 #include "render/spbr.h"
@@ -34,17 +36,13 @@ namespace candi::pipeline {
 enum class RenderMode { kAuto, kMemory, kStream };
 
 struct RenderOptions {
-  int repeat_level = 100;        // L, ensembles averaged, [1, 100000]
-  uint64_t seed = 1;             // seed of the ensemble assignment (and of opacity control)
-  int width = 1024, height = 768;  // pixels, [1, 16384]; a view's own size unless size_given
+  // L, the seed (of the ensembles and of opacity control), point size and opaque (excludes
+  // alpha); the image's size (a given view's own size unless size_given), background, brightness.
+  ImageSettings image;
   bool size_given = false;       // the size replaces a given view's
-  Rgb8 background{0, 0, 0};
-  double brightness = -1;        // -1: automatic (Uchida et al.), else a gain in (0, 100]
   std::vector<double> alpha;     // opacity control per input (one value for all), each in [0, 1];
                                  // empty: every point once (or as its spbr_multiplicity says)
-  bool opaque = false;           // L = 1, multiplicities ignored; excludes alpha
   int threads = 0;               // 0: all
-  double point_size = 1.0;       // pixels, >= 1 (stochastic rounding)
   int preview = 0;               // > 0: only the first k ensembles
   RenderMode mode = RenderMode::kAuto;  // point files: auto streams above 1e6 points read in place, 5e7 others (alpha, preview: memory)
   uint64_t memory_budget = uint64_t{2048} << 20;  // bytes of z-buffers resident per pass (stream, archive)
@@ -61,6 +59,19 @@ struct RenderOptions {
   FieldColouring colour_by;
   void Check() const;
 };
+
+// Which of RenderOptions::image the caller set (the command line's flags); the others may come
+// from a build's record (TakeBuildRenderSettings).
+struct GivenImageSettings {
+  bool repeat_level = false, seed = false, size = false, background = false, brightness = false;
+};
+
+// `options->image` with the render settings `record` says its build resolved (L, seed, image
+// size, background, brightness) wherever `given` says the caller set none: `candi render BUILD`
+// draws as the build's views did, as candi view and publish open it. False (nothing changed) for
+// records of builds older than that block.
+bool TakeBuildRenderSettings(const render::BuildRecord& record, const GivenImageSettings& given,
+                             RenderOptions* options);
 
 // What a render produced: the sums to average and the camera it was drawn from (world).
 struct RenderedImage {

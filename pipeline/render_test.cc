@@ -43,21 +43,21 @@ std::vector<std::string> WriteSheets(const TempDir& dir) {
 
 RenderOptions Small() {
   RenderOptions o;
-  o.width = 96;
-  o.height = 64;
-  o.repeat_level = 8;
+  o.image.width = 96;
+  o.image.height = 64;
+  o.image.spbr.repeat_level = 8;
   o.mode = RenderMode::kMemory;
   return o;
 }
 
 TEST(RenderOptions, DefaultsPassAndRulesAreChecked) {
   ExpectEachBreakRejected<RenderOptions>({}, {
-      [](RenderOptions& o) { o.repeat_level = 0; },
-      [](RenderOptions& o) { o.alpha = {0.5}, o.opaque = true; },
+      [](RenderOptions& o) { o.image.spbr.repeat_level = 0; },
+      [](RenderOptions& o) { o.alpha = {0.5}, o.image.spbr.opaque = true; },
       [](RenderOptions& o) { o.alpha = {1.5}; },
       [](RenderOptions& o) { o.alpha = {0.5}, o.mode = RenderMode::kStream; },
       [](RenderOptions& o) { o.preview = 3, o.mode = RenderMode::kStream; },
-      [](RenderOptions& o) { o.brightness = 0; },
+      [](RenderOptions& o) { o.image.spbr.point_size = 0.5; },
   });
 }
 
@@ -123,7 +123,7 @@ TEST(RenderPointFiles, StreamModeReadsRecordsInPlaceAndHonoursMultiplicities) {
   const std::string zero = dir.File("zero.ply");
   io::WritePointCloud(zero, none);
   EXPECT_EQ(RenderPointFiles(o, {zero}).result.copies, 0u);
-  o.opaque = true;
+  o.image.spbr.opaque = true;
   EXPECT_EQ(RenderPointFiles(o, {zero}).result.copies, 20000u);
 }
 
@@ -144,7 +144,7 @@ TEST(RenderArchiveEnsembles, SharesAddUpToTheWhole) {
   const RenderedImage whole = RenderArchiveEnsembles(o, archive, 0, 1);
   EXPECT_EQ(whole.mode, "archive");
   EXPECT_EQ(whole.result.ensembles, 8);
-  render::Accumulator sum(o.width, o.height);
+  render::Accumulator sum(o.image.width, o.image.height);
   for (int rank = 0; rank < 3; ++rank) {
     const RenderedImage part = RenderArchiveEnsembles(o, archive, rank, 3);
     EXPECT_EQ(part.mode, "archive, MPI");
@@ -160,7 +160,7 @@ TEST(WriteRender, ThePngAndItsProvenanceAndTheViewToRepeatIt) {
   TempDir dir;
   const std::vector<std::string> files = WriteSheets(dir);
   RenderOptions o = Small();
-  o.brightness = 1.25;
+  o.image.brightness = Brightness::Gain(1.25);
   const RenderedImage image = RenderPointFiles(o, files);
   RenderOutputs out;
   out.png = dir.File("r.png");
@@ -176,7 +176,7 @@ TEST(WriteRender, ThePngAndItsProvenanceAndTheViewToRepeatIt) {
   EXPECT_EQ(io::ReadPng(out.png16).bit_depth, 16);
   // The saved view renders the same image again.
   RenderOptions again = Small();
-  again.brightness = 1.25;
+  again.image.brightness = Brightness::Gain(1.25);
   again.view = render::LoadView(out.save_view);
   EXPECT_TRUE(RenderPointFiles(again, files).result.sums == image.result.sums);
 }
@@ -194,9 +194,9 @@ TEST(RenderPointFiles, ColouredByAFieldWithItsLegendInThePng) {
   const std::string file = dir.File("sheet.ply");
   io::WritePointCloud(file, sheet);
   RenderOptions o = Small();
-  o.width = 640;
-  o.height = 480;
-  o.opaque = true;
+  o.image.width = 640;
+  o.image.height = 480;
+  o.image.spbr.opaque = true;
   o.view = render::Camera();
   const Eigen::Vector3d centre = sheet.frame.origin + box.Center();  // the 8 x 6 m sheet fills most of the view
   o.view->eye = centre + Eigen::Vector3d(0, 0, 12);

@@ -31,6 +31,7 @@ class Node {
   }
   const json& raw() const { return *j_; }
   const std::string& path() const { return path_; }
+  const std::string& file() const { return *file_; }
 
   // An object whose keys are all in `known`.
   void ExpectObject(const std::set<std::string>& known) const {
@@ -177,6 +178,7 @@ SceneLayer ParseLayer(const Node& n) {
   if (!n.Has("name")) n.Fail("missing key \"name\"");
   if (!n.Has("kind")) n.Fail("missing key \"kind\"");
   SceneLayer l;
+  l.key_json = n.raw().dump();
   l.name = n["name"].String();
   if (!ValidName(l.name)) n["name"].Fail("a layer name is 1-64 characters of A-Z a-z 0-9 _ - (it names files)");
   l.kind = ParseKind(n["kind"]);
@@ -220,16 +222,24 @@ SceneLayer ParseLayer(const Node& n) {
       l.dxf = require("dxf").Path(true);
       if (n.Has("sections")) {
         const Node s = n["sections"];
-        for (size_t i = 0; i < s.ArraySize(); ++i) l.sections.push_back(s[i].String());
+        for (size_t i = 0; i < s.ArraySize(); ++i) l.foundation.layers.push_back(s[i].String());
       }
-      if (n.Has("samples_per_side")) l.samples_per_side = static_cast<int>(n["samples_per_side"].Integer(2, 1000000));
-      if (n.Has("angular_steps")) l.angular_steps = static_cast<int>(n["angular_steps"].Integer(2, 1000000));
+      if (n.Has("samples_per_side")) {
+        l.foundation.surface.profile.samples_per_side = static_cast<int>(n["samples_per_side"].Integer(2, 1000000));
+      }
+      if (n.Has("angular_steps")) {
+        l.foundation.surface.revolve.angular_steps = static_cast<int>(n["angular_steps"].Integer(2, 1000000));
+      }
       if (n.Has("density") && n.Has("count")) n["count"].Fail("give one of \"density\" and \"count\"");
-      if (n.Has("density")) l.density = n["density"].Number(0, 1e9, true);
-      if (n.Has("count")) l.count = static_cast<unsigned long long>(n["count"].Integer(1, 10000000000LL));
+      if (n.Has("density")) l.foundation.sample.density = n["density"].Number(0, 1e9, true);
+      if (n.Has("count")) {
+        l.foundation.sample.count = static_cast<uint64_t>(n["count"].Integer(1, 10000000000LL));
+        l.foundation.sample.density = 0;
+      }
       if (n.Has("mode")) {
-        l.mode = n["mode"].String();
-        if (l.mode != "auto" && l.mode != "blend" && l.mode != "sweep") n["mode"].Fail("expected auto, blend or sweep");
+        const std::string mode = n["mode"].String();
+        if (mode != "auto" && mode != "blend" && mode != "sweep") n["mode"].Fail("expected auto, blend or sweep");
+        l.foundation.surface.revolve.mode = mesh::ParseRevolveMode(mode);
       }
       break;
     case LayerKind::kRelief: {
@@ -278,28 +288,38 @@ SceneLayer ParseLayer(const Node& n) {
       }
       for (const char* key : {"max_image_size", "max_features"})
         if (n.Has(key) && !n.Has("images")) n[key].Fail("only with \"images\" (it sets structure from motion)");
-      if (n.Has("max_image_size")) l.max_image_size = static_cast<int>(n["max_image_size"].Integer(64, 100000));
-      if (n.Has("max_features")) l.max_features = static_cast<int>(n["max_features"].Integer(64, 1000000));
+      if (n.Has("max_image_size")) l.sfm.max_image_size = static_cast<int>(n["max_image_size"].Integer(64, 100000));
+      if (n.Has("max_features")) l.sfm.max_features = static_cast<int>(n["max_features"].Integer(64, 1000000));
       for (const char* key : {"resolution_scale", "iterations"})
         if (n.Has(key) && n.Has("dense")) n[key].Fail("dense stereo options need \"images\" or \"workspace\"");
-      if (n.Has("resolution_scale")) l.resolution_scale = n["resolution_scale"].Number(0, 1, true);
-      if (n.Has("iterations")) l.iterations = static_cast<int>(n["iterations"].Integer(1, 100));
+      if (n.Has("resolution_scale")) l.stereo.resolution_scale = n["resolution_scale"].Number(0, 1, true);
+      if (n.Has("iterations")) l.stereo.iterations = static_cast<int>(n["iterations"].Integer(1, 100));
       break;
     }
   }
   return l;
 }
 
+// An inline camera (render/view_json.h's format, world coordinates).
+render::Camera InlineCamera(const Node& n, const std::string& scene_path) {
+  try {
+    return render::ParseView(n.raw().dump(), scene_path);
+  } catch (const InputError& e) {
+    n.Fail(std::string("not a camera: ") + e.what());
+  }
+}
+
 SceneView ParseSceneView(const Node& n, const std::set<std::string>& layer_names) {
   n.ExpectObject({"name", "camera", "opaque", "layers", "focus", "focus_opacity", "dim", "opacity", "point_size"});
   SceneView v;
+  v.key_json = n.raw().dump();
   if (!n.Has("name")) n.Fail("missing key \"name\"");
   v.name = n["name"].String();
   if (!ValidName(v.name)) n["name"].Fail("a view name is 1-64 characters of A-Z a-z 0-9 _ - (it names the PNG)");
   if (n.Has("camera")) {
     const Node c = n["camera"];
     if (c.raw().is_string()) v.camera_file = c.Path(true);
-    else if (c.raw().is_object()) v.camera_json = c.raw().dump();
+    else if (c.raw().is_object()) v.camera = InlineCamera(c, n.file());
     else c.Fail("expected a view file or an inline view object");
   }
   if (n.Has("opaque")) v.opaque = n["opaque"].Bool();
@@ -408,6 +428,7 @@ SceneComparison ParseComparison(const Node& n, const std::set<std::string>& laye
   for (const auto& entry : MethodKeys()) known.insert(entry.first);
   n.ExpectObject(known);
   SceneComparison c;
+  c.key_json = n.raw().dump();
   for (const char* key : {"name", "compared", "reference"})
     if (!n.Has(key)) n.Fail(std::string("missing key \"") + key + "\"");
   c.name = n["name"].String();
@@ -464,6 +485,18 @@ std::vector<std::string> SceneLayer::Sources() const {
   return s;
 }
 
+FoundationPointsOptions SceneFoundationDefaults() {
+  FoundationPointsOptions f;
+  f.sample.density = kDefaultFoundationDensity;
+  return f;
+}
+
+ImageSettings SceneRenderDefaults() {
+  ImageSettings s;
+  s.background = {255, 255, 255};
+  return s;
+}
+
 Scene LoadScene(const std::string& path) {
   Scene scene;
   scene.path = fs::absolute(path).lexically_normal().string();
@@ -491,18 +524,27 @@ Scene LoadScene(const std::string& path) {
     }
   }
   if (root.Has("seed")) scene.seed = static_cast<unsigned long long>(root["seed"].Integer(0, (1LL << 62)));
+  scene.render.spbr.seed = scene.seed;
+  scene.origin_json = j.value("origin", json()).dump();
+  scene.render_json = j.value("render", json()).dump();
+  scene.copc_json = j.value("copc", json()).dump();
   if (root.Has("crs")) scene.crs = root["crs"].Crs();
   if (root.Has("render")) {
     const Node r = root["render"];
     r.ExpectObject({"repeat_level", "width", "height", "background", "brightness"});
-    if (r.Has("repeat_level")) scene.repeat_level = static_cast<int>(r["repeat_level"].Integer(1, 100000));
-    if (r.Has("width")) scene.width = static_cast<int>(r["width"].Integer(1, 16384));
-    if (r.Has("height")) scene.height = static_cast<int>(r["height"].Integer(1, 16384));
-    if (r.Has("background")) scene.background = r["background"].Colour();
+    ImageSettings& s = scene.render;
+    if (r.Has("repeat_level")) s.spbr.repeat_level = static_cast<int>(r["repeat_level"].Integer(1, kMaxRepeatLevel));
+    if (r.Has("width")) s.width = static_cast<int>(r["width"].Integer(1, kMaxImageSize));
+    if (r.Has("height")) s.height = static_cast<int>(r["height"].Integer(1, kMaxImageSize));
+    if (r.Has("background")) s.background = r["background"].Colour();
     if (r.Has("brightness")) {
       const Node b = r["brightness"];
-      if (b.raw().is_number()) scene.brightness = std::to_string(b.Number(0, 1000));
-      else if ((scene.brightness = b.String()) != "auto" && scene.brightness != "none") b.Fail("expected \"auto\", \"none\" or a gain");
+      try {
+        s.brightness = b.raw().is_number() ? Brightness::Gain(b.Number(0, Brightness::kMaxGain))
+                                           : Brightness::Parse(b.String());
+      } catch (const std::invalid_argument&) {
+        b.Fail(std::string("expected ") + Brightness::Rule());
+      }
     }
   }
   if (root.Has("copc")) {
@@ -557,12 +599,7 @@ Scene LoadScene(const std::string& path) {
                                          [&](const SceneView& sv) { return sv.name == a.view; });
           if (!known) v.Fail("no view named \"" + a.view + "\"");
         } else if (v.raw().is_object()) {
-          try {
-            render::ParseView(v.raw().dump(), scene.path);
-          } catch (const InputError& e) {
-            v.Fail(std::string("not a camera: ") + e.what());
-          }
-          a.camera_json = v.raw().dump();
+          a.camera = InlineCamera(v, scene.path);
         } else {
           v.Fail("expected a view's name or an inline camera object");
         }

@@ -90,8 +90,14 @@
 #include "compare/deviation.h"
 #include "compare/report.h"
 #include "core/point_cloud.h"
+#include "core/spbr_settings.h"
 #include "core/transform.h"
 #include "pipeline/copc_export.h"
+#include "pipeline/foundation.h"
+#include "reconstruction/photogrammetry/colmap_runner.h"
+#include "reconstruction/photogrammetry/patch_match.h"
+#include "reconstruction/relief/panel_size.h"
+#include "render/camera.h"
 
 namespace candi::pipeline {
 
@@ -105,6 +111,10 @@ struct ReliefPanelSpec {
   bool native_resolution = false;  // predict at the photo's own pixels per metre (no resampling)
 };
 
+// A foundation layer's options where the scene gives none: the sampling at
+// kDefaultFoundationDensity points per m^2.
+FoundationPointsOptions SceneFoundationDefaults();
+
 struct SceneLayer {
   std::string name;
   LayerKind kind = LayerKind::kPoints;
@@ -115,26 +125,25 @@ struct SceneLayer {
   bool highlight = false;
   // points
   std::string file, columns;
-  // foundation
+  // foundation: its drawing, and candi foundation's options as the scene sets them: "sections"
+  // (layers), "samples_per_side" (surface.profile), "angular_steps" and "mode" (surface.revolve),
+  // "count" or "density" (sample; kDefaultFoundationDensity when neither). The seed and threads
+  // are the build's.
   std::string dxf;
-  std::vector<std::string> sections;
-  int samples_per_side = 0, angular_steps = 0;  // 0: candi foundation's defaults
-  double density = 0;
-  unsigned long long count = 0;
-  std::string mode = "auto";
+  FoundationPointsOptions foundation = SceneFoundationDefaults();
   // relief
   std::vector<ReliefPanelSpec> panels;
   std::string model, placement;
-  double width_m = 2.7;
+  double width_m = relief::kPanelWidthM;
   // photogrammetry
   std::string dense, workspace, images, targets, picks;
   std::string targets_crs;  // "" : the targets are in the scene's CRS
-  int max_image_size = 1600, max_features = 4096;  // sfm (images)
-  double resolution_scale = 1.0;  // dense stereo (images, workspace)
-  int iterations = 3;
+  photogrammetry::SfmOptions sfm;            // "max_image_size", "max_features" (images)
+  photogrammetry::PatchMatchOptions stereo;  // "resolution_scale", "iterations" (images, workspace)
   // Layers this one supersedes (see the format above).
   std::vector<std::string> replaces;
   double replace_voxel = 0.5;
+  std::string key_json;  // the layer's entry, canonical JSON (part of the build's checkpoint key)
   // Every input file of the layer (absolute), for provenance.
   std::vector<std::string> Sources() const;
 };
@@ -142,13 +151,14 @@ struct SceneLayer {
 struct SceneView {
   std::string name;
   std::string camera_file;   // absolute, or "" (inline or default)
-  std::string camera_json;   // inline camera as JSON text, or ""
+  std::optional<render::Camera> camera;  // an inline camera (world), or none
   bool opaque = false;
   std::vector<std::string> layers;  // empty: all
   bool focus = false;
   double focus_opacity = 0.95, dim = 0.5;
   std::map<std::string, double> opacity;
   double point_size = 1.0;          // pixels (candi render --point-size)
+  std::string key_json;             // the entry, canonical JSON (part of the build's checkpoint key)
 };
 
 // A labelled point of the site: shown as a marker by candi view and a published site, which
@@ -158,7 +168,7 @@ struct SceneAnnotation {
   std::string text;                  // may be empty
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world (the scene's CRS), m
   std::string view;                  // a scene view's name, or ""
-  std::string camera_json;           // an inline camera (view.json's format), or ""
+  std::optional<render::Camera> camera;  // an inline camera (world), or none
 };
 
 // A deviation map the build writes once the layers are built (compare/deviation.h): the
@@ -171,7 +181,11 @@ struct SceneComparison {
   std::string reference_file;   // absolute: a point file, or for C2M a mesh, in world coordinates
   compare::DeviationOptions deviation;  // threads: set by the build
   compare::SummaryOptions summary;
+  std::string key_json;         // the entry, canonical JSON (part of the build's checkpoint key)
 };
+
+// A scene's "render" where it gives none: candi render's settings on a white background.
+ImageSettings SceneRenderDefaults();
 
 struct Scene {
   std::string path;   // the scene file
@@ -179,9 +193,9 @@ struct Scene {
   std::optional<Eigen::Vector3d> origin;  // none: auto
   unsigned long long seed = 1;
   std::string crs;    // "" : none declared
-  int repeat_level = 100, width = 1024, height = 768;
-  Rgb8 background{255, 255, 255};
-  std::string brightness = "auto";
+  // "render": what every view draws with (a view sets its own opaque and point size); its seed is
+  // the scene's. The background defaults to white.
+  ImageSettings render = SceneRenderDefaults();
   CopcOptions copc;   // the COPC files the build writes
   std::vector<SceneView> views;
   std::vector<SceneLayer> layers;
@@ -189,6 +203,9 @@ struct Scene {
   std::vector<SceneAnnotation> annotations;
   std::vector<SceneComparison> comparisons;
   std::string text;   // the file's bytes (hashed for provenance)
+  // "origin", "render" and "copc" as canonical JSON ("null" when absent): parts of the build's
+  // checkpoint keys.
+  std::string origin_json = "null", render_json = "null", copc_json = "null";
 };
 
 Scene LoadScene(const std::string& path);

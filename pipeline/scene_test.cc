@@ -90,7 +90,7 @@ TEST_F(SceneFile, EveryLayerKindAndItsDefaults) {
        {{"name", "dense"}, {"kind", "photogrammetry"}, {"dense", "dense.ply"}},
        {{"name", "ws"}, {"kind", "photogrammetry"}, {"workspace", "ws"}}});
   j["views"] = json::array({{{"name", "overview"}, {"camera", "view.json"}, {"opaque", true}},
-                            {{"name", "close"}, {"camera", {{"eye", {0, 0, 1}}}}, {"layers", {"scan", "reliefs"}},
+                            {{"name", "close"}, {"camera", {{"eye", {0, -1, 1}}}}, {"layers", {"scan", "reliefs"}},
                              {"focus", true}, {"focus_opacity", 0.8}, {"dim", 0.3}, {"opacity", {{"scan", 0.1}}},
                              {"point_size", 3}}});
   const Scene s = Load(j);
@@ -98,11 +98,11 @@ TEST_F(SceneFile, EveryLayerKindAndItsDefaults) {
   ASSERT_TRUE(s.origin.has_value());
   EXPECT_EQ(*s.origin, Eigen::Vector3d(500000, 9100000, 200));
   EXPECT_EQ(s.seed, 7u);
-  EXPECT_EQ(s.repeat_level, 32);
-  EXPECT_EQ(s.width, 640);
-  EXPECT_EQ(s.height, 480);
-  EXPECT_EQ(s.background.b, 3);
-  EXPECT_EQ(s.brightness, std::to_string(1.5));
+  EXPECT_EQ(s.render.spbr.repeat_level, 32);
+  EXPECT_EQ(s.render.width, 640);
+  EXPECT_EQ(s.render.height, 480);
+  EXPECT_EQ(s.render.background.b, 3);
+  EXPECT_EQ(s.render.brightness, Brightness::Gain(1.5));
   ASSERT_EQ(s.layers.size(), 6u);
 
   const SceneLayer& scan = s.layers[0];
@@ -117,12 +117,12 @@ TEST_F(SceneFile, EveryLayerKindAndItsDefaults) {
   const SceneLayer& f = s.layers[1];
   EXPECT_EQ(f.kind, LayerKind::kFoundation);
   EXPECT_EQ(f.dxf, Path("drawing.dxf"));
-  EXPECT_EQ(f.sections, (std::vector<std::string>{"A", "B"}));
-  EXPECT_EQ(f.samples_per_side, 200);
-  EXPECT_EQ(f.angular_steps, 36);
-  EXPECT_EQ(f.count, 1000u);
-  EXPECT_EQ(f.density, 0.0);
-  EXPECT_EQ(f.mode, "sweep");
+  EXPECT_EQ(f.foundation.layers, (std::vector<std::string>{"A", "B"}));
+  EXPECT_EQ(f.foundation.surface.profile.samples_per_side, 200);
+  EXPECT_EQ(f.foundation.surface.revolve.angular_steps, 36);
+  EXPECT_EQ(f.foundation.sample.count, 1000u);
+  EXPECT_EQ(f.foundation.sample.density, 0.0);
+  EXPECT_EQ(f.foundation.surface.revolve.mode, mesh::RevolveMode::kSweep);
 
   const SceneLayer& r = s.layers[2];
   EXPECT_EQ(r.kind, LayerKind::kRelief);
@@ -141,10 +141,10 @@ TEST_F(SceneFile, EveryLayerKindAndItsDefaults) {
   EXPECT_EQ(c.images, Path("photos"));
   EXPECT_EQ(c.targets, Path("targets.csv"));
   EXPECT_EQ(c.picks, Path("picks.csv"));
-  EXPECT_EQ(c.max_image_size, 800);
-  EXPECT_EQ(c.max_features, 1024);
-  EXPECT_DOUBLE_EQ(c.resolution_scale, 0.5);
-  EXPECT_EQ(c.iterations, 2);
+  EXPECT_EQ(c.sfm.max_image_size, 800);
+  EXPECT_EQ(c.sfm.max_features, 1024);
+  EXPECT_DOUBLE_EQ(c.stereo.resolution_scale, 0.5);
+  EXPECT_EQ(c.stereo.iterations, 2);
   EXPECT_EQ(c.replaces, (std::vector<std::string>{"scan"}));
   EXPECT_DOUBLE_EQ(c.replace_voxel, 0.25);
   // Sources: the files it reads, the photos sorted by name.
@@ -156,13 +156,13 @@ TEST_F(SceneFile, EveryLayerKindAndItsDefaults) {
   EXPECT_EQ(s.layers[5].workspace, Path("ws"));
   // Defaults where the file says nothing.
   EXPECT_DOUBLE_EQ(s.layers[4].opacity, 1.0);
-  EXPECT_EQ(s.layers[4].iterations, 3);
-  EXPECT_DOUBLE_EQ(s.layers[4].resolution_scale, 1.0);
+  EXPECT_EQ(s.layers[4].stereo.iterations, photogrammetry::PatchMatchOptions().iterations);
+  EXPECT_DOUBLE_EQ(s.layers[4].stereo.resolution_scale, 1.0);
 
   ASSERT_EQ(s.views.size(), 2u);
   EXPECT_EQ(s.views[0].camera_file, Path("view.json"));
   EXPECT_TRUE(s.views[0].opaque);
-  EXPECT_FALSE(s.views[1].camera_json.empty());
+  ASSERT_TRUE(s.views[1].camera.has_value());
   EXPECT_EQ(s.views[1].layers, (std::vector<std::string>{"scan", "reliefs"}));
   // Focus: highlighted layers at focus_opacity, others dimmed; overrides win.
   EXPECT_DOUBLE_EQ(ViewOpacity(s.views[1], r), 0.8);
@@ -191,8 +191,8 @@ TEST_F(SceneFile, LicenceAndAnnotations) {
   EXPECT_EQ(s.annotations[0].position, Eigen::Vector3d(416000.001, 9168000.002, 265.5));
   EXPECT_EQ(s.annotations[0].view, "front");
   EXPECT_EQ(s.annotations[0].text, "hidden foot");
-  EXPECT_NE(s.annotations[1].camera_json.find("eye"), std::string::npos);
-  EXPECT_TRUE(s.annotations[2].view.empty() && s.annotations[2].camera_json.empty());
+  ASSERT_TRUE(s.annotations[1].camera.has_value());
+  EXPECT_TRUE(s.annotations[2].view.empty() && !s.annotations[2].camera);
 
   json bad = j;
   bad["annotations"][0].erase("title");
@@ -222,8 +222,10 @@ TEST_F(SceneFile, DefaultsOfAMinimalScene) {
   EXPECT_EQ(s.name, "my_site");  // the file's stem
   EXPECT_FALSE(s.origin.has_value());
   EXPECT_EQ(s.seed, 1u);
-  EXPECT_EQ(s.repeat_level, 100);
-  EXPECT_EQ(s.brightness, "auto");
+  EXPECT_EQ(s.render.spbr.repeat_level, 100);
+  EXPECT_TRUE(s.render.brightness.automatic());
+  EXPECT_EQ(s.render.background, (Rgb8{255, 255, 255}));  // a scene's default
+  EXPECT_EQ(s.render.spbr.seed, s.seed);
   EXPECT_TRUE(s.views.empty());
   EXPECT_EQ(LayerKindName(s.layers[0].kind), "points");
   EXPECT_EQ(s.path, fs::absolute(dir_.File("my_site.json")).lexically_normal().string());
@@ -279,8 +281,13 @@ TEST_F(SceneFile, RenderErrors) {
   j["render"] = {{"background", {0, 0}}};
   ExpectError(j, "/render/background", "expected [r, g, b]");
   j["render"] = {{"brightness", "bright"}};
-  ExpectError(j, "/render/brightness", "expected \"auto\", \"none\" or a gain");
+  ExpectError(j, "/render/brightness", "expected auto, none or a gain in (0, 100]");
   j["render"] = {{"brightness", -1}};
+  ExpectError(j, "/render/brightness", "out of range");
+  // One range for a gain everywhere (the command line's, the viewer's): (0, 100].
+  j["render"] = {{"brightness", 0}};
+  ExpectError(j, "/render/brightness", "expected auto, none or a gain in (0, 100]");
+  j["render"] = {{"brightness", 500}};
   ExpectError(j, "/render/brightness", "out of range");
   j["render"] = {{"gamma", 2}};
   ExpectError(j, "/render/gamma", "unknown key");
@@ -375,7 +382,9 @@ TEST_F(SceneFile, TransformErrors) {
 TEST_F(SceneFile, FoundationErrors) {
   json j = Minimal();
   j["layers"][0] = {{"name", "f"}, {"kind", "foundation"}, {"dxf", "drawing.dxf"}};
-  EXPECT_EQ(Load(j).layers[0].samples_per_side, 0);  // 0: candi foundation's defaults
+  // candi foundation's defaults, at the scene's default density.
+  EXPECT_EQ(Load(j).layers[0].foundation.surface.profile.samples_per_side, mesh::ProfileOptions().samples_per_side);
+  EXPECT_EQ(Load(j).layers[0].foundation.sample.density, kDefaultFoundationDensity);
   json l = j;
   l["layers"][0].erase("dxf");
   ExpectError(l, "/layers/0", "a foundation layer needs \"dxf\"");

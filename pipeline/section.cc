@@ -272,7 +272,7 @@ Image8 RenderSlab(const SectionOptions& o, const Slab& slab, const std::vector<S
   // point goes to round(opacity L) of the L ensembles (opacity control's multiplicity), so a pixel
   // one point covers has that opacity, and where layers overlap the nearest of each ensemble
   // wins: see-through, as SPBR blends.
-  const int copies = std::max(1, static_cast<int>(std::lround(o.opacity * o.repeat_level)));
+  const int copies = std::max(1, static_cast<int>(std::lround(o.opacity * o.spbr.repeat_level)));
   const int field = cloud.AddScalarField(render::kMultiplicityField);
   for (size_t i = 0; i < cloud.size(); ++i) cloud.scalars[field].Set(i, copies);
   render::Camera camera;
@@ -287,15 +287,13 @@ Image8 RenderSlab(const SectionOptions& o, const Slab& slab, const std::vector<S
   render::SpbrResult result;
   if (cloud.empty()) {
     result.sums = render::Accumulator(w.width, w.height);
-    result.repeat_level = result.ensembles = o.repeat_level;
+    result.repeat_level = result.ensembles = o.spbr.repeat_level;
   } else {
     render::SplatCloudOptions build;
-    build.repeat_level = o.repeat_level;
-    build.seed = o.seed;
+    build.spbr = o.spbr;
     const render::SplatCloud splats = render::BuildSplatCloud(build, {&cloud});
     render::SpbrOptions spbr;
     spbr.threads = o.threads;
-    spbr.point_size = o.point_size;
     camera.eye -= splats.frame.origin;
     camera.target -= splats.frame.origin;
     result = render::RenderSpbr(spbr, camera, splats);
@@ -323,7 +321,7 @@ std::string SummaryJson(const SectionOptions& o, const std::vector<std::string>&
   out += ",\n  \"image\": {\"file\": \"section.png\", \"x0\": " + num(w.x0) + ", \"y0\": " + num(w.y0) +
          ", \"metres_per_pixel\": " + num(w.metres_per_pixel) + ", \"width\": " + std::to_string(w.width) +
          ", \"height\": " + std::to_string(w.height) + ", \"scale_bar_m\": " + num(bar) + ", \"repeat_level\": " +
-         std::to_string(o.repeat_level) + ", \"opacity\": " + num(o.opacity) + ", \"seed\": " + std::to_string(o.seed) +
+         std::to_string(o.spbr.repeat_level) + ", \"opacity\": " + num(o.opacity) + ", \"seed\": " + std::to_string(o.spbr.seed) +
          "},\n  \"layers\": [";
   for (size_t k = 0; k < layers.size(); ++k) {
     const SectionLayerResult& l = layers[k];
@@ -356,8 +354,9 @@ void SectionOptions::Check() const {
   CANDI_CHECK_OPTION(max_gap >= 0 && std::isfinite(max_gap), max_gap, "finite and >= 0 (0 = automatic)");
   CANDI_CHECK_OPTION_IN(width, 16, 8192);
   CANDI_CHECK_OPTION(pixel >= 0 && std::isfinite(pixel), pixel, ">= 0 m");
-  CANDI_CHECK_OPTION_IN(repeat_level, 1, 10000);
-  CANDI_CHECK_OPTION_IN(point_size, 1, 64);
+  spbr.Check();
+  CANDI_CHECK_OPTION_IN(spbr.repeat_level, 1, 10000);
+  CANDI_CHECK_OPTION(!spbr.opaque, spbr.opaque, "false (a section blends its slab)");
   CANDI_CHECK_OPTION(opacity > 0 && opacity <= 1, opacity, "in (0, 1]");
   CANDI_CHECK_OPTION_IN(threads, 0, 256);
 }

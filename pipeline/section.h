@@ -14,6 +14,7 @@
 
 #include "core/clip.h"
 #include "core/image.h"
+#include "core/spbr_settings.h"
 #include "io/image/png_io.h"
 #include "render/archive.h"
 #include "section/section_outputs.h"
@@ -29,9 +30,9 @@ struct SectionOptions {
   double max_gap = 0.0;         // section lines: a longer gap in the data breaks a line, m, >= 0; 0 = automatic
   int width = 1600;             // image pixels across, [16, 8192] (with pixel 0)
   double pixel = 0.0;           // image metres per pixel, >= 0; 0 = from width
-  int repeat_level = 10;        // image SPBR ensembles, [1, 10000] (a slab is thin: few blend it)
-  uint64_t seed = 1;            // image: seed of the ensembles
-  double point_size = 2.0;      // image: pixels, [1, 64]
+  // The image's SPBR: L in [1, 10000] (a slab is thin: few ensembles blend it), its seed, the
+  // point size (pixels); never opaque.
+  SpbrSettings spbr = {10, 1, 2.0, false};
   double opacity = 0.7;         // image: of a pixel one slab point covers, (0, 1]
   SectionColours colours = SectionColours::kLayer;
   Rgb8 background{255, 255, 255};  // image background

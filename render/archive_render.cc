@@ -19,18 +19,18 @@
 namespace candi::render {
 
 void ArchiveRenderOptions::Check() const {
-  CANDI_CHECK_OPTION_GE(repeat_level, 1);
-  CANDI_CHECK_OPTION(point_size >= 1.0 && point_size <= 64.0, point_size, "in [1, 64] pixels");
+  spbr.Check();
   CANDI_CHECK_OPTION_IN(threads, 0, 256);
   CANDI_CHECK_OPTION_EACH_IN(layer_fraction, 0, 16);
   clip.Check("ArchiveRenderOptions::clip");
   CANDI_CHECK_OPTION(sample > 0 && sample <= 1, sample, "in (0, 1]");
-  const int end = ensemble_end == 0 ? repeat_level : ensemble_end;
-  CANDI_CHECK_OPTION_PAIR(ensemble_begin >= 0 && end <= repeat_level && ensemble_begin <= end,
+  const int L = spbr.EffectiveRepeatLevel();
+  const int end = ensemble_end == 0 ? L : ensemble_end;
+  CANDI_CHECK_OPTION_PAIR(ensemble_begin >= 0 && end <= L && ensemble_begin <= end,
                           ensemble_begin, ensemble_end,
                           "ensembles [" + std::to_string(ensemble_begin) + ", " +
                               std::to_string(end) + ") not within [0, " +
-                              std::to_string(repeat_level) + "]");
+                              std::to_string(L) + "]");
 }
 
 bool BoxMayBeVisible(const Camera::Projector& p, const Camera& camera, const Box3d& box, double margin_px) {
@@ -107,7 +107,7 @@ std::vector<size_t> VisibleChunks(const ArchiveRenderOptions& options, const Cam
                                   const Camera::Projector& projector, const Archive& archive, uint64_t* points,
                                   std::vector<uint8_t>* cut) {
   const ArchiveManifest& m = archive.manifest();
-  const double margin = std::ceil(options.point_size) + 2.0;
+  const double margin = std::ceil(options.spbr.point_size) + 2.0;
   std::vector<size_t> visible;
   *points = 0;
   if (!options.layer_fraction.empty() && options.layer_fraction.size() != m.layers.size()) {
@@ -193,11 +193,11 @@ uint64_t DrawShare(const ArchiveRenderOptions& o, const Archive& archive, const 
     const ClipRegion* clip = cut[visible[j]] ? &o.clip : nullptr;
     for (int e = 0; e < share.count; ++e) {
       runs.clear();
-      EnsembleSlices(c.count, c.first, o.repeat_level, o.seed, share.first + e, fraction, &runs);
+      EnsembleSlices(c.count, c.first, o.spbr.EffectiveRepeatLevel(), o.spbr.seed, share.first + e, fraction, &runs);
       EnsembleSelection selection;
-      selection.seed = o.seed;
+      selection.seed = o.spbr.seed;
       selection.base = share.base + e;
-      selection.point_size = o.point_size;
+      selection.point_size = o.spbr.point_size;
       for (PointRun run : runs) {
         if (o.sample < 1) {
           const double n = std::ceil(o.sample * static_cast<double>(run.end - run.begin));
@@ -226,7 +226,7 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   options.Check();
   camera.Check();
   const auto start = std::chrono::steady_clock::now();
-  const int L = options.repeat_level;
+  const int L = options.spbr.EffectiveRepeatLevel();
   const int e_begin = options.ensemble_begin, e_end = options.ensemble_end == 0 ? L : options.ensemble_end;
   const ArchiveManifest& m = archive.manifest();
   const int w = camera.width, h = camera.height;
@@ -309,7 +309,7 @@ SpbrResult RenderArchive(const ArchiveRenderOptions& options, const Camera& came
   SpbrResult result;
   result.repeat_level = L;
   result.ensembles = L;
-  result.seed = options.seed;
+  result.seed = options.spbr.seed;
   for (uint64_t c : copies) result.copies += c;
   result.sums = Accumulator(w, h);
   for (const ThreadSums& t : sums) {

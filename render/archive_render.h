@@ -19,6 +19,7 @@
 
 #include "core/clip.h"
 #include "core/progress.h"
+#include "core/spbr_settings.h"
 #include "render/archive.h"
 #include "render/camera.h"
 #include "render/spbr.h"
@@ -26,9 +27,7 @@
 namespace candi::render {
 
 struct ArchiveRenderOptions {
-  int repeat_level = 100;                       // L, >= 1
-  uint64_t seed = 1;
-  double point_size = 1.0;                      // pixels, in [1, 64]
+  SpbrSettings spbr;                            // L (1 when opaque), seed, point size
   // Bytes for resident z-buffers (12 bytes a pixel per ensemble, shared by the threads): the
   // ensembles beyond it take further passes over the chunks.
   uint64_t memory_budget = uint64_t{2} << 30;  // L = 100 at 1024² in one pass

@@ -127,9 +127,9 @@ TEST_F(ArchiveRender, ClippedEqualsTheReferenceBitForBit) {
     for (double size : {1.0, 2.5}) {
       const SpbrResult ref = Reference(*archive_, camera, 8, 5, size, {0.6, 1.0}, clip);
       ArchiveRenderOptions o;
-      o.repeat_level = 8;
-      o.seed = 5;
-      o.point_size = size;
+      o.spbr.repeat_level = 8;
+      o.spbr.seed = 5;
+      o.spbr.point_size = size;
       o.threads = 2;
       o.layer_fraction = {0.6, 1.0};
       o.clip = clip;
@@ -146,7 +146,7 @@ TEST_F(ArchiveRender, ClippedEqualsTheReferenceBitForBit) {
   // A region holding everything gives the unclipped image.
   Camera camera = ObliqueView(bounds, 120, 90);
   ArchiveRenderOptions o;
-  o.repeat_level = 4;
+  o.spbr.repeat_level = 4;
   const SpbrResult plain = RenderArchive(o, camera, *archive_);
   o.clip = ClipRegion::Box(Box3d{(bounds.min.array() - 1).matrix(), (bounds.max.array() + 1).matrix()});
   EXPECT_TRUE(RenderArchive(o, camera, *archive_).sums == plain.sums);
@@ -219,9 +219,9 @@ TEST_F(ArchiveRender, EqualsAPlainReferenceBitForBit) {
       for (const std::vector<double>& fractions : {std::vector<double>{}, std::vector<double>{0.37, 2.6}}) {
         const SpbrResult ref = Reference(*archive_, camera, 12, 7, size, fractions);
         ArchiveRenderOptions o;
-        o.repeat_level = 12;
-        o.seed = 7;
-        o.point_size = size;
+        o.spbr.repeat_level = 12;
+        o.spbr.seed = 7;
+        o.spbr.point_size = size;
         o.threads = 2;
         o.layer_fraction = fractions;
         const SpbrResult one = RenderArchive(o, camera, *archive_);
@@ -242,7 +242,7 @@ TEST_F(ArchiveRender, EqualsAPlainReferenceBitForBit) {
         EXPECT_EQ(stats.passes, 3);
         EXPECT_TRUE(small.sums == ref.sums) << what;
         // A different seed gives a different image (the test can fail).
-        o.seed = 8;
+        o.spbr.seed = 8;
         EXPECT_FALSE(RenderArchive(o, camera, *archive_).sums == ref.sums) << what;
       }
     }
@@ -253,7 +253,7 @@ TEST_F(ArchiveRender, LayerFractionsDrawTheirShareAndZeroReadsNothing) {
   const Camera camera = ObliqueView(archive_->manifest().bounds, 64, 48);
   const ArchiveManifest& m = archive_->manifest();
   ArchiveRenderOptions o;
-  o.repeat_level = 50;
+  o.spbr.repeat_level = 50;
   o.layer_fraction = {0.5, 0};
   ArchiveRenderStats stats;
   const SpbrResult half = RenderArchive(o, camera, *archive_, nullptr, &stats);
@@ -328,9 +328,9 @@ TEST_F(ArchiveRender, ThreadsPassesAndBudgetsGiveTheSameImage) {
                           Case{3, 20 * frame, 8 * chunk, 3, 1}, Case{3, 6 * frame, 2 * chunk, 3, 2},
                           Case{2, 1 * frame, 8 * chunk, 1, 10}, Case{3, 2 * frame, 8 * chunk, 2, 5}}) {
       ArchiveRenderOptions o;
-      o.repeat_level = 10;
-      o.seed = 3;
-      o.point_size = size;
+      o.spbr.repeat_level = 10;
+      o.spbr.seed = 3;
+      o.spbr.point_size = size;
       o.threads = c.threads;
       o.memory_budget = c.memory;
       o.chunk_budget = c.chunk;
@@ -352,9 +352,9 @@ TEST_F(ArchiveRender, CancelPollsWithinChunksAndNeverChangesTheImage) {
   const Camera camera = ObliqueView(archive_->manifest().bounds, 96, 72);
   const SpbrResult ref = Reference(*archive_, camera, 1, 3, 2.0);
   ArchiveRenderOptions o;
-  o.repeat_level = 1;  // one ensemble: every point of every chunk
-  o.seed = 3;
-  o.point_size = 2.0;
+  o.spbr.repeat_level = 1;  // one ensemble: every point of every chunk
+  o.spbr.seed = 3;
+  o.spbr.point_size = 2.0;
   o.threads = 2;
   std::atomic<uint64_t> polls{0};
   o.cancel = [&] {
@@ -392,9 +392,9 @@ TEST_F(ArchiveRender, FewerEnsemblesThanThreadsDrawMergedCopiesBitForBit) {
                           Case{1, 2 * frame, 2, 2}}) {
       const SpbrResult ref = Reference(*archive_, camera, c.L, 11, size);
       ArchiveRenderOptions o;
-      o.repeat_level = c.L;
-      o.seed = 11;
-      o.point_size = size;
+      o.spbr.repeat_level = c.L;
+      o.spbr.seed = 11;
+      o.spbr.point_size = size;
       o.threads = 3;
       o.memory_budget = c.memory;
       ArchiveRenderStats stats;
@@ -412,7 +412,7 @@ TEST_F(ArchiveRender, FewerEnsemblesThanThreadsDrawMergedCopiesBitForBit) {
 TEST_F(ArchiveRender, EnsembleSharesAddUpToTheWhole) {
   const Camera camera = ObliqueView(archive_->manifest().bounds, 80, 60);
   ArchiveRenderOptions o;
-  o.repeat_level = 9;
+  o.spbr.repeat_level = 9;
   const SpbrResult whole = RenderArchive(o, camera, *archive_);
   Accumulator sum(80, 60);
   uint64_t copies = 0;
@@ -437,7 +437,7 @@ TEST_F(ArchiveRender, SkipsChunksOutsideTheViewWithoutChangingTheImage) {
   camera.up = Eigen::Vector3d::UnitY();
   camera.fov_y_deg = 30;
   ArchiveRenderOptions o;
-  o.repeat_level = 6;
+  o.spbr.repeat_level = 6;
   ArchiveRenderStats stats;
   const SpbrResult r = RenderArchive(o, camera, *archive_, nullptr, &stats);
   EXPECT_LT(stats.chunks_visible, stats.chunks / 3);

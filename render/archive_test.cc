@@ -456,7 +456,7 @@ TEST_F(ArchiveDamage, CorruptChunkFailsItsHash) {
       },
       InputError);
   ArchiveRenderOptions o;
-  o.repeat_level = 4;
+  o.spbr.repeat_level = 4;
   Camera camera = ObliqueView(a.manifest().bounds, 64, 48);
   EXPECT_THROW(RenderArchive(o, camera, a), InputError);
 }

@@ -17,13 +17,14 @@
 #include "core/image.h"
 #include "core/local_frame.h"
 #include "core/point_cloud.h"
+#include "core/spbr_settings.h"
 #include "render/camera.h"
 
 namespace candi::render {
 
 struct ReferenceOptions {
-  int repeat_level = 100;            // L, >= 1
-  bool use_multiplicity = true;      // honour `spbr_multiplicity`
+  SpbrSettings spbr;                 // L (1 when opaque) and its multiplicities (point size: 1)
+  bool use_multiplicity = true;      // honour `spbr_multiplicity` (not when spbr.opaque)
   Rgb8 background{0, 0, 0};
   Rgb8 default_color{200, 200, 200};  // for clouds without colours
   void Check() const;

@@ -17,7 +17,6 @@
 namespace candi::render {
 
 void SpbrOptions::Check() const {
-  CANDI_CHECK_OPTION(point_size >= 1.0 && point_size <= 64.0, point_size, "in [1, 64] pixels");
   CANDI_CHECK_OPTION_GE(ensembles, 0);
   CANDI_CHECK_OPTION_IN(threads, 0, 256);
 }
@@ -112,10 +111,10 @@ void RenderEnsemble(const Frame& f, int e, ThreadFrame* t) {
     const uint16_t* y = f.cloud.qy.data() + b.begin;
     const uint16_t* z = f.cloud.qz.data() + b.begin;
     const uint32_t* c = f.cloud.colors.data() + b.begin;
-    if (f.options.point_size == 1.0) {
+    if (f.cloud.point_size == 1.0) {
       SplatPoints(tr, kp, x, y, z, c, b.count, &t->keys);
     } else {
-      SplatPointsSized(tr, kp, x, y, z, c, b.count, {f.options.point_size, f.cloud.seed, b.begin}, &t->keys);
+      SplatPointsSized(tr, kp, x, y, z, c, b.count, {f.cloud.point_size, f.cloud.seed, b.begin}, &t->keys);
     }
   }
   t->keys.DrainInto(&t->sums, e == 0 ? &t->first_grey : nullptr);
@@ -130,6 +129,7 @@ SpbrResult RenderSpbr(const SpbrOptions& options, const Camera& camera, const Sp
   const Camera::Projector projector = camera.MakeProjector();
   const int L = cloud.repeat_level;
   CANDI_CHECK(static_cast<int>(cloud.ensemble_blocks.size()) == L + 1) << "SplatCloud not built";
+  CANDI_CHECK(cloud.point_size >= 1 && cloud.point_size <= 64) << "SplatCloud::point_size = " << cloud.point_size;
   SpbrResult result;
   result.repeat_level = L;
   result.seed = cloud.seed;
@@ -137,7 +137,7 @@ SpbrResult RenderSpbr(const SpbrOptions& options, const Camera& camera, const Sp
   result.copies = cloud.copies();
   Frame frame{options, camera, projector, cloud, {}, result.ensembles, OrthographicDepthOffset(projector, cloud.bounds)};
   frame.visible.resize(cloud.blocks.size());
-  const double margin = 1.0 + options.point_size;
+  const double margin = 1.0 + cloud.point_size;
   tbb::enumerable_thread_specific<ThreadFrame> frames(camera.width, camera.height);
   std::atomic<int> done{0};
   auto body = [&] {
@@ -194,6 +194,11 @@ double AutoBrightnessGain(const SpbrResult& result) {
   const double g = greys[rank];
   if (!(g > 0)) return 1.0;
   return std::max(1.0, std::ceil(t / g * 100.0 - 1e-9) / 100.0);
+}
+
+double BrightnessGain(const Brightness& brightness, const SpbrResult& result) {
+  if (!brightness.automatic()) return brightness.gain();
+  return result.ensembles > 1 ? AutoBrightnessGain(result) : 1.0;
 }
 
 ImageF AverageImage(const SpbrResult& result, Rgb8 background, double gain) {

@@ -13,14 +13,16 @@
 
 #include "core/image.h"
 #include "core/progress.h"
+#include "core/spbr_settings.h"
 #include "render/camera.h"
 #include "render/frame.h"
 #include "render/splat_cloud.h"
 
 namespace candi::render {
 
+// How a SplatCloud is drawn; its L, seed and point size are the cloud's (SplatCloudOptions::spbr;
+// a splat's side in pixels, above 3 an equal-area disc).
 struct SpbrOptions {
-  double point_size = 1.0;    // splat side in pixels, >= 1 (above 3: an equal-area disc)
   int ensembles = 0;          // > 0: only the first k ensembles (progressive preview); 0: all L
   int threads = 0;            // 0: as many as TBB allows; otherwise 1..256
   void Check() const;
@@ -46,6 +48,10 @@ SpbrResult RenderSpbr(const SpbrOptions& options, const Camera& camera, const Sp
 // image's covered pixels (hits > 0) to T. The gain multiplies the points' part of the average
 // only (not the background), before quantization.
 double AutoBrightnessGain(const SpbrResult& result);
+
+// The gain `brightness` gives `result`: its fixed gain, or the automatic one (which needs more
+// than one ensemble: 1 for a single ensemble). candi render's, the viewer's and a section's rule.
+double BrightnessGain(const Brightness& brightness, const SpbrResult& result);
 
 // Average colour per pixel as floats in [0, 255]:
 // (gain * sum + (k - hits) * background) / k, clamped.

@@ -20,8 +20,7 @@
 namespace candi::render {
 
 void SpbrStreamOptions::Check() const {
-  CANDI_CHECK_OPTION_GE(repeat_level, 1);
-  CANDI_CHECK_OPTION(point_size >= 1.0 && point_size <= 64.0, point_size, "in [1, 64] pixels");
+  spbr.Check();
   CANDI_CHECK_OPTION_IN(threads, 0, 256);
 }
 
@@ -54,6 +53,8 @@ struct ThreadSums {
 
 struct SpbrStreamRenderer::Impl {
   SpbrStreamOptions options;
+  int L = 1;                  // the effective repeat level (1 when opaque)
+  bool multiplicity = false;  // points draw their `spbr_multiplicity` copies
   Camera camera;
   Camera::Projector projector;
   LocalFrame frame;
@@ -72,7 +73,10 @@ struct SpbrStreamRenderer::Impl {
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
 
   Impl(const SpbrStreamOptions& o, const Camera& c, const LocalFrame& f)
-      : options(o), camera(c), projector(c.MakeProjector()), frame(f), sums(c.width, c.height) {
+      : options(o),
+        L(o.spbr.EffectiveRepeatLevel()),
+        multiplicity(o.use_multiplicity && !o.spbr.opaque),
+        camera(c), projector(c.MakeProjector()), frame(f), sums(c.width, c.height) {
     const double frame_bytes = 8.0 * c.width * c.height;
     if (o.memory_budget < frame_bytes) {
       throw std::invalid_argument("SpbrStreamOptions::memory_budget = " + std::to_string(o.memory_budget) +
@@ -81,10 +85,10 @@ struct SpbrStreamRenderer::Impl {
                                   std::to_string(static_cast<uint64_t>(frame_bytes)) + " bytes)");
     }
     per_pass = static_cast<int>(std::clamp(std::floor(o.memory_budget / frame_bytes), 1.0,
-                                           static_cast<double>(o.repeat_level)));
-    const double staged_bytes = (o.point_size != 1.0 ? 24.0 : 16.0) * static_cast<double>(o.expected_points);
+                                           static_cast<double>(L)));
+    const double staged_bytes = (o.spbr.point_size != 1.0 ? 24.0 : 16.0) * static_cast<double>(o.expected_points);
     gather = o.expected_points > 0 && staged_bytes <= per_pass * frame_bytes;
-    if (gather) per_pass = o.repeat_level;
+    if (gather) per_pass = L;
     // c = R (p - eye) for positions p in the render frame (float, full precision).
     for (int r = 0; r < 3; ++r) {
       for (int k = 0; k < 3; ++k) transform.a[3 * r + k] = static_cast<float>(projector.rotation(r, k));
@@ -119,14 +123,13 @@ struct SpbrStreamRenderer::Impl {
 
 template <typename Decode>
 void SpbrStreamRenderer::Impl::Stage(size_t n, Decode&& decode) {
-  const int L = options.repeat_level;
   const size_t K = static_cast<size_t>(last - first);
   // Blocks of kStageBlock points, fewer and larger where many ensembles are resident (a small
   // image at a large L): the per-block counts stay within 2^22 entries.
   const size_t max_blocks = std::max<size_t>(1, (size_t{1} << 22) / (K + 1));
   const size_t block = std::max(kStageBlock, (n + max_blocks - 1) / max_blocks);
   const size_t blocks = (n + block - 1) / block;
-  const bool indices = options.point_size != 1.0;
+  const bool indices = options.spbr.point_size != 1.0;
   if (n == 0) return;
   slots.resize(n);
   counts.assign(blocks * (K + 1), 0);  // per block, points per resident ensemble and the rest
@@ -134,7 +137,7 @@ void SpbrStreamRenderer::Impl::Stage(size_t n, Decode&& decode) {
     ParallelFor(size_t{0}, blocks, [&](size_t b) {
       uint64_t* count = counts.data() + b * (K + 1);
       for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {
-        const int e = EnsembleOf(options.seed, next_index + i, L);
+        const int e = EnsembleOf(options.spbr.seed, next_index + i, L);
         const uint32_t k = e >= first && e < last ? static_cast<uint32_t>(e - first) : static_cast<uint32_t>(K);
         slots[i] = k;
         ++count[k];
@@ -186,13 +189,13 @@ void SpbrStreamRenderer::Impl::Stage(size_t n, Decode&& decode) {
 void SpbrStreamRenderer::Impl::DrawEnsemble(int k, BandBuffer* buffer) {
   Staged& s = staged[k];
   if (s.x.empty()) return;
-  if (options.point_size == 1.0) {
+  if (options.spbr.point_size == 1.0) {
     SplatPoints(transform, projection, s.x.data(), s.y.data(), s.z.data(), s.color.data(), s.x.size(), buffer);
   } else {
     // Draw point by point so each keeps its own stream index for the size draw.
     for (size_t i = 0; i < s.x.size(); ++i) {
       SplatPointsSized(transform, projection, &s.x[i], &s.y[i], &s.z[i], &s.color[i], 1,
-                       {options.point_size, options.seed, s.index[i]}, buffer);
+                       {options.spbr.point_size, options.spbr.seed, s.index[i]}, buffer);
     }
   }
 }
@@ -214,7 +217,7 @@ SpbrStreamRenderer::SpbrStreamRenderer(const SpbrStreamOptions& options, const C
 SpbrStreamRenderer::~SpbrStreamRenderer() = default;
 
 int SpbrStreamRenderer::passes() const {
-  return (impl_->options.repeat_level + impl_->per_pass - 1) / impl_->per_pass;
+  return (impl_->L + impl_->per_pass - 1) / impl_->per_pass;
 }
 int SpbrStreamRenderer::ensembles_per_pass() const { return impl_->per_pass; }
 
@@ -223,13 +226,13 @@ void SpbrStreamRenderer::BeginPass(int pass) {
   CANDI_CHECK(pass >= 0 && pass < passes()) << "pass " << pass;
   m.pass = pass;
   m.first = pass * m.per_pass;
-  m.last = std::min(m.options.repeat_level, m.first + m.per_pass);
+  m.last = std::min(m.L, m.first + m.per_pass);
   m.next_index = 0;
   m.staged.resize(m.last - m.first);
   if (m.gather) {
     // Room for each ensemble's expected share (a little more: the shares vary).
-    const uint64_t share = m.options.expected_points / static_cast<uint64_t>(m.options.repeat_level);
-    const bool indices = m.options.point_size != 1.0;
+    const uint64_t share = m.options.expected_points / static_cast<uint64_t>(m.L);
+    const bool indices = m.options.spbr.point_size != 1.0;
     for (Staged& s : m.staged) {
       s.Clear();
       const size_t room = static_cast<size_t>(share + share / 16 + 64);
@@ -251,7 +254,7 @@ void SpbrStreamRenderer::Add(const PointCloud& chunk) {
   Impl& m = *impl_;
   CANDI_CHECK(m.pass >= 0) << "Add before BeginPass";
   const Eigen::Vector3d shift = chunk.frame.origin - m.frame.origin;
-  const ScalarField* mult = m.options.use_multiplicity ? chunk.FindScalar(kMultiplicityField) : nullptr;
+  const ScalarField* mult = m.multiplicity ? chunk.FindScalar(kMultiplicityField) : nullptr;
   const uint32_t fallback = PackColor(m.options.default_color);
   if (!m.gather) for (Staged& s : m.staged) s.Clear();
   if (!mult) {
@@ -264,7 +267,7 @@ void SpbrStreamRenderer::Add(const PointCloud& chunk) {
     return;
   }
   // Points with multiplicities: m copies in m ensembles, staged serially.
-  const int L = m.options.repeat_level;
+  const int L = m.L;
   for (size_t i = 0; i < chunk.size(); ++i) {
     const uint64_t index = m.next_index + i;
     const Eigen::Vector3d p = chunk.positions[i] + shift;
@@ -272,7 +275,7 @@ void SpbrStreamRenderer::Add(const PointCloud& chunk) {
       throw InputError("point " + std::to_string(index) + " of the render input has a NaN or infinite coordinate");
     }
     const int copies = static_cast<int>(std::clamp(std::round(mult->Get(i)), 0.0, double(L)));
-    ForEachEnsemble(m.options.seed, index, copies, L, [&](int e) {
+    ForEachEnsemble(m.options.spbr.seed, index, copies, L, [&](int e) {
       if (e < m.first || e >= m.last) return;
       Staged& s = m.staged[e - m.first];
       s.x.push_back(static_cast<float>(p.x()));
@@ -328,9 +331,9 @@ void SpbrStreamRenderer::EndPass() {
 SpbrResult SpbrStreamRenderer::Finish() {
   Impl& m = *impl_;
   SpbrResult result;
-  result.repeat_level = m.options.repeat_level;
-  result.ensembles = m.options.repeat_level;
-  result.seed = m.options.seed;
+  result.repeat_level = m.L;
+  result.ensembles = m.L;
+  result.seed = m.options.spbr.seed;
   result.copies = m.copies;
   result.sums = Accumulator(m.camera.width, m.camera.height);
   for (const ThreadSums& t : m.sums) {

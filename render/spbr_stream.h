@@ -20,6 +20,7 @@
 
 #include "core/local_frame.h"
 #include "core/point_cloud.h"
+#include "core/spbr_settings.h"
 #include "io/point_file.h"
 #include "render/camera.h"
 #include "render/spbr.h"
@@ -27,10 +28,8 @@
 namespace candi::render {
 
 struct SpbrStreamOptions {
-  int repeat_level = 100;                        // L, >= 1
-  uint64_t seed = 1;
-  double point_size = 1.0;                       // pixels, in [1, 64]
-  bool use_multiplicity = true;                  // honour `spbr_multiplicity`
+  SpbrSettings spbr;                             // L, seed, point size; opaque: L = 1, no multiplicities
+  bool use_multiplicity = true;                  // honour `spbr_multiplicity` (unless spbr.opaque)
   Rgb8 default_color{200, 200, 200};             // for clouds without colours
   uint64_t memory_budget = uint64_t{1} << 30;    // bytes for resident z-buffers, >= one frame
   // The points a pass brings, when known (0: not). Few enough that their staged copies (16 bytes

@@ -42,12 +42,12 @@ PointCloud Slice(const PointCloud& cloud, size_t begin, size_t end) {
 SpbrResult Stream(const Scene& s, int L, uint64_t seed, size_t chunk, int threads, uint64_t budget,
                   uint64_t expected_points = 0, double point_size = 1.0) {
   SpbrStreamOptions o;
-  o.repeat_level = L;
-  o.seed = seed;
+  o.spbr.repeat_level = L;
+  o.spbr.seed = seed;
   o.threads = threads;
   o.memory_budget = budget;
   o.expected_points = expected_points;
-  o.point_size = point_size;
+  o.spbr.point_size = point_size;
   SpbrStreamRenderer renderer(o, s.camera, s.frame);
   for (int pass = 0; pass < renderer.passes(); ++pass) {
     renderer.BeginPass(pass);
@@ -70,7 +70,7 @@ TEST(SpbrStream, SameImageForAnyChunkSizeThreadCountAndBudget) {
   EXPECT_TRUE(base.sums == chunked.sums) << "chunk size or threads changed the image";
   // A budget of 3 frames: 6 passes, each holding 3 ensembles (the last 1).
   SpbrStreamOptions o;
-  o.repeat_level = 16;
+  o.spbr.repeat_level = 16;
   o.memory_budget = 3 * kOneFrame;
   EXPECT_EQ(SpbrStreamRenderer(o, s.camera, s.frame).passes(), 6);
   const SpbrResult passes = Stream(s, 16, 3, 5000, 2, 3 * kOneFrame);
@@ -128,7 +128,7 @@ TEST(SpbrStream, GatheringFewPointsGivesTheResidentImage) {
   // Gathering holds no more than the z-buffers would: 40000 points at 16 bytes need 640 KB, so a
   // budget of 3 frames (184 KB) keeps 6 passes of resident z-buffers; 10^4 points (160 KB) gather.
   SpbrStreamOptions o;
-  o.repeat_level = 16;
+  o.spbr.repeat_level = 16;
   o.memory_budget = 3 * kOneFrame;
   o.expected_points = 40000;
   EXPECT_EQ(SpbrStreamRenderer(o, s.camera, s.frame).passes(), 6);
@@ -168,10 +168,10 @@ TEST(SpbrStream, RecordsInPlaceGiveTheImageOfTheReadersChunks) {
       for (int threads : {1, 2}) {
         for (uint64_t budget : {uint64_t{1} << 30, 3 * kOneFrame, uint64_t{0}}) {
           SpbrStreamOptions o;
-          o.repeat_level = 8;
-          o.seed = 11;
+          o.spbr.repeat_level = 8;
+          o.spbr.seed = 11;
           o.threads = threads;
-          o.point_size = size;
+          o.spbr.point_size = size;
           o.memory_budget = budget > 0 ? budget : uint64_t{1} << 30;
           SpbrStreamOptions gathering = o;  // budget 0: the records gathered, the chunks resident
           if (budget == 0) gathering.expected_points = 50000;
@@ -203,8 +203,8 @@ TEST(SpbrStream, RecordsInPlaceGiveTheImageOfTheReadersChunks) {
 
 SpbrResult InMemory(const Scene& s, int L, uint64_t seed) {
   SplatCloudOptions build;
-  build.repeat_level = L;
-  build.seed = seed;
+  build.spbr.repeat_level = L;
+  build.spbr.seed = seed;
   const SplatCloud splats = BuildSplatCloud(build, {&s.cloud});
   Camera camera = s.camera;  // the splat cloud's frame may differ from s.frame
   camera.eye += s.frame.origin - splats.frame.origin;
@@ -233,7 +233,7 @@ TEST(SpbrStream, MatchesTheInMemoryRendererStatistically) {
 TEST(SpbrStream, NanPositionsAreAnErrorAndEmptyChunksAreFine) {
   Scene s = MakeScene(1000);
   SpbrStreamOptions o;
-  o.repeat_level = 4;
+  o.spbr.repeat_level = 4;
   SpbrStreamRenderer renderer(o, s.camera, s.frame);
   renderer.BeginPass(0);
   renderer.Add(PointCloud());
@@ -267,10 +267,10 @@ TEST(SpbrStream, NanPositionsAreAnErrorAndEmptyChunksAreFine) {
 
 TEST(SpbrStream, BadOptionsNameTheField) {
   SpbrStreamOptions o;
-  o.repeat_level = 0;
+  o.spbr.repeat_level = 0;
   EXPECT_THROW(o.Check(), std::invalid_argument);
   o = {};
-  o.point_size = 100;
+  o.spbr.point_size = 100;
   EXPECT_THROW(o.Check(), std::invalid_argument);
   o = {};
   o.memory_budget = kOneFrame - 1;

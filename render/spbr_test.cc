@@ -40,8 +40,8 @@ PointCloud Plane(size_t n, double sx, double sy, double z, Rgb8 color, uint64_t 
 SpbrResult Render(const PointCloud& cloud, const Camera& camera, int L, uint64_t seed, int threads = 0,
                   SplatCloud* splats_out = nullptr) {
   SplatCloudOptions build;
-  build.repeat_level = L;
-  build.seed = seed;
+  build.spbr.repeat_level = L;
+  build.spbr.seed = seed;
   const SplatCloud splats = BuildSplatCloud(build, {&cloud});
   Camera local = camera;  // the camera is given in world coordinates here
   local.eye -= splats.frame.origin;
@@ -70,7 +70,7 @@ TEST(ArchiveRenderOptions, LayerSharesAndEnsemblesNameTheirFields) {
   EXPECT_EQ(testing::OptionCheckMessage(o),
             "ArchiveRenderOptions::layer_fraction[2] = 17; must be in [0, 16]");
   o = {};
-  o.repeat_level = 10;
+  o.spbr.repeat_level = 10;
   o.ensemble_begin = 5;
   o.ensemble_end = 3;
   EXPECT_EQ(testing::OptionCheckMessage(o),
@@ -81,10 +81,10 @@ TEST(ArchiveRenderOptions, LayerSharesAndEnsemblesNameTheirFields) {
 TEST(SpbrOptions, DefaultsPassAndBadValuesNameTheField) {
   EXPECT_NO_THROW(SpbrOptions{}.Check());
   SpbrOptions o;
-  o.point_size = 0.5;
+  o.threads = -1;
   EXPECT_THROW(o.Check(), std::invalid_argument);
   SplatCloudOptions s;
-  s.repeat_level = 0;
+  s.spbr.repeat_level = 0;
   try {
     s.Check();
     FAIL();
@@ -102,7 +102,7 @@ TEST(Spbr, OpaqueRenderShowsTheNearestPoint) {
   SplatCloud splats;
   Render(back, camera, 1, 7, 0, &splats);
   ReferenceOptions ref;
-  ref.repeat_level = 1;
+  ref.spbr.repeat_level = 1;
   Camera local = camera;
   local.eye -= splats.frame.origin;
   local.target -= splats.frame.origin;
@@ -191,7 +191,7 @@ ImageF ExactImage(const PointCloud& cloud, const Camera& camera, int L, Rgb8 bac
   local.eye -= frame.origin;
   local.target -= frame.origin;
   ReferenceOptions ref;
-  ref.repeat_level = L;
+  ref.spbr.repeat_level = L;
   ref.background = background;
   return RenderSortedBlend(ref, local, frame, {&cloud});
 }

@@ -17,7 +17,7 @@
 namespace candi::render {
 
 void SplatCloudOptions::Check() const {
-  CANDI_CHECK_OPTION_GE(repeat_level, 1);
+  spbr.Check();
   CANDI_CHECK_OPTION(block_size == 0 || (block_size >= 64 && block_size <= 65536), block_size,
                      "0 (automatic) or in [64, 65536]");
 }
@@ -316,8 +316,9 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
     world.Extend(local_bounds.back().Translated(c->frame.origin));
   }
   SplatCloud out;
-  out.repeat_level = options.repeat_level;
-  out.seed = options.seed;
+  out.repeat_level = options.spbr.EffectiveRepeatLevel();
+  out.seed = options.spbr.seed;
+  out.point_size = options.spbr.point_size;
   out.frame = RenderFrameFor(world);
   const Located located = Locate(clouds, out.frame);
   out.source_points = located.total;
@@ -333,18 +334,19 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
   UninitVector<PointRecord> records(n);
   const Eigen::Vector3f lo = out.bounds.min.cast<float>();
   const Eigen::Vector3f inv_cell = (1024.0 / out.bounds.Extent().array().max(1e-9)).matrix().cast<float>();
-  const double cap = std::min(options.repeat_level, 65535);  // more copies than ensembles add nothing
-  const int L = options.repeat_level;
+  const int L = out.repeat_level;
+  const double cap = std::min(L, 65535);  // more copies than ensembles add nothing
+  const bool use_multiplicity = options.use_multiplicity && !options.spbr.opaque;
   // Every point drawn once (no multiplicities): the records carry their ensembles and are put in
   // copy order directly (GroupByEnsembleThenCode).
   const bool single_copies =
       L > 1 && std::none_of(located.sources.begin(), located.sources.end(), [&](const Source& s) {
-        return options.use_multiplicity && s.multiplicity != nullptr;
+        return use_multiplicity && s.multiplicity != nullptr;
       });
   std::atomic<uint64_t> first_bad{std::numeric_limits<uint64_t>::max()};
   for (const Source& s : located.sources) {
     const PointCloud& c = *s.cloud;
-    const bool weights = options.use_multiplicity && s.multiplicity != nullptr;
+    const bool weights = use_multiplicity && s.multiplicity != nullptr;
     ParallelFor(tbb::blocked_range<size_t>(0, c.size(), 65536), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) {
         const Eigen::Vector3d p = c.positions[i] + s.shift;
@@ -355,7 +357,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
         PointRecord& rec = records[s.first + i];
         rec.position = p.cast<float>();
         rec.code = Morton30(rec.position, lo, inv_cell);
-        rec.index = single_copies ? static_cast<uint32_t>(EnsembleOf(options.seed, s.first + i, L))
+        rec.index = single_copies ? static_cast<uint32_t>(EnsembleOf(options.spbr.seed, s.first + i, L))
                                   : static_cast<uint32_t>(s.first + i);
         rec.color = c.schema.colors ? c.colors[i] : options.default_color;
         rec.multiplicity = 1;
@@ -377,7 +379,7 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
     GroupByEnsembleThenCode(&records, L, &start);
   } else {
     SortByCode(&records);  // records[k].index stays the input index, which the ensemble hash uses
-    copies = CopiesByEnsemble(options.seed, L, records, &start);
+    copies = CopiesByEnsemble(options.spbr.seed, L, records, &start);
     UninitVector<PointRecord>().swap(records);
   }
   if (progress) progress(n / 2, n);

@@ -23,16 +23,18 @@
 #include "core/point_cloud.h"
 #include "core/progress.h"
 #include "core/rng.h"
+#include "core/spbr_settings.h"
 
 namespace candi::render {
 
 struct SplatCloudOptions {
-  int repeat_level = 100;             // L, the number of ensembles, >= 1
-  uint64_t seed = 1;                  // seeds the ensemble of every point
+  // L and the seed of every point's ensemble; opaque: one ensemble, multiplicities ignored; the
+  // point size the cloud is drawn with (RenderSpbr).
+  SpbrSettings spbr;
   // Points per block, in [64, 65536]; 0: each ensemble in ~1024 blocks (64..4096 points), so a
   // block covers a small part of the image and is drawn by one or two bands of rows.
   int block_size = 0;
-  bool use_multiplicity = true;       // honour the `spbr_multiplicity` field when present
+  bool use_multiplicity = true;       // honour the `spbr_multiplicity` field when present (not opaque)
   Rgb8 default_color{200, 200, 200};  // for clouds without colours
   void Check() const;
 };
@@ -81,8 +83,9 @@ template <typename T>
 using UninitVector = std::vector<T, DefaultInitAllocator<T>>;
 
 struct SplatCloud {
-  int repeat_level = 1;
+  int repeat_level = 1;       // the ensembles of the arrays (SpbrSettings::EffectiveRepeatLevel)
   uint64_t seed = 0;
+  double point_size = 1.0;    // pixels, as drawn (the settings' point size)
   LocalFrame frame;           // world = position + frame.origin
   Box3d bounds;               // of all points, render frame
   uint64_t source_points = 0; // points in the inputs (multiplicity 0 included)

@@ -103,13 +103,13 @@ TEST(SplatCloud, MultiplicitiesConvergeToTheExactImage) {
     const int field = adjusted.AddScalarField(kMultiplicityField);
     for (float& m : adjusted.scalars[field].f32) m = 0.15f * L;
     SplatCloudOptions b;
-    b.repeat_level = L;
+    b.spbr.repeat_level = L;
     const SplatCloud splats = BuildSplatCloud(b, {&adjusted});
     EXPECT_EQ(splats.copies(), scene.size() * 3 * L / 20);
     const Camera camera = ObliqueView(splats.bounds, 64, 64);
     const ImageF image = AverageImage(RenderSpbr(SpbrOptions{}, camera, splats), {0, 0, 0});
     ReferenceOptions ref;
-    ref.repeat_level = L;
+    ref.spbr.repeat_level = L;
     rmse.push_back(Rmse(image, RenderSortedBlend(ref, camera, splats.frame, {&adjusted})));
   }
   // sqrt(320 / 20) = 4: allow noise in the estimate.

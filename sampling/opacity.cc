@@ -17,7 +17,6 @@ namespace {
 constexpr uint64_t kCopyStream = 0x6f706163697479ULL;  // "opacity": the rounding draws u_i
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr int kMaxRepeatLevel = 1 << 24;  // copy counts are stored exactly in float
 
 // Each point's input multiplicity w_i, or empty for "all 1".
 std::vector<double> InputMultiplicity(const PointCloud& cloud) {
@@ -99,7 +98,7 @@ void SetScales(const OpacityOptions& o, const PointCloud& cloud, const DensityRe
   }
   s->point_area_ratio = point_area / s->area;
   s->median_density = density.median_density;
-  s->points_needed = o.repeat_level * SpbrPointsPerEnsemble(o.alpha, s->point_area_ratio);
+  s->points_needed = o.spbr.EffectiveRepeatLevel() * SpbrPointsPerEnsemble(o.alpha, s->point_area_ratio);
 }
 
 // Ratio statistics, counts and the predicted alpha at the median density.
@@ -117,12 +116,12 @@ void Summarize(const OpacityOptions& o, std::vector<double> ratios, const std::v
   s->points_out = s->points_in - s->removed;
   const double median_points = s->median_density * s->area;
   const double after = median_points * std::min(Ratio(s->points_needed, median_points),
-                                                static_cast<double>(o.repeat_level));
-  s->predicted_alpha = SpbrAlpha(after / o.repeat_level, s->point_area_ratio);
+                                                static_cast<double>(o.spbr.EffectiveRepeatLevel()));
+  s->predicted_alpha = SpbrAlpha(after / o.spbr.EffectiveRepeatLevel(), s->point_area_ratio);
   if (o.alpha == 0) AddNote(s, "alpha = 0: every point removed");
   if (s->capped > 0) {
     AddNote(s, std::to_string(s->capped) +
-                   " points wanted more than repeat_level = " + std::to_string(o.repeat_level) +
+                   " points wanted more than repeat_level = " + std::to_string(o.spbr.EffectiveRepeatLevel()) +
                    " copies and were capped: the target alpha is not reached there");
   }
 }
@@ -150,8 +149,7 @@ double SpbrPointsPerEnsemble(double alpha, double point_area_ratio) {
 
 void OpacityOptions::Check() const {
   CANDI_CHECK_OPTION_IN(alpha, 0, 1);
-  CANDI_CHECK_OPTION(repeat_level >= 1 && repeat_level <= kMaxRepeatLevel, repeat_level,
-                     "in [1, 2^24]");
+  spbr.Check();
   CANDI_CHECK_OPTION(pixel_size >= 0 && std::isfinite(pixel_size), pixel_size,
                      "finite and >= 0 (0 = from image_size)");
   CANDI_CHECK_OPTION_GE(image_size, 0);
@@ -195,10 +193,10 @@ OpacityResult AdjustOpacity(const OpacityOptions& options, const PointCloud& clo
     ratios[i] = Ratio(s.points_needed, density.density[i] * s.area);
     const double weight = w.empty() ? 1.0 : w[i];
     const double wanted = weight == 0 ? 0.0 : weight * ratios[i];  // 0 copies of a point stay 0
-    const double u = ToUnit(HashIndex(options.seed, i, kCopyStream));
-    copies[i] = Multiplicity(wanted, options.repeat_level, u);
-    s.capped += wanted > options.repeat_level;
-    s.expected_copies += std::min(wanted, static_cast<double>(options.repeat_level));
+    const double u = ToUnit(HashIndex(options.spbr.seed, i, kCopyStream));
+    copies[i] = Multiplicity(wanted, options.spbr.EffectiveRepeatLevel(), u);
+    s.capped += wanted > options.spbr.EffectiveRepeatLevel();
+    s.expected_copies += std::min(wanted, static_cast<double>(options.spbr.EffectiveRepeatLevel()));
   }
   Summarize(options, std::move(ratios), copies, &s);
   result.cloud = Gather(cloud, copies, s.points_out);

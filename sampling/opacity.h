@@ -19,6 +19,7 @@
 #include <string>
 
 #include "core/point_cloud.h"
+#include "core/spbr_settings.h"
 #include "sampling/density.h"
 
 namespace candi::sampling {
@@ -52,12 +53,13 @@ inline constexpr double kMaxPointAreaRatio = 0.01;
 
 struct OpacityOptions {
   double alpha = 0.5;      // target opacity, [0, 1]
-  int repeat_level = 100;  // L, the number of ensembles the renderer averages, [1, 2^24]
+  // L (the ensembles the renderer averages; 1 when opaque) and the seed of the copy counts' random
+  // rounding: the settings of the render the cloud is for (its point size is not used here).
+  SpbrSettings spbr;
   // The pixel footprint's side s_side (s = s_side^2): exactly one of the two is > 0.
   double pixel_size = 0.0;  // m, >= 0; 0 = from image_size
   int image_size = 1024;    // N pixels across the cloud's largest bounding-box extent, >= 0:
                             // s_side = extent / N; 0 = use pixel_size
-  uint64_t seed = 1;        // seeds the random rounding of copy counts
   // Local density. Its weight_field is ignored: AdjustOpacity sets it to kMultiplicityField when
   // the input has that field, so such a point counts as that many points (see AdjustOpacity).
   DensityOptions density;

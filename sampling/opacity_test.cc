@@ -105,7 +105,7 @@ PointCloud Plane(size_t n, uint64_t seed) {
 OpacityOptions ForRatio(double alpha, int repeat_level, double ratio) {
   OpacityOptions o;
   o.alpha = alpha;
-  o.repeat_level = repeat_level;
+  o.spbr.repeat_level = repeat_level;
   o.density.radius = kRadius;
   const double k = kMaxPointAreaRatio;
   const double s = repeat_level * SpbrPointsPerEnsemble(alpha, k) * k / (kDensity * ratio);
@@ -132,10 +132,10 @@ double ExpectedCopies(const OpacityOptions& o, const PointCloud& cloud) {
   const DensityResult density = EstimateSurfaceDensity(o.density, cloud);
   const double area = EffectiveArea(o, density.area);
   const double s_over_S = o.pixel_size * o.pixel_size / area;
-  const double needed = o.repeat_level * SpbrPointsPerEnsemble(o.alpha, s_over_S);
+  const double needed = o.spbr.repeat_level * SpbrPointsPerEnsemble(o.alpha, s_over_S);
   double sum = 0;
   for (double rho : density.density) {
-    sum += std::min(needed / (rho * area), 1.0 * o.repeat_level);
+    sum += std::min(needed / (rho * area), 1.0 * o.spbr.repeat_level);
   }
   return sum;
 }
@@ -164,8 +164,8 @@ TEST(OpacityOptions, DefaultsPassAndBadValuesNameTheField) {
   o.alpha = 1.5;
   EXPECT_EQ(message(o), "OpacityOptions::alpha = 1.5; must be in [0, 1]");
   o = {};
-  o.repeat_level = 0;
-  EXPECT_EQ(message(o), "OpacityOptions::repeat_level = 0; must be in [1, 2^24]");
+  o.spbr.repeat_level = 0;
+  EXPECT_EQ(message(o), "SpbrSettings::repeat_level = 0; must be in [1, 100000]");
   o = {};
   o.pixel_size = 0.01;
   EXPECT_EQ(message(o),
@@ -199,7 +199,7 @@ TEST(AdjustOpacity, ReplicationMatchesTheRatiosInExpectation) {
   uint64_t total = 0;
   for (int c : m) {
     ASSERT_GE(c, 1);
-    ASSERT_LE(c, o.repeat_level);
+    ASSERT_LE(c, o.spbr.repeat_level);
     total += c;
   }
   EXPECT_EQ(total, s.total_copies);
@@ -259,7 +259,7 @@ TEST(AdjustOpacity, SeededAndIndependentOfThreads) {
   EXPECT_EQ(one.cloud.positions, two.cloud.positions);
   EXPECT_EQ(Copies(one.cloud), Copies(two.cloud));
   EXPECT_EQ(one.summary.total_copies, two.summary.total_copies);
-  o.seed = 2;
+  o.spbr.seed = 2;
   const OpacityResult other = AdjustOpacity(o, cloud);
   EXPECT_NE(Copies(other.cloud), Copies(one.cloud));
   EXPECT_NEAR(static_cast<double>(other.summary.total_copies) / one.summary.total_copies, 1.0,

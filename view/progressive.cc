@@ -40,7 +40,7 @@ void ProgressiveImage::Start(const ViewState& state) {
   sums_ = render::SpbrResult();
   sums_.sums = render::Accumulator(state.camera.width, state.camera.height);
   sums_.repeat_level = repeat_level();
-  sums_.seed = state.settings.seed;
+  sums_.seed = state.settings.spbr.seed;
 }
 
 double ProgressiveImage::Step(int count, const std::function<bool()>& cancel, double sample) {
@@ -52,9 +52,7 @@ double ProgressiveImage::Step(int count, const std::function<bool()>& cancel, do
   count = preview ? 1 : std::clamp(count, 1, L - drawn_);
   const auto start = std::chrono::steady_clock::now();
   render::ArchiveRenderOptions o;
-  o.repeat_level = L;
-  o.seed = state_.settings.seed;
-  o.point_size = state_.settings.point_size;
+  o.spbr = state_.settings.spbr;
   o.threads = threads_;
   o.ensemble_begin = drawn_;
   o.ensemble_end = drawn_ + count;
@@ -92,16 +90,14 @@ double ProgressiveImage::EnsembleFootprint() const {
   for (size_t k = 0; k < m.layers.size(); ++k) {
     points += static_cast<double>(m.layers[k].points) * (f.empty() ? 1.0 : f[k]);
   }
-  const double size = state_.settings.point_size;
+  const double size = state_.settings.spbr.point_size;
   const double area = std::min(size * size, static_cast<double>(state_.camera.width) * state_.camera.height);
   return points / repeat_level() * area;
 }
 
 Image8 ProgressiveImage::Image(double* gain) const {
   CANDI_CHECK(started_) << "Start first";
-  const double b = state_.settings.brightness;
-  // As candi render (apps/cmd_render.cc WriteOutputs): automatic gain needs more than one ensemble.
-  const double g = b < 0 ? (sums_.ensembles > 1 ? render::AutoBrightnessGain(sums_) : 1.0) : b;
+  const double g = render::BrightnessGain(state_.settings.brightness, sums_);  // as candi render's
   if (gain) *gain = g;
   return render::ToImage8(render::AverageImage(sums_, state_.settings.background, g));
 }
@@ -120,9 +116,10 @@ std::vector<char> DrawnPoints(const render::ArchiveChunk& c, const PickOptions& 
   std::vector<char> drawn(c.count, f >= 1 ? 1 : 0);
   if (f >= 1) return drawn;
   std::vector<render::PointRun> runs;
-  for (int e = 0; e < o.repeat_level; ++e) {
+  const int L = o.spbr.EffectiveRepeatLevel();
+  for (int e = 0; e < L; ++e) {
     runs.clear();
-    render::EnsembleSlices(c.count, c.first, o.repeat_level, o.seed, e, f, &runs);
+    render::EnsembleSlices(c.count, c.first, L, o.spbr.seed, e, f, &runs);
     for (const render::PointRun& r : runs) std::fill(drawn.begin() + r.begin, drawn.begin() + r.end, 1);
   }
   return drawn;
@@ -132,7 +129,7 @@ std::vector<char> DrawnPoints(const render::ArchiveChunk& c, const PickOptions& 
 
 void PickOptions::Check() const {
   CANDI_CHECK_OPTION(radius_px >= 0 && std::isfinite(radius_px), radius_px, "finite and >= 0");
-  CANDI_CHECK_OPTION_GE(repeat_level, 1);
+  spbr.Check();
   CANDI_CHECK_OPTION_EACH_IN(layer_fraction, 0, 16);
   clip.Check("PickOptions::clip");
 }

@@ -35,7 +35,7 @@ class ProgressiveImage {
   void Start(const ViewState& state);
   const ViewState& state() const { return state_; }
   int ensembles() const { return drawn_; }  // 0 after a sampled preview
-  int repeat_level() const { return state_.settings.EffectiveRepeatLevel(); }
+  int repeat_level() const { return state_.settings.spbr.EffectiveRepeatLevel(); }
   bool converged() const { return started_ && drawn_ == repeat_level(); }
 
   // Draws the next `count` ensembles (at least one, at most those left); returns milliseconds.
@@ -87,8 +87,7 @@ struct StepPolicy {
 // and seed), and points outside `clip` (the archive's frame) are skipped.
 struct PickOptions {
   double radius_px = 3;                // pixels, finite and >= 0
-  int repeat_level = 100;              // L, >= 1
-  uint64_t seed = 1;                   // the render seed
+  SpbrSettings spbr;                   // the render's L (1 when opaque) and seed
   std::vector<double> layer_fraction;  // per archive layer, each in [0, 16]; empty: all 1
   ClipRegion clip;                     // archive frame; finite planes with non-zero normals
   void Check() const;                  // throws std::invalid_argument naming the field

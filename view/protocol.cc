@@ -42,27 +42,30 @@ ViewSettings ParseSettings(const json& j) {
     const json& v = it.value();
     const std::string where = "/settings/" + k;
     if (k == "repeat_level") {
-      s.repeat_level = static_cast<int>(Whole(v, where, kMaxRepeatLevel));
-      if (s.repeat_level < 1) Bad(where, "must be >= 1");
+      s.spbr.repeat_level = static_cast<int>(Whole(v, where, kMaxViewRepeatLevel));
+      if (s.spbr.repeat_level < 1) Bad(where, "must be >= 1");
     } else if (k == "point_size") {
-      s.point_size = Number(v, where, 1, 64);
+      s.spbr.point_size = Number(v, where, 1, 64);
     } else if (k == "background") {
       if (!v.is_array() || v.size() != 3) Bad(where, "expected [r, g, b]");
       uint8_t c[3];
       for (int i = 0; i < 3; ++i) c[i] = static_cast<uint8_t>(Whole(v[i], where + "/" + std::to_string(i), 255));
       s.background = {c[0], c[1], c[2]};
     } else if (k == "brightness") {
-      if (v == "auto") s.brightness = -1;
-      else if (v == "none") s.brightness = 1;
-      else if (v.is_number()) {
-        s.brightness = Number(v, where, 0, 100);
-        if (!(s.brightness > 0)) Bad(where, "a gain must be > 0");
-      } else Bad(where, "expected \"auto\", \"none\" or a gain in (0, 100]");
+      if (v == "auto" || v == "none") {
+        s.brightness = Brightness::Parse(v.get<std::string>());
+      } else if (v.is_number()) {
+        const double gain = Number(v, where, 0, Brightness::kMaxGain);
+        if (!(gain > 0)) Bad(where, "a gain must be > 0");
+        s.brightness = Brightness::Gain(gain);
+      } else {
+        Bad(where, std::string("expected ") + Brightness::Rule());
+      }
     } else if (k == "opaque") {
       if (!v.is_boolean()) Bad(where, "expected true or false");
-      s.opaque = v.get<bool>();
+      s.spbr.opaque = v.get<bool>();
     } else if (k == "seed") {
-      s.seed = Whole(v, where, uint64_t{1} << 53);
+      s.spbr.seed = Whole(v, where, uint64_t{1} << 53);
     } else if (k == "layers") {
       if (!v.is_array() || v.size() > kMaxLayers) Bad(where, "expected an array of at most 1024 numbers");
       for (size_t i = 0; i < v.size(); ++i) s.layer_fraction.push_back(Number(v[i], where + "/" + std::to_string(i), 0, 16));

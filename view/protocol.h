@@ -44,13 +44,14 @@
 
 #include "core/clip.h"
 #include "core/point_cloud.h"
+#include "core/spbr_settings.h"
 #include "render/camera.h"
 
 namespace candi::view {
 
 inline constexpr size_t kMaxMessageBytes = 16384;
 inline constexpr int kMaxImageSide = 4096;
-inline constexpr int kMaxRepeatLevel = 10000;
+inline constexpr int kMaxViewRepeatLevel = 10000;  // a page's L (the server draws every ensemble)
 inline constexpr size_t kMaxLayers = 1024;
 inline constexpr size_t kMaxClipPlanes = 16;
 
@@ -65,20 +66,14 @@ inline bool SameClip(const ClipRegion& a, const ClipRegion& b) {
 
 // What the page sets besides the camera.
 struct ViewSettings {
-  int repeat_level = 100;
-  double point_size = 1.0;
-  Rgb8 background{0, 0, 0};  // candi render's default; a build's scene sets its own
-  double brightness = -1;  // -1: auto; otherwise the gain (1: none)
-  bool opaque = false;
-  uint64_t seed = 1;
+  SpbrSettings spbr;         // L in [1, kMaxViewRepeatLevel], seed in [0, 2^53], point size, opaque
+  Rgb8 background{0, 0, 0};  // candi render's default; a build's record sets its own
+  Brightness brightness;
   std::vector<double> layer_fraction;  // per archive layer; empty: all 1
   ClipRegion clip;                     // world frame; empty: nothing clipped
-  // L as drawn: 1 when opaque.
-  int EffectiveRepeatLevel() const { return opaque ? 1 : repeat_level; }
   bool operator==(const ViewSettings& o) const {
-    return repeat_level == o.repeat_level && point_size == o.point_size && background == o.background &&
-           brightness == o.brightness && opaque == o.opaque && seed == o.seed && layer_fraction == o.layer_fraction &&
-           SameClip(clip, o.clip);
+    return spbr == o.spbr && background == o.background && brightness == o.brightness &&
+           layer_fraction == o.layer_fraction && SameClip(clip, o.clip);
   }
 };
 

@@ -25,8 +25,7 @@ std::string Server::Impl::Pick(const ClientMessage& pick, const ViewState& state
   local.eye -= origin;
   local.target -= origin;
   PickOptions o;
-  o.repeat_level = state.settings.EffectiveRepeatLevel();
-  o.seed = state.settings.seed;
+  o.spbr = state.settings.spbr;
   o.layer_fraction = state.settings.layer_fraction;
   o.clip = state.settings.clip.ToLocal(origin);
   const PickResult r = PickPoint(archive(), local, pick.x, pick.y, o);

@@ -22,6 +22,7 @@
 #include "io/point_io.h"
 #include "io/point_records.h"
 #include "render/archive_pack.h"
+#include "render/build_record.h"
 #include "render/view_json.h"
 
 namespace candi::view {
@@ -33,127 +34,74 @@ using nlohmann::json;
 
 json Vec(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
 
-json ReadJson(const std::string& path) {
-  try {
-    return json::parse(ReadFileToString(path));
-  } catch (const json::exception& e) {
-    throw InputError(path, "", std::string("not valid JSON: ") + e.what());
-  }
-}
-
-// The scene's "render" block (repeat level, size, background, brightness), when the scene file
-// a build names is still there; anything unreadable keeps the defaults (the viewer's settings
-// are the page's to change).
-void SceneSettings(const json& provenance, ViewerSource* source) {
-  if (!provenance.contains("scene") || !provenance["scene"].is_object()) return;
-  const json& scene = provenance["scene"];
-  if (!scene.contains("path") || !scene["path"].is_string()) return;
-  const std::string path = scene["path"].get<std::string>();
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return;
-  json s;
-  try {
-    s = json::parse(ReadFileToString(path));
-  } catch (const std::exception&) {
-    return;
-  }
-  if (!s.is_object() || !s.contains("render") || !s["render"].is_object()) return;
-  const json& r = s["render"];
-  ViewSettings& v = source->settings;
-  if (r.contains("repeat_level") && r["repeat_level"].is_number_integer()) {
-    v.repeat_level = std::clamp(r["repeat_level"].get<int>(), 1, kMaxRepeatLevel);
-  }
-  if (r.contains("width") && r["width"].is_number_integer() && r.contains("height") && r["height"].is_number_integer()) {
-    source->first_view.width = std::clamp(r["width"].get<int>(), 1, kMaxImageSide);
-    source->first_view.height = std::clamp(r["height"].get<int>(), 1, kMaxImageSide);
-  }
-  if (r.contains("background") && r["background"].is_array() && r["background"].size() == 3) {
-    const json& b = r["background"];
-    if (b[0].is_number_integer() && b[1].is_number_integer() && b[2].is_number_integer()) {
-      v.background = {static_cast<uint8_t>(std::clamp(b[0].get<int>(), 0, 255)),
-                      static_cast<uint8_t>(std::clamp(b[1].get<int>(), 0, 255)),
-                      static_cast<uint8_t>(std::clamp(b[2].get<int>(), 0, 255))};
-    }
-  }
-  if (r.contains("brightness")) {
-    if (r["brightness"] == "none") v.brightness = 1;
-    else if (r["brightness"].is_number() && r["brightness"].get<double>() > 0) v.brightness = r["brightness"].get<double>();
-  }
-  if (s.contains("seed") && s["seed"].is_number_unsigned()) v.seed = s["seed"].get<uint64_t>();
-}
-
 // What a visitor needs to tell measured from reconstructed: per layer its kind, method and
 // sources (file names and SHA-256, not the build machine's paths), the CRS, the scene's licence
-// and annotations. Fields of the wrong type are left out (the page shows what there is).
-json Provenance(const json& p) {
+// and annotations.
+json Provenance(const render::BuildRecord& r) {
   json out = json::object();
-  if (p.contains("crs") && p["crs"].is_object()) out["crs"] = p["crs"];
-  if (p.contains("licence") && p["licence"].is_string()) out["licence"] = p["licence"];
-  if (p.contains("annotations") && p["annotations"].is_array()) out["annotations"] = p["annotations"];
-  json layers = json::array();
-  if (p.contains("layers") && p["layers"].is_array()) {
-    for (const json& l : p["layers"]) {
-      if (!l.is_object()) continue;
-      json e = json::object();
-      for (const char* key : {"name", "kind", "method"}) {
-        if (l.contains(key) && l[key].is_string()) e[key] = l[key];
-      }
-      if (l.contains("scanned") && l["scanned"].is_boolean()) e["scanned"] = l["scanned"];
-      if (l.contains("crs") && l["crs"].is_object()) e["crs"] = l["crs"];
-      json sources = json::array();
-      if (l.contains("sources") && l["sources"].is_array()) {
-        for (const json& src : l["sources"]) {
-          if (!src.is_object() || !src.contains("path") || !src["path"].is_string()) continue;
-          json s = {{"file", fs::path(src["path"].get<std::string>()).filename().string()}};
-          if (src.contains("sha256") && src["sha256"].is_string()) s["sha256"] = src["sha256"];
-          sources.push_back(s);
-        }
-      }
-      e["sources"] = sources;
-      layers.push_back(e);
+  if (!r.crs_definition.empty()) out["crs"] = {{"definition", r.crs_definition}, {"label", r.crs_label}};
+  if (!r.licence.empty()) out["licence"] = r.licence;
+  if (!r.annotations.empty()) {
+    json list = json::array();
+    for (const render::BuildAnnotationRecord& a : r.annotations) {
+      json e = {{"title", a.title}, {"text", a.text}, {"position", Vec(a.position)}};
+      if (!a.view.empty()) e["view"] = a.view;
+      if (a.camera) e["view"] = json::parse(render::ViewToJson(*a.camera));
+      list.push_back(e);
     }
+    out["annotations"] = list;
+  }
+  json layers = json::array();
+  for (const render::BuildLayerRecord& l : r.layers) {
+    json e = {{"name", l.name}, {"kind", l.kind}, {"method", l.method}, {"scanned", l.scanned}};
+    const json crs = json::parse(l.crs_json);
+    if (crs.is_object()) e["crs"] = crs;
+    json sources = json::array();
+    for (const render::BuildSourceRecord& src : l.sources) {
+      json s = {{"file", fs::path(src.path).filename().string()}};
+      if (!src.sha256.empty()) s["sha256"] = src.sha256;
+      sources.push_back(s);
+    }
+    e["sources"] = sources;
+    layers.push_back(e);
   }
   out["layers"] = layers;
   return out;
 }
 
+// A build's folder, as its record describes it: its layers, views and provenance, and the render
+// settings the build resolved (older records have none: the viewer's defaults, the build's seed).
 ViewerSource FromBuild(const fs::path& dir, const render::Orientation& orientation) {
   ViewerSource source;
   source.kind = "build";
   source.archive_dir = (dir / "archive").string();
-  const std::string provenance_path = (dir / "archive.json").string();
-  const json p = ReadJson(provenance_path);
-  if (!p.is_object()) throw InputError(provenance_path, "/", "expected a JSON object");
-  source.title = p.value("name", dir.filename().string());
-  if (p.contains("layers") && p["layers"].is_array()) {
-    for (const json& l : p["layers"]) {
-      if (!l.is_object()) continue;
-      SourceLayer layer;
-      layer.name = l.value("name", "");
-      layer.kind = l.value("kind", "");
-      layer.points = l.value("points", uint64_t{0});
-      layer.opacity = l.value("opacity", 1.0);
-      layer.highlight = l.value("highlight", false);
-      source.layers.push_back(layer);
-    }
+  const render::BuildRecord record = render::ReadBuildRecord(dir.string());
+  source.title = record.name;
+  for (const render::BuildLayerRecord& l : record.layers) {
+    source.layers.push_back({l.name, l.kind, l.points, l.opacity, l.highlight});
   }
-  source.provenance_json = Provenance(p).dump();
+  source.provenance_json = Provenance(record).dump();
+  ViewSettings& v = source.settings;
+  v.spbr.seed = record.seed;
+  if (record.render) {
+    const ImageSettings& r = *record.render;
+    v.spbr.repeat_level = std::clamp(r.spbr.repeat_level, 1, kMaxViewRepeatLevel);
+    v.spbr.seed = r.spbr.seed;
+    v.background = r.background;
+    v.brightness = r.brightness;
+    source.first_view.width = std::clamp(r.width, 1, kMaxImageSide);
+    source.first_view.height = std::clamp(r.height, 1, kMaxImageSide);
+  }
   const render::Archive archive(source.archive_dir);
   const render::ArchiveManifest& m = archive.manifest();
-  SceneSettings(p, &source);
   source.legend = m.colour_by;
   source.first_view = render::FirstView(m.bounds.Translated(m.frame.origin), source.first_view.width,
-                                source.first_view.height, orientation);
-  if (p.contains("views") && p["views"].is_array()) {
-    for (const json& v : p["views"]) {
-      if (!v.is_object() || !v.contains("name") || !v["name"].is_string()) continue;
-      const std::string name = v["name"].get<std::string>();
-      const fs::path file = dir / "renders" / (name + ".view.json");
-      std::error_code ec;
-      if (!fs::is_regular_file(file, ec)) continue;
-      source.views.push_back({name, render::ParseView(ReadFileToString(file.string()), file.string()),
-                              v.value("opaque", false)});
-    }
+                                        source.first_view.height, orientation);
+  for (const render::BuildViewRecord& view : record.views) {
+    const fs::path file = dir / "renders" / (view.name + ".view.json");
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) continue;
+    source.views.push_back({view.name, render::ParseView(ReadFileToString(file.string()), file.string()), view.opaque});
   }
   return source;
 }
@@ -224,12 +172,13 @@ std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
             {"views", views_json},
             {"first_view", json::parse(render::ViewToJson(first_view))},
             {"settings",
-             {{"repeat_level", settings.repeat_level},
-              {"point_size", settings.point_size},
+             {{"repeat_level", settings.spbr.repeat_level},
+              {"point_size", settings.spbr.point_size},
               {"background", {settings.background.r, settings.background.g, settings.background.b}},
-              {"brightness", settings.brightness < 0 ? json("auto") : json(settings.brightness)},
-              {"opaque", settings.opaque},
-              {"seed", settings.seed},
+              // (none is the gain 1, as the page sends it back)
+              {"brightness", settings.brightness.automatic() ? json("auto") : json(settings.brightness.gain())},
+              {"opaque", settings.spbr.opaque},
+              {"seed", settings.spbr.seed},
               {"clip", ClipPlaneArrays(settings.clip)}}}};
   if (!provenance_json.empty()) s["provenance"] = json::parse(provenance_json);
   if (legend) s["legend"] = LegendJson(*legend);
@@ -238,14 +187,10 @@ std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
 }
 
 ViewerSource OpenViewerSource(const std::string& path, const render::Orientation& orientation) {
-  std::error_code ec;
   const fs::path p(path);
   // A build directory, or a demo's output holding one in archive/ (what candi section opens).
-  for (const fs::path& build : {p, p / "archive"}) {
-    if (fs::is_regular_file(build / "archive.json", ec) && render::IsArchive((build / "archive").string())) {
-      return FromBuild(build, orientation);
-    }
-  }
+  const std::string build = render::FindBuild(path);
+  if (!build.empty()) return FromBuild(build, orientation);
   if (!render::IsArchive(path)) {
     throw InputError(path, "", "neither a build directory (archive.json and archive/), a demo's output holding one in "
                                "archive/, nor a render archive (manifest.json)");

@@ -42,11 +42,11 @@ TEST(Protocol, ParsesAViewAndAPick) {
   EXPECT_EQ(m.seq, 3u);
   EXPECT_EQ(m.view.camera.width, 64);
   EXPECT_EQ(m.view.camera.eye, Eigen::Vector3d(10, -20, 15));
-  EXPECT_EQ(m.view.settings.repeat_level, 20);
-  EXPECT_EQ(m.view.settings.point_size, 1.5);
+  EXPECT_EQ(m.view.settings.spbr.repeat_level, 20);
+  EXPECT_EQ(m.view.settings.spbr.point_size, 1.5);
   EXPECT_EQ(m.view.settings.background, (Rgb8{1, 2, 3}));
-  EXPECT_EQ(m.view.settings.brightness, 2.5);
-  EXPECT_EQ(m.view.settings.seed, 7u);
+  EXPECT_EQ(m.view.settings.brightness, Brightness::Gain(2.5));
+  EXPECT_EQ(m.view.settings.spbr.seed, 7u);
   const ClientMessage p = ParseClientMessage(R"({"type":"pick","seq":4,"x":3.5,"y":-1})");
   EXPECT_EQ(p.type, MessageType::kPick);
   EXPECT_EQ(p.x, 3.5);
@@ -162,9 +162,10 @@ std::string MakeDemoOutput(const TempDir& dir) {
   const std::string build = dir.File("demo/archive");
   fs::create_directories(build);
   fs::rename(MakeArchive(dir, 3000, 512), build + "/archive");
-  WriteFileAtomic(build + "/archive.json", R"({"name": "site", "licence": "CC0", "crs": {"label": "UTM 49S"},
+  WriteFileAtomic(build + "/archive.json", R"({"name": "site", "licence": "CC0", "crs": {"definition": "EPSG:32749", "label": "UTM 49S"},
+    "frame": {"origin": [500000, 9100000, 0]},
     "annotations": [{"title": "stair", "text": "", "position": [500000, 9100000, 201]}],
-    "layers": [{"name": "solid", "kind": "points", "scanned": true, "method": "measured: a scan",
+    "layers": [{"name": "solid", "kind": "points", "scanned": true, "method": "measured: a scan", "file": "layers/solid.ply",
                 "sources": [{"path": "/home/someone/scans/solid.ply", "sha256": "ab12", "bytes": 9}]}]})");
   return dir.File("demo");
 }
@@ -418,14 +419,14 @@ TEST(Progressive, BatchesOfEnsemblesGiveTheWholeRenderBitForBit) {
   for (render::Projection projection : {render::Projection::kPerspective, render::Projection::kOrthographic}) {
     ViewState state;
     state.camera = WorldView(archive, projection);
-    state.settings.repeat_level = 13;
-    state.settings.seed = 5;
-    state.settings.point_size = 1.5;
+    state.settings.spbr.repeat_level = 13;
+    state.settings.spbr.seed = 5;
+    state.settings.spbr.point_size = 1.5;
     // The whole render, as candi render draws it.
     render::ArchiveRenderOptions o;
-    o.repeat_level = 13;
-    o.seed = 5;
-    o.point_size = 1.5;
+    o.spbr.repeat_level = 13;
+    o.spbr.seed = 5;
+    o.spbr.point_size = 1.5;
     render::Camera local = state.camera;
     local.eye -= archive.manifest().frame.origin;
     local.target -= archive.manifest().frame.origin;
@@ -470,13 +471,13 @@ TEST(Progressive, SampledPreviewLeavesNoTraceInTheConvergedImage) {
   for (int L : {13, 1}) {
     ViewState state;
     state.camera = WorldView(archive, render::Projection::kPerspective);
-    state.settings.repeat_level = L;
-    state.settings.seed = 5;
-    state.settings.point_size = 3;
+    state.settings.spbr.repeat_level = L;
+    state.settings.spbr.seed = 5;
+    state.settings.spbr.point_size = 3;
     render::ArchiveRenderOptions o;
-    o.repeat_level = L;
-    o.seed = 5;
-    o.point_size = 3;
+    o.spbr.repeat_level = L;
+    o.spbr.seed = 5;
+    o.spbr.point_size = 3;
     render::Camera local = state.camera;
     local.eye -= archive.manifest().frame.origin;
     local.target -= archive.manifest().frame.origin;
@@ -518,8 +519,8 @@ TEST(Progressive, OrthographicArchiveRenderAgreesWithTheInMemoryRenderer) {
   const render::Archive archive(MakeArchive(dir, 20000, 2048));
   const PointCloud points = archive.ReadAll();
   render::SplatCloudOptions so;
-  so.repeat_level = 1;
-  so.seed = 1;
+  so.spbr.repeat_level = 1;
+  so.spbr.seed = 1;
   const render::SplatCloud splats = render::BuildSplatCloud(so, {&points});
   render::Camera world = WorldView(archive, render::Projection::kOrthographic);
   render::Camera in_splats = world, in_archive = world;
@@ -527,7 +528,7 @@ TEST(Progressive, OrthographicArchiveRenderAgreesWithTheInMemoryRenderer) {
   in_archive.eye -= archive.manifest().frame.origin, in_archive.target -= archive.manifest().frame.origin;
   const render::SpbrResult a = render::RenderSpbr(render::SpbrOptions(), in_splats, splats);
   render::ArchiveRenderOptions o;
-  o.repeat_level = 1;
+  o.spbr.repeat_level = 1;
   const render::SpbrResult b = render::RenderArchive(o, in_archive, archive);
   // Opaque (L = 1): the nearest point per pixel. The two renderers shift depths differently, so a
   // near tie may go either way; coverage must agree exactly and colours almost everywhere.
@@ -560,8 +561,8 @@ TEST(PickOptions, BadValuesNameTheField) {
   o.radius_px = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(OptionCheckMessage(o), "PickOptions::radius_px = nan; must be finite and >= 0");
   o = {};
-  o.repeat_level = 0;
-  EXPECT_EQ(OptionCheckMessage(o), "PickOptions::repeat_level = 0; must be >= 1");
+  o.spbr.repeat_level = 0;
+  EXPECT_EQ(OptionCheckMessage(o), "SpbrSettings::repeat_level = 0; must be in [1, 100000]");
   o = {};
   o.layer_fraction = {1, -0.5};
   EXPECT_EQ(OptionCheckMessage(o), "PickOptions::layer_fraction[1] = -0.5; must be in [0, 16]");
@@ -576,7 +577,7 @@ TEST(PickOptions, PickPointChecksThem) {
   render::Camera local = WorldView(archive, render::Projection::kPerspective);
   local.eye -= archive.manifest().frame.origin, local.target -= archive.manifest().frame.origin;
   PickOptions o;
-  o.repeat_level = 0;
+  o.spbr.repeat_level = 0;
   EXPECT_THROW(PickPoint(archive, local, 48, 32, o), std::invalid_argument);
 }
 
@@ -718,8 +719,8 @@ TEST(Progressive, PickTakesOnlyWhatIsShown) {
   // A share of 0.2 at L = 10: the picked point of the front layer is one its ensembles draw.
   o.clip = {};
   o.layer_fraction = {0.2, 1};
-  o.repeat_level = 10;
-  o.seed = 3;
+  o.spbr.repeat_level = 10;
+  o.spbr.seed = 3;
   r = PickPoint(archive, camera, 32, 32, o);
   ASSERT_FALSE(r.hits.empty());
   ASSERT_EQ(r.hits[0].layer, 0);
@@ -791,7 +792,7 @@ TEST(ViewerSource, PointFilesColouredByAFieldCarryTheLegend) {
   top.eye = top.target + Eigen::Vector3d(0, 0, 20);
   top.up = Eigen::Vector3d::UnitY();
   PickOptions po;
-  po.repeat_level = 1;
+  po.spbr.repeat_level = 1;
   po.radius_px = 4;
   const PickResult pick = PickPoint(archive, top, 100, 100, po);
   ASSERT_TRUE(pick.hit);

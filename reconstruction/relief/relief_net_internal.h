@@ -4,6 +4,7 @@
 
 #include <torch/torch.h>
 
+#include "reconstruction/relief/panel_size.h"
 #include "reconstruction/relief/relief_net.h"
 
 namespace candi::relief {
@@ -53,7 +54,7 @@ TORCH_MODULE(BtsNet);
 struct DepthModel::Impl {
   explicit Impl(const NetOptions& o) : net(o) {}
   BtsNet net;
-  double pixels_per_m = 800 / 2.7;
+  double pixels_per_m = 800 / kPanelWidthM;
 };
 
 // The model file's archive (options, resolution, weights), shared with training checkpoints.

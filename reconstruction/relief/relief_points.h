@@ -9,13 +9,14 @@
 
 #include "core/image.h"
 #include "core/point_cloud.h"
+#include "reconstruction/relief/panel_size.h"
 
 namespace candi::relief {
 
 struct ReliefPointsOptions {
-  double width_m = 2.7;    // panel width, m, > 0
-  double height_m = 0.92;  // panel height, m, > 0
-  double depth_m = 0.15;   // depth of level 0 above the wall (level 255), m, > 0
+  double width_m = kPanelWidthM;    // panel width, m, > 0
+  double height_m = kPanelHeightM;  // panel height, m, > 0
+  double depth_m = kPanelDepthM;    // depth of level 0 above the wall (level 255), m, > 0
   void Check() const;      // throws std::invalid_argument naming the field
 };
 

@@ -14,6 +14,7 @@
 #include <cstdint>
 
 #include "core/image.h"
+#include "reconstruction/relief/panel_size.h"
 
 namespace candi::relief {
 
@@ -34,9 +35,9 @@ struct OldPhotoOptions {
 
 struct SynthOptions {
   int width = 800;         // pixels along the panel, [32, 16384]; height from the aspect ratio
-  double width_m = 2.7;    // panel width, m, > 0
-  double height_m = 0.92;  // panel height, m, > 0
-  double depth_m = 0.15;   // maximum relief depth (front plane), m, > 0
+  double width_m = kPanelWidthM;    // panel width, m, > 0
+  double height_m = kPanelHeightM;  // panel height, m, > 0
+  double depth_m = kPanelDepthM;    // maximum relief depth (front plane), m, > 0
   uint64_t seed = 1;       // the series; panel i depends on (seed, i) only
   OldPhotoOptions photo;
   void Check() const;

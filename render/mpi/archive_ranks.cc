@@ -10,9 +10,10 @@ namespace candi::render::mpi {
 
 std::string EncodeArchiveRequest(const ArchiveRenderOptions& o, const Camera& local) {
   const nlohmann::json j = {{"camera", nlohmann::json::parse(ViewToJson(local))},
-                            {"repeat_level", o.repeat_level},
-                            {"seed", o.seed},
-                            {"point_size", o.point_size},
+                            {"repeat_level", o.spbr.repeat_level},
+                            {"seed", o.spbr.seed},
+                            {"point_size", o.spbr.point_size},
+                            {"opaque", o.spbr.opaque},
                             {"begin", o.ensemble_begin},
                             {"end", o.ensemble_end},
                             {"layers", o.layer_fraction},
@@ -30,9 +31,10 @@ SpbrResult RenderRequestShare(const Session& session, const Archive& archive, co
     const nlohmann::json j = nlohmann::json::parse(request);
     const Camera camera = ParseView(j.at("camera").dump(), "request");
     ArchiveRenderOptions o;
-    o.repeat_level = j.at("repeat_level").get<int>();
-    o.seed = j.at("seed").get<uint64_t>();
-    o.point_size = j.at("point_size").get<double>();
+    o.spbr.repeat_level = j.at("repeat_level").get<int>();
+    o.spbr.seed = j.at("seed").get<uint64_t>();
+    o.spbr.point_size = j.at("point_size").get<double>();
+    o.spbr.opaque = j.at("opaque").get<bool>();
     o.layer_fraction = j.at("layers").get<std::vector<double>>();
     for (const auto& p : j.at("clip")) {
       o.clip.planes.push_back({Eigen::Vector3d(p[0].get<double>(), p[1].get<double>(), p[2].get<double>()),
