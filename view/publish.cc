@@ -115,16 +115,37 @@ std::string PageName(size_t group, int page) {
   return name;
 }
 
-// The files publish writes at the top of a site: the page's, then site.json (renamed into place
-// last, so a visitor's new index names pages that are there).
-std::vector<std::string> TopFiles() {
+// The page's files a site holds: all of view/web/ but viewer.js (candi view's backend, the
+// server page's entry module; site.js takes its place).
+std::vector<std::string> PageFiles() {
   std::vector<std::string> names;
   for (size_t i = 0; i < WebAssetCount(); ++i) {
     const std::string name = std::string(WebAssetAt(i).path).substr(1);
     if (name != "viewer.js") names.push_back(name);
   }
+  return names;
+}
+
+// The files publish writes at the top of a site: the page's, then site.json (renamed into place
+// last, so a visitor's new index names pages that are there).
+std::vector<std::string> TopFiles() {
+  std::vector<std::string> names = PageFiles();
   names.push_back(kSiteIndex);
   return names;
+}
+
+// What loads the site's scripts in index.html: the entry module site.js, with every other module
+// preloaded beside it (else a module's imports are found only once it has arrived, a round trip
+// for each level of imports). site_worker.js is a worker's script, not a module.
+std::string SiteScripts() {
+  std::string html;
+  for (const std::string& name : PageFiles()) {
+    const bool module = name.size() > 3 && name.compare(name.size() - 3, 3, ".js") == 0;
+    if (module && name != "site.js" && name != "site_worker.js") {
+      html += "<link rel=\"modulepreload\" href=\"" + name + "\">\n";
+    }
+  }
+  return html + "<script type=\"module\" src=\"site.js\"></script>";
 }
 
 // The paths under an earlier site's data/ that its site.json does not list (data/<g> and
@@ -427,17 +448,14 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
 
   // The page: the viewer's files, its index.html loading the WebGL2 renderer instead of the
   // server's protocol.
-  for (size_t i = 0; i < WebAssetCount(); ++i) {
-    const WebAsset& a = WebAssetAt(i);
-    const std::string name = std::string(a.path).substr(1);
-    if (name == "viewer.js") continue;
+  for (const std::string& name : PageFiles()) {
+    const WebAsset& a = *FindWebAsset("/" + name);
     std::string content(reinterpret_cast<const char*>(a.data), a.size);
     if (name == "index.html") {
-      const std::string from = "<script src=\"viewer.js\"></script>";
+      const std::string from = "<script type=\"module\" src=\"viewer.js\"></script>";
       const size_t at = content.find(from);
       CANDI_CHECK(at != std::string::npos) << "index.html has no " << from;
-      content.replace(at, from.size(),
-                      "<script src=\"site_index.js\"></script><script src=\"site.js\"></script>");
+      content.replace(at, from.size(), SiteScripts());
       const std::string body = "<body>";
       const size_t b = content.find(body);
       CANDI_CHECK(b != std::string::npos) << "index.html has no <body>";

@@ -2,9 +2,10 @@
 // (WebGL2), with nothing running on a server.
 //
 // The site (docs/guide/publish.md):
-//   SITE/index.html, viewer.css, controls.js (the page's controls, shared with candi view),
-//        site_index.js (site.json checked before use), site.js (the WebGL2 renderer and the
-//        loader), site_worker.js (decoding, off the main thread)
+//   SITE/index.html, viewer.css, controls.js and the modules it wires (the page's controls,
+//        shared with candi view), site.js (the entry: the WebGL2 renderer site_gl.js and
+//        site_view.js, the loader site_loader.js, picking site_pick.js), site_index.js
+//        (site.json checked before use), site_worker.js (decoding, off the main thread)
 //   SITE/site.json   the page's scene (ViewerSource::ToJson) and the data's index (below)
 //   SITE/data/<group>/<page>.bin
 // The data: the archive's chunks, grouped in runs of consecutive chunks (at most group_points
