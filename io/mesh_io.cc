@@ -1,21 +1,17 @@
-#include "mesh/mesh_export.h"
-
-// OpenMesh's IO must be included before any mesh kernel header (the warning: see open_mesh.h).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include <OpenMesh/Core/IO/MeshIO.hh>
+#include "io/mesh_io.h"
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/text_format.h"
+#include "io/obj/obj_mesh.h"
 #include "io/ply/ply_io.h"
-#include "io/point_io.h"
 #include "io/shift_sidecar.h"
-#include "mesh/open_mesh.h"
 
-namespace candi::mesh {
+namespace candi::io {
 
 namespace {
 
@@ -25,6 +21,11 @@ std::string Extension(const std::string& path) {
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
   return ext;
+}
+
+std::string Lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
 }
 
 // OBJ and OFF are written here, not by OpenMesh: its writers go through float (Vec3f), which
@@ -59,7 +60,7 @@ std::string MeshText(const TriMesh& mesh, bool obj) {
 void WriteMesh(const std::string& path, const TriMesh& mesh) {
   const std::string ext = Extension(path);
   if (ext == ".ply") {
-    io::WritePlyMesh(path, mesh);
+    WritePlyMesh(path, mesh);
     return;
   }
   if (ext != ".obj" && ext != ".off") {
@@ -67,19 +68,19 @@ void WriteMesh(const std::string& path, const TriMesh& mesh) {
   }
   WriteFileAtomic(path, MeshText(mesh, ext == ".obj"));
   if (!mesh.vertices.frame.IsIdentity()) {
-    io::WriteShiftSidecar(path, mesh.vertices.frame);
+    WriteShiftSidecar(path, mesh.vertices.frame);
   } else {
-    std::remove(io::ShiftSidecarPath(path).c_str());  // a stale sidecar would mislead
+    std::remove(ShiftSidecarPath(path).c_str());  // a stale sidecar would mislead
   }
 }
 
+// ReadMesh takes the file name's extension (std::filesystem), WriteMesh what follows the path's
+// last dot, each as before they met here: they differ only for a dot file or a dot in a folder.
 TriMesh ReadMesh(const std::string& path) {
-  internal::OpenTriMesh om;
-  if (!OpenMesh::IO::read_mesh(om, path)) {
-    throw InputError(path, "", "OpenMesh could not read the mesh");
-  }
-  const std::optional<LocalFrame> shift = io::ReadShiftSidecar(path);
-  return internal::FromOpenMesh(om, shift ? *shift : LocalFrame());
+  const std::string ext = Lower(std::filesystem::path(path).extension().string());
+  if (ext == ".ply") return ReadPlyMesh(path);
+  if (ext == ".obj") return ReadObjMesh(path);
+  throw InputError(path, "", "is not a mesh candi reads for C2M (PLY or OBJ)");
 }
 
-}  // namespace candi::mesh
+}  // namespace candi::io
