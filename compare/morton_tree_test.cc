@@ -1,4 +1,4 @@
-#include "compare/kd_tree.h"
+#include "compare/morton_tree.h"
 
 #include <gtest/gtest.h>
 
@@ -23,9 +23,9 @@ std::vector<Eigen::Vector3d> SurfacePoints(size_t n, uint64_t seed) {
   return sorted;
 }
 
-TEST(PointTreeTest, AnswersAsABruteForceSearch) {
+TEST(MortonTreeTest, AnswersAsABruteForceSearch) {
   const std::vector<Eigen::Vector3d> pts = SurfacePoints(20000, 1);  // 2048 leaves of 10 (the last ones fewer)
-  const PointTree tree(pts);
+  const MortonTree tree(pts);
   Rng rng(2);
   int64_t hint = -1;
   for (int t = 0; t < 300; ++t) {
@@ -57,7 +57,7 @@ TEST(PointTreeTest, AnswersAsABruteForceSearch) {
   }
   // Fewer points than k.
   const std::vector<Eigen::Vector3d> few = {{0, 0, 0}, {1, 0, 0}};
-  const PointTree small(few);
+  const MortonTree small(few);
   uint32_t index[5];
   double dist_sq[5];
   EXPECT_EQ(small.Knn({0.2, 0, 0}, 5, index, dist_sq), 2u);
@@ -65,12 +65,12 @@ TEST(PointTreeTest, AnswersAsABruteForceSearch) {
   EXPECT_EQ(index[1], 1u);
   // One point, none, and coincident points (every leaf's box a point).
   const std::vector<Eigen::Vector3d> one = {{416000.25, 9168000.5, 200.125}};
-  EXPECT_EQ(PointTree(one).Nearest({0, 0, 0}, -1), 0);
+  EXPECT_EQ(MortonTree(one).Nearest({0, 0, 0}, -1), 0);
   const std::vector<Eigen::Vector3d> none;
-  EXPECT_EQ(PointTree(none).Nearest({0, 0, 0}, -1), -1);
-  EXPECT_EQ(PointTree(none).Knn({0, 0, 0}, 3, index, dist_sq), 0u);
+  EXPECT_EQ(MortonTree(none).Nearest({0, 0, 0}, -1), -1);
+  EXPECT_EQ(MortonTree(none).Knn({0, 0, 0}, 3, index, dist_sq), 0u);
   const std::vector<Eigen::Vector3d> same(1000, Eigen::Vector3d(1, 2, 3));
-  const PointTree coincident(same);
+  const MortonTree coincident(same);
   EXPECT_EQ(coincident.Knn({1, 2, 3.5}, 5, index, dist_sq), 5u);
   EXPECT_EQ(dist_sq[4], 0.25);
   size_t within = 0;

@@ -1,5 +1,5 @@
-// The spatial index of the deviation methods: a binary radix tree over points in Morton order
-// (MortonOrder), included by compare/*.cc only.
+// MortonTree, the spatial index of the deviation methods: a binary radix tree over points in
+// Morton order (MortonOrder), not a kd-tree; included by compare/*.cc only.
 //
 // Sorted by their Morton codes (MortonCodes), the points of any octree cell are one run, so the
 // tree needs no search for splits: a node's run splits where the first Morton bit in which its
@@ -25,13 +25,13 @@
 
 namespace candi::compare::internal {
 
-class PointTree {
+class MortonTree {
  public:
   static constexpr size_t kLeafPoints = 12;  // points a leaf, at most (but for coincident codes)
 
   // `points`' elements (finite, best in Morton order) must outlive the tree, unchanged; the
   // vector itself may be moved (the tree keeps its buffer, not the vector).
-  explicit PointTree(const std::vector<Eigen::Vector3d>& points) : points_(points.data()), size_(points.size()) {
+  explicit MortonTree(const std::vector<Eigen::Vector3d>& points) : points_(points.data()), size_(points.size()) {
     if (size_ == 0) return;
     const std::vector<uint64_t> codes = MortonCodes(points);
     sorted_ = std::is_sorted(codes.begin(), codes.end());
@@ -215,7 +215,7 @@ class PointTree {
 // M3C2 (m3c2.cc) of `compared` (NaN where not finite) against `reference` (finite, with its
 // tree), the scales resolved (D and d > 0).
 DeviationResult M3c2(const DeviationOptions& options, const std::vector<Eigen::Vector3d>& reference,
-                     const PointTree& reference_tree, const std::vector<Eigen::Vector3d>& compared,
+                     const MortonTree& reference_tree, const std::vector<Eigen::Vector3d>& compared,
                      const ProgressCallback& progress);
 
 }  // namespace candi::compare::internal
