@@ -1,5 +1,6 @@
-// CsvTable: a small comma-separated table with a required header row, for the survey-target, image-
-// pick and colour-patch files of this module.
+// CsvTable: a small comma-separated table with a required header row, for the survey-target,
+// image-pick and colour-patch files of photogrammetry, relief placement's correspondences and the
+// scan targets of `candi register-scans`.
 //
 // Format: UTF-8/ASCII text; the first non-blank line that is not a comment is the header (column
 // names, matched case-insensitively, surrounding blanks ignored); every further non-blank line is a
@@ -12,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace candi::photogrammetry {
+namespace candi::io {
 
 class CsvTable {
  public:
@@ -48,4 +49,4 @@ class CsvTable {
   std::vector<Row> rows_;
 };
 
-}  // namespace candi::photogrammetry
+}  // namespace candi::io

@@ -1,4 +1,4 @@
-#include "reconstruction/photogrammetry/csv_table.h"
+#include "io/csv_table.h"
 
 #include <algorithm>
 #include <cctype>
@@ -8,7 +8,7 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 
-namespace candi::photogrammetry {
+namespace candi::io {
 
 namespace {
 
@@ -103,4 +103,4 @@ void CsvTable::Fail(const Row& row, const std::string& column, const std::string
   throw InputError(path_, Line(row.line), "field '" + column + "': " + message);
 }
 
-}  // namespace candi::photogrammetry
+}  // namespace candi::io
