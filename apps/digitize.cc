@@ -17,8 +17,8 @@
 #include "core/timer.h"
 #include "io/image/png_io.h"
 #include "io/layer_clouds.h"
+#include "io/mesh_io.h"
 #include "io/point_io.h"
-#include "mesh/mesh_export.h"
 #include "pipeline/foundation.h"
 #include "pipeline/photogrammetry.h"
 #include "reconstruction/photogrammetry/color_correct.h"
@@ -502,7 +502,7 @@ int RunFoundation(const FoundationArgs& a) {
   const pipeline::FoundationPoints f = pipeline::DigitizeFoundation(o, a.input);
   for (size_t k = 0; k < f.surfaces.size(); ++k) {
     if (!a.mesh.empty()) {
-      mesh::WriteMesh(f.surfaces.size() == 1 ? a.mesh : LayerPath(a.mesh, f.surfaces[k].layer), f.surfaces[k].mesh);
+      io::WriteMesh(f.surfaces.size() == 1 ? a.mesh : LayerPath(a.mesh, f.surfaces[k].layer), f.surfaces[k].mesh);
     }
     if (a.split) io::WritePointCloud(LayerPath(a.output, f.surfaces[k].layer), f.clouds[k]);
   }

@@ -12,8 +12,8 @@
 #include "core/progress.h"
 #include "core/text_format.h"
 #include "io/convert.h"
+#include "io/copc/copc_read.h"
 #include "io/crs.h"
-#include "io/las/copc_read.h"
 #include "io/point_io.h"
 #include "pipeline/compare.h"
 

@@ -20,10 +20,10 @@
 #include "core/progress.h"
 #include "core/text_format.h"
 #include "core/transform.h"
+#include "io/csv_table.h"
 #include "io/e57/e57_io.h"
 #include "io/point_io.h"
 #include "reconstruction/photogrammetry/cleaning.h"
-#include "reconstruction/photogrammetry/csv_table.h"
 #include "reconstruction/photogrammetry/local_points.h"
 #include "reconstruction/photogrammetry/registration.h"
 
@@ -267,8 +267,7 @@ PointCloud ReadScan(const ScanInput& in) {
 // (an E57's scan) by its label "file#k" or output stem "stem_k".
 std::vector<photogrammetry::ScanTarget> ReadScanTargets(const std::string& path,
                                                         const std::vector<ScanInput>& scans) {
-  const photogrammetry::CsvTable t =
-      photogrammetry::CsvTable::Read(path, {"name", "scan", "x", "y", "z", "e", "n", "h"});
+  const io::CsvTable t = io::CsvTable::Read(path, {"name", "scan", "x", "y", "z", "e", "n", "h"});
   std::vector<photogrammetry::ScanTarget> out;
   for (const auto& row : t.rows()) {
     photogrammetry::ScanTarget target;

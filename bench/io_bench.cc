@@ -22,10 +22,10 @@
 
 #include "core/binary_file.h"
 #include "core/rng.h"
-#include "io/las/copc_write.h"
+#include "io/copc/copc_write.h"
 #include "io/las/las_header.h"
-#include "io/las/laz_chunks.h"
-#include "io/las/laz_format.h"
+#include "io/laz/laz_chunks.h"
+#include "io/laz/laz_format.h"
 #include "io/point_io.h"
 
 namespace {

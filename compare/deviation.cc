@@ -12,7 +12,7 @@
 #include <stdexcept>
 
 #include "compare/deviation_internal.h"
-#include "compare/kd_tree.h"
+#include "compare/morton_tree.h"
 #include "core/check.h"
 #include "core/morton.h"
 #include "core/parallel.h"
@@ -118,7 +118,7 @@ void Finish(DeviationResult& result, uint64_t not_finite, double gap,
 
 namespace {
 
-using internal::PointTree;
+using internal::MortonTree;
 using Points = std::vector<Eigen::Vector3d>;
 
 // The reference's finite points about `origin`, in Morton order (internal::MortonOrder); the
@@ -144,7 +144,7 @@ struct PreparedClouds {
   std::vector<Eigen::Vector3d> compared;
   uint64_t compared_not_finite = 0;
   double gap = 0;
-  std::unique_ptr<PointTree> tree;
+  std::unique_ptr<MortonTree> tree;
 };
 
 PreparedClouds Prepare(const PointCloud& reference, const PointCloud& compared,
@@ -174,7 +174,7 @@ PreparedClouds Prepare(const PointCloud& reference, const PointCloud& compared,
   const double size = std::max(reference_box.IsEmpty() ? 0.0 : reference_box.Extent().norm(),
                                compared_box.IsEmpty() ? 0.0 : compared_box.Extent().norm());
   p.gap = gap > 0.1 * size ? gap : 0.0;
-  p.tree = std::make_unique<PointTree>(p.reference);
+  p.tree = std::make_unique<MortonTree>(p.reference);
   return p;
 }
 
@@ -385,7 +385,7 @@ std::pair<double, double> AutoM3c2Scales(const PointCloud& reference) {
     throw InputError("cannot choose M3C2's scales from fewer than 2 reference points; give "
                      "--normal-scale and --projection-scale");
   }
-  const PointTree tree(pts);
+  const MortonTree tree(pts);
   // The density from the distance r to the 16th neighbour (16 points in pi r^2 of a surface);
   // d so that a cylinder of diameter d holds ~30 reference points.
   constexpr size_t kNeighbours = 16;

@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "compare/deviation_internal.h"
-#include "compare/kd_tree.h"
+#include "compare/morton_tree.h"
 #include "core/check.h"
 #include "core/parallel.h"
 #include "core/text_format.h"
@@ -35,7 +35,7 @@ struct AxisStats {
 };
 
 // The points of `tree` in the cylinder through q along unit n: radius r, half-length h.
-AxisStats InCylinder(const PointTree& tree, const Eigen::Vector3d& q, const Eigen::Vector3d& n,
+AxisStats InCylinder(const MortonTree& tree, const Eigen::Vector3d& q, const Eigen::Vector3d& n,
                      double r, double h) {
   AxisStats stats;
   const double r_sq = r * r;
@@ -48,7 +48,7 @@ AxisStats InCylinder(const PointTree& tree, const Eigen::Vector3d& q, const Eige
 
 // The normal at q from the reference points within `radius`: PCA's smallest direction; NaN
 // when fewer than 3 points or they define no plane (coincident or collinear).
-Eigen::Vector3d NormalAt(const PointTree& tree, const Eigen::Vector3d& q, double radius) {
+Eigen::Vector3d NormalAt(const MortonTree& tree, const Eigen::Vector3d& q, double radius) {
   size_t count = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
@@ -93,7 +93,7 @@ Eigen::Vector3d Oriented(Eigen::Vector3d n, NormalOrientation o, const Eigen::Ve
 }  // namespace
 
 DeviationResult M3c2(const DeviationOptions& options, const std::vector<Eigen::Vector3d>& reference,
-                     const PointTree& reference_tree, const std::vector<Eigen::Vector3d>& compared,
+                     const MortonTree& reference_tree, const std::vector<Eigen::Vector3d>& compared,
                      const ProgressCallback& progress) {
   const M3c2Options& o = options.m3c2;
   DeviationResult result;
@@ -113,7 +113,7 @@ DeviationResult M3c2(const DeviationOptions& options, const std::vector<Eigen::V
   if (finite.empty()) {
     throw InputError("M3C2: no compared point has a finite position");
   }
-  const PointTree compared_tree(finite);
+  const MortonTree compared_tree(finite);
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (const auto& p : reference) centroid += p;
   centroid /= static_cast<double>(reference.size());

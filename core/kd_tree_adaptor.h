@@ -1,6 +1,6 @@
-// Points as nanoflann's kd-tree reads them (its dataset adaptor), for the .cc files that build a
-// nanoflann::KDTreeSingleIndexAdaptor. This header does not include nanoflann: the tree, and so
-// the heavy header, stays in those files.
+// KdTreeAdaptor, not an index itself: points as nanoflann's kd-tree reads them (its dataset
+// adaptor), for the .cc files that build a nanoflann::KDTreeSingleIndexAdaptor. This header does
+// not include nanoflann: the tree, and so the heavy header, stays in those files.
 //
 // Point: a fixed-size Eigen vector (Eigen::Vector3f, Eigen::Vector2d, ...), the tree's scalar
 // Point::Scalar and dimension Point::RowsAtCompileTime; indices uint32_t (under 2^32 points).

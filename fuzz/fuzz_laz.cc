@@ -1,5 +1,5 @@
 // LAZ: the laszip VLR, the chunk table and the compressed chunks of both compressors (pointwise
-// v2, layered v3), read to the end through the LAS reader (io/las/las_io.h, io/las/laz_format.h),
+// v2, layered v3), read to the end through the LAS reader (io/las/las_io.h, io/laz/laz_format.h),
 // with and without scalar fields.
 #include "fuzz/fuzz_util.h"
 #include "io/point_io.h"

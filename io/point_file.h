@@ -102,7 +102,7 @@ class PointReader {
 enum class PlyEncoding { kBinaryLittleEndian, kBinaryBigEndian, kAscii };
 enum class PositionPrecision { kAuto, kFloat32, kFloat64 };
 
-// COPC (a *.copc.laz name, io/las/copc_write.h) writing options.
+// COPC (a *.copc.laz name, io/copc/copc_write.h) writing options.
 struct CopcWriteOptions {
   // The hierarchy's pages as untwine and PDAL cut them: a page holds its root node and this many
   // levels below it; a node at that depth whose subtree has more than min_page_nodes nodes

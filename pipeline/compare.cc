@@ -8,18 +8,12 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/text_format.h"
-#include "io/obj/obj_mesh.h"
-#include "io/ply/ply_io.h"
+#include "io/mesh_io.h"
 #include "io/point_io.h"
 
 namespace candi::pipeline {
 
 namespace {
-
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 // A number for JSON: NaN and infinity as null.
 nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
@@ -54,13 +48,6 @@ std::string FileName(const std::string& path) {
 void CompareOptions::Check() const {
   deviation.Check();
   summary.Check();
-}
-
-TriMesh ReadReferenceMesh(const std::string& path) {
-  const std::string ext = Lower(std::filesystem::path(path).extension().string());
-  if (ext == ".ply") return io::ReadPlyMesh(path);
-  if (ext == ".obj") return io::ReadObjMesh(path);
-  throw InputError(path, "", "is not a mesh candi reads for C2M (PLY or OBJ)");
 }
 
 std::string CompareSummaryJson(const CompareOptions& options, const CompareOutcome& outcome,
@@ -114,7 +101,7 @@ CompareOutcome RunCompare(const CompareOptions& options, const std::string& refe
   const PointCloud compared_cloud = io::ReadPointCloud(compared, read);
   CompareOutcome out;
   if (options.deviation.method == compare::Method::kC2M) {
-    const TriMesh mesh = ReadReferenceMesh(reference);
+    const TriMesh mesh = io::ReadMesh(reference);
     out.result = compare::CompareToMesh(options.deviation, mesh, compared_cloud, reference,
                                         compared, progress);
   } else {

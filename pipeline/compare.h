@@ -40,7 +40,4 @@ CompareOutcome RunCompare(const CompareOptions& options, const std::string& refe
 std::string CompareSummaryJson(const CompareOptions& options, const CompareOutcome& outcome,
                                const std::string& reference, const std::string& compared);
 
-// Reads a triangle mesh for C2M in double precision: PLY (io/ply) or OBJ (io/obj), by extension.
-TriMesh ReadReferenceMesh(const std::string& path);
-
 }  // namespace candi::pipeline

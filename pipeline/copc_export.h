@@ -23,7 +23,7 @@
 // Failures: InputError naming the file: a folder that is not a finished build (no archive.json,
 // or one without the keys a build writes), a missing or unreadable layer file, an unwritable
 // output, positions beyond the LAS integers' range. Every file is written atomically. Not
-// thread-safe (one call at a time); the same bytes for any thread count (io/las/copc_write.h).
+// thread-safe (one call at a time); the same bytes for any thread count (io/copc/copc_write.h).
 #pragma once
 
 #include <Eigen/Core>

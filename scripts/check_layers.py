@@ -44,9 +44,9 @@ def module_of(path):
 
 
 def exempt(path):
-    """Files that may include any module: unit tests, benchmark programs, test helpers."""
+    """Files that may include any module: unit tests and benchmark programs."""
     name = os.path.basename(path)
-    return name.endswith("_test.cc") or name.endswith("_bench.cc") or "/testing/" in path
+    return name.endswith("_test.cc") or name.endswith("_bench.cc")
 
 
 def main():

@@ -1,4 +1,4 @@
-#include "io/las/las_colour_scan.h"
+#include "io/las/las_colour_scan_internal.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-#include "io/las/las_crs.h"
+#include "io/las/las_crs_internal.h"
 
 #include <cstring>
 

@@ -82,7 +82,7 @@ void CheckSizes(const BinaryFile& file, const LasHeader& h) {
 }
 
 // LASzip marks compressed point data with bits 7 (and 6) of the format byte; the LAS reader
-// decodes it (io/las/laz_format.h), so only the format proper is checked here.
+// decodes it (io/laz/laz_format.h), so only the format proper is checked here.
 void CheckPointFormat(const std::string& path, const LasHeader& h) {
   const int format = h.point_format & 0x3F;
   const LasFormatLayout layout = LasLayoutOf(format);

@@ -12,17 +12,17 @@
 //
 // LAZ (LASzip-compressed LAS: format byte bits 6-7 and a "laszip encoded" VLR) reads through the
 // same reader: the chunked pointwise compressor (items of version 2, formats 0-3) and the layered
-// one (version 3, formats 6-8) are decoded (io/las/laz_format.h, io/las/laz_chunks.h), a run of
+// one (version 3, formats 6-8) are decoded (io/laz/laz_format.h, io/laz/laz_chunks.h), a run of
 // chunks at a time and in parallel; LASzip 1.x files (items of version 1, the unchunked
 // compressor), waveform items and files without a chunk table are refused with a clear message.
 // meta.las holds the uncompressed point format and no laszip VLR; record_layout() is nullopt.
 // Writing to a .laz name writes LAZ as LASzip 3.4 does (point-format bit 7, the laszip VLR last,
-// 50,000-point chunks with the chunk table, compressed in parallel; io/las/laz_chunks.h), with
+// 50,000-point chunks with the chunk table, compressed in parallel; io/laz/laz_chunks.h), with
 // the same header, VLRs and records as the LAS file the name .las would give.
 // A name ending in .copc.laz writes COPC 1.0 (https://copc.io): LAS 1.4 with point format 6-8
 // (formats 0-3 become 6 or 7, as PDAL's writers.copc does), the "copc" info VLR first, the octree
-// of io/las/copc_octree.h with each node one variable-size layered LAZ chunk, and the hierarchy
-// EVLR in pages as untwine cuts them (io/las/copc_write.h, PointWriteOptions::copc); the source's "copc" records are dropped, and GeoTIFF-key CRS
+// of io/copc/copc_octree.h with each node one variable-size layered LAZ chunk, and the hierarchy
+// EVLR in pages as untwine cuts them (io/copc/copc_write.h, PointWriteOptions::copc); the source's "copc" records are dropped, and GeoTIFF-key CRS
 // records give way to a WKT record of the CRS they name (formats 6-8 allow only WKT). Its
 // records are held in memory until Close() (record_length bytes a point).
 //

@@ -219,7 +219,7 @@ TEST(LasRead, Format6WithEvlr) {
   ExpectBoundsMatchHeader(path);
 }
 
-TEST(LasRead, ReadsLaz) {  // more in io/las/laz_test.cc
+TEST(LasRead, ReadsLaz) {  // more in io/laz/laz_test.cc
   CANDI_REQUIRE_SHARED_DATA(path, "las/autzen_trim.laz");
   auto reader = OpenPointReader(path);
   EXPECT_EQ(reader->info().format, PointFormat::kLas);

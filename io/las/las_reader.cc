@@ -14,12 +14,12 @@
 #include "core/mapped_file.h"
 #include "core/parallel.h"
 #include "io/crs.h"
-#include "io/las/las_colour_scan.h"
+#include "io/las/las_colour_scan_internal.h"
 #include "io/las/las_columns.h"
-#include "io/las/las_crs.h"
+#include "io/las/las_crs_internal.h"
 #include "io/las/las_header.h"
-#include "io/las/laz_chunks.h"
-#include "io/las/laz_format.h"
+#include "io/laz/laz_chunks.h"
+#include "io/laz/laz_format.h"
 
 namespace candi::io {
 

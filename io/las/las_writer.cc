@@ -1,6 +1,6 @@
 // The LAS/LAZ/COPC writer behind OpenLasWriter (io/las/las_io.h): the version and point
 // format, the header and VLRs, records encoded column by column, LAZ chunks compressed in
-// parallel, and for a .copc.laz name the octree's nodes (io/las/copc_octree.h, copc_write.h).
+// parallel, and for a .copc.laz name the octree's nodes (io/copc/copc_octree.h, copc_write.h).
 #include "io/las/las_io.h"
 
 #include <algorithm>
@@ -20,15 +20,15 @@
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/text_format.h"
+#include "io/copc/copc_octree.h"
+#include "io/copc/copc_store.h"
+#include "io/copc/copc_write.h"
 #include "io/crs.h"
-#include "io/las/copc_octree.h"
-#include "io/las/copc_store.h"
-#include "io/las/copc_write.h"
 #include "io/las/las_columns.h"
-#include "io/las/las_crs.h"
+#include "io/las/las_crs_internal.h"
 #include "io/las/las_header.h"
-#include "io/las/laz_chunks.h"
-#include "io/las/laz_format.h"
+#include "io/laz/laz_chunks.h"
+#include "io/laz/laz_format.h"
 
 namespace candi::io {
 
@@ -191,7 +191,7 @@ class LasWriter : public PointWriter {
   std::array<uint64_t, 15> by_return_{};
   std::vector<uint8_t> buffer_;
   // COPC (a .copc.laz name): every record is held until Close() builds the octree, in memory or
-  // spilled beside the file (io/las/copc_store.h; a stated count the disk cannot hold is
+  // spilled beside the file (io/copc/copc_store.h; a stated count the disk cannot hold is
   // refused before anything is written).
   bool copc_ = false;
   CopcWriteOptions copc_options_;

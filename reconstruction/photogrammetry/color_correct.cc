@@ -9,7 +9,7 @@
 
 #include "core/check.h"
 #include "core/text_format.h"
-#include "reconstruction/photogrammetry/csv_table.h"
+#include "io/csv_table.h"
 
 namespace candi::photogrammetry {
 
@@ -19,7 +19,8 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kRankTolerance = 1e-6;  // smallest/largest singular value: rank-deficient below
 constexpr double kPoorTolerance = 1e-2;  // ... poorly conditioned below
 
-Eigen::Vector3d ReadRgb(const CsvTable& t, const CsvTable::Row& row, const std::string& prefix) {
+Eigen::Vector3d ReadRgb(const io::CsvTable& t, const io::CsvTable::Row& row,
+                        const std::string& prefix) {
   Eigen::Vector3d v;
   const char* channel[3] = {"_r", "_g", "_b"};
   for (int c = 0; c < 3; ++c) {
@@ -175,10 +176,11 @@ double DeltaE2000(const Eigen::Vector3d& lab1, const Eigen::Vector3d& lab2) {
 }
 
 std::vector<ColorPatch> ReadColorPatches(const std::string& path) {
-  const CsvTable t = CsvTable::Read(path, {"patch", "measured_r", "measured_g", "measured_b",
-                                           "reference_r", "reference_g", "reference_b"});
+  const io::CsvTable t =
+      io::CsvTable::Read(path, {"patch", "measured_r", "measured_g", "measured_b", "reference_r",
+                                "reference_g", "reference_b"});
   std::vector<ColorPatch> patches;
-  for (const CsvTable::Row& row : t.rows()) {
+  for (const io::CsvTable::Row& row : t.rows()) {
     patches.push_back({t.Text(row, "patch"), ReadRgb(t, row, "measured"),
                        ReadRgb(t, row, "reference"), row.line});
   }
@@ -186,10 +188,11 @@ std::vector<ColorPatch> ReadColorPatches(const std::string& path) {
 }
 
 std::vector<PatchQuad> ReadPatchQuads(const std::string& path) {
-  const CsvTable t = CsvTable::Read(path, {"patch", "x0", "y0", "x1", "y1", "x2", "y2", "x3", "y3",
-                                           "reference_r", "reference_g", "reference_b"});
+  const io::CsvTable t =
+      io::CsvTable::Read(path, {"patch", "x0", "y0", "x1", "y1", "x2", "y2", "x3", "y3",
+                                "reference_r", "reference_g", "reference_b"});
   std::vector<PatchQuad> quads;
-  for (const CsvTable::Row& row : t.rows()) {
+  for (const io::CsvTable::Row& row : t.rows()) {
     PatchQuad q;
     q.name = t.Text(row, "patch");
     q.line = row.line;

@@ -11,7 +11,7 @@
 
 #include "core/box.h"
 #include "core/check.h"
-#include "reconstruction/photogrammetry/csv_table.h"
+#include "io/csv_table.h"
 
 namespace candi::photogrammetry {
 
@@ -22,7 +22,7 @@ std::string Lower(std::string s) {
   return s;
 }
 
-SurveyTarget ParseTarget(const CsvTable& t, const CsvTable::Row& row, bool model_columns) {
+SurveyTarget ParseTarget(const io::CsvTable& t, const io::CsvTable::Row& row, bool model_columns) {
   SurveyTarget target;
   target.line = row.line;
   target.name = t.Text(row, "name");
@@ -107,14 +107,14 @@ std::string TargetRoleName(TargetRole role) {
 }
 
 std::vector<SurveyTarget> ReadSurveyTargets(const std::string& path) {
-  const CsvTable t = CsvTable::Read(path, {"name", "E", "N", "H", "role", "accuracy"});
+  const io::CsvTable t = io::CsvTable::Read(path, {"name", "E", "N", "H", "role", "accuracy"});
   const int model_columns = t.Has("x") + t.Has("y") + t.Has("z");
   if (model_columns != 0 && model_columns != 3) {
     throw InputError(path, "line 1", "the model columns must be x, y and z together");
   }
   std::vector<SurveyTarget> targets;
   std::set<std::string> names;
-  for (const CsvTable::Row& row : t.rows()) {
+  for (const io::CsvTable::Row& row : t.rows()) {
     targets.push_back(ParseTarget(t, row, model_columns == 3));
     if (!names.insert(targets.back().name).second) {
       t.Fail(row, "name", "'" + targets.back().name + "' appears twice");
@@ -125,9 +125,9 @@ std::vector<SurveyTarget> ReadSurveyTargets(const std::string& path) {
 }
 
 std::vector<ImagePick> ReadImagePicks(const std::string& path) {
-  const CsvTable t = CsvTable::Read(path, {"name", "image", "u", "v"});
+  const io::CsvTable t = io::CsvTable::Read(path, {"name", "image", "u", "v"});
   std::vector<ImagePick> picks;
-  for (const CsvTable::Row& row : t.rows()) {
+  for (const io::CsvTable::Row& row : t.rows()) {
     ImagePick p;
     p.line = row.line;
     p.target = t.Text(row, "name");

@@ -1,5 +1,6 @@
-// Nearest-neighbour queries on float points (pcl::KdTreeFLANN, exact search), for the overlap and
-// RMS figures of registration. Positions are in a common local frame (local_points.h).
+// PointIndex, a kd-tree of float points (pcl::KdTreeFLANN, exact search) for nearest-neighbour
+// queries: the overlap and RMS figures of registration. Positions are in a common local frame
+// (local_points.h).
 // Not thread-safe for concurrent queries (FLANN's search keeps state); build once, query many.
 #pragma once
 

@@ -9,7 +9,7 @@
 #include "core/box.h"
 #include "core/check.h"
 #include "core/text_format.h"
-#include "reconstruction/photogrammetry/csv_table.h"
+#include "io/csv_table.h"
 
 namespace candi::relief {
 
@@ -56,7 +56,7 @@ void CheckPanels(const std::vector<PanelCorrespondence>& c, const std::string& s
   }
 }
 
-PanelCorrespondence ParseRow(const pg::CsvTable& t, const pg::CsvTable::Row& row) {
+PanelCorrespondence ParseRow(const io::CsvTable& t, const io::CsvTable::Row& row) {
   PanelCorrespondence c;
   c.line = row.line;
   c.panel = t.Text(row, "panel");
@@ -74,9 +74,9 @@ PanelCorrespondence ParseRow(const pg::CsvTable& t, const pg::CsvTable::Row& row
 
 const std::vector<std::string> kColumns = {"panel", "point", "x", "y", "z", "E", "N", "H"};
 
-std::vector<PanelCorrespondence> FromTable(const pg::CsvTable& t) {
+std::vector<PanelCorrespondence> FromTable(const io::CsvTable& t) {
   std::vector<PanelCorrespondence> out;
-  for (const pg::CsvTable::Row& row : t.rows()) out.push_back(ParseRow(t, row));
+  for (const io::CsvTable::Row& row : t.rows()) out.push_back(ParseRow(t, row));
   if (out.empty()) throw InputError(t.path(), "", "no correspondences (only a header)");
   CheckPanels(out, t.path());
   return out;
@@ -178,11 +178,11 @@ void PanelPlacementOptions::Check() const {
 
 std::vector<PanelCorrespondence> ParsePanelCorrespondences(const std::string& path,
                                                            const std::string& text) {
-  return FromTable(pg::CsvTable::Parse(path, text, kColumns));
+  return FromTable(io::CsvTable::Parse(path, text, kColumns));
 }
 
 std::vector<PanelCorrespondence> ReadPanelCorrespondences(const std::string& path) {
-  return FromTable(pg::CsvTable::Read(path, kColumns));
+  return FromTable(io::CsvTable::Read(path, kColumns));
 }
 
 PlacementResult PlacePanels(const PanelPlacementOptions& options,

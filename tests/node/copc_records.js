@@ -2,7 +2,7 @@
 // with laz-perf's WASM build): header, info VLR, every hierarchy page and every node's points.
 // Writes the nodes' point records, concatenated in hierarchy order, to out.bin and prints one
 // JSON line: {"count", "format", "nodes", "pointSum", "spacing", "cube", "depth"}.
-// Used by io/las/copc_write_test.cc. Usage: node copc_records.js in.copc.laz out.bin
+// Used by io/copc/copc_write_test.cc. Usage: node copc_records.js in.copc.laz out.bin
 // (copc found through NODE_PATH; scripts/node_test_deps.sh installs it).
 const fs = require('fs');
 const { Copc } = require('copc');

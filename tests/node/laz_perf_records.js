@@ -1,5 +1,5 @@
 // Decodes a LAZ file with npm's laz-perf (the WASM build of laz-perf, an independent LAZ reader)
-// and writes its point records, concatenated, to a file. Used by io/las/laz_write_test.cc.
+// and writes its point records, concatenated, to a file. Used by io/laz/laz_write_test.cc.
 // Usage: node laz_perf_records.js in.laz out.bin   (laz-perf found through NODE_PATH)
 const fs = require('fs');
 const { createLazPerf } = require('laz-perf');

@@ -1,5 +1,5 @@
 // Test helper (header-only, for io's tests): the point records of a LAZ file, decoded through the
-// chunk table and chunk decoders of io/las, and the file's laszip VLR.
+// chunk table and chunk decoders of io/laz, and the file's laszip VLR.
 #pragma once
 
 #include <cstdint>
@@ -7,8 +7,8 @@
 
 #include "core/binary_file.h"
 #include "io/las/las_header.h"
-#include "io/las/laz_chunks.h"
-#include "io/las/laz_format.h"
+#include "io/laz/laz_chunks.h"
+#include "io/laz/laz_format.h"
 
 namespace candi::testing {
 
