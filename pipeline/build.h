@@ -12,9 +12,10 @@
 //   archive/               the render archive of every layer (render/archive_pack.h)
 //   renders/<view>.png     one SPBR render per view, and its .view.json (repeatable)
 //   meshlab/               float local-coordinate PLYs, scene.mlp and shift.txt
-//   archive.json           provenance: sources and hashes, method, parameters, seed, version, counts,
-//                          what makes the build reproducible; no run times, so that two builds of the
-//                          same input give the same bytes
+//   archive.json           the build's record (render/build_record.h): provenance (sources and hashes,
+//                          method, parameters, seed, version, counts, what makes the build
+//                          reproducible) and the render settings it resolved; no run times, so that
+//                          two builds of the same input give the same bytes
 //   compare/<name>.ply     each of the scene's comparisons (scene.h, "comparisons"; pipeline/compare.h):
 //                          the compared layer's points (world) with their distances, and beside it
 //                          .compare.json, .histogram.svg and .report.md; archive.json lists each
@@ -26,8 +27,10 @@
 //   timings.json           seconds per layer, the pack, each view, each comparison, the COPC files
 //                          and in all
 // Intermediate files go to work/ (the stages' own outputs: the foundation's and the dense cloud's
-// points, relief depth maps and panel points, COLMAP's workspace). The layers pass from stage to
-// stage in memory; relief panels pass through their files (they may come from child processes).
+// points, relief depth maps and panel points, COLMAP's workspace). The layers are digitized, placed
+// and rendered in memory; relief panels pass through their files (they may come from child
+// processes), and the comparisons, the render archive and the COPC files are made from the layer
+// files (layers/<name>.ply).
 // Every file is written atomically.
 //
 // Resuming (options.resume): every finished stage that is worth keeping (a digitized foundation,
