@@ -1,28 +1,25 @@
-// candi sfm, dense, georef, register, register-scans, clean, colorcorrect, foundation (and relief, relief.cc): the
-// building from photos (pipeline/photogrammetry.h), colour-card correction, the foundation from
-// CAD sections (pipeline/foundation.h). register and clean run in candi-pcl (pcl_commands.cc).
+// candi sfm, dense, georef, colorcorrect: the building from photos (pipeline/photogrammetry.h):
+// COLMAP structure from motion, CPU dense stereo, georeferencing on surveyed targets; and
+// colour-card correction (reconstruction/photogrammetry/color_correct.h).
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
-#include "apps/arg_parse.h"
 #include "apps/commands.h"
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/log.h"
 #include "core/timer.h"
 #include "io/image/png_io.h"
-#include "io/layer_clouds.h"
 #include "io/point_io.h"
-#include "mesh/mesh_export.h"
-#include "pipeline/foundation.h"
 #include "pipeline/photogrammetry.h"
 #include "reconstruction/photogrammetry/color_correct.h"
-#include "sampling/layer_colours.h"
 
 namespace candi::apps {
 
@@ -30,8 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 namespace pg = candi::photogrammetry;
-
-// ---------------------------------------------------------------------------------------- sfm
 
 struct SfmArgs {
   std::string images, workspace;
@@ -61,6 +56,8 @@ int RunSfm(const SfmArgs& a) {
   return kOk;
 }
 
+}  // namespace
+
 void AddSfm(Command& root) {
   SfmArgs& a = root.Keep<SfmArgs>();
   pg::SfmOptions& o = a.options;
@@ -83,7 +80,7 @@ void AddSfm(Command& root) {
   c.Footer("Example: candi sfm photos/ -o work --max-image-size 1600");
 }
 
-// -------------------------------------------------------------------------------------- dense
+namespace {
 
 struct DenseArgs {
   std::string workspace, output;
@@ -109,6 +106,8 @@ int RunDense(const DenseArgs& a) {
   return kOk;
 }
 
+}  // namespace
+
 void AddDense(Command& root) {
   DenseArgs& a = root.Keep<DenseArgs>();
   pg::PatchMatchOptions& s = a.options.stereo;
@@ -130,7 +129,7 @@ void AddDense(Command& root) {
   c.Footer("Example: candi dense workspace -o dense.ply --resolution-scale 0.5 --iterations 3");
 }
 
-// ------------------------------------------------------------------------------------- georef
+namespace {
 
 struct GeorefArgs {
   std::string input;    // point file, or a COLMAP sparse model folder
@@ -228,6 +227,8 @@ int RunGeoref(const GeorefArgs& a) {
   return kOk;  // a fit that did not converge is reported (table, JSON, warning), not an error
 }
 
+}  // namespace
+
 void AddGeoref(Command& root) {
   GeorefArgs& a = root.Keep<GeorefArgs>();
   pg::SimilarityFitOptions& fit = a.options.fit;
@@ -253,84 +254,7 @@ void AddGeoref(Command& root) {
   c.Footer("Example: candi georef chunk1.ply --targets targets.csv -o chunk1_utm.ply");
 }
 
-// ------------------------------------------------------------------------- register and clean
-
-void AddRegister(Command& root) {
-  RegisterArgs& a = root.Keep<RegisterArgs>();
-  pg::RegistrationOptions& o = a.icp;
-  Command c = root.Add("register", "ICP refinement of MOVING onto FIXED (PCL, local coordinates): RMS, overlap, the "
-                                   "4x4 transform; writes MOVING moved");
-  c.Option("moving", a.moving, "Point file to move").Required();
-  c.Option("fixed", a.fixed, "Point file to register onto").Required();
-  c.Option("-o,--output", a.output, "MOVING after the transform (its precision and shift kept)").Required();
-  c.Option("--max-distance", o.max_correspondence_distance, "Largest correspondence distance, m");
-  c.Option("--iterations", o.max_iterations, "Largest number of ICP iterations");
-  c.Choice("--method", o.method,
-           {{"point", pg::IcpMethod::kPointToPoint}, {"plane", pg::IcpMethod::kPointToPlane}},
-           "point (point-to-point) or plane (point-to-plane; normals estimated when FIXED has none)");
-  c.Option("--voxel", o.voxel, "Thin both clouds to this voxel size for the solve, m");
-  c.Option("--transform-out", a.transform_out, "Write the transform and figures as JSON");
-  c.Option("--initial", a.initial, "Initial transform (JSON as --transform-out writes)");
-  c.Run([&a] { return RunRegister(a); });
-  c.Footer("Example: candi register scan2.las scan1.las -o scan2_reg.las --max-distance 0.2 --transform-out t.json");
-}
-
-void AddRegisterScans(Command& root) {
-  RegisterScansArgs& a = root.Keep<RegisterScansArgs>();
-  pg::MultiRegistrationOptions& o = a.options;
-  Command c = root.Add("register-scans", "Many scans into one frame at once: overlapping pairs by point-to-plane ICP, "
-                                         "then all poses in one robust Ceres solve (loops close), with control targets");
-  c.Option("scans", a.scans, "Point files, one scan each (an E57 file with several scans counts as several, each "
-           "starting from its stored pose)").Required();
-  c.Option("-o,--output", a.output_dir, "Folder for the moved scans and registration.json").Required();
-  c.Option("--poses", a.poses, "Start poses: JSON, a 4x4 world_from_scan per scan (or a registration.json); "
-           "default identity");
-  c.Flag("--coarse", a.coarse, "Scans without a start pose are first aligned onto scan 0 by FPFH features and "
-         "RANSAC (PCL)");
-  c.Option("--targets", a.targets, "Targets seen in the scans, CSV: name,scan,x,y,z,E,N,H[,role[,accuracy]] (scan: "
-           "index or file name; role control or check)");
-  c.Option("--fixed", a.fixed, "Scans held at their start pose, e.g. 0,2 (default: scan 0, or none with 3+ "
-           "control targets)");
-  c.Option("--max-distance", o.max_correspondence_distance, "Coarse ICP pairing distance, m");
-  c.Option("--solve-distance", o.solve_distance, "Fine ICP and global solve pairing distance, m");
-  c.Option("--iterations", o.icp_iterations, "ICP iterations per stage");
-  c.Option("--voxel", o.voxel, "Thin every scan to this voxel first, m (0: off)");
-  c.Option("--icp-voxel", o.icp_voxel, "Thin the moving scan of a pair further for ICP, m (0: off)");
-  c.Option("--min-overlap", o.min_overlap, "Overlap a pair needs to count (share of points within the solve distance)");
-  c.Option("--loss-scale", o.loss_scale, "Huber scale of the global solve's point-to-plane terms, m");
-  c.Option("--rounds", o.outer_iterations, "Global solve rounds (correspondences re-found each)");
-  c.Option("--correspondences", o.correspondences_per_pair, "Correspondences per pair and direction");
-  c.Option("--coarse-voxel", a.coarse_options.voxel, "With --coarse: thin both scans to this for the features, m");
-  c.Option("--coarse-radius", a.coarse_options.feature_radius, "With --coarse: the FPFH features' support radius, m "
-           "(> the coarse voxel)");
-  c.Option("--coarse-inlier-distance", a.coarse_options.inlier_distance, "With --coarse: a moved point within this "
-           "of the other scan is an inlier, m");
-  c.Option("--coarse-min-inliers", a.coarse_options.min_inlier_fraction, "With --coarse: the share of inliers a pose "
-           "needs, [0, 1] (lower only for scans sharing less than half their points)");
-  c.Option("--coarse-iterations", a.coarse_options.max_iterations, "With --coarse: RANSAC iterations");
-  c.Option("--seed", a.coarse_options.seed, "With --coarse: the seed of RANSAC's sampling");
-  c.Option("--format", a.format, "Extension of the moved scans (ply, las, laz, copc.laz, e57, xyz; default: each scan's own)");
-  c.Run([&a] { return RunRegisterScans(a); });
-  c.Footer("Example: candi register-scans st1.las st2.las st3.las st4.las -o registered --targets targets.csv\n"
-           "         (then candi compare registered/st1.las registered/st2.las -o overlap.las --method m3c2)");
-}
-
-void AddClean(Command& root) {
-  CleanArgs& a = root.Keep<CleanArgs>();
-  pg::CleanOptions& o = a.clean;
-  Command c = root.Add("clean", "Statistical outlier removal (PCL) and voxel thinning (one real point per voxel); "
-                                "every field kept");
-  c.Option("input", a.input, "Input point file").Required();
-  c.Option("-o,--output", a.output, "Output point file").Required();
-  c.Option("--sor-k", o.sor_neighbours, "Outlier removal: neighbours averaged");
-  c.Option("--sor-std", o.sor_std_multiplier, "Outlier removal: threshold in standard deviations");
-  c.FlagOff("--no-sor", o.sor, "Skip outlier removal");
-  c.Option("--voxel", o.voxel, "Keep the point nearest each voxel's centre, voxel side m");
-  c.Run([&a] { return RunClean(a); });
-  c.Footer("Example: candi clean dense.ply -o dense_clean.ply --voxel 0.01");
-}
-
-// ------------------------------------------------------------------------------- colorcorrect
+namespace {
 
 struct ColorCorrectArgs {
   std::string input, output;    // PNG image or point file with colours
@@ -431,6 +355,8 @@ int RunColorCorrect(const ColorCorrectArgs& a) {
   return kOk;
 }
 
+}  // namespace
+
 void AddColorCorrect(Command& root) {
   ColorCorrectArgs& a = root.Keep<ColorCorrectArgs>();
   Command c = root.Add("colorcorrect", "Colour-card correction: a 3x4 matrix in linear RGB from the card's patches, "
@@ -450,124 +376,6 @@ void AddColorCorrect(Command& root) {
   c.Option("--max-outliers", a.options.max_outliers, "Patches that may be left out").Range(0, 100);
   c.Run([&a] { return RunColorCorrect(a); });
   c.Footer("Example: candi colorcorrect photo.png -o photo_corrected.png --patches card.csv");
-}
-
-// --------------------------------------------------------------------------------- foundation
-
-struct FoundationArgs {
-  std::string input;   // the section drawing (ASCII DXF)
-  std::string output;  // point file; merged unless split
-  pipeline::FoundationPointsOptions options;
-  std::string mesh;    // optional mesh output (.obj .off .ply); per layer if several
-  bool split = false;  // one point file per layer, <stem>_<layer><ext>
-  std::string axis_x;  // drawing x of the axis, m; "" = through the reference point
-};
-
-// "<stem>_<layer><ext>" beside `path`.
-std::string LayerPath(const std::string& path, const std::string& layer) {
-  const fs::path p(path);
-  return (p.parent_path() / (p.stem().string() + "_" + layer + p.extension().string())).string();
-}
-
-void PrintFoundation(const pipeline::FoundationPoints& f, const mesh::RevolveOptions& revolve) {
-  std::printf("%-8s %-8s %10s %-9s %-6s %10s %12s %10s  %s\n", "layer", "colour", "points", "symmetric", "mode",
-              "asymmetry", "area m^2", "triangles", "mesh check");
-  size_t total = 0;
-  for (size_t k = 0; k < f.surfaces.size(); ++k) {
-    const mesh::LayerSurface& s = f.surfaces[k];
-    total += f.clouds[k].size();
-    std::printf("%-8s %-8s %10zu %-9s %-6s %10.2e %12.1f %10zu  %s\n", s.layer.c_str(),
-                sampling::DefaultLayerColour(s.layer, k).name.c_str(), f.clouds[k].size(),
-                s.mode == mesh::RevolveMode::kSweep ? "yes" : "no", mesh::RevolveModeName(s.mode).c_str(), s.asymmetry,
-                f.areas[k], s.mesh.faces.size(), s.checked ? s.check.Summary().c_str() : "not checked");
-  }
-  std::printf("%-8s %-8s %10zu\n", "total", "", total);
-  if (revolve.mode == mesh::RevolveMode::kAuto) {
-    std::printf("mode auto: layers whose sides mirror within %.3g of their extent are swept, the others blended\n",
-                revolve.symmetry_tolerance);
-  }
-}
-
-int RunFoundation(const FoundationArgs& a) {
-  pipeline::FoundationPointsOptions o = a.options;
-  if (!a.axis_x.empty()) o.surface.revolve.axis_x = ParseNumbers(a.axis_x, ',', "--axis-x").at(0);
-  if (o.sample.per_triangle > 0) {
-    o.sample.mode = sampling::SurfaceSamplingMode::kPerTriangle;
-  } else if (o.sample.count == 0 && o.sample.density == 0) {
-    o.sample.density = pipeline::kDefaultFoundationDensity;  // a negative one fails Check
-  }
-  o.Check();  // bad values: std::invalid_argument, exit 1
-  io::OutputPointFormat(a.output);  // a known extension, before the work
-  const Stopwatch watch;
-  const pipeline::FoundationPoints f = pipeline::DigitizeFoundation(o, a.input);
-  for (size_t k = 0; k < f.surfaces.size(); ++k) {
-    if (!a.mesh.empty()) {
-      mesh::WriteMesh(f.surfaces.size() == 1 ? a.mesh : LayerPath(a.mesh, f.surfaces[k].layer), f.surfaces[k].mesh);
-    }
-    if (a.split) io::WritePointCloud(LayerPath(a.output, f.surfaces[k].layer), f.clouds[k]);
-  }
-  if (!a.split) io::WriteLayerClouds(a.output, f.clouds, f.Names());  // one file with a layer field
-  std::printf("drawing %s: %s, %zu layer(s) with sections, units %s\n", a.input.c_str(),
-              a.split ? "points per layer" : "merged points", f.drawing_layers, f.unit_name.c_str());
-  PrintFoundation(f, o.surface.revolve);
-  const double total = watch.Seconds();
-  std::printf("time: %.2f s (meshes and checks %.2f s, sampling %.2f s, writing %.2f s)\n", total, f.mesh_seconds,
-              f.sample_seconds, total - f.mesh_seconds - f.sample_seconds);
-  return kOk;
-}
-
-void AddFoundation(Command& root) {
-  FoundationArgs& a = root.Keep<FoundationArgs>();
-  mesh::FoundationOptions& s = a.options.surface;
-  sampling::SurfaceSampleOptions& sample = a.options.sample;
-  Command c = root.Add("foundation", "Foundation layers from a CAD section drawing (DXF): profiles, Hermite "
-                                     "resampling, rotational blending or sweep, mesh, uniform points");
-  c.Option("drawing", a.input, "Section drawing (ASCII DXF)").Required();
-  c.Option("-o,--output", a.output, "Point file " CANDI_POINT_FILES_WRITTEN ": merged with a layer field, or one per layer "
-           "with --split").Required();
-  c.Option("--layers", a.options.layers, "Layers to build, e.g. A,B,C,D (default: all with a section)").Delimiter(',');
-  c.Option("--samples-per-side", s.profile.samples_per_side, "N: Hermite samples per side (>= 2)");
-  c.Option("--angular-steps", s.revolve.angular_steps, "M: steps per half-turn (>= 2)");
-  Arg count = c.Option("--count", sample.count, "Total points, split over the layers by area");
-  Arg density = c.Option("--density", sample.density, "Points per m^2 (default 50)");
-  Arg per = c.Option("--per-triangle", sample.per_triangle, "The paper's mode: this many points in every triangle "
-                     "(not uniform; for comparison)");
-  count.Excludes(density);
-  per.Excludes(count).Excludes(density);
-  c.Choice("--mode", s.revolve.mode,
-           {{"auto", mesh::RevolveMode::kAuto}, {"blend", mesh::RevolveMode::kBlend},
-            {"sweep", mesh::RevolveMode::kSweep}},
-           "auto (sweep symmetric layers, blend the others), blend or sweep");
-  c.Option("--mesh", a.mesh, "Also write the mesh (.obj .off .ply); <stem>_<layer><ext> when several layers");
-  c.Flag("--split", a.split, "One point file per layer: <stem>_<layer><ext>");
-  c.Flag("--close-base", s.mesh.close_base, "Close each mesh's bottom ring (a solid)");
-  c.FlagOff("--no-check", s.check, "Skip the CGAL mesh checks");
-  c.FlagOff("--no-self-intersection", s.check_options.self_intersections,
-            "Skip only CGAL's self-intersection test (the slowest check)");
-  c.Option("--axis-x", a.axis_x, "Drawing x of the vertical axis, m (default: through each layer's highest point)");
-  c.Option("--symmetry-tolerance", s.revolve.symmetry_tolerance, "auto: sides mirrored within this fraction of the "
-           "section's extent count as symmetric");
-  c.Option("--chord-tolerance", s.dxf.chord_tolerance, "Bulge arcs: largest chord error, m");
-  c.Option("--join-tolerance", s.section.join_tolerance, "LINE ends closer than this join, m");
-  c.Option("--seed", sample.seed, "Random seed of the sampling");
-  c.Option("--threads", sample.threads, "Threads (0: all)").Range(0, 256);
-  c.Run([&a] { return RunFoundation(a); });
-  c.Footer("Example: candi foundation examples/borobudur/foundation.dxf -o foundation.ply --layers A,B,C,D --mesh "
-           "foundation.obj");
-}
-
-}  // namespace
-
-void AddDigitizeCommands(Command& root) {
-  AddSfm(root);
-  AddDense(root);
-  AddGeoref(root);
-  AddRegister(root);
-  AddRegisterScans(root);
-  AddClean(root);
-  AddColorCorrect(root);
-  AddFoundation(root);
-  AddReliefCommands(root);
 }
 
 }  // namespace candi::apps

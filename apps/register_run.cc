@@ -1,11 +1,12 @@
-// candi register, candi register-scans, candi clean (PCL, in candi-pcl only): ICP refinement of
-// MOVING onto FIXED (reconstruction/photogrammetry/registration.h), printing RMS and overlap before
-// and after and the 4x4 transform (world coordinates) and writing MOVING moved, in its own format,
-// precision and shift (and optionally the transform and figures as JSON); many scans at once
+// candi register, candi register-scans, candi clean (PCL: in candi-pcl and candi-relief; their
+// command lines are in register.cc): ICP refinement of MOVING onto FIXED
+// (reconstruction/photogrammetry/registration.h), printing RMS and overlap before and after and
+// the 4x4 transform (world coordinates) and writing MOVING moved, in its own format, precision and
+// shift (and optionally the transform and figures as JSON); many scans at once
 // (multi_registration.h), printing per scan, pair and loop and writing the moved scans and
-// registration.json; statistical outlier removal and voxel
-// thinning (cleaning.h), printing the counts removed per step, every attribute of the kept points,
-// the shift and the position precision kept.
+// registration.json; statistical outlier removal and voxel thinning (cleaning.h), printing the
+// counts removed per step, every attribute of the kept points, the shift and the position
+// precision kept.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
