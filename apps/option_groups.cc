@@ -4,7 +4,6 @@
 
 #include "apps/arg_parse.h"
 #include "core/text_format.h"
-#include "pipeline/render.h"
 
 namespace candi::apps {
 
@@ -50,11 +49,12 @@ void AddOrientation(Command& c, OrientationArgs& o, const OrientationHelp& help)
   c.Option("--cameras", o.cameras, help.cameras);
 }
 
-render::Orientation ParseOrientation(const OrientationArgs& a) {
-  render::Orientation o = a.cameras.empty() ? render::Orientation() : pipeline::OrientationOfCameras(a.cameras);
-  if (!a.up.empty()) o.up = ParseDirection(a.up, "--up");
-  if (!a.from.empty()) o.view_dir = ParseDirection(a.from, "--from");
-  return o;
+pipeline::ViewOrientation ParseOrientation(const OrientationArgs& o) {
+  pipeline::ViewOrientation v;
+  v.cameras = o.cameras;
+  if (!o.up.empty()) v.up = ParseDirection(o.up, "--up");
+  if (!o.from.empty()) v.view_dir = ParseDirection(o.from, "--from");
+  return v;
 }
 
 void AddCopcMemory(Command& c, double& mb) {

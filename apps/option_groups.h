@@ -9,7 +9,7 @@
 #include "apps/cli.h"
 #include "core/clip.h"
 #include "core/field_colour.h"
-#include "render/first_view.h"
+#include "pipeline/view_orientation.h"
 
 namespace candi::apps {
 
@@ -40,9 +40,8 @@ struct OrientationHelp {
   std::string up, from, cameras;
 };
 void AddOrientation(Command& c, OrientationArgs& o, const OrientationHelp& help);
-// The cameras' orientation (pipeline/render.h's OrientationOfCameras; InputError for a model
-// that cannot be read), with the directions given (std::invalid_argument naming the option).
-render::Orientation ParseOrientation(const OrientationArgs& o);
+// The directions parsed (std::invalid_argument naming the option); the model is read by Resolve().
+pipeline::ViewOrientation ParseOrientation(const OrientationArgs& o);
 
 // --copc-memory MB (convert, build, export copc): the memory a COPC file's records may take until
 // it is complete, beyond which they are spilled beside it (0: half this machine's).

@@ -1,11 +1,11 @@
 // candi render, section, opacity: see-through images of point files or an archive
-// (pipeline/render.h; an archive's ensembles split over the ranks under mpirun), sections (pipeline/section.h), and SPBR opacity by point-number
+// (pipeline/render.h; an archive's ensembles split over the ranks under mpirun,
+// pipeline/render_ranks.h), sections (pipeline/section.h), and SPBR opacity by point-number
 // adjustment from file to file (sampling/opacity.h; writes the kept points with the field
 // spbr_multiplicity and records the parameters as a comment "candi_opacity alpha=...
 // repeat_level=... pixel_size=... seed=...").
 #include <cstdio>
 #include <exception>
-#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -21,9 +21,9 @@
 #include "core/text_format.h"
 #include "io/point_io.h"
 #include "pipeline/render.h"
+#include "pipeline/render_ranks.h"
 #include "pipeline/section.h"
 #include "render/archive.h"
-#include "render/mpi/archive_ranks.h"
 #include "render/mpi/mpi_session.h"
 #include "render/view_json.h"
 #include "sampling/opacity.h"
@@ -86,7 +86,7 @@ pipeline::RenderOptions RenderOptionsOf(const RenderArgs& a) {
     }
     o.clip = o.clip.And(saved.clip);
   } else {
-    o.orientation = ParseOrientation(a.orientation);
+    o.orientation = ParseOrientation(a.orientation).Resolve();
   }
   return o;
 }
@@ -98,52 +98,29 @@ void PrintRender(const std::string& output, const pipeline::RenderedImage& image
               static_cast<unsigned long long>(r.copies), r.milliseconds, gain, static_cast<unsigned long long>(r.seed));
 }
 
-// Renders an archive, under mpirun as one of the ranks: every rank draws its ensembles, the
-// ranks agree that all succeeded, the sums are added on rank 0, which alone writes the image
-// (atomically). A failed rank makes every rank fail: no image.
+// Under mpirun, rank 0 prints every failed rank's report, before any process exits.
+void PrintRankFailures(const std::vector<render::mpi::Session::Failure>& failures, int ranks) {
+  for (const auto& f : failures) {
+    const size_t skip = f.message.rfind("candi: ", 0) == 0 ? 7 : 0;  // the report's own prefix
+    std::fprintf(stderr, "candi: MPI rank %d of %d failed: %s\n", f.rank, ranks, f.message.c_str() + skip);
+  }
+  std::fprintf(stderr, "candi: every rank stopped because %s failed; no image written\n",
+               failures.size() == 1 && failures[0].rank != 0 ? "another rank" : "a rank");
+  std::fflush(stderr);
+}
+
+// Renders an archive, under mpirun as one of the ranks (pipeline/render_ranks.h); rank 0 alone
+// writes the image (atomically). A failed rank makes every rank fail: no image.
 int RenderArchive(const RenderArgs& a, pipeline::RenderOptions o) {
   if (!o.alpha.empty()) throw std::invalid_argument("--alpha needs point files: an archive holds one copy per point");
   if (!(a.chunk_budget_mb > 0)) throw std::invalid_argument("--chunk-budget must be > 0 MB");
   o.chunk_budget = static_cast<uint64_t>(a.chunk_budget_mb * 1048576.0);
-  std::unique_ptr<render::mpi::Session> session;
-  if (render::mpi::LaunchedByMpi()) session = std::make_unique<render::mpi::Session>();
-  const int rank = session ? session->rank() : 0, ranks = session ? session->size() : 1;
-  if (rank != 0) SetConsoleProgressEnabled(false);
-  pipeline::RenderedImage image;
-  std::exception_ptr failure;
-  try {
-    const render::Archive archive(a.inputs[0]);
-    image = pipeline::RenderArchiveEnsembles(o, archive, rank, ranks);
-  } catch (...) {
-    failure = std::current_exception();
-  }
-  if (!session) {
-    if (failure) std::rethrow_exception(failure);
-  } else {
-    // Every rank learns every failure; rank 0 prints them all before any process exits, since
-    // mpirun ends the job when the first process exits non-zero and a report that another rank
-    // had yet to print would be lost. The barrier holds every rank until it is printed.
-    const FailureReport mine = failure ? DescribeFailure(failure) : FailureReport{};
-    const auto failures = session->GatherFailures(mine.exit_code, mine.text);
-    if (!failures.empty()) {
-      if (rank == 0) {
-        for (const auto& f : failures) {
-          const size_t skip = f.message.rfind("candi: ", 0) == 0 ? 7 : 0;  // the report's own prefix
-          std::fprintf(stderr, "candi: MPI rank %d of %d failed: %s\n", f.rank, ranks, f.message.c_str() + skip);
-        }
-        std::fprintf(stderr, "candi: every rank stopped because %s failed; no image written\n",
-                     failures.size() == 1 && failures[0].rank != 0 ? "another rank" : "a rank");
-        std::fflush(stderr);
-      }
-      session->Barrier();
-      throw ReportedFailure(failures.front().exit_code);
-    }
-    session->ReduceToRoot(&image.result);
-    if (rank != 0) return kOk;
-  }
+  const pipeline::RanksRender r = pipeline::RenderArchiveOnRanks(o, a.inputs[0], {DescribeFailureForMpi, PrintRankFailures});
+  if (!r.failures.empty()) throw ReportedFailure(r.failures.front().exit_code);
+  if (!r.root) return kOk;
   pipeline::RenderOutputs outputs = a.outputs;
   outputs.inputs = a.inputs;
-  PrintRender(outputs.png, image, pipeline::WriteRender(o, image, outputs));
+  PrintRender(outputs.png, r.image, pipeline::WriteRender(o, r.image, outputs));
   return kOk;
 }
 
