@@ -9,16 +9,13 @@
 #pragma once
 
 #include <string>
-#include <vector>
 
 #include "apps/cli.h"
 #include "bench/bench.h"
 #include "pipeline/build.h"
 #include "pipeline/demo_site.h"
+#include "pipeline/scan_registration.h"
 #include "reconstruction/photogrammetry/cleaning.h"
-#include "reconstruction/photogrammetry/coarse_alignment.h"
-#include "reconstruction/photogrammetry/multi_registration.h"
-#include "reconstruction/photogrammetry/registration.h"
 
 namespace candi::apps {
 
@@ -64,23 +61,15 @@ void AddBench(Command& root);
 // candi-pcl (register_run.cc).
 struct RegisterArgs {
   std::string moving, fixed, output;
-  photogrammetry::RegistrationOptions icp;
-  std::string transform_out;         // optional JSON: the 4x4 and the figures
-  std::string initial;               // optional JSON: initial fixed_from_moving (same format)
+  pipeline::RegisterPairOptions options;  // ICP, the initial transform, the transform's JSON
 };
 int RunRegister(const RegisterArgs& args);
 
-// candi register-scans: many scans into one frame at once (multi_registration.h).
+// candi register-scans: many scans into one frame at once (pipeline/scan_registration.h).
 struct RegisterScansArgs {
-  std::vector<std::string> scans;     // point files, one scan each
+  std::vector<std::string> scans;     // point files, one scan each (an E57 file: each of its scans)
   std::string output_dir;             // the moved scans, registration.json
-  photogrammetry::MultiRegistrationOptions options;
-  std::string fixed;                  // "0,2": scans held at their start pose
-  std::string poses;                  // optional JSON: start poses world_from_scan
-  std::string targets;                // optional CSV: targets seen in the scans
-  bool coarse = false;                // scans without a start pose: FPFH + RANSAC onto scan 0 first
-  photogrammetry::CoarseAlignmentOptions coarse_options;
-  std::string format;                 // output extension ("" = each scan's own)
+  pipeline::RegisterScansOptions options;
 };
 int RunRegisterScans(const RegisterScansArgs& args);
 
