@@ -1,31 +1,22 @@
 // candi sfm, dense, georef, colorcorrect: the building from photos (pipeline/photogrammetry.h):
 // COLMAP structure from motion, CPU dense stereo, georeferencing on surveyed targets; and
-// colour-card correction (reconstruction/photogrammetry/color_correct.h).
-#include <cctype>
+// colour-card correction (pipeline/color_correct.h).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
-#include <vector>
 
 #include "apps/commands.h"
-#include "core/atomic_file.h"
-#include "core/check.h"
-#include "core/log.h"
 #include "core/timer.h"
-#include "io/image/png_io.h"
 #include "io/point_io.h"
+#include "pipeline/color_correct.h"
 #include "pipeline/photogrammetry.h"
-#include "reconstruction/photogrammetry/color_correct.h"
 
 namespace candi::apps {
 
 namespace {
 
-namespace fs = std::filesystem;
 namespace pg = candi::photogrammetry;
 
 struct SfmArgs {
@@ -132,11 +123,7 @@ void AddDense(Command& root) {
 namespace {
 
 struct GeorefArgs {
-  std::string input;    // point file, or a COLMAP sparse model folder
-  std::string targets;  // targets CSV (reconstruction/photogrammetry/georef.h)
-  std::string output;   // point file (IN a point file) or folder (IN a model)
-  std::string model;    // COLMAP sparse model of the picks (default: IN if a model)
-  std::string picks;    // picks CSV name,image,u,v
+  pipeline::GeorefFiles files;  // IN, --targets, -o, --model, --picks
   pipeline::GeorefOptions options;
 };
 
@@ -174,56 +161,8 @@ void PrintGeoref(const pg::GeorefResult& r) {
   for (const std::string& w : r.fit.warnings) std::printf("warning: %s\n", w.c_str());
 }
 
-// IN, a point file, streamed through the transform into OUT.
-void GeoreferencePointFile(const GeorefArgs& a, const pg::GeorefResult& r) {
-  auto reader = io::OpenPointReader(a.input);
-  io::PointWriteSpec spec;
-  spec.schema = reader->info().schema;
-  spec.meta = reader->info().meta;
-  if (!a.options.crs.empty()) spec.meta.crs = a.options.crs;
-  spec.frame = r.frame;
-  spec.count = reader->info().count;
-  auto writer = io::OpenPointWriter(a.output, spec);
-  PointCloud chunk;
-  while (reader->Read(1 << 20, &chunk) > 0) {
-    pg::ApplySimilarity(r.survey_from_model, r.frame, &chunk);
-    writer->Write(chunk);
-  }
-  writer->Close();
-  LogInfo("wrote " + std::to_string(writer->points_written()) + " points to " + a.output);
-}
-
-// IN, a COLMAP model, moved into OUT (a model folder) with its points.
-void GeoreferenceModel(const GeorefArgs& a, const pg::GeorefResult& r, PointCloud points) {
-  fs::create_directories(a.output);
-  const Sim3 local_from_model(r.survey_from_model.scale, r.survey_from_model.rotation,
-                              r.survey_from_model.translation - r.frame.origin);
-  pg::WriteGeoreferencedColmapModel(a.input, local_from_model, a.output);
-  pg::ApplySimilarity(r.survey_from_model, r.frame, &points);
-  io::WritePointCloud(a.output + "/points.ply", points);
-}
-
 int RunGeoref(const GeorefArgs& a) {
-  a.options.Check();  // bad values: exit 1
-  const bool input_is_model = fs::is_directory(a.input);
-  if (!input_is_model) {
-    io::DetectPointFormat(a.input);  // readable and known, before the work
-    io::OutputPointFormat(a.output);
-  }
-  CheckOutputFolder(a.output);
-  const std::string model_dir = input_is_model ? a.input : a.model;
-  pg::ColmapGeorefInput model;
-  if (!model_dir.empty()) model = pg::ReadColmapForGeoref(model_dir);
-  const pg::GeorefResult result =
-      pipeline::FitGeoref(a.options, a.targets, model_dir.empty() ? nullptr : &model, a.picks);
-  PrintGeoref(result);
-  for (const std::string& w : result.fit.warnings) LogWarning(w);
-  if (input_is_model) {
-    GeoreferenceModel(a, result, model.points);
-  } else {
-    GeoreferencePointFile(a, result);
-  }
-  WriteFileAtomic(a.output + ".georef.json", pipeline::GeorefReport(a.options, result).dump(2) + "\n");
+  pipeline::GeoreferenceFiles(a.options, a.files, PrintGeoref);
   return kOk;  // a fit that did not converge is reported (table, JSON, warning), not an error
 }
 
@@ -234,12 +173,12 @@ void AddGeoref(Command& root) {
   pg::SimilarityFitOptions& fit = a.options.fit;
   Command c = root.Add("georef", "Georeference with total-station targets: robust similarity (Ceres), residuals per "
                                  "target, RMSE of control and check targets; per chunk, ties chunks into one frame");
-  c.Option("input", a.input, "Point file, or a COLMAP sparse model folder").Required();
-  c.Option("--targets", a.targets, "Targets CSV: name,E,N,H,role,accuracy[,x,y,z]").Required();
-  c.Option("-o,--output", a.output, "Output point file (or folder, for a model); also writes OUT.georef.json")
+  c.Option("input", a.files.input, "Point file, or a COLMAP sparse model folder").Required();
+  c.Option("--targets", a.files.targets, "Targets CSV: name,E,N,H,role,accuracy[,x,y,z]").Required();
+  c.Option("-o,--output", a.files.output, "Output point file (or folder, for a model); also writes OUT.georef.json")
       .Required();
-  c.Option("--model", a.model, "COLMAP sparse model whose images the picks are in");
-  c.Option("--picks", a.picks, "Picks CSV: name,image,u,v (pixels, undistorted images)");
+  c.Option("--model", a.files.model, "COLMAP sparse model whose images the picks are in");
+  c.Option("--picks", a.files.picks, "Picks CSV: name,image,u,v (pixels, undistorted images)");
   c.Choice("--loss", fit.loss,
            {{"none", pg::RobustLoss::kNone}, {"huber", pg::RobustLoss::kHuber}, {"cauchy", pg::RobustLoss::kCauchy}},
            "Robust loss: huber, cauchy or none");
@@ -258,23 +197,9 @@ namespace {
 
 struct ColorCorrectArgs {
   std::string input, output;    // PNG image or point file with colours
-  std::string patches;          // CSV of measured vs reference patch colours, or
-  std::string card, corners;    // the card photo (PNG) and its patches' corners CSV
+  pipeline::ColorCard card;     // --patches, or --card and --corners
   pg::ColorCorrectionOptions options;
 };
-
-bool IsPng(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".png";
-}
-
-std::vector<pg::ColorPatch> Patches(const ColorCorrectArgs& a) {
-  if (!a.patches.empty()) return pg::ReadColorPatches(a.patches);
-  const io::PngImage card = io::ReadPng(a.card);
-  if (card.bit_depth != 8) throw InputError(a.card, "", "the card photo must be an 8-bit PNG");
-  return pg::SamplePatches(card.image8, pg::ReadPatchQuads(a.corners), a.corners);
-}
 
 void PrintColorCorrection(const pg::ColorCorrection& c) {
   std::printf("%-16s %10s %10s  %s\n", "patch", "dE00 before", "dE00 after", "status");
@@ -291,67 +216,8 @@ void PrintColorCorrection(const pg::ColorCorrection& c) {
   for (const std::string& w : c.warnings) std::printf("warning: %s\n", w.c_str());
 }
 
-std::string ColorCorrectionJson(const pg::ColorCorrection& c) {
-  nlohmann::json j;
-  j["matrix_linear_rgb"] = nlohmann::json::array();
-  for (int r = 0; r < 3; ++r) {
-    j["matrix_linear_rgb"].push_back({c.matrix(r, 0), c.matrix(r, 1), c.matrix(r, 2), c.matrix(r, 3)});
-  }
-  j["delta_e"] = "CIEDE2000";
-  for (const pg::PatchDeltaE& p : c.patches) {
-    j["patches"].push_back({{"name", p.name}, {"before", p.before}, {"after", p.after}, {"outlier", p.outlier}});
-  }
-  j["mean_before"] = c.mean_before;
-  j["mean_after"] = c.mean_after;
-  j["max_before"] = c.max_before;
-  j["max_after"] = c.max_after;
-  j["warnings"] = c.warnings;
-  return j.dump(2) + "\n";
-}
-
-void CorrectPointFile(const ColorCorrectArgs& a, const pg::ColorMatrix& m) {
-  PointCloud cloud = io::ReadPointCloud(a.input);
-  if (!cloud.schema.colors) throw InputError(a.input, "", "the points have no colours");
-  pg::ApplyColorMatrix(m, &cloud);
-  io::WritePointCloud(a.output, cloud);
-}
-
-void CorrectImage(const ColorCorrectArgs& a, const pg::ColorMatrix& m) {
-  io::PngImage png = io::ReadPng(a.input);
-  Image8& image8 = png.image8;
-  const int channels = png.bit_depth == 8 ? image8.channels() : png.image16.channels();
-  if (channels < 3) throw InputError(a.input, "", "a grey image cannot be colour-corrected");
-  if (png.bit_depth == 8) {
-    pg::ApplyColorMatrix(m, &image8);
-    io::WritePng(a.output, image8, png.text);
-  } else {
-    pg::ApplyColorMatrix(m, &png.image16);
-    io::WritePng(a.output, png.image16, png.text);
-  }
-}
-
 int RunColorCorrect(const ColorCorrectArgs& a) {
-  a.options.Check();
-  if (a.patches.empty() == (a.card.empty() || a.corners.empty())) {
-    throw std::invalid_argument("give either --patches or both --card and --corners");
-  }
-  const bool png = IsPng(a.input);
-  if (png != IsPng(a.output)) throw std::invalid_argument("IN and OUT must both be PNG images or both point files");
-  if (!png) {
-    io::DetectPointFormat(a.input);
-    io::OutputPointFormat(a.output);
-  } else if (!fs::is_regular_file(a.input)) {
-    throw InputError(a.input, "", "cannot read the image (no such file)");
-  }
-  const pg::ColorCorrection c = pg::FitColorCorrection(a.options, Patches(a));
-  PrintColorCorrection(c);
-  for (const std::string& w : c.warnings) LogWarning(w);
-  if (png) {
-    CorrectImage(a, c.matrix);
-  } else {
-    CorrectPointFile(a, c.matrix);
-  }
-  WriteFileAtomic(a.output + ".colorcorrect.json", ColorCorrectionJson(c));
+  pipeline::ColorCorrectFile(a.options, a.card, a.input, a.output, PrintColorCorrection);
   return kOk;
 }
 
@@ -363,10 +229,10 @@ void AddColorCorrect(Command& root) {
                                        "applied to a PNG or point colours; CIEDE2000 before and after");
   c.Option("input", a.input, "PNG image or point file with colours").Required();
   c.Option("-o,--output", a.output, "Corrected output (same kind); also OUT.colorcorrect.json").Required();
-  Arg patches = c.Option("--patches", a.patches, "CSV: patch,measured_r,measured_g,measured_b,reference_r,"
+  Arg patches = c.Option("--patches", a.card.patches, "CSV: patch,measured_r,measured_g,measured_b,reference_r,"
                          "reference_g,reference_b (0..255)");
-  Arg card = c.Option("--card", a.card, "Photo of the colour card (8-bit PNG)");
-  Arg corners = c.Option("--corners", a.corners, "CSV: patch,x0,y0,...,x3,y3,reference_r,reference_g,reference_b "
+  Arg card = c.Option("--card", a.card.card, "Photo of the colour card (8-bit PNG)");
+  Arg corners = c.Option("--corners", a.card.corners, "CSV: patch,x0,y0,...,x3,y3,reference_r,reference_g,reference_b "
                          "(corners in pixels, around the patch)");
   patches.Excludes(card).Excludes(corners);
   card.Needs(corners);
