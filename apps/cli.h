@@ -1,4 +1,4 @@
-// How a command group declares its command line, without CLI11: each command binds its options
+// How a command declares its command line, without CLI11: each command binds its options
 // to the fields they set (the library's Options structs, or a few of the command's own), once.
 // cli.cc is the one translation unit that includes CLI11 (its headers cost ~10 s each to parse)
 // and turns these declarations into CLI11's; the help text is CLI11's, from these declarations.
