@@ -217,13 +217,29 @@ int RunCli(int argc, char** argv) {
   std::function<int()> run;
   std::vector<std::shared_ptr<void>> kept;
   Command root(&app, &run, &kept);
-  AddInspectCommands(root);
-  AddDigitizeCommands(root);
-  AddAssembleCommands(root);
-  AddLookCommands(root);
+  // In the order of CommandGroups().
+  AddInfo(root);
+  AddConvert(root);
+  AddCompare(root);
+  AddSfm(root);
+  AddDense(root);
+  AddGeoref(root);
+  AddRegister(root);
+  AddRegisterScans(root);
+  AddClean(root);
+  AddColorCorrect(root);
+  AddFoundation(root);
+  AddReliefCommands(root);
+  AddBuild(root);
+  AddPack(root);
+  AddExport(root);
+  AddRender(root);
+  AddView(root);
+  AddPublish(root);
+  AddSection(root);
   AddOpacity(root);
   AddDemo(root);
-  AddBenchCommands(root);
+  AddBench(root);
   GroupCommands(app);
   AddGlobalFlags(app, verbose, quiet);
   try {

@@ -1,11 +1,12 @@
-// How a command group declares its command line, without CLI11: each command binds its options
+// How a command declares its command line, without CLI11: each command binds its options
 // to the fields they set (the library's Options structs, or a few of the command's own), once.
 // cli.cc is the one translation unit that includes CLI11 (its headers cost ~10 s each to parse)
 // and turns these declarations into CLI11's; the help text is CLI11's, from these declarations.
 //
-// A group file (apps/inspect.cc, ...) provides `void AddXxxCommands(Command& root)`, which adds
-// its commands in the order `candi --help` lists them, keeps their arguments alive with
-// Keep<T>(), and names the function that runs each command with Run().
+// A command's file (apps/render.cc, ...; commands.h lists them) provides `void AddXxx(Command&
+// root)` for each of its commands, which adds the command, keeps its arguments alive with
+// Keep<T>(), and names the function that runs it with Run(); cli.cc adds them in the order
+// `candi --help` lists them. Option groups several commands share are in option_groups.h.
 #pragma once
 
 #include <cstdint>

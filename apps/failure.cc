@@ -25,4 +25,9 @@ FailureReport DescribeFailure(std::exception_ptr failure) {
   }
 }
 
+std::pair<int, std::string> DescribeFailureForMpi(std::exception_ptr failure) {
+  const FailureReport report = DescribeFailure(failure);
+  return {report.exit_code, report.text};
+}
+
 }  // namespace candi::apps

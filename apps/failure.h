@@ -6,6 +6,7 @@
 #include <exception>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace candi::apps {
 
@@ -16,6 +17,9 @@ struct FailureReport {
 
 // The report of an exception: InputError -> 2, std::invalid_argument -> 1, anything else -> 3.
 FailureReport DescribeFailure(std::exception_ptr failure);
+// The same as the MPI split wants it (render/mpi/archive_ranks.h's FailureDescriber): the exit
+// code and the line.
+std::pair<int, std::string> DescribeFailureForMpi(std::exception_ptr failure);
 
 // A failure whose report is on stderr already (an MPI rank's, printed by rank 0 for every rank):
 // main() returns exit_code() and prints nothing more.

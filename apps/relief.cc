@@ -1,5 +1,5 @@
 // candi relief synth | dataset | train | predict | points | eval | place: the command line of the
-// buried-relief path. The commands run in relief_commands.cc (candi-relief) and relief_place.cc.
+// buried-relief path. The commands run in relief_network.cc (candi-relief) and relief_place.cc.
 #include "apps/relief.h"
 
 #include "apps/commands.h"

@@ -1,6 +1,6 @@
 // `candi relief ...`: the buried-relief path (ALGORITHMS.md section 3). relief.cc declares every
 // relief command (in every executable, for --help); relief_place.cc runs `place` (Ceres only, in
-// candi); relief_commands.cc runs the others (libtorch, in candi-relief only; handoff_stubs.cc
+// candi); relief_network.cc runs the others (libtorch, in candi-relief only; handoff_stubs.cc
 // stands in elsewhere).
 #pragma once
 

@@ -1,7 +1,7 @@
 // candi's benchmarks as a library (candi_bench; the relief one in candi_bench_relief, which links
 // libtorch): each prints a table on stdout, accuracy against time or throughput, and returns 0
 // (the scale benchmark returns 2 when one of its runs failed).
-// `candi bench ...` (apps/bench_commands.cc) runs them; so do the programs in bench/ that need no
+// `candi bench ...` (apps/bench.cc) runs them; so do the programs in bench/ that need no
 // command line. docs/benchmarks.md keeps their current tables.
 // Failures: std::invalid_argument for invalid options, InputError for unreadable data.
 #pragma once

@@ -11,6 +11,7 @@
 #include "core/progress.h"
 #include "core/timer.h"
 #include "io/crs.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/dense_workspace.h"
 
 namespace candi::pipeline {
@@ -193,6 +194,64 @@ json GeorefReport(const GeorefOptions& o, const pg::GeorefResult& r) {
   }
   j["rmse"] = {{"control", RmseJson(r.control)}, {"check", RmseJson(r.check)}};
   return j;
+}
+
+namespace {
+
+// IN, a point file, streamed through the transform into OUT.
+void GeoreferencePointFile(const GeorefOptions& o, const GeorefFiles& files, const pg::GeorefResult& r) {
+  auto reader = io::OpenPointReader(files.input);
+  io::PointWriteSpec spec;
+  spec.schema = reader->info().schema;
+  spec.meta = reader->info().meta;
+  if (!o.crs.empty()) spec.meta.crs = o.crs;
+  spec.frame = r.frame;
+  spec.count = reader->info().count;
+  auto writer = io::OpenPointWriter(files.output, spec);
+  PointCloud chunk;
+  while (reader->Read(1 << 20, &chunk) > 0) {
+    pg::ApplySimilarity(r.survey_from_model, r.frame, &chunk);
+    writer->Write(chunk);
+  }
+  writer->Close();
+  LogInfo("wrote " + std::to_string(writer->points_written()) + " points to " + files.output);
+}
+
+// IN, a COLMAP model, moved into OUT (a model folder) with its points.
+void GeoreferenceModel(const GeorefFiles& files, const pg::GeorefResult& r, PointCloud points) {
+  std::filesystem::create_directories(files.output);
+  const Sim3 local_from_model(r.survey_from_model.scale, r.survey_from_model.rotation,
+                              r.survey_from_model.translation - r.frame.origin);
+  pg::WriteGeoreferencedColmapModel(files.input, local_from_model, files.output);
+  pg::ApplySimilarity(r.survey_from_model, r.frame, &points);
+  io::WritePointCloud(files.output + "/points.ply", points);
+}
+
+}  // namespace
+
+pg::GeorefResult GeoreferenceFiles(const GeorefOptions& options, const GeorefFiles& files,
+                                   const std::function<void(const pg::GeorefResult&)>& fitted) {
+  options.Check();  // bad values: exit 1
+  const bool input_is_model = std::filesystem::is_directory(files.input);
+  if (!input_is_model) {
+    io::DetectPointFormat(files.input);  // readable and known, before the work
+    io::OutputPointFormat(files.output);
+  }
+  CheckOutputFolder(files.output);
+  const std::string model_dir = input_is_model ? files.input : files.model;
+  pg::ColmapGeorefInput model;
+  if (!model_dir.empty()) model = pg::ReadColmapForGeoref(model_dir);
+  const pg::GeorefResult result =
+      FitGeoref(options, files.targets, model_dir.empty() ? nullptr : &model, files.picks);
+  if (fitted) fitted(result);
+  for (const std::string& w : result.fit.warnings) LogWarning(w);
+  if (input_is_model) {
+    GeoreferenceModel(files, result, model.points);
+  } else {
+    GeoreferencePointFile(options, files, result);
+  }
+  WriteFileAtomic(files.output + ".georef.json", GeorefReport(options, result).dump(2) + "\n");
+  return result;
 }
 
 }  // namespace candi::pipeline

@@ -1,13 +1,15 @@
 // The standing building from photographs: COLMAP structure from motion into a dense workspace,
 // candi's CPU PatchMatch stereo and fusion into coloured points, and georeferencing on surveyed
-// targets (reconstruction/photogrammetry). What `candi sfm`, `candi dense` and `candi georef` do,
-// and a build's photogrammetry layer, which passes the points between them in memory.
+// targets (reconstruction/photogrammetry). What `candi sfm`, `candi dense` and `candi georef` do
+// (GeoreferenceFiles: the fit and the files it moves), and a build's photogrammetry layer, which
+// passes the points between them in memory.
 // Units: metres, pixels; the model's frame until georeferenced, the survey frame (its integer
 // shift, GeorefResult::frame) after. Failures: std::invalid_argument for invalid options,
 // InputError naming the file (or COLMAP's exit code and log) otherwise; a fit that does not
 // converge is a result (GeorefResult::fit), not an error. Not thread-safe (runs processes).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -71,5 +73,23 @@ void Georeference(const GeorefOptions& options, const photogrammetry::GeorefResu
 // The fit as JSON (OUT.georef.json): the transform, the shift, the loss, convergence, warnings,
 // per-target residuals and the RMSE of control and check targets.
 nlohmann::json GeorefReport(const GeorefOptions& options, const photogrammetry::GeorefResult& result);
+
+// What `candi georef` reads and writes.
+struct GeorefFiles {
+  std::string input;    // a point file, or a COLMAP sparse model folder
+  std::string targets;  // the targets CSV (photogrammetry/georef.h)
+  std::string model;    // the COLMAP sparse model the picks are in ("": `input`, when it is a model)
+  std::string picks;    // optional picks CSV: name,image,u,v
+  std::string output;   // a point file (for a point file in) or a folder (for a model), and OUTPUT.georef.json
+};
+
+// `candi georef`: the fit (FitGeoref), then the input moved into the survey frame: a point file
+// streamed through the transform into `output` (its fields kept, options.crs stated), or a model
+// into the folder `output` with its points (points.ply); then OUTPUT.georef.json (GeorefReport).
+// `fitted` (may be null) gets the fit before anything is written; its warnings are logged. A fit
+// that does not converge is written and reported, not an error.
+photogrammetry::GeorefResult GeoreferenceFiles(
+    const GeorefOptions& options, const GeorefFiles& files,
+    const std::function<void(const photogrammetry::GeorefResult&)>& fitted = nullptr);
 
 }  // namespace candi::pipeline

@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "core/check.h"
+#include "io/point_io.h"
 #include "reconstruction/photogrammetry/dense_workspace.h"
 #include "reconstruction/photogrammetry/synthetic_views.h"
 #include "tests/util/option_check.h"
@@ -126,6 +127,58 @@ TEST(Georeference, BadInputsAreNamed) {
   EXPECT_THROW(FitGeoref(o, dir.File("two.csv"), nullptr, ""), InputError);
   o.fit.loss_scale = 0;
   EXPECT_THROW(o.Check(), std::invalid_argument);
+}
+
+TEST(GeoreferenceFiles, APointFileStreamedIntoTheSurveyFrameAfterTheFitIsReported) {
+  TempDir dir;
+  PointCloud cloud;
+  cloud.schema.colors = true;
+  cloud.positions = {{0, 0, 0}, {2, 1, 2}, {4, 3, 0}};
+  cloud.colors = {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}};
+  io::WritePointCloud(dir.File("model.ply"), cloud);
+  GeorefOptions o;
+  o.crs = "EPSG:32749";
+  GeorefFiles files;
+  files.input = dir.File("model.ply");
+  files.targets = Targets(dir);
+  files.output = dir.File("survey.las");
+  bool fitted = false;
+  const pg::GeorefResult r = GeoreferenceFiles(o, files, [&](const pg::GeorefResult& fit) {
+    fitted = true;
+    EXPECT_TRUE(fit.fit.converged);
+    EXPECT_FALSE(fs::exists(files.output));
+  });
+  EXPECT_TRUE(fitted);
+  EXPECT_NEAR(r.survey_from_model.scale, 3.0, 1e-4);
+  const PointCloud moved = io::ReadPointCloud(files.output);
+  ASSERT_EQ(moved.size(), 3u);
+  EXPECT_FALSE(moved.meta.crs.empty());
+  EXPECT_EQ(moved.colors[2], cloud.colors[2]);
+  EXPECT_LT((moved.WorldPosition(1) - kSurveyFromModel * Eigen::Vector3d(2, 1, 2)).norm(), 2e-3);
+  const nlohmann::json report = nlohmann::json::parse(testing::ReadBytes(files.output + ".georef.json"));
+  EXPECT_EQ(report.at("crs"), "EPSG:32749");
+}
+
+TEST(GeoreferenceFiles, AModelMovedWithItsPointsAndBadInputsNamedFirst) {
+  TempDir dir;
+  std::vector<pg::SyntheticView> views;
+  const std::string ws = Workspace(dir, &views);
+  GeorefFiles files;
+  files.input = ws + "/sparse";
+  files.targets = Targets(dir);
+  files.output = dir.File("model_utm");
+  GeoreferenceFiles(GeorefOptions(), files);
+  EXPECT_TRUE(fs::exists(dir.File("model_utm/points.ply")));
+  EXPECT_TRUE(fs::exists(dir.File("model_utm.georef.json")));
+  EXPECT_FALSE(io::ReadPointCloud(dir.File("model_utm/points.ply")).empty());
+  // An unknown output format and a missing input are refused before the fit.
+  files.input = dir.File("missing.ply");
+  files.output = dir.File("out.ply");
+  EXPECT_THROW(GeoreferenceFiles(GeorefOptions(), files), InputError);
+  files.input = ws + "/sparse";
+  files.targets = dir.File("missing.csv");
+  EXPECT_THROW(GeoreferenceFiles(GeorefOptions(), files), InputError);
+  EXPECT_FALSE(fs::exists(dir.File("out.ply")));
 }
 
 }  // namespace

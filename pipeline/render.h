@@ -4,7 +4,7 @@
 // Point files and clouds are drawn in memory (a SplatCloud, 10 bytes a point copy; opacity
 // control possible) or streamed in chunks (bounded memory); an archive is streamed from its
 // memory-mapped chunks, a share of its ensembles at a time (the MPI split of `candi render`:
-// apps/ owns the MPI session and adds the ranks' sums). The camera is the view given, or the
+// pipeline/render_ranks.h runs the ranks and adds their sums). The camera is the view given, or the
 // default view of the data (render/first_view.h) framed on the clipped bounds.
 // World (survey) coordinates throughout; the renderers work in the data's render frame.
 // Failures: std::invalid_argument for invalid options (the field named), InputError for bad or

@@ -19,6 +19,7 @@
 #include "reconstruction/photogrammetry/registration.h"
 #include "reconstruction/photogrammetry/virtual_scanner.h"
 #include "tests/run_candi.h"
+#include "tests/util/rigid_json.h"
 #include "tests/util/scan_scene.h"
 #include "tests/util/test_util.h"
 
@@ -27,23 +28,6 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 const Eigen::Vector3d kOrigin(500000.0, 4000000.0, 120.0);
-
-nlohmann::json Matrix(const Rigid3& t) {
-  const Eigen::Matrix4d m = t.ToMatrix();
-  nlohmann::json rows = nlohmann::json::array();
-  for (int i = 0; i < 4; ++i) rows.push_back({m(i, 0), m(i, 1), m(i, 2), m(i, 3)});
-  return rows;
-}
-
-Rigid3 FromJson(const nlohmann::json& m) {
-  Eigen::Matrix3d r;
-  Eigen::Vector3d t;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) r(i, j) = m[i][j].get<double>();
-    t[i] = m[i][3].get<double>();
-  }
-  return Rigid3(Eigen::Quaterniond(r), t);
-}
 
 struct Scans {
   std::vector<Rigid3> truth, start;
@@ -74,7 +58,7 @@ Scans MakeScans(const TempDir& dir, int count) {
 
 void WritePoses(const std::string& path, const std::vector<Rigid3>& poses) {
   nlohmann::json j = nlohmann::json::array();
-  for (const Rigid3& p : poses) j.push_back(Matrix(p));
+  for (const Rigid3& p : poses) j.push_back(RigidJson(p));
   WriteBytes(path, j.dump());
 }
 
@@ -100,13 +84,13 @@ TEST(RegisterScansCli, RecoversPerturbedStationsAtSurveyCoordinates) {
   for (int i = 0; i < 5; ++i) {
     SCOPED_TRACE("scan " + std::to_string(i));
     EXPECT_TRUE(j["scans"][i]["connected"].get<bool>());
-    const Rigid3 got = FromJson(j["scans"][i]["world_from_scan"]);
+    const Rigid3 got = RigidFromJson(j["scans"][i]["world_from_scan"]);
     EXPECT_LT((got.translation - s.truth[i].translation).norm(), 0.002);
     EXPECT_LT(Eigen::AngleAxisd(got.rotation * s.truth[i].rotation.conjugate()).angle() / kDeg, 0.01);
   }
   EXPECT_FALSE(j["scans"][5]["connected"].get<bool>());
   EXPECT_EQ(j["scans"][0]["start_from"], "given (--poses)");  // where each start came from
-  const Rigid3 kept = FromJson(j["scans"][5]["world_from_scan"]);
+  const Rigid3 kept = RigidFromJson(j["scans"][5]["world_from_scan"]);
   EXPECT_LT((kept.translation - far_pose.translation).norm(), 1e-6);
   EXPECT_FALSE(j["loops"].empty());
   for (const auto& loop : j["loops"]) EXPECT_LT(loop["translation_m"].get<double>(), 0.02);
@@ -150,7 +134,7 @@ TEST(RegisterScansCli, ControlTargetsTieTheBlockToTheSurvey) {
   const nlohmann::json j = nlohmann::json::parse(ReadBytes(dir.File("out/registration.json")));
   EXPECT_LT(j["check_rmse"]["xyz_m"].get<double>(), 0.005);
   for (int i = 0; i < 3; ++i) {
-    const Rigid3 got = FromJson(j["scans"][i]["world_from_scan"]);
+    const Rigid3 got = RigidFromJson(j["scans"][i]["world_from_scan"]);
     EXPECT_LT((got.translation - s.truth[i].translation).norm(), 0.005) << i;
   }
 }
@@ -181,7 +165,7 @@ TEST(RegisterScansCli, NoWorseThanCloudCompareIcpFromTheSameStart) {
                                    dir.File("out") + " --poses " + dir.File("poses.json"));
   ASSERT_EQ(r.code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(ReadBytes(dir.File("out/registration.json")));
-  const Rigid3 candi = FromJson(j["scans"][1]["world_from_scan"]);
+  const Rigid3 candi = RigidFromJson(j["scans"][1]["world_from_scan"]);
   const double candi_error = (candi.translation - truth[1].translation).norm();
   // CloudCompare on both scans in world coordinates under their start poses (shifted to the site).
   for (int i = 0; i < 2; ++i) {
@@ -245,7 +229,7 @@ TEST(RegisterScansCli, AnE57FileWithSeveralScansStartsFromItsPoses) {
     SCOPED_TRACE("scan " + std::to_string(i));
     EXPECT_EQ(j["scans"][i]["e57_scan"], i);
     EXPECT_EQ(j["scans"][i]["output"], "site_" + std::to_string(i) + ".ply");
-    const Rigid3 got = FromJson(j["scans"][i]["world_from_scan"]);
+    const Rigid3 got = RigidFromJson(j["scans"][i]["world_from_scan"]);
     EXPECT_LT((got.translation - s.truth[i].translation).norm(), 0.002);
     EXPECT_LT(Eigen::AngleAxisd(got.rotation * s.truth[i].rotation.conjugate()).angle() / kDeg, 0.01);
   }

@@ -252,7 +252,7 @@ export function check(index) {
     repeat_level: L,
     point_size: setting('point_size', (v) => finite(v) && v >= 1 && v <= 64, 1),
     background: setting('background', (v) => vec3(v) && v.every((x) => Number.isInteger(x) && x >= 0 && x <= 255), [0, 0, 0]).slice(),
-    brightness: setting('brightness', (v) => v === 'auto' || v === 'none' || (finite(v) && v > 0 && v <= 1000), 'auto'),
+    brightness: setting('brightness', (v) => v === 'auto' || v === 'none' || (finite(v) && v > 0 && v <= 100), 'auto'),
     opaque: setting('opaque', (v) => typeof v === 'boolean', false),
     seed,
     clip: setting('clip', (v) => Array.isArray(v) && v.length <= 16 &&

@@ -1,13 +1,18 @@
-// candi info, candi convert, candi compare: a point file's count, bounds, fields, format, shift and
-// CRS; a point file in another format, shift or CRS (io/convert.h); the deviation of one cloud from
-// a reference cloud or mesh (pipeline/compare.h).
+// candi info, candi convert, candi pack, candi export: a point file's count, bounds, fields, format,
+// shift and CRS; a point file in another format, shift or CRS (io/convert.h); point files packed
+// into a render archive (render/archive_pack.h); a finished build's layers as COPC
+// (pipeline/copc_export.h).
+#include <algorithm>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "apps/arg_parse.h"
 #include "apps/commands.h"
+#include "apps/option_groups.h"
 #include "core/check.h"
 #include "core/progress.h"
 #include "core/text_format.h"
@@ -15,7 +20,8 @@
 #include "io/copc/copc_read.h"
 #include "io/crs.h"
 #include "io/point_io.h"
-#include "pipeline/compare.h"
+#include "pipeline/copc_export.h"
+#include "render/archive_pack.h"
 
 namespace candi::apps {
 
@@ -189,6 +195,8 @@ int RunInfo(const InfoArgs& args) {
   return kOk;
 }
 
+}  // namespace
+
 void AddInfo(Command& root) {
   InfoArgs& a = root.Keep<InfoArgs>();
   Command c = root.Add("info", "Print a point file's count, bounds (world), fields, format (LAZ: its compressor), shift "
@@ -200,6 +208,8 @@ void AddInfo(Command& root) {
   c.Run([&a] { return RunInfo(a); });
   c.Footer("Example: candi info site.las");
 }
+
+namespace {
 
 struct ConvertArgs {
   std::string input, output;
@@ -251,22 +261,6 @@ int RunConvert(const ConvertArgs& args) {
 
 }  // namespace
 
-void AddCopcMemory(Command& c, double& mb) {
-  c.Option("--copc-memory", mb,
-           "COPC output: the memory (MB) its records may take until the file is complete; "
-           "beyond it they are spilled beside the file (default 0: half of this machine's)");
-}
-
-uint64_t CopcMemoryBytes(double mb) {
-  if (!(mb >= 0)) {
-    throw std::invalid_argument("--copc-memory " + FormatSignificant(mb, 6) +
-                                ": must be >= 0 (MB; 0: half of this machine's memory)");
-  }
-  return static_cast<uint64_t>(mb * 1048576.0);
-}
-
-namespace {
-
 void AddConvert(Command& root) {
   ConvertArgs& a = root.Keep<ConvertArgs>();
   io::ConvertOptions& o = a.options;
@@ -304,90 +298,110 @@ void AddConvert(Command& root) {
            "          candi convert scan.las scan.copc.laz   (for Potree, QGIS, CloudCompare)");
 }
 
-struct CompareArgs {
-  std::string reference, compared, output;
-  pipeline::CompareOptions options;
+namespace {
+
+struct PackArgs {
+  std::vector<std::string> inputs;
+  std::string output;        // archive directory
+  render::PackOptions options;
+  double memory_mb = 400;    // sort buffers (~100 bytes a point)
+  std::string columns;       // XYZ/PTS inputs
+  FieldArgs field;           // the points coloured by a scalar field
 };
 
-int RunCompare(const CompareArgs& args) {
-  std::optional<ConsoleProgress> progress;
-  const pipeline::CompareOutcome out = pipeline::RunCompare(
-      args.options, args.reference, args.compared, args.output, [&](uint64_t done, uint64_t total) {
-        if (!progress) progress.emplace(compare::MethodName(args.options.deviation.method) + " " +
-                                        args.compared);
-        progress->Update(done, total);
-      });
-  if (progress) progress->Finish();
-  const compare::DeviationSummary& s = out.summary;
-  auto mm = [](double m) { return std::isnan(m) ? std::string("n/a") : FormatSignificant(m * 1000, 5) + " mm"; };
-  std::printf("%-22s %s\n", "method", compare::MethodName(s.method).c_str());
-  std::printf("%-22s %llu (%llu undefined)\n", "points",
-              static_cast<unsigned long long>(s.count), static_cast<unsigned long long>(s.undefined));
-  std::printf("%-22s %s\n", "mean", mm(s.mean).c_str());
-  std::printf("%-22s %s\n", "std", mm(s.std).c_str());
-  std::printf("%-22s %s\n", "rms", mm(s.rms).c_str());
-  if (!s.percentiles.empty()) {
-    std::printf("%-22s %s / %s / %s\n", "p5 / median / p95", mm(s.percentiles[1].second).c_str(),
-                mm(s.percentiles[3].second).c_str(), mm(s.percentiles[5].second).c_str());
+int RunPack(const PackArgs& a) {
+  if (!(a.memory_mb > 0)) throw std::invalid_argument("--memory must be > 0 MB");
+  render::PackOptions o = a.options;
+  o.memory_points = std::max<uint64_t>(o.chunk_points, static_cast<uint64_t>(a.memory_mb * 1048576.0 / 100));
+  ConsoleProgress progress("pack");
+  const FieldColouring colour_by = ParseFieldColouring(a.field);
+  const render::PackSummary s =
+      render::PackFiles(o, a.inputs, a.columns, a.output, progress.Callback(), colour_by);
+  progress.Finish();
+  std::printf("%s: %llu points in %llu chunks, %llu data file(s), %.2f bytes/point, %.1f s (%.1f M points/s: "
+              "bounds %.1f s, sort and write %.1f s; input hashes %.1f s on another thread meanwhile)%s, %zu-byte records; "
+              "largest quantization error %.3g, %.3g, %.3g mm\n",
+              a.output.c_str(), static_cast<unsigned long long>(s.points), static_cast<unsigned long long>(s.chunks),
+              static_cast<unsigned long long>(s.files), s.points ? static_cast<double>(s.bytes) / s.points : 0.0,
+              s.seconds, s.points / s.seconds / 1e6, s.bounds_seconds, s.sort_seconds, s.hash_seconds,
+              s.spilled_points ? ", sorted on disk" : "", s.record_bytes, 1e3 * s.max_error[0], 1e3 * s.max_error[1],
+              1e3 * s.max_error[2]);
+  if (s.colour_by) {
+    const FieldLegend& l = *s.colour_by;
+    std::printf("  coloured by %s (%s, %s to %s): %llu of %llu points outside the range, %llu without a value (grey)\n",
+                l.field.c_str(), FieldScaleName(l.scale), FormatDouble(l.lo).c_str(), FormatDouble(l.hi).c_str(),
+                static_cast<unsigned long long>(l.outside), static_cast<unsigned long long>(l.count),
+                static_cast<unsigned long long>(l.undefined));
   }
-  std::printf("%-22s %s\n", ("within " + mm(s.tolerance)).c_str(),
-              s.defined ? (FormatSignificant(100 * s.within_tolerance, 4) + " %").c_str() : "n/a");
-  if (s.method == compare::Method::kM3C2) {
-    std::printf("%-22s %llu\n", "significant change", static_cast<unsigned long long>(s.significant));
-  }
-  for (const std::string& w : out.result.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-  std::printf("wrote %s, %s, %s, %s\n", out.cloud.c_str(), out.json.c_str(), out.histogram.c_str(),
-              out.report.c_str());
   return kOk;
-}
-
-void AddCompare(Command& root) {
-  CompareArgs& a = root.Keep<CompareArgs>();
-  compare::DeviationOptions& d = a.options.deviation;
-  Command c = root.Add("compare", "Deviation of COMPARED from REFERENCE (C2C, C2M, M3C2, as CloudCompare): the "
-                                  "distance per point as a scalar field, a summary, a histogram and a report");
-  c.Option("reference", a.reference, "Reference point file (C2C, M3C2) or mesh, PLY or OBJ (C2M)").Required();
-  c.Option("compared", a.compared, "Compared point file: one distance per point, in its order").Required();
-  c.Option("-o,--output", a.output,
-           "Output point file (format by extension; PLY and LAS keep the fields); also writes "
-           "OUT.compare.json, OUT.histogram.svg and OUT.report.md").Required();
-  c.Choice("--method", d.method,
-           {{"c2c", compare::Method::kC2C}, {"c2m", compare::Method::kC2M}, {"m3c2", compare::Method::kM3C2}},
-           "c2c (nearest point), c2m (signed, to a mesh) or m3c2 (Lague et al. 2013)");
-  c.Choice("--model", d.c2c.local_model,
-           {{"none", compare::LocalModel::kNone}, {"plane", compare::LocalModel::kPlane},
-            {"quadric", compare::LocalModel::kQuadric}},
-           "C2C: a local model of the reference: none, plane or quadric (least squares)");
-  c.Option("--model-neighbours", d.c2c.model_neighbours, "C2C: reference points a local model is fitted to");
-  c.FlagOff("--unsigned", d.c2m.signed_distance, "C2M: |distance| instead of the signed distance");
-  c.Option("--normal-scale", d.m3c2.normal_scale, "M3C2: D, the diameter normals are fitted over, m (0: 2 d)");
-  c.Option("--projection-scale", d.m3c2.projection_scale,
-           "M3C2: d, the cylinder's diameter, m (0: ~30 reference points in it)");
-  c.Option("--max-depth", d.m3c2.max_depth, "M3C2: the cylinder's half-length, m (0: D)");
-  c.Option("--registration-error", d.m3c2.registration_error, "M3C2: added to LoD95, m");
-  c.Option("--min-points", d.m3c2.min_points, "M3C2: points each cloud needs in a cylinder");
-  c.Choice("--orientation", d.m3c2.orientation,
-           {{"+z", compare::NormalOrientation::kPlusZ}, {"-z", compare::NormalOrientation::kMinusZ},
-            {"+x", compare::NormalOrientation::kPlusX}, {"-x", compare::NormalOrientation::kMinusX},
-            {"+y", compare::NormalOrientation::kPlusY}, {"-y", compare::NormalOrientation::kMinusY},
-            {"out", compare::NormalOrientation::kOutward}},
-           "M3C2: normals towards +z (... -y), or out: away from the reference's centroid");
-  c.Option("--tolerance", a.options.summary.tolerance, "Summary: |distance| within this counts as within, m");
-  c.Option("--bins", a.options.summary.bins, "Histogram bins");
-  c.Option("--range", a.options.summary.range, "Histogram range, m (signed: -range..range; 0: the 99th percentile)");
-  c.Option("--columns", a.options.columns, "XYZ/PTS column spec of text inputs, e.g. x,y,z,r,g,b");
-  c.Option("--threads", d.threads, "Threads (0: all); results do not depend on it").Range(0, 256);
-  c.Run([&a] { return RunCompare(a); });
-  c.Footer("Examples: candi compare scan2025.las scan2026.las -o change.las --method m3c2 --registration-error 0.003\n"
-           "          candi compare wall_mesh.ply photogrammetry.ply -o deviation.ply --method c2m --tolerance 0.005");
 }
 
 }  // namespace
 
-void AddInspectCommands(Command& root) {
-  AddInfo(root);
-  AddConvert(root);
-  AddCompare(root);
+void AddPack(Command& root) {
+  PackArgs& a = root.Keep<PackArgs>();
+  Command c = root.Add("pack", "Pack point files into a render archive: Morton-ordered chunks, 8 bytes a point, "
+                               "memory-mapped by `candi render ARCHIVE`");
+  c.Option("inputs", a.inputs, "Point files " CANDI_POINT_FILES_READ).Required();
+  c.Option("-o,--output", a.output, "Archive directory (replaced if it is an archive)").Required();
+  c.Option("--chunk-points", a.options.chunk_points, "Points per chunk at most").Range(64, 1 << 24);
+  c.Option("--memory", a.memory_mb, "MB for sorting (larger inputs are bucketed on disk)");
+  c.Option("--columns", a.columns, "XYZ/PTS column spec");
+  c.Option("--threads", a.options.threads, "Threads (0: all)").Range(0, 256);
+  AddFieldColouring(c, a.field);
+  c.Run([&a] { return RunPack(a); });
+  c.Footer("Example: candi pack site.las photos.ply -o site.archive && candi render site.archive -o site.png   "
+           "(candi pack deviations.ply --colour-by distance -o dev.archive: render, view and publish show its "
+           "legend)");
+}
+
+namespace {
+
+struct ExportCopcArgs {
+  pipeline::CopcExportOptions options;
+  double copc_memory_mb = 0;
+};
+
+int RunExportCopc(const ExportCopcArgs& a) {
+  pipeline::CopcExportOptions o = a.options;
+  o.copc.memory_bytes = CopcMemoryBytes(a.copc_memory_mb);
+  std::optional<ConsoleProgress> progress;  // from the first point: no bar before an error
+  StagedProgress closing("copc");            // each file's octree and chunks, once all is read
+  const std::vector<pipeline::CopcFile> files = pipeline::ExportCopc(
+      o,
+      [&](uint64_t done, uint64_t total) {
+        if (!progress) progress.emplace("copc");
+        progress->Update(done, total);
+        if (total > 0 && done >= total) progress->Finish();  // all read: the files close next
+      },
+      closing.Callback());
+  closing.Finish();
+  if (progress) progress->Finish();
+  for (const pipeline::CopcFile& f : files) {
+    std::printf("%s: %llu points (%s), %llu bytes\n", f.path.c_str(), static_cast<unsigned long long>(f.points),
+                f.layer.empty() ? "every layer, point source ID = layer index" : ("layer " + f.layer).c_str(),
+                static_cast<unsigned long long>(f.bytes));
+  }
+  return kOk;
+}
+
+}  // namespace
+
+void AddExport(Command& root) {
+  Command e = root.Add("export", "Write a finished build's layers in another format, without rebuilding");
+  e.RequireSubcommand();
+  ExportCopcArgs& a = root.Keep<ExportCopcArgs>();
+  pipeline::CopcExportOptions& o = a.options;
+  Command c = e.Add("copc", "COPC (cloud-optimized LAZ) of a finished build, for Potree, QGIS and CloudCompare: "
+                            "every layer in one file, the layer as point source ID, and with --layers each layer "
+                            "beside its PLY (what a scene's \"copc\" makes candi build write)");
+  c.Option("build", o.build, "A finished build's folder (archive.json, layers/)").Required();
+  c.Option("-o,--out", o.out, "The whole scene's file (default: BUILD/copc/<scene>.copc.laz)");
+  c.Flag("--layers", o.copc.layers, "Also each layer as BUILD/layers/<name>.copc.laz");
+  AddCopcMemory(c, a.copc_memory_mb);
+  c.Run([&a] { return RunExportCopc(a); });
+  c.Footer("Example: candi export copc borobudur_archive --layers   (then open "
+           "borobudur_archive/copc/borobudur.copc.laz in QGIS, or with Potree)");
 }
 
 }  // namespace candi::apps

@@ -1,5 +1,7 @@
-// candi bench render|foundation|dense, bench scale, view, section, publish and relief: the
-// benchmarks of bench/ (bench/bench.h). `bench relief` runs in candi-relief (relief_commands.cc).
+// candi bench render|foundation|dense, bench scale, view, section, publish, compare and relief: the
+// benchmarks of bench/ (bench/bench.h). `bench relief` runs in candi-relief (relief_network.cc).
+#include <string>
+
 #include "apps/commands.h"
 #include "bench/bench.h"
 
@@ -7,7 +9,16 @@ namespace candi::apps {
 
 namespace {
 
-void AddBench(Command& root) {
+// --sizes, --billion and --work-dir of bench view, section and publish: the generated archives
+// (the same field names in their options).
+template <typename Options>
+void AddGeneratedArchives(Command& c, Options& o, const std::string& work_dir_help) {
+  c.Option("--sizes", o.sizes, "Point counts, comma separated (e.g. 1e7,1e8)");
+  c.Flag("--billion", o.billion, "Also 1e9 points (~8 GB archive on disk)");
+  c.Option("--work-dir", o.work_dir, work_dir_help);
+}
+
+void AddBenchCommand(Command& root) {
   bench::BenchOptions& a = root.Keep<bench::BenchOptions>();
   Command c = root.Add("bench", "Benchmarks: `candi bench render` prints SPBR accuracy vs time for L = 1 ... 1024");
   c.Option("what", a.what, "What to measure: render (SPBR), foundation (sections to points), dense (PatchMatch on "
@@ -24,7 +35,7 @@ void AddBench(Command& root) {
   c.Footer("Example: candi bench render --points 1000000; candi bench dense --data ../shared/data --threads 2");
 }
 
-void AddScale(Command& bench) {
+void AddScaleBench(Command& bench) {
   bench::ScaleBenchOptions& a = bench.Keep<bench::ScaleBenchOptions>();
   Command c = bench.Add("scale", "Pack and render generated scenes of 1e7, 1e8 (1e9) points: points/s, s/frame, "
                                  "peak RSS");
@@ -39,13 +50,11 @@ void AddScale(Command& bench) {
   c.Footer("Example: candi bench scale --sizes 1e7");
 }
 
-void AddView(Command& bench) {
+void AddViewBench(Command& bench) {
   bench::ViewBenchOptions& a = bench.Keep<bench::ViewBenchOptions>();
   Command c = bench.Add("view", "The viewer's renderer on generated archives: first-frame latency (p50/p95) and "
                                 "frames/s during an orbit, seconds to the converged image, peak memory");
-  c.Option("--sizes", a.sizes, "Point counts, comma separated (e.g. 1e7,1e8)");
-  c.Flag("--billion", a.billion, "Also 1e9 points (~8 GB archive on disk)");
-  c.Option("--work-dir", a.work_dir, "Folder for the generated archive (deleted afterwards)");
+  AddGeneratedArchives(c, a, "Folder for the generated archive (deleted afterwards)");
   c.Option("--size", a.size, "Image size WxH");
   c.Option("-L,--repeat-level", a.repeat_level, "Ensembles of the converged image");
   c.Option("--threads", a.threads, "Render threads (0: all)").Range(0, 256);
@@ -56,13 +65,11 @@ void AddView(Command& bench) {
   c.Footer("Example: candi bench view --sizes 1e7,1e8 --threads 2");
 }
 
-void AddSection(Command& bench) {
+void AddSectionBench(Command& bench) {
   bench::SectionBenchOptions& a = bench.Keep<bench::SectionBenchOptions>();
   Command c = bench.Add("section", "Sections: accuracy vs slab thickness on the bundled foundation, and seconds and "
                                    "chunks read on generated archives");
-  c.Option("--sizes", a.sizes, "Point counts, comma separated (e.g. 1e7,1e8)");
-  c.Flag("--billion", a.billion, "Also 1e9 points (~8 GB archive on disk)");
-  c.Option("--work-dir", a.work_dir, "Folder for the generated data (shared with bench view)");
+  AddGeneratedArchives(c, a, "Folder for the generated data (shared with bench view)");
   c.Option("--drawing", a.drawing, "The drawing of the accuracy table (\"\" skips it)");
   c.Option("--thickness", a.thickness, "Slab thickness of the scale table, m");
   c.Option("--threads", a.threads, "Threads (0: all)").Range(0, 256);
@@ -71,13 +78,11 @@ void AddSection(Command& bench) {
   c.Footer("Example: candi bench section --sizes 1e7,1e8 --keep");
 }
 
-void AddPublish(Command& bench) {
+void AddPublishBench(Command& bench) {
   bench::PublishBenchOptions& a = bench.Keep<bench::PublishBenchOptions>();
   Command c = bench.Add("publish", "candi publish on generated archives: points/s by threads, bytes a point, bytes "
                                    "before the first image, points an ensemble draws");
-  c.Option("--sizes", a.sizes, "Point counts, comma separated (e.g. 1e7,1e8)");
-  c.Flag("--billion", a.billion, "Also 1e9 points (~8 GB archive on disk)");
-  c.Option("--work-dir", a.work_dir, "Folder for the generated data (shared with bench view and section)");
+  AddGeneratedArchives(c, a, "Folder for the generated data (shared with bench view and section)");
   c.Option("-L,--repeat-level", a.repeat_level, "L of the site's pages");
   c.Option("--threads", a.threads, "Thread counts, comma separated");
   c.Option("--runs", a.runs, "Runs of each setting (the median is printed)");
@@ -87,7 +92,7 @@ void AddPublish(Command& bench) {
            "browser's side)");
 }
 
-void AddCompare(Command& bench) {
+void AddCompareBench(Command& bench) {
   bench::CompareBenchOptions& a = bench.Keep<bench::CompareBenchOptions>();
   Command c = bench.Add("compare", "candi compare on a known change: seconds and error against the truth per "
                                    "setting (C2C models, M3C2 scales, thinning), and C2C beside CloudCompare's");
@@ -103,7 +108,7 @@ void AddCompare(Command& bench) {
   c.Footer("Example: candi bench compare --points 1e7 --runs 3");
 }
 
-void AddRelief(Command& bench) {
+void AddReliefBench(Command& bench) {
   bench::ReliefBenchOptions& a = bench.Keep<bench::ReliefBenchOptions>();
   Command c = bench.Add("relief", "Relief depth: network width x training time -> accuracy, training and prediction "
                                   "seconds, 3200x1024 photo -> points");
@@ -132,15 +137,15 @@ void AddRelief(Command& bench) {
 
 }  // namespace
 
-void AddBenchCommands(Command& root) {
-  AddBench(root);
+void AddBench(Command& root) {
+  AddBenchCommand(root);
   Command bench = root.Find("bench");
-  AddScale(bench);
-  AddView(bench);
-  AddSection(bench);
-  AddPublish(bench);
-  AddCompare(bench);
-  AddRelief(bench);
+  AddScaleBench(bench);
+  AddViewBench(bench);
+  AddSectionBench(bench);
+  AddPublishBench(bench);
+  AddCompareBench(bench);
+  AddReliefBench(bench);
 }
 
 }  // namespace candi::apps

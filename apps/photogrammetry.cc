@@ -1,0 +1,247 @@
+// candi sfm, dense, georef, colorcorrect: the building from photos (pipeline/photogrammetry.h):
+// COLMAP structure from motion, CPU dense stereo, georeferencing on surveyed targets; and
+// colour-card correction (pipeline/color_correct.h).
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <utility>
+
+#include "apps/commands.h"
+#include "core/timer.h"
+#include "io/point_io.h"
+#include "pipeline/color_correct.h"
+#include "pipeline/photogrammetry.h"
+
+namespace candi::apps {
+
+namespace {
+
+namespace pg = candi::photogrammetry;
+
+struct SfmArgs {
+  std::string images, workspace;
+  pg::SfmOptions options;
+  std::string colmap;  // "" = $CANDI_COLMAP, else options.colmap
+};
+
+int RunSfm(const SfmArgs& a) {
+  pg::SfmOptions o = a.options;
+  if (!a.colmap.empty()) {
+    o.colmap = a.colmap;
+  } else if (const char* env = std::getenv("CANDI_COLMAP"); env != nullptr && *env != '\0') {
+    o.colmap = env;
+  }
+  o.Check();
+  const pg::SfmSummary s = pipeline::StructureFromMotion(o, a.images, a.workspace);
+  double total = 0;
+  for (const auto& [stage, seconds] : s.stage_seconds) total += seconds;
+  std::printf("COLMAP %s (%s), %s\n", s.colmap.version.c_str(), s.colmap.cuda ? "CUDA" : "CPU", s.matcher.c_str());
+  std::printf("%-28s %s\n", "images registered / total",
+              (std::to_string(s.registered.size()) + " / " + std::to_string(s.images.size())).c_str());
+  std::printf("%-28s %zu\n", "sparse points", s.points);
+  std::printf("%-28s %.3f px\n", "mean reprojection error", s.mean_reprojection_error);
+  std::printf("%-28s %.2f\n", "mean track length", s.mean_track_length);
+  std::printf("%-28s %.1f s\n", "time", total);
+  std::printf("model: %s\ndense workspace: %s\n", s.model_dir.c_str(), s.dense_dir.c_str());
+  return kOk;
+}
+
+}  // namespace
+
+void AddSfm(Command& root) {
+  SfmArgs& a = root.Keep<SfmArgs>();
+  pg::SfmOptions& o = a.options;
+  Command c = root.Add("sfm", "Structure from motion with COLMAP: photos to a sparse model and a dense workspace "
+                              "(WORKSPACE/dense)");
+  c.Option("images", a.images, "Folder of photos (other files are ignored)").Required();
+  c.Option("-o,--output", a.workspace, "Workspace folder (created)").Required();
+  c.Option("--colmap", a.colmap, "COLMAP executable (default: $CANDI_COLMAP, else colmap)");
+  c.Option("--max-image-size", o.max_image_size, "Longest side in pixels for SIFT and the dense images")
+      .Range(64, 100000);
+  c.Option("--max-features", o.max_features, "SIFT features per image").Range(64, 1000000);
+  c.Option("--exhaustive-max-images", o.exhaustive_max_images, "Exhaustive matching up to this many images, "
+           "sequential matching above").Range(2, 1000000);
+  c.Option("--camera-model", o.camera_model, "COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
+  c.FlagOff("--camera-per-image", o.single_camera, "Separate intrinsics per photo (default: one shared camera)");
+  c.Option("--threads", o.threads, "Threads for feature extraction and matching (-1: all); COLMAP verifies and "
+           "maps on one thread, so the model is the same on every run");
+  c.Flag("--overwrite", o.overwrite, "Replace a previous run in the workspace");
+  c.Run([&a] { return RunSfm(a); });
+  c.Footer("Example: candi sfm photos/ -o work --max-image-size 1600");
+}
+
+namespace {
+
+struct DenseArgs {
+  std::string workspace, output;
+  pipeline::DenseOptions options;
+};
+
+int RunDense(const DenseArgs& a) {
+  pipeline::DenseOptions o = a.options;
+  o.stereo.window_step = o.stereo.window_radius >= 3 ? 2 : 1;
+  o.Check();
+  io::OutputPointFormat(a.output);  // an unknown extension fails before the work
+  const Stopwatch watch;
+  pipeline::DenseCloud dense = pipeline::DenseStereo(o, a.workspace);
+  std::printf("workspace %s: %zu images, %zu sparse points\n", a.workspace.c_str(), dense.images, dense.sparse_points);
+  io::WritePointCloud(a.output, dense.cloud);
+  const double total_s = watch.Seconds();
+  std::printf("depth maps: %llu of %llu pixels valid (%.1f %%)\n", static_cast<unsigned long long>(dense.valid_pixels),
+              static_cast<unsigned long long>(dense.total_pixels),
+              dense.total_pixels ? 100.0 * dense.valid_pixels / dense.total_pixels : 0.0);
+  std::printf("fused points: %zu -> %s\n", dense.cloud.size(), a.output.c_str());
+  std::printf("time: %.2f s (reading and PatchMatch %.2f s), %.0f points/s\n", total_s, dense.stereo_seconds,
+              total_s > 0 ? dense.cloud.size() / total_s : 0.0);
+  return kOk;
+}
+
+}  // namespace
+
+void AddDense(Command& root) {
+  DenseArgs& a = root.Keep<DenseArgs>();
+  pg::PatchMatchOptions& s = a.options.stereo;
+  Command c = root.Add("dense", "CPU multi-view PatchMatch stereo on a COLMAP dense workspace (images/ + sparse/): "
+                                "depth and normal maps (written to stereo/ for COLMAP's stereo_fusion), fused into "
+                                "coloured points with normals");
+  c.Option("workspace", a.workspace, "COLMAP dense workspace (e.g. from candi sfm)").Required();
+  c.Option("-o,--output", a.output, "Point file " CANDI_POINT_FILES_WRITTEN).Required();
+  c.Option("--resolution-scale", s.resolution_scale, "Resample images by this factor (0, 1]");
+  c.Option("--iterations", s.iterations, "PatchMatch rounds (propagation + refinement)");
+  c.Option("--window", s.window_radius, "Matching window radius, pixels");
+  c.Option("--views", s.num_source_views, "Source views per reference image");
+  c.Option("--min-consistent", s.min_consistent_views, "Source views that must agree geometrically");
+  c.Option("--min-views", a.options.fusion.min_views, "Fusion: views per point");
+  c.FlagOff("--no-maps", a.options.write_maps, "Do not write stereo/{depth,normal}_maps");
+  c.Option("--seed", s.seed, "Random seed");
+  c.Option("--threads", s.threads, "Threads (0: all)").Range(0, 256);
+  c.Run([&a] { return RunDense(a); });
+  c.Footer("Example: candi dense workspace -o dense.ply --resolution-scale 0.5 --iterations 3");
+}
+
+namespace {
+
+struct GeorefArgs {
+  pipeline::GeorefFiles files;  // IN, --targets, -o, --model, --picks
+  pipeline::GeorefOptions options;
+};
+
+std::string Fixed(double v, int digits = 4) {
+  if (!std::isfinite(v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
+  return buf;
+}
+
+void PrintGeoref(const pg::GeorefResult& r) {
+  std::printf("%-12s %-7s %9s %9s %9s %9s %9s %9s %5s  %s\n", "target", "role", "dX m", "dY m", "dZ m", "dXY m",
+              "d3D m", "reproj px", "views", "status");
+  for (size_t i = 0; i < r.targets.size(); ++i) {
+    const pg::SurveyTarget& t = r.targets[i];
+    const Eigen::Vector3d& d = r.residuals[i];
+    const bool used = t.unused_reason.empty();
+    const std::string status = !used ? "unused: " + t.unused_reason : r.outlier[i] ? "OUTLIER" : "ok";
+    std::printf("%-12s %-7s %9s %9s %9s %9s %9s %9s %5d  %s\n", t.name.c_str(), pg::TargetRoleName(t.role).c_str(),
+                used ? Fixed(d.x()).c_str() : "-", used ? Fixed(d.y()).c_str() : "-", used ? Fixed(d.z()).c_str() : "-",
+                used ? Fixed(d.head<2>().norm()).c_str() : "-", used ? Fixed(d.norm()).c_str() : "-",
+                Fixed(t.reprojection_px, 2).c_str(), t.views, status.c_str());
+  }
+  std::printf("\n%-26s %5s %9s %9s %9s %9s %9s\n", "RMSE", "n", "X m", "Y m", "Z m", "XY m", "3D m");
+  const std::pair<const char*, const pg::Rmse*> rows[] = {{"control (outliers out)", &r.control}, {"check", &r.check}};
+  for (const auto& [name, e] : rows) {
+    std::printf("%-26s %5d %9s %9s %9s %9s %9s\n", name, e->count, Fixed(e->x).c_str(), Fixed(e->y).c_str(),
+                Fixed(e->z).c_str(), Fixed(e->xy).c_str(), Fixed(e->d3).c_str());
+  }
+  const Sim3& t = r.survey_from_model;
+  std::printf("\nscale %.9f, rotation %.6f deg, shift %s, outlier threshold %.4f m, %s\n", t.scale,
+              Eigen::AngleAxisd(t.rotation).angle() * 180 / M_PI, r.frame.ToString().c_str(), r.fit.threshold,
+              r.fit.converged ? "converged" : "NOT CONVERGED");
+  std::printf("layout: collinearity s2/s1 %.3g, planarity s3/s1 %.3g\n", r.fit.collinearity, r.fit.planarity);
+  for (const std::string& w : r.fit.warnings) std::printf("warning: %s\n", w.c_str());
+}
+
+int RunGeoref(const GeorefArgs& a) {
+  pipeline::GeoreferenceFiles(a.options, a.files, PrintGeoref);
+  return kOk;  // a fit that did not converge is reported (table, JSON, warning), not an error
+}
+
+}  // namespace
+
+void AddGeoref(Command& root) {
+  GeorefArgs& a = root.Keep<GeorefArgs>();
+  pg::SimilarityFitOptions& fit = a.options.fit;
+  Command c = root.Add("georef", "Georeference with total-station targets: robust similarity (Ceres), residuals per "
+                                 "target, RMSE of control and check targets; per chunk, ties chunks into one frame");
+  c.Option("input", a.files.input, "Point file, or a COLMAP sparse model folder").Required();
+  c.Option("--targets", a.files.targets, "Targets CSV: name,E,N,H,role,accuracy[,x,y,z]").Required();
+  c.Option("-o,--output", a.files.output, "Output point file (or folder, for a model); also writes OUT.georef.json")
+      .Required();
+  c.Option("--model", a.files.model, "COLMAP sparse model whose images the picks are in");
+  c.Option("--picks", a.files.picks, "Picks CSV: name,image,u,v (pixels, undistorted images)");
+  c.Choice("--loss", fit.loss,
+           {{"none", pg::RobustLoss::kNone}, {"huber", pg::RobustLoss::kHuber}, {"cauchy", pg::RobustLoss::kCauchy}},
+           "Robust loss: huber, cauchy or none");
+  c.Option("--loss-scale", fit.loss_scale, "Robust loss scale, m").Positive();
+  c.Option("--outlier-threshold", fit.outlier_threshold, "Flag residuals above this, m "
+           "(default: 4 x max(robust sigma, target accuracy))").NonNegative();
+  c.FlagOff("--rigid", fit.estimate_scale, "Rigid fit (scale 1)");
+  c.Option("--crs", a.options.crs, "CRS of the survey frame (e.g. EPSG:32749), stated in OUT");
+  c.Option("--targets-crs", a.options.targets_crs, "CRS the targets are given in (e.g. EPSG:4979 for GNSS); "
+           "transformed into --crs with PROJ before the fit");
+  c.Run([&a] { return RunGeoref(a); });
+  c.Footer("Example: candi georef chunk1.ply --targets targets.csv -o chunk1_utm.ply");
+}
+
+namespace {
+
+struct ColorCorrectArgs {
+  std::string input, output;    // PNG image or point file with colours
+  pipeline::ColorCard card;     // --patches, or --card and --corners
+  pg::ColorCorrectionOptions options;
+};
+
+void PrintColorCorrection(const pg::ColorCorrection& c) {
+  std::printf("%-16s %10s %10s  %s\n", "patch", "dE00 before", "dE00 after", "status");
+  for (const pg::PatchDeltaE& p : c.patches) {
+    std::printf("%-16s %10.2f %10.2f  %s\n", p.name.c_str(), p.before, p.after,
+                p.outlier ? "OUTLIER (not fitted)" : "ok");
+  }
+  std::printf("%-16s %10.2f %10.2f\n%-16s %10.2f %10.2f\n", "mean (fitted)", c.mean_before, c.mean_after,
+              "max (fitted)", c.max_before, c.max_after);
+  std::printf("colour difference: CIEDE2000, CIELAB D65; matrix (linear RGB, out = M [in; 1]):\n");
+  for (int r = 0; r < 3; ++r) {
+    std::printf("  %9.5f %9.5f %9.5f %9.5f\n", c.matrix(r, 0), c.matrix(r, 1), c.matrix(r, 2), c.matrix(r, 3));
+  }
+  for (const std::string& w : c.warnings) std::printf("warning: %s\n", w.c_str());
+}
+
+int RunColorCorrect(const ColorCorrectArgs& a) {
+  pipeline::ColorCorrectFile(a.options, a.card, a.input, a.output, PrintColorCorrection);
+  return kOk;
+}
+
+}  // namespace
+
+void AddColorCorrect(Command& root) {
+  ColorCorrectArgs& a = root.Keep<ColorCorrectArgs>();
+  Command c = root.Add("colorcorrect", "Colour-card correction: a 3x4 matrix in linear RGB from the card's patches, "
+                                       "applied to a PNG or point colours; CIEDE2000 before and after");
+  c.Option("input", a.input, "PNG image or point file with colours").Required();
+  c.Option("-o,--output", a.output, "Corrected output (same kind); also OUT.colorcorrect.json").Required();
+  Arg patches = c.Option("--patches", a.card.patches, "CSV: patch,measured_r,measured_g,measured_b,reference_r,"
+                         "reference_g,reference_b (0..255)");
+  Arg card = c.Option("--card", a.card.card, "Photo of the colour card (8-bit PNG)");
+  Arg corners = c.Option("--corners", a.card.corners, "CSV: patch,x0,y0,...,x3,y3,reference_r,reference_g,reference_b "
+                         "(corners in pixels, around the patch)");
+  patches.Excludes(card).Excludes(corners);
+  card.Needs(corners);
+  corners.Needs(card);
+  c.Option("--outlier-delta-e", a.options.outlier_delta_e, "A patch predicted worse than this (CIEDE2000) may be "
+           "left out").Positive();
+  c.Option("--max-outliers", a.options.max_outliers, "Patches that may be left out").Range(0, 100);
+  c.Run([&a] { return RunColorCorrect(a); });
+  c.Footer("Example: candi colorcorrect photo.png -o photo_corrected.png --patches card.csv");
+}
+
+}  // namespace candi::apps
