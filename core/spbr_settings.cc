@@ -11,7 +11,8 @@
 namespace candi {
 
 void SpbrSettings::Check() const {
-  CANDI_CHECK_OPTION(repeat_level >= 1 && repeat_level <= kMaxRepeatLevel, repeat_level, "in [1, 100000]");
+  CANDI_CHECK_OPTION(repeat_level >= 1 && repeat_level <= kMaxRepeatLevel, repeat_level,
+                     "in [1, 100000]");
   static_assert(kMaxRepeatLevel == 100000, "the rule above says 100000");
   CANDI_CHECK_OPTION(point_size >= 1 && point_size <= 64, point_size, "in [1, 64]");
 }
@@ -39,7 +40,8 @@ Brightness Brightness::Parse(const std::string& text) {
   char* end = nullptr;
   errno = 0;
   const double gain = std::strtod(begin, &end);
-  const bool decimal = !text.empty() && text.find_first_not_of("0123456789.eE+-") == std::string::npos;
+  const bool decimal =
+      !text.empty() && text.find_first_not_of("0123456789.eE+-") == std::string::npos;
   if (!decimal || end != begin + text.size() || errno != 0 || !(gain > 0 && gain <= kMaxGain)) {
     throw std::invalid_argument("'" + text + "': expected " + Rule());
   }

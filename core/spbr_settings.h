@@ -32,7 +32,8 @@ struct SpbrSettings {
   int EffectiveRepeatLevel() const { return opaque ? 1 : repeat_level; }
   void Check() const;
   bool operator==(const SpbrSettings& o) const {
-    return repeat_level == o.repeat_level && seed == o.seed && point_size == o.point_size && opaque == o.opaque;
+    return repeat_level == o.repeat_level && seed == o.seed && point_size == o.point_size &&
+           opaque == o.opaque;
   }
   bool operator!=(const SpbrSettings& o) const { return !(*this == o); }
 };

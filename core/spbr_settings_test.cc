@@ -51,12 +51,14 @@ TEST(Brightness, OneParserOneRange) {
   EXPECT_EQ(Brightness::Parse("1e-3").gain(), 1e-3);
   EXPECT_EQ(Brightness::Auto().AsNumber(), -1.0);
   EXPECT_EQ(Brightness::None().AsNumber(), 1.0);
-  for (const char* bad : {"", "0", "-1", "100.5", "1e309", "nan", "inf", "2,5", "2.5x", " 2", "AUTO", "1 "}) {
+  for (const char* bad :
+       {"", "0", "-1", "100.5", "1e309", "nan", "inf", "2,5", "2.5x", " 2", "AUTO", "1 "}) {
     try {
       Brightness::Parse(bad);
       ADD_FAILURE() << "'" << bad << "' was taken";
     } catch (const std::invalid_argument& e) {
-      EXPECT_EQ(std::string(e.what()), "'" + std::string(bad) + "': expected auto, none or a gain in (0, 100]");
+      EXPECT_EQ(std::string(e.what()),
+                "'" + std::string(bad) + "': expected auto, none or a gain in (0, 100]");
     }
   }
   EXPECT_THROW(Brightness::Gain(0), std::invalid_argument);
@@ -66,8 +68,9 @@ TEST(Brightness, OneParserOneRange) {
 
 // Its text reads back to the same value (a record written and read again keeps it).
 TEST(Brightness, TextRoundTrips) {
-  for (const Brightness& b : {Brightness::Auto(), Brightness::None(), Brightness::Gain(1), Brightness::Gain(1.25),
-                              Brightness::Gain(0.1 + 0.2), Brightness::Gain(99.999999999)}) {
+  for (const Brightness& b :
+       {Brightness::Auto(), Brightness::None(), Brightness::Gain(1), Brightness::Gain(1.25),
+        Brightness::Gain(0.1 + 0.2), Brightness::Gain(99.999999999)}) {
     EXPECT_EQ(Brightness::Parse(b.ToString()), b) << b.ToString();
   }
   EXPECT_EQ(Brightness::Gain(1.5).ToString(), "1.5");

@@ -14,7 +14,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (m.type == candi::view::MessageType::kView) {
       m.view.camera.Check();  // throws (uncaught: a finding) if the parser let a bad camera through
       m.view.camera.MakeProjector();
-      if (m.view.settings.spbr.EffectiveRepeatLevel() < 1 || m.view.camera.width > candi::view::kMaxImageSide) std::abort();
+      if (m.view.settings.spbr.EffectiveRepeatLevel() < 1 ||
+          m.view.camera.width > candi::view::kMaxImageSide)
+        std::abort();
     }
   } catch (const std::invalid_argument&) {
   }

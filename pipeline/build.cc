@@ -97,7 +97,8 @@ struct Layers {
 // 1. Every layer digitized (or resumed), in world coordinates, into the scene's CRS. A layer's
 // key: its JSON, the seed, its inputs.
 void DigitizeLayers(const BuildOptions& options, const Scene& scene, const fs::path& out,
-                    const Checkpoints& checkpoints, FileHashes& hashes, Layers* layers, Box3d* world_box) {
+                    const Checkpoints& checkpoints, FileHashes& hashes, Layers* layers,
+                    Box3d* world_box) {
   const std::string seed = std::to_string(scene.seed);
   for (size_t k = 0; k < scene.layers.size(); ++k) {
     const SceneLayer& l = scene.layers[k];
@@ -166,8 +167,9 @@ void PlaceLayers(const Scene& scene, const LocalFrame& frame, const fs::path& ou
 // 3. The render archive of every layer from the layer files (key: the layers' keys and the scene's
 // origin; the archive format's version too, so a build resumed by a newer candi repacks).
 // Returns the pack's seconds and whether it was resumed.
-std::pair<double, bool> PackLayers(const BuildOptions& options, const Scene& scene, const fs::path& out,
-                                   const Checkpoints& checkpoints, const Layers& layers, std::string* pack_key) {
+std::pair<double, bool> PackLayers(const BuildOptions& options, const Scene& scene,
+                                   const fs::path& out, const Checkpoints& checkpoints,
+                                   const Layers& layers, std::string* pack_key) {
   std::vector<std::string> parts = {"pack", "archive v" + std::to_string(render::kArchiveVersion),
                                     scene.origin_json};
   parts.insert(parts.end(), layers.keys.begin(), layers.keys.end());
@@ -192,16 +194,19 @@ std::pair<double, bool> PackLayers(const BuildOptions& options, const Scene& sce
 // 4. One render per view, from the layers in memory (key: the view's and the render settings'
 // JSON, the seed, the archive's key): the scene's render settings, the view's opaque and point
 // size. Returns the record's views; their seconds go to `timings`.
-std::vector<render::BuildViewRecord> RenderViews(const BuildOptions& options, const Scene& scene, const fs::path& out,
+std::vector<render::BuildViewRecord> RenderViews(const BuildOptions& options, const Scene& scene,
+                                                 const fs::path& out,
                                                  const Checkpoints& checkpoints, FileHashes& hashes,
-                                                 const Layers& layers, const std::string& pack_key, json* timings) {
+                                                 const Layers& layers, const std::string& pack_key,
+                                                 json* timings) {
   std::vector<PointCloud> world;  // as the layer files hold them
   for (const PointCloud& c : layers.clouds) world.push_back(InWorld(c));
   DensityCache densities;         // a layer's density serves every view
   std::vector<render::BuildViewRecord> views;
   for (const SceneView& v : scene.views) {
     const Stopwatch watch;
-    std::vector<std::string> parts = {"view", v.key_json, scene.render_json, std::to_string(scene.seed), pack_key};
+    std::vector<std::string> parts = {"view", v.key_json, scene.render_json,
+                                      std::to_string(scene.seed), pack_key};
     if (!v.camera_file.empty()) parts.push_back(hashes(v.camera_file));
     RenderOptions r;
     std::vector<const PointCloud*> clouds;
@@ -247,7 +252,8 @@ std::vector<render::BuildViewRecord> RenderViews(const BuildOptions& options, co
     record.name = v.name;
     record.png = "renders/" + v.name + ".png";
     record.opaque = v.opaque;
-    for (size_t k = 0; k < r.alpha.size(); ++k) record.opacity.push_back({fs::path(names[k]).stem().string(), r.alpha[k]});
+    for (size_t k = 0; k < r.alpha.size(); ++k)
+      record.opacity.push_back({fs::path(names[k]).stem().string(), r.alpha[k]});
     record.resumed = checkpoint.has_value();
     views.push_back(record);
     (*timings)["views"][v.name] = seconds;
@@ -258,8 +264,9 @@ std::vector<render::BuildViewRecord> RenderViews(const BuildOptions& options, co
 // 5. The COPC files the scene asks for (copc_export.h), from the layer files (key: the layers'
 // keys, the scene's "copc", name, CRS and origin). Returns the record's "copc" (none when none is
 // asked for); the seconds go to `timings`.
-std::optional<render::BuildCopcRecord> WriteSceneCopc(const BuildOptions& options, const Scene& scene,
-                                                      const fs::path& out, const Checkpoints& checkpoints,
+std::optional<render::BuildCopcRecord> WriteSceneCopc(const BuildOptions& options,
+                                                      const Scene& scene, const fs::path& out,
+                                                      const Checkpoints& checkpoints,
                                                       const Layers& layers, const LocalFrame& frame,
                                                       const std::string& scene_crs, json* timings) {
   if (!scene.copc.layers && !scene.copc.scene) return std::nullopt;
@@ -281,7 +288,8 @@ std::optional<render::BuildCopcRecord> WriteSceneCopc(const BuildOptions& option
   render::BuildCopcRecord copc;
   if (resumed) {
     LogInfo("COPC: resumed");
-    copc = render::CopcFilesFromJson(checkpoint->at("files").dump(), (out / "work" / "checkpoints").string());
+    copc = render::CopcFilesFromJson(checkpoint->at("files").dump(),
+                                     (out / "work" / "checkpoints").string());
   } else {
     const Stopwatch watch;
     ConsoleProgress progress("copc");
@@ -298,12 +306,15 @@ std::optional<render::BuildCopcRecord> WriteSceneCopc(const BuildOptions& option
     closing.Finish();
     progress.Finish();
     for (const CopcFile& f : files) {
-      const render::BuildCopcFileRecord record{fs::path(f.path).lexically_relative(out).generic_string(), f.points,
-                                               f.bytes, f.layer};
-      if (f.layer.empty()) copc.scene = record;
-      else copc.layers.push_back(record);
+      const render::BuildCopcFileRecord record{
+          fs::path(f.path).lexically_relative(out).generic_string(), f.points, f.bytes, f.layer};
+      if (f.layer.empty())
+        copc.scene = record;
+      else
+        copc.layers.push_back(record);
     }
-    checkpoint = {{"seconds", watch.Seconds()}, {"files", json::parse(render::CopcFilesToJson(copc))}};
+    checkpoint = {{"seconds", watch.Seconds()},
+                  {"files", json::parse(render::CopcFilesToJson(copc))}};
     checkpoints.Save("copc", key, *checkpoint);
   }
   (*timings)["copc"] = checkpoint->at("seconds");
@@ -312,8 +323,8 @@ std::optional<render::BuildCopcRecord> WriteSceneCopc(const BuildOptions& option
   return copc;
 }
 
-std::vector<render::BuildLayerRecord> LayerRecords(const Scene& scene, FileHashes& hashes, const Layers& layers,
-                                                   json* timings) {
+std::vector<render::BuildLayerRecord> LayerRecords(const Scene& scene, FileHashes& hashes,
+                                                   const Layers& layers, json* timings) {
   std::vector<render::BuildLayerRecord> out;
   for (size_t k = 0; k < scene.layers.size(); ++k) {
     const SceneLayer& l = scene.layers[k];
@@ -323,7 +334,8 @@ std::vector<render::BuildLayerRecord> LayerRecords(const Scene& scene, FileHashe
     r.scanned = l.kind == LayerKind::kPoints || l.kind == LayerKind::kPhotogrammetry;
     r.method = layers.results[k].method;
     r.parameters_json = layers.results[k].parameters.dump();
-    for (const std::string& src : l.Sources()) r.sources.push_back({src, hashes(src), fs::file_size(src)});
+    for (const std::string& src : l.Sources())
+      r.sources.push_back({src, hashes(src), fs::file_size(src)});
     r.world_from_layer = l.world_from_layer.ToMatrix();
     r.opacity = l.opacity;
     r.highlight = l.highlight;
@@ -342,7 +354,8 @@ std::vector<render::BuildLayerRecord> LayerRecords(const Scene& scene, FileHashe
   return out;
 }
 
-render::BuildRecord Record(const Scene& scene, const LocalFrame& frame, const std::string& scene_crs) {
+render::BuildRecord Record(const Scene& scene, const LocalFrame& frame,
+                           const std::string& scene_crs) {
   render::BuildRecord r;
   r.candi_version = kVersion;
   r.scene_path = scene.path;
@@ -353,7 +366,8 @@ render::BuildRecord Record(const Scene& scene, const LocalFrame& frame, const st
   if (!scene_crs.empty()) r.crs_definition = scene_crs, r.crs_label = io::CrsLabel(scene_crs);
   r.render = scene.render;
   r.licence = scene.licence;
-  for (const SceneAnnotation& a : scene.annotations) r.annotations.push_back({a.title, a.text, a.position, a.view, a.camera});
+  for (const SceneAnnotation& a : scene.annotations)
+    r.annotations.push_back({a.title, a.text, a.position, a.view, a.camera});
   return r;
 }
 
@@ -386,12 +400,15 @@ BuildSummary Build(const BuildOptions& options, const Scene& scene) {
   PlaceLayers(scene, frame, out, &layers);
   json timings = {{"layers", json::object()}, {"views", json::object()}};  // seconds, apart from archive.json
   render::BuildRecord record = Record(scene, frame, scene_crs);
-  record.comparisons = RunComparisons(options, scene, out, checkpoints, hashes, layers.files, &timings);
+  record.comparisons =
+      RunComparisons(options, scene, out, checkpoints, hashes, layers.files, &timings);
   std::string pack_key;
-  const auto [pack_seconds, pack_resumed] = PackLayers(options, scene, out, checkpoints, layers, &pack_key);
+  const auto [pack_seconds, pack_resumed] =
+      PackLayers(options, scene, out, checkpoints, layers, &pack_key);
   record.pack_resumed = pack_resumed;
   record.views = RenderViews(options, scene, out, checkpoints, hashes, layers, pack_key, &timings);
-  record.copc = WriteSceneCopc(options, scene, out, checkpoints, layers, frame, scene_crs, &timings);
+  record.copc =
+      WriteSceneCopc(options, scene, out, checkpoints, layers, frame, scene_crs, &timings);
 
   // 6. MeshLab project, provenance.
   WriteMeshlab(scene, layers.clouds, (out / "meshlab").string());
@@ -399,8 +416,8 @@ BuildSummary Build(const BuildOptions& options, const Scene& scene) {
   BuildSummary summary;
   for (size_t k = 0; k < scene.layers.size(); ++k) {
     const SceneLayer& l = scene.layers[k];
-    summary.layers.push_back({l.name, l.kind, layers.clouds[k].size(), l.opacity, record.layers[k].scanned,
-                              layers.results[k].seconds});
+    summary.layers.push_back({l.name, l.kind, layers.clouds[k].size(), l.opacity,
+                              record.layers[k].scanned, layers.results[k].seconds});
     summary.points += layers.clouds[k].size();
   }
   record.points = summary.points;
@@ -408,7 +425,8 @@ BuildSummary Build(const BuildOptions& options, const Scene& scene) {
   summary.frame = frame;
   summary.views = record.views.size();
   for (const render::BuildComparisonRecord& c : record.comparisons) {
-    summary.comparisons.push_back({c.name, c.method, c.count, c.mean, c.rms, c.tolerance, c.within_tolerance, c.resumed});
+    summary.comparisons.push_back(
+        {c.name, c.method, c.count, c.mean, c.rms, c.tolerance, c.within_tolerance, c.resumed});
   }
   summary.seconds = watch.Seconds();
   timings["pack"] = pack_seconds;

@@ -50,10 +50,11 @@ render::BuildComparisonRecord Entry(const SceneComparison& c, const CompareOutco
 }
 
 // One comparison, or its checkpoint (key: its JSON, the bytes of both inputs).
-render::BuildComparisonRecord RunComparison(const BuildOptions& options, const Scene& scene, const fs::path& out,
-                                            const Checkpoints& checkpoints, FileHashes& hashes,
-                                            const std::vector<std::string>& layer_files, const SceneComparison& c,
-                                            double* seconds) {
+render::BuildComparisonRecord RunComparison(const BuildOptions& options, const Scene& scene,
+                                            const fs::path& out, const Checkpoints& checkpoints,
+                                            FileHashes& hashes,
+                                            const std::vector<std::string>& layer_files,
+                                            const SceneComparison& c, double* seconds) {
   const std::string compared = LayerFile(scene, layer_files, c.compared);
   const std::string reference =
       c.reference_layer.empty() ? c.reference_file : LayerFile(scene, layer_files, c.reference_layer);
@@ -64,8 +65,8 @@ render::BuildComparisonRecord RunComparison(const BuildOptions& options, const S
   if (checkpoint) {
     LogInfo("comparison " + c.name + ": resumed from " + cloud);
     *seconds = checkpoint->at("seconds").get<double>();
-    render::BuildComparisonRecord e =
-        render::ComparisonFromJson(checkpoint->at("entry").dump(), (out / "work" / "checkpoints").string());
+    render::BuildComparisonRecord e = render::ComparisonFromJson(
+        checkpoint->at("entry").dump(), (out / "work" / "checkpoints").string());
     e.resumed = true;
     return e;
   }
@@ -83,23 +84,25 @@ render::BuildComparisonRecord RunComparison(const BuildOptions& options, const S
   for (const std::string& w : outcome.result.warnings) LogWarning("comparison " + c.name + ": " + w);
   const render::BuildComparisonRecord e = Entry(c, outcome);
   *seconds = watch.Seconds();
-  checkpoints.Save(stage, key, {{"entry", json::parse(render::ComparisonToJson(e))}, {"seconds", *seconds}});
+  checkpoints.Save(stage, key,
+                   {{"entry", json::parse(render::ComparisonToJson(e))}, {"seconds", *seconds}});
   return e;
 }
 
 }  // namespace
 
-std::vector<render::BuildComparisonRecord> RunComparisons(const BuildOptions& options, const Scene& scene,
-                                                          const fs::path& out, const Checkpoints& checkpoints,
-                                                          FileHashes& hashes,
-                                                          const std::vector<std::string>& layer_files, json* timings) {
+std::vector<render::BuildComparisonRecord> RunComparisons(
+    const BuildOptions& options, const Scene& scene, const fs::path& out,
+    const Checkpoints& checkpoints, FileHashes& hashes, const std::vector<std::string>& layer_files,
+    json* timings) {
   std::vector<render::BuildComparisonRecord> list;
   if (scene.comparisons.empty()) return list;
   fs::create_directories(out / "compare");
   for (size_t i = 0; i < scene.comparisons.size(); ++i) {
     const SceneComparison& c = scene.comparisons[i];
     double seconds = 0;
-    list.push_back(RunComparison(options, scene, out, checkpoints, hashes, layer_files, c, &seconds));
+    list.push_back(
+        RunComparison(options, scene, out, checkpoints, hashes, layer_files, c, &seconds));
     (*timings)["comparisons"][c.name] = seconds;
   }
   return list;

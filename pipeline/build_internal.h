@@ -87,10 +87,9 @@ LayerResult LoadLayer(const nlohmann::json& checkpoint, const std::filesystem::p
 // (layers/<name>.ply, in scene order) against its reference, written to <out>/compare/ or
 // resumed (key: the comparison's JSON, the bytes of both inputs). Returns the record's
 // comparisons; each one's seconds go to (*timings)["comparisons"].
-std::vector<render::BuildComparisonRecord> RunComparisons(const BuildOptions& options, const Scene& scene,
-                                                          const std::filesystem::path& out,
-                                                          const Checkpoints& checkpoints, FileHashes& hashes,
-                                                          const std::vector<std::string>& layer_files,
-                                                          nlohmann::json* timings);
+std::vector<render::BuildComparisonRecord> RunComparisons(
+    const BuildOptions& options, const Scene& scene, const std::filesystem::path& out,
+    const Checkpoints& checkpoints, FileHashes& hashes, const std::vector<std::string>& layer_files,
+    nlohmann::json* timings);
 
 }  // namespace candi::pipeline::internal

@@ -53,11 +53,15 @@ LayerResult Foundation(const BuildOptions& options, const Scene& scene, const Sc
   LayerResult r;
   r.cloud = points.Merged();
   r.method = "reconstructed: CAD sections -> Hermite profiles -> rotational blending / sweep -> mesh -> uniform samples";
-  r.parameters = {{"sections", f.layers}, {"samples_per_side", f.surface.profile.samples_per_side},
+  r.parameters = {{"sections", f.layers},
+                  {"samples_per_side", f.surface.profile.samples_per_side},
                   {"angular_steps", f.surface.revolve.angular_steps},
-                  {"mode", mesh::RevolveModeName(f.surface.revolve.mode)}, {"seed", scene.seed}};
-  if (f.sample.count) r.parameters["count"] = f.sample.count;
-  else r.parameters["density"] = f.sample.density;
+                  {"mode", mesh::RevolveModeName(f.surface.revolve.mode)},
+                  {"seed", scene.seed}};
+  if (f.sample.count)
+    r.parameters["count"] = f.sample.count;
+  else
+    r.parameters["density"] = f.sample.density;
   return r;
 }
 

@@ -184,7 +184,10 @@ TEST_F(BuildScene, EveryLayerInOneSurveyFrameWithItsOutputs) {
 TEST_F(BuildScene, AMovedBuildKeepsItsRenderSettings) {
   json j = SceneJson();
   j["seed"] = 11;
-  j["render"] = {{"repeat_level", 12}, {"width", 200}, {"height", 150}, {"background", {10, 20, 30}},
+  j["render"] = {{"repeat_level", 12},
+                 {"width", 200},
+                 {"height", 150},
+                 {"background", {10, 20, 30}},
                  {"brightness", 1.5}};
   BuildOptions o;
   o.output = dir_.File("out");
@@ -201,7 +204,8 @@ TEST_F(BuildScene, AMovedBuildKeepsItsRenderSettings) {
   fs::copy(dir_.File("out"), dir_.File("elsewhere/moved"), fs::copy_options::recursive);
   fs::remove_all(dir_.File("out"));
   fs::remove(dir_.File("scene.json"));
-  const view::ViewerSource source = view::OpenViewerSource(dir_.File("elsewhere/moved"), render::Orientation());
+  const view::ViewerSource source =
+      view::OpenViewerSource(dir_.File("elsewhere/moved"), render::Orientation());
   EXPECT_EQ(source.settings.spbr.repeat_level, 12);
   EXPECT_EQ(source.settings.spbr.seed, 11u);
   EXPECT_EQ(source.settings.background, (Rgb8{10, 20, 30}));

@@ -25,7 +25,8 @@ void WriteSyntheticPanels(const relief::SynthOptions& options, int count, const 
 
 struct PanelDepthOptions {
   relief::PredictOptions predict;  // the tiles; photo_pixels_per_m comes from width_m
-  double width_m = relief::kPanelWidthM;  // the panel's width in the photo, m, >= 0; 0: at the model's resolution
+  // The panel's width in the photo, m, >= 0; 0: at the model's resolution.
+  double width_m = relief::kPanelWidthM;
   int threads = 1;                 // libtorch threads, [1, 256]
   void Check() const;
 };

@@ -27,7 +27,8 @@ struct ReliefDatasetOptions {
   relief::ScanRasterOptions raster;       // scans: resolution (also the panels'), frame, depth, relight, seed
   relief::PatchOptions patches;           // patch side and stride
   double val_fraction = 0.1;              // inputs (or patches, with one input) held out for validation, [0, 0.9]
-  double panel_width_m = relief::kPanelWidthM;  // width of a photo input without a recorded resolution, m, > 0
+  // The width of a photo input without a recorded resolution, m, > 0.
+  double panel_width_m = relief::kPanelWidthM;
   // Real photographs: a COLMAP sparse model and its photos (the inputs are dense clouds in its frame).
   std::string colmap, images;
   std::vector<std::string> holdout;       // image names (or stems) kept out of training

@@ -39,7 +39,8 @@ render::Camera WorldCamera(const RenderOptions& o, const Box3d& world) {
     if (o.size_given) c.width = o.image.width, c.height = o.image.height;
     return c;
   }
-  return render::FirstView(ClippedBounds(world, o.clip), o.image.width, o.image.height, o.orientation);
+  return render::FirstView(ClippedBounds(world, o.clip), o.image.width, o.image.height,
+                           o.orientation);
 }
 
 render::Camera InFrame(render::Camera c, const LocalFrame& frame) {
@@ -112,7 +113,8 @@ RenderedImage RenderOwnedClouds(const RenderOptions& o, std::vector<PointCloud>*
   spbr.threads = o.threads;
   ConsoleProgressOptions po;
   po.unit = "ensembles";
-  ConsoleProgress progress("render: SPBR L=" + std::to_string(o.image.spbr.EffectiveRepeatLevel()), po);
+  ConsoleProgress progress("render: SPBR L=" + std::to_string(o.image.spbr.EffectiveRepeatLevel()),
+                           po);
   image.result = render::RenderSpbr(spbr, InFrame(image.world_camera, splats.frame), splats, progress.Callback());
   progress.Finish();
   return image;
@@ -186,7 +188,8 @@ void StreamFile(const RenderOptions& o, const std::string& in, io::PointReadOpti
   io::PointReadOptions all = read;
   all.scalar_fields = true;
   auto r = io::OpenPointReader(in, all);
-  const bool multiplicity = !o.image.spbr.opaque && r->info().schema.ScalarIndex(render::kMultiplicityField) >= 0;
+  const bool multiplicity =
+      !o.image.spbr.opaque && r->info().schema.ScalarIndex(render::kMultiplicityField) >= 0;
   if (!multiplicity) r = io::OpenPointReader(in, read);
   if (const std::optional<io::PointRecordLayout> layout = r->record_layout(); layout && o.clip.empty() && !multiplicity) {
     const MappedFile map(in);
@@ -232,8 +235,8 @@ RenderedImage RenderFilesStreaming(const RenderOptions& o, const std::vector<std
   so.memory_budget = o.memory_budget;
   so.expected_points = total;  // few enough: gathered by ensemble, no L z-buffers held
   render::SpbrStreamRenderer renderer(so, InFrame(image.world_camera, frame), frame);
-  ConsoleProgress progress("render: SPBR L=" + std::to_string(o.image.spbr.EffectiveRepeatLevel()) + " streaming, " +
-                           std::to_string(renderer.passes()) + " pass(es)");
+  ConsoleProgress progress("render: SPBR L=" + std::to_string(o.image.spbr.EffectiveRepeatLevel()) +
+                           " streaming, " + std::to_string(renderer.passes()) + " pass(es)");
   uint64_t done = 0;
   for (int pass = 0; pass < renderer.passes(); ++pass) {
     renderer.BeginPass(pass);
@@ -262,7 +265,9 @@ bool Streams(const RenderOptions& o, const std::vector<std::string>& files) {
     const auto r = io::OpenPointReader(in, read);
     const uint64_t count = r->info().count;
     if (count != io::kUnknownCount) stated += count;
-    in_place &= r->record_layout() && (o.image.spbr.opaque || r->info().schema.ScalarIndex(render::kMultiplicityField) < 0);
+    in_place &=
+        r->record_layout() &&
+        (o.image.spbr.opaque || r->info().schema.ScalarIndex(render::kMultiplicityField) < 0);
   }
   return stated > (in_place ? kStreamInPlaceThreshold : kStreamThreshold);
 }
@@ -412,7 +417,8 @@ bool TakeBuildRenderSettings(const render::BuildRecord& record, const GivenImage
 double WriteRender(const RenderOptions& o, const RenderedImage& image, const RenderOutputs& out) {
   const render::SpbrResult& result = image.result;
   const double gain = render::BrightnessGain(o.image.brightness, result);
-  LogInfo("brightness gain " + std::to_string(gain) + (o.image.brightness.automatic() ? " (auto)" : ""));
+  LogInfo("brightness gain " + std::to_string(gain) +
+          (o.image.brightness.automatic() ? " (auto)" : ""));
   const ImageF average = render::AverageImage(result, o.image.background, gain);
   std::string inputs;
   for (const std::string& in : out.inputs) inputs += (inputs.empty() ? "" : " ") + in;

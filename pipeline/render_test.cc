@@ -51,14 +51,15 @@ RenderOptions Small() {
 }
 
 TEST(RenderOptions, DefaultsPassAndRulesAreChecked) {
-  ExpectEachBreakRejected<RenderOptions>({}, {
-      [](RenderOptions& o) { o.image.spbr.repeat_level = 0; },
-      [](RenderOptions& o) { o.alpha = {0.5}, o.image.spbr.opaque = true; },
-      [](RenderOptions& o) { o.alpha = {1.5}; },
-      [](RenderOptions& o) { o.alpha = {0.5}, o.mode = RenderMode::kStream; },
-      [](RenderOptions& o) { o.preview = 3, o.mode = RenderMode::kStream; },
-      [](RenderOptions& o) { o.image.spbr.point_size = 0.5; },
-  });
+  ExpectEachBreakRejected<RenderOptions>(
+      {}, {
+              [](RenderOptions& o) { o.image.spbr.repeat_level = 0; },
+              [](RenderOptions& o) { o.alpha = {0.5}, o.image.spbr.opaque = true; },
+              [](RenderOptions& o) { o.alpha = {1.5}; },
+              [](RenderOptions& o) { o.alpha = {0.5}, o.mode = RenderMode::kStream; },
+              [](RenderOptions& o) { o.preview = 3, o.mode = RenderMode::kStream; },
+              [](RenderOptions& o) { o.image.spbr.point_size = 0.5; },
+          });
 }
 
 // A build draws its layers from memory: the same image as from the files it wrote.

@@ -225,10 +225,12 @@ SceneLayer ParseLayer(const Node& n) {
         for (size_t i = 0; i < s.ArraySize(); ++i) l.foundation.layers.push_back(s[i].String());
       }
       if (n.Has("samples_per_side")) {
-        l.foundation.surface.profile.samples_per_side = static_cast<int>(n["samples_per_side"].Integer(2, 1000000));
+        l.foundation.surface.profile.samples_per_side =
+            static_cast<int>(n["samples_per_side"].Integer(2, 1000000));
       }
       if (n.Has("angular_steps")) {
-        l.foundation.surface.revolve.angular_steps = static_cast<int>(n["angular_steps"].Integer(2, 1000000));
+        l.foundation.surface.revolve.angular_steps =
+            static_cast<int>(n["angular_steps"].Integer(2, 1000000));
       }
       if (n.Has("density") && n.Has("count")) n["count"].Fail("give one of \"density\" and \"count\"");
       if (n.Has("density")) l.foundation.sample.density = n["density"].Number(0, 1e9, true);
@@ -238,7 +240,8 @@ SceneLayer ParseLayer(const Node& n) {
       }
       if (n.Has("mode")) {
         const std::string mode = n["mode"].String();
-        if (mode != "auto" && mode != "blend" && mode != "sweep") n["mode"].Fail("expected auto, blend or sweep");
+        if (mode != "auto" && mode != "blend" && mode != "sweep")
+          n["mode"].Fail("expected auto, blend or sweep");
         l.foundation.surface.revolve.mode = mesh::ParseRevolveMode(mode);
       }
       break;
@@ -288,12 +291,16 @@ SceneLayer ParseLayer(const Node& n) {
       }
       for (const char* key : {"max_image_size", "max_features"})
         if (n.Has(key) && !n.Has("images")) n[key].Fail("only with \"images\" (it sets structure from motion)");
-      if (n.Has("max_image_size")) l.sfm.max_image_size = static_cast<int>(n["max_image_size"].Integer(64, 100000));
-      if (n.Has("max_features")) l.sfm.max_features = static_cast<int>(n["max_features"].Integer(64, 1000000));
+      if (n.Has("max_image_size"))
+        l.sfm.max_image_size = static_cast<int>(n["max_image_size"].Integer(64, 100000));
+      if (n.Has("max_features"))
+        l.sfm.max_features = static_cast<int>(n["max_features"].Integer(64, 1000000));
       for (const char* key : {"resolution_scale", "iterations"})
         if (n.Has(key) && n.Has("dense")) n[key].Fail("dense stereo options need \"images\" or \"workspace\"");
-      if (n.Has("resolution_scale")) l.stereo.resolution_scale = n["resolution_scale"].Number(0, 1, true);
-      if (n.Has("iterations")) l.stereo.iterations = static_cast<int>(n["iterations"].Integer(1, 100));
+      if (n.Has("resolution_scale"))
+        l.stereo.resolution_scale = n["resolution_scale"].Number(0, 1, true);
+      if (n.Has("iterations"))
+        l.stereo.iterations = static_cast<int>(n["iterations"].Integer(1, 100));
       break;
     }
   }
@@ -319,7 +326,8 @@ SceneView ParseSceneView(const Node& n, const std::set<std::string>& layer_names
   if (n.Has("camera")) {
     const Node c = n["camera"];
     if (c.raw().is_string()) v.camera_file = c.Path(true);
-    else if (c.raw().is_object()) v.camera = InlineCamera(c, n.file());
+    else if (c.raw().is_object())
+      v.camera = InlineCamera(c, n.file());
     else c.Fail("expected a view file or an inline view object");
   }
   if (n.Has("opaque")) v.opaque = n["opaque"].Bool();
@@ -533,7 +541,8 @@ Scene LoadScene(const std::string& path) {
     const Node r = root["render"];
     r.ExpectObject({"repeat_level", "width", "height", "background", "brightness"});
     ImageSettings& s = scene.render;
-    if (r.Has("repeat_level")) s.spbr.repeat_level = static_cast<int>(r["repeat_level"].Integer(1, kMaxRepeatLevel));
+    if (r.Has("repeat_level"))
+      s.spbr.repeat_level = static_cast<int>(r["repeat_level"].Integer(1, kMaxRepeatLevel));
     if (r.Has("width")) s.width = static_cast<int>(r["width"].Integer(1, kMaxImageSize));
     if (r.Has("height")) s.height = static_cast<int>(r["height"].Integer(1, kMaxImageSize));
     if (r.Has("background")) s.background = r["background"].Colour();

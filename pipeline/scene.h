@@ -158,7 +158,7 @@ struct SceneView {
   double focus_opacity = 0.95, dim = 0.5;
   std::map<std::string, double> opacity;
   double point_size = 1.0;          // pixels (candi render --point-size)
-  std::string key_json;             // the entry, canonical JSON (part of the build's checkpoint key)
+  std::string key_json;  // the entry, canonical JSON (part of the build's checkpoint key)
 };
 
 // A labelled point of the site: shown as a marker by candi view and a published site, which
@@ -181,7 +181,7 @@ struct SceneComparison {
   std::string reference_file;   // absolute: a point file, or for C2M a mesh, in world coordinates
   compare::DeviationOptions deviation;  // threads: set by the build
   compare::SummaryOptions summary;
-  std::string key_json;         // the entry, canonical JSON (part of the build's checkpoint key)
+  std::string key_json;  // the entry, canonical JSON (part of the build's checkpoint key)
 };
 
 // A scene's "render" where it gives none: candi render's settings on a white background.

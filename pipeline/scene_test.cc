@@ -90,8 +90,13 @@ TEST_F(SceneFile, EveryLayerKindAndItsDefaults) {
        {{"name", "dense"}, {"kind", "photogrammetry"}, {"dense", "dense.ply"}},
        {{"name", "ws"}, {"kind", "photogrammetry"}, {"workspace", "ws"}}});
   j["views"] = json::array({{{"name", "overview"}, {"camera", "view.json"}, {"opaque", true}},
-                            {{"name", "close"}, {"camera", {{"eye", {0, -1, 1}}}}, {"layers", {"scan", "reliefs"}},
-                             {"focus", true}, {"focus_opacity", 0.8}, {"dim", 0.3}, {"opacity", {{"scan", 0.1}}},
+                            {{"name", "close"},
+                             {"camera", {{"eye", {0, -1, 1}}}},
+                             {"layers", {"scan", "reliefs"}},
+                             {"focus", true},
+                             {"focus_opacity", 0.8},
+                             {"dim", 0.3},
+                             {"opacity", {{"scan", 0.1}}},
                              {"point_size", 3}}});
   const Scene s = Load(j);
   EXPECT_EQ(s.name, "borobudur");
@@ -383,7 +388,8 @@ TEST_F(SceneFile, FoundationErrors) {
   json j = Minimal();
   j["layers"][0] = {{"name", "f"}, {"kind", "foundation"}, {"dxf", "drawing.dxf"}};
   // candi foundation's defaults, at the scene's default density.
-  EXPECT_EQ(Load(j).layers[0].foundation.surface.profile.samples_per_side, mesh::ProfileOptions().samples_per_side);
+  EXPECT_EQ(Load(j).layers[0].foundation.surface.profile.samples_per_side,
+            mesh::ProfileOptions().samples_per_side);
   EXPECT_EQ(Load(j).layers[0].foundation.sample.density, kDefaultFoundationDensity);
   json l = j;
   l["layers"][0].erase("dxf");

@@ -318,10 +318,12 @@ std::string SummaryJson(const SectionOptions& o, const std::vector<std::string>&
   out += ",\n  \"seconds\": {\"read\": " + num(slab.read_s) + ", \"lines\": " + num(slab.lines_s) +
          ", \"image\": " + num(slab.image_s) + "}";
   if (total == 0) out += ",\n  \"message\": \"no points within the slab\"";
-  out += ",\n  \"image\": {\"file\": \"section.png\", \"x0\": " + num(w.x0) + ", \"y0\": " + num(w.y0) +
-         ", \"metres_per_pixel\": " + num(w.metres_per_pixel) + ", \"width\": " + std::to_string(w.width) +
-         ", \"height\": " + std::to_string(w.height) + ", \"scale_bar_m\": " + num(bar) + ", \"repeat_level\": " +
-         std::to_string(o.spbr.repeat_level) + ", \"opacity\": " + num(o.opacity) + ", \"seed\": " + std::to_string(o.spbr.seed) +
+  out += ",\n  \"image\": {\"file\": \"section.png\", \"x0\": " + num(w.x0) +
+         ", \"y0\": " + num(w.y0) + ", \"metres_per_pixel\": " + num(w.metres_per_pixel) +
+         ", \"width\": " + std::to_string(w.width) + ", \"height\": " + std::to_string(w.height) +
+         ", \"scale_bar_m\": " + num(bar) +
+         ", \"repeat_level\": " + std::to_string(o.spbr.repeat_level) +
+         ", \"opacity\": " + num(o.opacity) + ", \"seed\": " + std::to_string(o.spbr.seed) +
          "},\n  \"layers\": [";
   for (size_t k = 0; k < layers.size(); ++k) {
     const SectionLayerResult& l = layers[k];

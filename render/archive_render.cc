@@ -26,11 +26,10 @@ void ArchiveRenderOptions::Check() const {
   CANDI_CHECK_OPTION(sample > 0 && sample <= 1, sample, "in (0, 1]");
   const int L = spbr.EffectiveRepeatLevel();
   const int end = ensemble_end == 0 ? L : ensemble_end;
-  CANDI_CHECK_OPTION_PAIR(ensemble_begin >= 0 && end <= L && ensemble_begin <= end,
-                          ensemble_begin, ensemble_end,
+  CANDI_CHECK_OPTION_PAIR(ensemble_begin >= 0 && end <= L && ensemble_begin <= end, ensemble_begin,
+                          ensemble_end,
                           "ensembles [" + std::to_string(ensemble_begin) + ", " +
-                              std::to_string(end) + ") not within [0, " +
-                              std::to_string(L) + "]");
+                              std::to_string(end) + ") not within [0, " + std::to_string(L) + "]");
 }
 
 bool BoxMayBeVisible(const Camera::Projector& p, const Camera& camera, const Box3d& box, double margin_px) {
@@ -193,7 +192,8 @@ uint64_t DrawShare(const ArchiveRenderOptions& o, const Archive& archive, const 
     const ClipRegion* clip = cut[visible[j]] ? &o.clip : nullptr;
     for (int e = 0; e < share.count; ++e) {
       runs.clear();
-      EnsembleSlices(c.count, c.first, o.spbr.EffectiveRepeatLevel(), o.spbr.seed, share.first + e, fraction, &runs);
+      EnsembleSlices(c.count, c.first, o.spbr.EffectiveRepeatLevel(), o.spbr.seed, share.first + e,
+                     fraction, &runs);
       EnsembleSelection selection;
       selection.seed = o.spbr.seed;
       selection.base = share.base + e;

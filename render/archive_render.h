@@ -27,7 +27,7 @@
 namespace candi::render {
 
 struct ArchiveRenderOptions {
-  SpbrSettings spbr;                            // L (1 when opaque), seed, point size
+  SpbrSettings spbr;  // L (1 when opaque), seed, point size
   // Bytes for resident z-buffers (12 bytes a pixel per ensemble, shared by the threads): the
   // ensembles beyond it take further passes over the chunks.
   uint64_t memory_budget = uint64_t{2} << 30;  // L = 100 at 1024² in one pass

@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <filesystem>
-#include <stdexcept>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
@@ -18,17 +18,23 @@ using nlohmann::json;
 
 // What every build's record has said of how to reproduce it.
 constexpr const char* kSameBytes =
-    "the same sources (their SHA-256 above), scene, seed, candi version and COLMAP build on the same machine give "
-    "byte-identical layers/, archive/, renders/, meshlab/ and this file, for any thread count; run times are kept "
+    "the same sources (their SHA-256 above), scene, seed, candi version and COLMAP build on the "
+    "same machine give "
+    "byte-identical layers/, archive/, renders/, meshlab/ and this file, for any thread count; run "
+    "times are kept "
     "apart, in timings.json";
 constexpr const char* kHow =
-    "every random step draws from the scene's seed; parallel work is split and reduced in a fixed order; photos: "
-    "COLMAP's image ids follow the photo names, candi matches the features exactly (brute force), COLMAP verifies "
+    "every random step draws from the scene's seed; parallel work is split and reduced in a fixed "
+    "order; photos: "
+    "COLMAP's image ids follow the photo names, candi matches the features exactly (brute force), "
+    "COLMAP verifies "
     "and maps on one thread with its random seed fixed";
 constexpr const char* kAcrossMachines =
-    "not guaranteed: another CPU or C library can round floating point differently (COLMAP's SIFT, Ceres, libm), "
+    "not guaranteed: another CPU or C library can round floating point differently (COLMAP's SIFT, "
+    "Ceres, libm), "
     "and one differing bit can change what COLMAP's mapper registers (README, Reproducibility)";
-constexpr const char* kPointSourceId = "the layer's index in \"layers\" (0-based); the files' \"candi\" VLR names them";
+constexpr const char* kPointSourceId =
+    "the layer's index in \"layers\" (0-based); the files' \"candi\" VLR names them";
 
 // A number, NaN (undefined) as null.
 json Figure(double v) { return std::isfinite(v) ? json(v) : json(); }
@@ -37,14 +43,18 @@ json Vec(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); 
 // Reading: every access names the file and the JSON path of what is wrong.
 class Reader {
  public:
-  Reader(const json& j, std::string path, std::string at) : j_(j), path_(std::move(path)), at_(std::move(at)) {}
+  Reader(const json& j, std::string path, std::string at)
+      : j_(j), path_(std::move(path)), at_(std::move(at)) {}
   bool Has(const char* key) const { return j_.is_object() && j_.contains(key); }
   Reader operator[](const char* key) const {
     if (!j_.is_object()) Fail("expected an object");
-    if (!j_.contains(key)) throw InputError(path_, at_.empty() ? "/" : at_, std::string("no \"") + key + "\"");
+    if (!j_.contains(key))
+      throw InputError(path_, at_.empty() ? "/" : at_, std::string("no \"") + key + "\"");
     return Reader(j_[key], path_, at_ + "/" + key);
   }
-  Reader operator[](size_t i) const { return Reader(j_.at(i), path_, at_ + "/" + std::to_string(i)); }
+  Reader operator[](size_t i) const {
+    return Reader(j_.at(i), path_, at_ + "/" + std::to_string(i));
+  }
   size_t Size() const {
     if (!j_.is_array()) Fail("expected a list");
     return j_.size();
@@ -76,7 +86,9 @@ class Reader {
     for (size_t i = 0; i < Size(); ++i) out.push_back((*this)[i].String());
     return out;
   }
-  [[noreturn]] void Fail(const std::string& what) const { throw InputError(path_, at_.empty() ? "/" : at_, what); }
+  [[noreturn]] void Fail(const std::string& what) const {
+    throw InputError(path_, at_.empty() ? "/" : at_, what);
+  }
 
  private:
   const json& j_;
@@ -85,7 +97,8 @@ class Reader {
 
 json LayerJson(const BuildLayerRecord& l) {
   json sources = json::array();
-  for (const BuildSourceRecord& s : l.sources) sources.push_back({{"path", s.path}, {"sha256", s.sha256}, {"bytes", s.bytes}});
+  for (const BuildSourceRecord& s : l.sources)
+    sources.push_back({{"path", s.path}, {"sha256", s.sha256}, {"bytes", s.bytes}});
   json matrix = json::array();
   for (int r = 0; r < 4; ++r) {
     const Eigen::Matrix4d& m = l.world_from_layer;
@@ -93,11 +106,22 @@ json LayerJson(const BuildLayerRecord& l) {
   }
   json replaced_by = json::object();
   for (const auto& [name, n] : l.replaced_by) replaced_by[name] = n;
-  return {{"name", l.name}, {"kind", l.kind}, {"scanned", l.scanned}, {"method", l.method},
-          {"parameters", json::parse(l.parameters_json)}, {"sources", sources}, {"world_from_layer", matrix},
-          {"opacity", l.opacity}, {"highlight", l.highlight}, {"points", l.points}, {"dropped_nan", l.dropped_nan},
-          {"replaces", l.replaces}, {"replaced_by", replaced_by}, {"crs", json::parse(l.crs_json)},
-          {"file", l.file}, {"resumed", l.resumed}};
+  return {{"name", l.name},
+          {"kind", l.kind},
+          {"scanned", l.scanned},
+          {"method", l.method},
+          {"parameters", json::parse(l.parameters_json)},
+          {"sources", sources},
+          {"world_from_layer", matrix},
+          {"opacity", l.opacity},
+          {"highlight", l.highlight},
+          {"points", l.points},
+          {"dropped_nan", l.dropped_nan},
+          {"replaces", l.replaces},
+          {"replaced_by", replaced_by},
+          {"crs", json::parse(l.crs_json)},
+          {"file", l.file},
+          {"resumed", l.resumed}};
 }
 
 BuildLayerRecord LayerFrom(const Reader& r) {
@@ -152,8 +176,11 @@ json ComparisonJson(const BuildComparisonRecord& c, bool with_resumed) {
             {"reference_kind", c.reference_is_layer ? "layer" : "file"},
             {"method", c.method},
             {"signed", c.is_signed},
-            {"files", {{"cloud", base}, {"summary", base + ".compare.json"}, {"histogram", base + ".histogram.svg"},
-                       {"report", base + ".report.md"}}},
+            {"files",
+             {{"cloud", base},
+              {"summary", base + ".compare.json"},
+              {"histogram", base + ".histogram.svg"},
+              {"report", base + ".report.md"}}},
             {"count", c.count},
             {"defined", c.defined},
             {"undefined", c.undefined},
@@ -227,7 +254,8 @@ json Parse(const std::string& text, const std::string& path) {
   try {
     return json::parse(text);
   } catch (const json::parse_error& e) {
-    throw InputError(path, "byte " + std::to_string(e.byte), std::string("not valid JSON: ") + e.what());
+    throw InputError(path, "byte " + std::to_string(e.byte),
+                     std::string("not valid JSON: ") + e.what());
   }
 }
 
@@ -254,14 +282,17 @@ ImageSettings RenderFrom(const Reader& r) {
     c[i] = b[i].Count();
     if (c[i] > 255) b[i].Fail("expected 0 to 255");
   }
-  out.background = {static_cast<uint8_t>(c[0]), static_cast<uint8_t>(c[1]), static_cast<uint8_t>(c[2])};
+  out.background = {static_cast<uint8_t>(c[0]), static_cast<uint8_t>(c[1]),
+                    static_cast<uint8_t>(c[2])};
   const Reader g = r["brightness"];
   try {
-    out.brightness = g.raw().is_string() ? Brightness::Parse(g.String()) : Brightness::Gain(g.Number());
+    out.brightness =
+        g.raw().is_string() ? Brightness::Parse(g.String()) : Brightness::Gain(g.Number());
   } catch (const std::invalid_argument&) {
     g.Fail(std::string("expected ") + Brightness::Rule());
   }
-  if (out.spbr.repeat_level < 1 || out.spbr.repeat_level > kMaxRepeatLevel) r["repeat_level"].Fail("out of range");
+  if (out.spbr.repeat_level < 1 || out.spbr.repeat_level > kMaxRepeatLevel)
+    r["repeat_level"].Fail("out of range");
   if (out.width < 1 || out.width > kMaxImageSize) r["width"].Fail("out of range");
   if (out.height < 1 || out.height > kMaxImageSize) r["height"].Fail("out of range");
   return out;
@@ -276,15 +307,20 @@ std::string BuildRecord::ToJson() const {
   for (const BuildViewRecord& v : views) {
     json alphas = json::object();
     for (const auto& [layer, alpha] : v.opacity) alphas[layer] = alpha;
-    views_json.push_back(
-        {{"name", v.name}, {"png", v.png}, {"opaque", v.opaque}, {"opacity", alphas}, {"resumed", v.resumed}});
+    views_json.push_back({{"name", v.name},
+                          {"png", v.png},
+                          {"opaque", v.opaque},
+                          {"opacity", alphas},
+                          {"resumed", v.resumed}});
   }
   json p = {{"candi_version", candi_version},
             {"scene", {{"path", scene_path}, {"sha256", scene_sha256}}},
             {"name", name},
             {"seed", seed},
             {"frame", {{"origin", Vec(origin)}}},
-            {"crs", crs_definition.empty() ? json() : json({{"definition", crs_definition}, {"label", crs_label}})},
+            {"crs", crs_definition.empty()
+                        ? json()
+                        : json({{"definition", crs_definition}, {"label", crs_label}})},
             {"points", points},
             {"layers", layers_json},
             {"archive", "archive"},
@@ -292,7 +328,10 @@ std::string BuildRecord::ToJson() const {
             {"views", views_json},
             {"meshlab", "meshlab/scene.mlp"},
             {"reproducibility",
-             {{"seed", seed}, {"same_bytes", kSameBytes}, {"how", kHow}, {"across_machines", kAcrossMachines}}}};
+             {{"seed", seed},
+              {"same_bytes", kSameBytes},
+              {"how", kHow},
+              {"across_machines", kAcrossMachines}}}};
   if (render) p["render"] = RenderJson(*render);
   // What a published page shows besides the layers (only when the scene gives them).
   if (!licence.empty()) p["licence"] = licence;
@@ -375,9 +414,12 @@ BuildRecord BuildRecord::FromJson(const std::string& text, const std::string& pa
       if (a.Has("text")) e.text = a["text"].String();
       e.position = a["position"].Vector();
       if (a.Has("view")) {
-        if (a["view"].raw().is_string()) e.view = a["view"].String();
-        else if (a["view"].raw().is_object()) e.camera = ParseView(a["view"].raw().dump(), path);
-        else a["view"].Fail("expected a view's name or a camera");
+        if (a["view"].raw().is_string())
+          e.view = a["view"].String();
+        else if (a["view"].raw().is_object())
+          e.camera = ParseView(a["view"].raw().dump(), path);
+        else
+          a["view"].Fail("expected a view's name or a camera");
       }
       b.annotations.push_back(e);
     }
@@ -390,7 +432,9 @@ BuildRecord BuildRecord::FromJson(const std::string& text, const std::string& pa
   return b;
 }
 
-std::string ComparisonToJson(const BuildComparisonRecord& c) { return ComparisonJson(c, false).dump(); }
+std::string ComparisonToJson(const BuildComparisonRecord& c) {
+  return ComparisonJson(c, false).dump();
+}
 
 BuildComparisonRecord ComparisonFromJson(const std::string& text, const std::string& path) {
   const json j = Parse(text, path);
@@ -408,7 +452,8 @@ std::string FindBuild(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   for (const fs::path& build : {fs::path(path), fs::path(path) / "archive"}) {
-    if (fs::is_regular_file(build / kBuildRecord, ec) && IsArchive((build / "archive").string())) return build.string();
+    if (fs::is_regular_file(build / kBuildRecord, ec) && IsArchive((build / "archive").string()))
+      return build.string();
   }
   return "";
 }
@@ -420,7 +465,8 @@ BuildRecord ReadBuildRecord(const std::string& build_dir) {
   if (!fs::is_directory(build_dir, ec)) {
     throw InputError(build_dir, "", "not a folder (a finished candi build's, with archive.json)");
   }
-  if (!fs::exists(path, ec)) throw InputError(build_dir, "", "no archive.json: not a finished candi build");
+  if (!fs::exists(path, ec))
+    throw InputError(build_dir, "", "no archive.json: not a finished candi build");
   return BuildRecord::FromJson(ReadFileToString(path), path);
 }
 

@@ -36,26 +36,26 @@ struct BuildSourceRecord {
 
 struct BuildLayerRecord {
   std::string name;
-  std::string kind;            // "points", "foundation", "relief", "photogrammetry"
-  bool scanned = false;        // measured (points, photogrammetry), not reconstructed
-  std::string method;          // in words
+  std::string kind;                    // "points", "foundation", "relief", "photogrammetry"
+  bool scanned = false;                // measured (points, photogrammetry), not reconstructed
+  std::string method;                  // in words
   std::string parameters_json = "{}";  // the stage's parameters (JSON object)
   std::vector<BuildSourceRecord> sources;
   Eigen::Matrix4d world_from_layer = Eigen::Matrix4d::Identity();
   double opacity = 1;
   bool highlight = false;
-  uint64_t points = 0;         // after replacement
+  uint64_t points = 0;  // after replacement
   uint64_t dropped_nan = 0;
   std::vector<std::string> replaces;
   std::vector<std::pair<std::string, uint64_t>> replaced_by;  // layer -> points it took, by name
   std::string crs_json = "null";  // what the build did with the layer's CRS (JSON)
-  std::string file;            // "layers/<name>.ply", relative to the record
+  std::string file;               // "layers/<name>.ply", relative to the record
   bool resumed = false;
 };
 
 struct BuildViewRecord {
   std::string name;
-  std::string png;             // "renders/<name>.png"; its camera is renders/<name>.view.json
+  std::string png;  // "renders/<name>.png"; its camera is renders/<name>.view.json
   bool opaque = false;
   std::vector<std::pair<std::string, double>> opacity;  // per drawn layer (by name); empty: opaque
   bool resumed = false;
@@ -64,28 +64,28 @@ struct BuildViewRecord {
 struct BuildAnnotationRecord {
   std::string title, text;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world
-  std::string view;            // a view's name, or ""
-  std::optional<Camera> camera;  // an inline camera (world), or none
+  std::string view;                                    // a view's name, or ""
+  std::optional<Camera> camera;                        // an inline camera (world), or none
 };
 
 struct BuildComparisonRecord {
   std::string name, compared;
-  std::string reference;       // a layer's name or the reference file
+  std::string reference;  // a layer's name or the reference file
   bool reference_is_layer = false;
-  std::string method;          // "c2c", "c2m", "m3c2"
+  std::string method;  // "c2c", "c2m", "m3c2"
   bool is_signed = false;
   uint64_t count = 0, defined = 0, undefined = 0;
   double mean = 0, std = 0, rms = 0, mean_abs = 0;  // m; NaN when undefined (JSON null)
-  double tolerance = 0;        // m
-  double within_tolerance = 0; // share of the defined; NaN when none
-  std::optional<uint64_t> significant;  // M3C2: distances beyond their LoD95
+  double tolerance = 0;                             // m
+  double within_tolerance = 0;                      // share of the defined; NaN when none
+  std::optional<uint64_t> significant;              // M3C2: distances beyond their LoD95
   bool resumed = false;
 };
 
 struct BuildCopcFileRecord {
-  std::string path;            // relative to the record
+  std::string path;  // relative to the record
   uint64_t points = 0, bytes = 0;
-  std::string layer;           // the layer's name; "" for the scene's file
+  std::string layer;  // the layer's name; "" for the scene's file
 };
 
 struct BuildCopcRecord {
@@ -110,7 +110,7 @@ struct BuildRecord {
   // its own opaque and point size) and what a page opening the build starts with. None in the
   // records of older builds.
   std::optional<ImageSettings> render;
-  std::string licence;                               // "" when the scene gives none
+  std::string licence;  // "" when the scene gives none
   std::vector<BuildAnnotationRecord> annotations;
   std::vector<BuildComparisonRecord> comparisons;
   std::optional<BuildCopcRecord> copc;

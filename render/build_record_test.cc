@@ -4,8 +4,8 @@
 
 #include <cmath>
 #include <filesystem>
-#include <string>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
@@ -119,7 +119,8 @@ TEST(BuildRecord, WritesAndReadsEveryField) {
   const std::string entry = ComparisonToJson(r.comparisons[0]);
   EXPECT_EQ(entry.find("resumed"), std::string::npos);
   EXPECT_EQ(ComparisonToJson(ComparisonFromJson(entry, "e")), entry);
-  EXPECT_EQ(CopcFilesToJson(CopcFilesFromJson(CopcFilesToJson(*r.copc), "c")), CopcFilesToJson(*r.copc));
+  EXPECT_EQ(CopcFilesToJson(CopcFilesFromJson(CopcFilesToJson(*r.copc), "c")),
+            CopcFilesToJson(*r.copc));
   // No render setting of the build depends on the machine it was made on.
   EXPECT_EQ(text.find("\"render\": {\n    \"background\": [\n      10"), text.find("\"render\""));
 }

@@ -29,9 +29,13 @@ std::vector<Fragment> Fragments(const ReferenceOptions& options, const Camera& c
   std::vector<Fragment> out;
   for (const PointCloud* c : clouds) {
     const Eigen::Vector3d shift = c->frame.origin - frame.origin;
-    const ScalarField* m = options.use_multiplicity && !options.spbr.opaque ? c->FindScalar(kMultiplicityField) : nullptr;
+    const ScalarField* m = options.use_multiplicity && !options.spbr.opaque
+                               ? c->FindScalar(kMultiplicityField)
+                               : nullptr;
     for (size_t i = 0; i < c->size(); ++i) {
-      const double copies = m ? std::clamp(std::round(m->Get(i)), 0.0, double(options.spbr.EffectiveRepeatLevel())) : 1.0;
+      const double copies =
+          m ? std::clamp(std::round(m->Get(i)), 0.0, double(options.spbr.EffectiveRepeatLevel()))
+            : 1.0;
       double u, v, depth;
       if (copies <= 0 || !p.Project(c->positions[i] + shift, &u, &v, &depth)) continue;
       if (!(u >= 0 && u < camera.width && v >= 0 && v < camera.height)) continue;
@@ -39,7 +43,8 @@ std::vector<Fragment> Fragments(const ReferenceOptions& options, const Camera& c
                              static_cast<uint32_t>(std::floor(u));
       const Rgb8 color = c->schema.colors ? c->colors[i] : options.default_color;
       out.push_back({pixel, PackKey(static_cast<float>(depth), color),
-                     static_cast<float>(copies / options.spbr.EffectiveRepeatLevel()), static_cast<float>(depth)});
+                     static_cast<float>(copies / options.spbr.EffectiveRepeatLevel()),
+                     static_cast<float>(depth)});
     }
   }
   return out;

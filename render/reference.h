@@ -23,8 +23,8 @@
 namespace candi::render {
 
 struct ReferenceOptions {
-  SpbrSettings spbr;                 // L (1 when opaque) and its multiplicities (point size: 1)
-  bool use_multiplicity = true;      // honour `spbr_multiplicity` (not when spbr.opaque)
+  SpbrSettings spbr;             // L (1 when opaque) and its multiplicities (point size: 1)
+  bool use_multiplicity = true;  // honour `spbr_multiplicity` (not when spbr.opaque)
   Rgb8 background{0, 0, 0};
   Rgb8 default_color{200, 200, 200};  // for clouds without colours
   void Check() const;

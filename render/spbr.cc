@@ -114,7 +114,8 @@ void RenderEnsemble(const Frame& f, int e, ThreadFrame* t) {
     if (f.cloud.point_size == 1.0) {
       SplatPoints(tr, kp, x, y, z, c, b.count, &t->keys);
     } else {
-      SplatPointsSized(tr, kp, x, y, z, c, b.count, {f.cloud.point_size, f.cloud.seed, b.begin}, &t->keys);
+      SplatPointsSized(tr, kp, x, y, z, c, b.count, {f.cloud.point_size, f.cloud.seed, b.begin},
+                       &t->keys);
     }
   }
   t->keys.DrainInto(&t->sums, e == 0 ? &t->first_grey : nullptr);
@@ -129,7 +130,8 @@ SpbrResult RenderSpbr(const SpbrOptions& options, const Camera& camera, const Sp
   const Camera::Projector projector = camera.MakeProjector();
   const int L = cloud.repeat_level;
   CANDI_CHECK(static_cast<int>(cloud.ensemble_blocks.size()) == L + 1) << "SplatCloud not built";
-  CANDI_CHECK(cloud.point_size >= 1 && cloud.point_size <= 64) << "SplatCloud::point_size = " << cloud.point_size;
+  CANDI_CHECK(cloud.point_size >= 1 && cloud.point_size <= 64)
+      << "SplatCloud::point_size = " << cloud.point_size;
   SpbrResult result;
   result.repeat_level = L;
   result.seed = cloud.seed;

@@ -76,7 +76,10 @@ struct SpbrStreamRenderer::Impl {
       : options(o),
         L(o.spbr.EffectiveRepeatLevel()),
         multiplicity(o.use_multiplicity && !o.spbr.opaque),
-        camera(c), projector(c.MakeProjector()), frame(f), sums(c.width, c.height) {
+        camera(c),
+        projector(c.MakeProjector()),
+        frame(f),
+        sums(c.width, c.height) {
     const double frame_bytes = 8.0 * c.width * c.height;
     if (o.memory_budget < frame_bytes) {
       throw std::invalid_argument("SpbrStreamOptions::memory_budget = " + std::to_string(o.memory_budget) +
@@ -84,9 +87,10 @@ struct SpbrStreamRenderer::Impl {
                                   std::to_string(c.height) + " z-buffer (" +
                                   std::to_string(static_cast<uint64_t>(frame_bytes)) + " bytes)");
     }
-    per_pass = static_cast<int>(std::clamp(std::floor(o.memory_budget / frame_bytes), 1.0,
-                                           static_cast<double>(L)));
-    const double staged_bytes = (o.spbr.point_size != 1.0 ? 24.0 : 16.0) * static_cast<double>(o.expected_points);
+    per_pass = static_cast<int>(
+        std::clamp(std::floor(o.memory_budget / frame_bytes), 1.0, static_cast<double>(L)));
+    const double staged_bytes =
+        (o.spbr.point_size != 1.0 ? 24.0 : 16.0) * static_cast<double>(o.expected_points);
     gather = o.expected_points > 0 && staged_bytes <= per_pass * frame_bytes;
     if (gather) per_pass = L;
     // c = R (p - eye) for positions p in the render frame (float, full precision).

@@ -28,8 +28,8 @@
 namespace candi::render {
 
 struct SpbrStreamOptions {
-  SpbrSettings spbr;                             // L, seed, point size; opaque: L = 1, no multiplicities
-  bool use_multiplicity = true;                  // honour `spbr_multiplicity` (unless spbr.opaque)
+  SpbrSettings spbr;             // L, seed, point size; opaque: L = 1, no multiplicities
+  bool use_multiplicity = true;  // honour `spbr_multiplicity` (unless spbr.opaque)
   Rgb8 default_color{200, 200, 200};             // for clouds without colours
   uint64_t memory_budget = uint64_t{1} << 30;    // bytes for resident z-buffers, >= one frame
   // The points a pass brings, when known (0: not). Few enough that their staged copies (16 bytes

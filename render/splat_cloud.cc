@@ -357,8 +357,9 @@ SplatCloud BuildSplatCloud(const SplatCloudOptions& options,
         PointRecord& rec = records[s.first + i];
         rec.position = p.cast<float>();
         rec.code = Morton30(rec.position, lo, inv_cell);
-        rec.index = single_copies ? static_cast<uint32_t>(EnsembleOf(options.spbr.seed, s.first + i, L))
-                                  : static_cast<uint32_t>(s.first + i);
+        rec.index = single_copies
+                        ? static_cast<uint32_t>(EnsembleOf(options.spbr.seed, s.first + i, L))
+                        : static_cast<uint32_t>(s.first + i);
         rec.color = c.schema.colors ? c.colors[i] : options.default_color;
         rec.multiplicity = 1;
         if (weights) {

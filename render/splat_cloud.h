@@ -34,7 +34,7 @@ struct SplatCloudOptions {
   // Points per block, in [64, 65536]; 0: each ensemble in ~1024 blocks (64..4096 points), so a
   // block covers a small part of the image and is drawn by one or two bands of rows.
   int block_size = 0;
-  bool use_multiplicity = true;       // honour the `spbr_multiplicity` field when present (not opaque)
+  bool use_multiplicity = true;  // honour the `spbr_multiplicity` field when present (not opaque)
   Rgb8 default_color{200, 200, 200};  // for clouds without colours
   void Check() const;
 };
@@ -83,7 +83,7 @@ template <typename T>
 using UninitVector = std::vector<T, DefaultInitAllocator<T>>;
 
 struct SplatCloud {
-  int repeat_level = 1;       // the ensembles of the arrays (SpbrSettings::EffectiveRepeatLevel)
+  int repeat_level = 1;  // the ensembles of the arrays (SpbrSettings::EffectiveRepeatLevel)
   uint64_t seed = 0;
   double point_size = 1.0;    // pixels, as drawn (the settings' point size)
   LocalFrame frame;           // world = position + frame.origin

@@ -98,7 +98,8 @@ void SetScales(const OpacityOptions& o, const PointCloud& cloud, const DensityRe
   }
   s->point_area_ratio = point_area / s->area;
   s->median_density = density.median_density;
-  s->points_needed = o.spbr.EffectiveRepeatLevel() * SpbrPointsPerEnsemble(o.alpha, s->point_area_ratio);
+  s->points_needed =
+      o.spbr.EffectiveRepeatLevel() * SpbrPointsPerEnsemble(o.alpha, s->point_area_ratio);
 }
 
 // Ratio statistics, counts and the predicted alpha at the median density.
@@ -120,8 +121,8 @@ void Summarize(const OpacityOptions& o, std::vector<double> ratios, const std::v
   s->predicted_alpha = SpbrAlpha(after / o.spbr.EffectiveRepeatLevel(), s->point_area_ratio);
   if (o.alpha == 0) AddNote(s, "alpha = 0: every point removed");
   if (s->capped > 0) {
-    AddNote(s, std::to_string(s->capped) +
-                   " points wanted more than repeat_level = " + std::to_string(o.spbr.EffectiveRepeatLevel()) +
+    AddNote(s, std::to_string(s->capped) + " points wanted more than repeat_level = " +
+                   std::to_string(o.spbr.EffectiveRepeatLevel()) +
                    " copies and were capped: the target alpha is not reached there");
   }
 }

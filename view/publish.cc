@@ -291,7 +291,8 @@ PublishStats PublishSite(const PublishOptions& options, const std::string& input
   const ViewerSource source = OpenViewerSource(input, orientation);
   const render::Archive archive(source.archive_dir);
   const render::ArchiveManifest& m = archive.manifest();
-  const int L = options.repeat_level > 0 ? options.repeat_level : std::clamp(source.settings.spbr.repeat_level, 1, 1000);
+  const int L = options.repeat_level > 0 ? options.repeat_level
+                                         : std::clamp(source.settings.spbr.repeat_level, 1, 1000);
   const uint64_t seed = source.settings.spbr.seed;
 
   // Refuse early what the moves would refuse late. A folder holding an earlier site (or an empty

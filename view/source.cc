@@ -39,7 +39,8 @@ json Vec(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); 
 // and annotations.
 json Provenance(const render::BuildRecord& r) {
   json out = json::object();
-  if (!r.crs_definition.empty()) out["crs"] = {{"definition", r.crs_definition}, {"label", r.crs_label}};
+  if (!r.crs_definition.empty())
+    out["crs"] = {{"definition", r.crs_definition}, {"label", r.crs_label}};
   if (!r.licence.empty()) out["licence"] = r.licence;
   if (!r.annotations.empty()) {
     json list = json::array();
@@ -95,13 +96,16 @@ ViewerSource FromBuild(const fs::path& dir, const render::Orientation& orientati
   const render::Archive archive(source.archive_dir);
   const render::ArchiveManifest& m = archive.manifest();
   source.legend = m.colour_by;
-  source.first_view = render::FirstView(m.bounds.Translated(m.frame.origin), source.first_view.width,
-                                        source.first_view.height, orientation);
+  source.first_view =
+      render::FirstView(m.bounds.Translated(m.frame.origin), source.first_view.width,
+                        source.first_view.height, orientation);
   for (const render::BuildViewRecord& view : record.views) {
     const fs::path file = dir / "renders" / (view.name + ".view.json");
     std::error_code ec;
     if (!fs::is_regular_file(file, ec)) continue;
-    source.views.push_back({view.name, render::ParseView(ReadFileToString(file.string()), file.string()), view.opaque});
+    source.views.push_back({view.name,
+                            render::ParseView(ReadFileToString(file.string()), file.string()),
+                            view.opaque});
   }
   return source;
 }
@@ -176,7 +180,8 @@ std::string ViewerSource::ToJson(const render::ArchiveManifest& m) const {
               {"point_size", settings.spbr.point_size},
               {"background", {settings.background.r, settings.background.g, settings.background.b}},
               // (none is the gain 1, as the page sends it back)
-              {"brightness", settings.brightness.automatic() ? json("auto") : json(settings.brightness.gain())},
+              {"brightness",
+               settings.brightness.automatic() ? json("auto") : json(settings.brightness.gain())},
               {"opaque", settings.spbr.opaque},
               {"seed", settings.spbr.seed},
               {"clip", ClipPlaneArrays(settings.clip)}}}};

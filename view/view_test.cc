@@ -162,7 +162,9 @@ std::string MakeDemoOutput(const TempDir& dir) {
   const std::string build = dir.File("demo/archive");
   fs::create_directories(build);
   fs::rename(MakeArchive(dir, 3000, 512), build + "/archive");
-  WriteFileAtomic(build + "/archive.json", R"({"name": "site", "licence": "CC0", "crs": {"definition": "EPSG:32749", "label": "UTM 49S"},
+  WriteFileAtomic(
+      build + "/archive.json",
+      R"({"name": "site", "licence": "CC0", "crs": {"definition": "EPSG:32749", "label": "UTM 49S"},
     "frame": {"origin": [500000, 9100000, 0]},
     "annotations": [{"title": "stair", "text": "", "position": [500000, 9100000, 201]}],
     "layers": [{"name": "solid", "kind": "points", "scanned": true, "method": "measured: a scan", "file": "layers/solid.ply",

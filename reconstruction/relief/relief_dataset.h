@@ -28,7 +28,7 @@ namespace candi::relief {
 struct ScanRasterOptions {
   double pixels_per_m = 800 / kPanelWidthM;  // resolution of the render, pixels per metre, > 0
   std::string frame = "auto";       // "auto" (PCA) or "panel" (the cloud's own axes)
-  double depth_m = kPanelDepthM;            // front plane above the wall, m, > 0
+  double depth_m = kPanelDepthM;    // front plane above the wall, m, > 0
   int fill_holes = 3;               // fill holes up to this many pixels from data, [0, 64]
   bool relight = true;              // simulate a raking-light photo; false: the scan's grey
   OldPhotoOptions photo;            // how the photo is simulated (relight)

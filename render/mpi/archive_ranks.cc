@@ -9,17 +9,18 @@
 namespace candi::render::mpi {
 
 std::string EncodeArchiveRequest(const ArchiveRenderOptions& o, const Camera& local) {
-  const nlohmann::json j = {{"camera", nlohmann::json::parse(ViewToJson(local))},
-                            {"repeat_level", o.spbr.repeat_level},
-                            {"seed", o.spbr.seed},
-                            {"point_size", o.spbr.point_size},
-                            {"opaque", o.spbr.opaque},
-                            {"begin", o.ensemble_begin},
-                            {"end", o.ensemble_end},
-                            {"layers", o.layer_fraction},
-                            {"clip", ClipPlaneArrays(o.clip)},  // doubles travel exactly (17 digits)
-                            {"verify", o.verify},
-                            {"sample", o.sample}};
+  const nlohmann::json j = {
+      {"camera", nlohmann::json::parse(ViewToJson(local))},
+      {"repeat_level", o.spbr.repeat_level},
+      {"seed", o.spbr.seed},
+      {"point_size", o.spbr.point_size},
+      {"opaque", o.spbr.opaque},
+      {"begin", o.ensemble_begin},
+      {"end", o.ensemble_end},
+      {"layers", o.layer_fraction},
+      {"clip", ClipPlaneArrays(o.clip)},  // doubles travel exactly (17 digits)
+      {"verify", o.verify},
+      {"sample", o.sample}};
   return j.dump();
 }
 
