@@ -549,7 +549,7 @@ Scene LoadScene(const std::string& path) {
     if (r.Has("brightness")) {
       const Node b = r["brightness"];
       try {
-        s.brightness = b.raw().is_number() ? Brightness::Gain(b.Number(0, Brightness::kMaxGain))
+        s.brightness = b.raw().is_number() ? Brightness::Gain(b.Number(0, Brightness::kMaxGain, true))
                                            : Brightness::Parse(b.String());
       } catch (const std::invalid_argument&) {
         b.Fail(std::string("expected ") + Brightness::Rule());

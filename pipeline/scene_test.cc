@@ -291,9 +291,9 @@ TEST_F(SceneFile, RenderErrors) {
   ExpectError(j, "/render/brightness", "out of range");
   // One range for a gain everywhere (the command line's, the viewer's): (0, 100].
   j["render"] = {{"brightness", 0}};
-  ExpectError(j, "/render/brightness", "expected auto, none or a gain in (0, 100]");
+  ExpectError(j, "/render/brightness", "out of range: 0 is not in (0, 100]");
   j["render"] = {{"brightness", 500}};
-  ExpectError(j, "/render/brightness", "out of range");
+  ExpectError(j, "/render/brightness", "out of range: 500 is not in (0, 100]");
   j["render"] = {{"gamma", 2}};
   ExpectError(j, "/render/gamma", "unknown key");
 }

@@ -356,8 +356,8 @@ void SectionOptions::Check() const {
   CANDI_CHECK_OPTION(max_gap >= 0 && std::isfinite(max_gap), max_gap, "finite and >= 0 (0 = automatic)");
   CANDI_CHECK_OPTION_IN(width, 16, 8192);
   CANDI_CHECK_OPTION(pixel >= 0 && std::isfinite(pixel), pixel, ">= 0 m");
+  CANDI_CHECK_OPTION_IN(spbr.repeat_level, 1, 10000);  // narrower than SpbrSettings' range: first
   spbr.Check();
-  CANDI_CHECK_OPTION_IN(spbr.repeat_level, 1, 10000);
   CANDI_CHECK_OPTION(!spbr.opaque, spbr.opaque, "false (a section blends its slab)");
   CANDI_CHECK_OPTION(opacity > 0 && opacity <= 1, opacity, "in (0, 1]");
   CANDI_CHECK_OPTION_IN(threads, 0, 256);

@@ -18,6 +18,12 @@ What is not behaviour, and so is normalised before comparing (each rule is print
     "stages" of section.json, "total"), which differ between any two runs;
   - timings.json (a build's run times, kept apart from archive.json for this reason), logs (the
     runner's block logs, COLMAP's logs) and the runner's block scripts.
+Files known to differ between two runs of the same binary are compared and listed apart, as
+"known to vary", and do not fail the comparison (KNOWN_TO_VARY names each and why).
+
+The demo names examples/ by the absolute path of the source tree its candi was built from, and
+the build's checkpoint keys hash that text: record two builds whose source trees sit at one path
+(or build the old one's pipeline/demo_site.cc with -DCANDI_SOURCE_DIR set to the new tree).
 """
 import json
 import os
@@ -29,6 +35,15 @@ import time
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TIMING_KEYS = re.compile(r"(^|_)(seconds|timings|ms|elapsed|stages)$|^total$|^time")
 SKIP_FILES = re.compile(r"(^|/)(timings\.json|block_line\d+\.sh|[^/]*\.log|[^/]*\.log\.[A-Z]+\.[0-9.-]+)$")
+# (pattern, why): files that differ between two runs of one binary on the same input.
+KNOWN_TO_VARY = [
+    (re.compile(r"(^|/)database\.db$"),
+     "COLMAP's SQLite database: its pages follow the order the extractor's threads finish"),
+    (re.compile(r"\.ckpt$"),
+     "libtorch's optimizer state: keyed by the tensors' addresses in memory"),
+    (re.compile(r"\.e57$"),
+     "an E57 file's GUIDs, new on every write"),
+]
 RECORDED_AT = ".recorded_at"  # the folder the recording was made in (outputs name it)
 RUNNER_DIR = re.compile(r"candi-docs-[A-Za-z0-9]{6}")
 RUNNER_DIR_BYTES = re.compile(rb"candi-docs-[A-Za-z0-9]{6}")
@@ -151,6 +166,7 @@ def compare(old, new):
     print("normalised: absolute paths of the recording; JSON keys matching " + TIMING_KEYS.pattern +
           "; files matching " + SKIP_FILES.pattern + " are skipped")
     bad = 0
+    varied = {}
     for rel in sorted(set(a) | set(b)):
         if rel not in a or rel not in b:
             print(("only in new: " if rel in b else "only in old: ") + rel)
@@ -158,8 +174,14 @@ def compare(old, new):
             continue
         ca, cb = content(a[rel], root_a), content(b[rel], root_b)
         if ca != cb:
+            why = next((w for pattern, w in KNOWN_TO_VARY if pattern.search(rel)), None)
+            if why:
+                varied.setdefault(why, []).append(rel)
+                continue
             print(f"differs: {rel} ({len(ca)} vs {len(cb)} bytes)")
             bad += 1
+    for why, rels in varied.items():
+        print(f"known to vary ({why}): " + ", ".join(rels))
     print(f"{len(a)} files in old, {len(b)} in new; {bad} differ or are missing")
     return 0 if bad == 0 else 1
 

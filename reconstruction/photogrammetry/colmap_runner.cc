@@ -284,6 +284,10 @@ void ParseFeatureExtractionLog(const std::string& log_path, SfmSummary* summary)
     summary->no_exif.push_back(name);
     std::istringstream(line.substr(focal_at + 13)) >> summary->default_focal_px;
   }
+  // The extractor's threads log the photos in the order they finish: sorted, the lists are the
+  // same bytes on every run.
+  std::sort(summary->no_exif.begin(), summary->no_exif.end());
+  std::sort(summary->unreadable.begin(), summary->unreadable.end());
 }
 
 double RunSfmStage(const SfmStage& stage, const std::string& log_path, int index, int count,

@@ -97,7 +97,7 @@ int RunLogged(const std::vector<std::string>& argv, const std::string& log_path,
               const std::function<void(double seconds)>& heartbeat = nullptr);
 // Reads COLMAP's feature_extractor log into summary->no_exif / default_focal_px / unreadable:
 // COLMAP prints "Focal Length: <f>px (Prior)" for a focal from EXIF, no "(Prior)" for its default
-// guess, and "ERROR: Failed to read image" for a file it cannot decode.
+// guess, and "ERROR: Failed to read image" for a file it cannot decode. Both lists sorted by name.
 void ParseFeatureExtractionLog(const std::string& log_path, SfmSummary* summary);
 // Runs one stage with its output in log_path (replaced), reporting progress; returns its seconds.
 // A failure throws InputError naming the log, the exit code (or signal) and the log's last lines.

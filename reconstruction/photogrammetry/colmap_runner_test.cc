@@ -209,6 +209,19 @@ TEST(ParseFeatureExtractionLog, FindsPhotosWithoutExifFocal) {
   EXPECT_DOUBLE_EQ(s.default_focal_px, 240.0);
 }
 
+TEST(ParseFeatureExtractionLog, ListsThePhotosByNameWhateverOrderTheThreadsLogged) {
+  TempDir dir;
+  Put(dir.File("fe.log"),
+      "  Name:            d.png\n  Focal Length:    240.00px\n"
+      "  Name:            b.png\n  Focal Length:    240.00px\n"
+      "  Name:            c.png\nERROR: Failed to read image\n"
+      "  Name:            a.png\nERROR: Failed to read image\n");
+  SfmSummary s;
+  ParseFeatureExtractionLog(dir.File("fe.log"), &s);
+  EXPECT_EQ(s.no_exif, (std::vector<std::string>{"b.png", "d.png"}));
+  EXPECT_EQ(s.unreadable, (std::vector<std::string>{"a.png", "c.png"}));
+}
+
 TEST(RunSfm, ColmapAbsentSaysHowToInstall) {
   TempDir dir;
   for (const char* f : {"a.jpg", "b.jpg"}) Put(dir.File(std::string("in/") + f), "x");
