@@ -15,7 +15,7 @@
 #include "pipeline/build.h"
 #include "pipeline/demo_site.h"
 #include "pipeline/scan_registration.h"
-#include "reconstruction/photogrammetry/cleaning.h"
+#include "reconstruction/photogrammetry/registration/cleaning.h"
 
 namespace candi::apps {
 

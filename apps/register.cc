@@ -1,7 +1,7 @@
 // candi register, candi register-scans, candi clean: their command lines, in every executable
 // (--help); they run in candi-pcl and candi-relief (register_run.cc: PCL). ICP refinement of one
 // scan onto another and many scans into one frame at once (pipeline/scan_registration.h);
-// statistical outlier removal and voxel thinning (photogrammetry/cleaning.h).
+// statistical outlier removal and voxel thinning (photogrammetry/registration/cleaning.h).
 #include "apps/commands.h"
 
 namespace candi::apps {

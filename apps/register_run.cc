@@ -2,7 +2,7 @@
 // command lines are in register.cc): ICP refinement of MOVING onto FIXED, printing RMS and overlap
 // before and after and the 4x4 transform (world coordinates); many scans at once, printing per
 // scan, pair and loop (pipeline/scan_registration.h writes the moved files and the reports);
-// statistical outlier removal and voxel thinning (photogrammetry/cleaning.h), printing the counts
+// statistical outlier removal and voxel thinning (photogrammetry/registration/cleaning.h), printing the counts
 // removed per step.
 #include <algorithm>
 #include <chrono>
@@ -15,7 +15,7 @@
 #include "core/progress.h"
 #include "io/point_io.h"
 #include "pipeline/scan_registration.h"
-#include "reconstruction/photogrammetry/cleaning.h"
+#include "reconstruction/photogrammetry/registration/cleaning.h"
 
 namespace candi::apps {
 

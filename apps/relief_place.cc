@@ -20,7 +20,7 @@
 #include "core/log.h"
 #include "core/progress.h"
 #include "io/point_io.h"
-#include "reconstruction/photogrammetry/georef.h"
+#include "reconstruction/photogrammetry/georef/georef.h"
 #include "reconstruction/relief/relief_place.h"
 
 namespace candi::apps {

@@ -1,14 +1,14 @@
 // candi bench dense: PatchMatch accuracy and completeness against time on the synthetic scene
-// (reconstruction/photogrammetry/synthetic_views.h), for resolution scale x iterations, then the
+// (reconstruction/photogrammetry/scenes/synthetic_views.h), for resolution scale x iterations, then the
 // throughput (fused points per second) at --width x --height.
 #include <chrono>
 #include <cstdio>
 #include <vector>
 
 #include "bench/bench.h"
-#include "reconstruction/photogrammetry/fusion.h"
-#include "reconstruction/photogrammetry/patch_match.h"
-#include "reconstruction/photogrammetry/synthetic_views.h"
+#include "reconstruction/photogrammetry/mvs/fusion.h"
+#include "reconstruction/photogrammetry/mvs/patch_match.h"
+#include "reconstruction/photogrammetry/scenes/synthetic_views.h"
 
 namespace candi::bench {
 

@@ -23,12 +23,12 @@
 #include "core/timer.h"
 #include "io/image/jpeg_io.h"
 #include "io/point_io.h"
-#include "reconstruction/photogrammetry/colmap_model.h"
-#include "reconstruction/photogrammetry/colmap_runner.h"
-#include "reconstruction/photogrammetry/dense_workspace.h"
-#include "reconstruction/photogrammetry/fusion.h"
-#include "reconstruction/photogrammetry/patch_match.h"
-#include "reconstruction/photogrammetry/point_index.h"
+#include "reconstruction/photogrammetry/mvs/dense_workspace.h"
+#include "reconstruction/photogrammetry/mvs/fusion.h"
+#include "reconstruction/photogrammetry/mvs/patch_match.h"
+#include "reconstruction/photogrammetry/registration/point_index.h"
+#include "reconstruction/photogrammetry/sfm/colmap_model.h"
+#include "reconstruction/photogrammetry/sfm/colmap_runner.h"
 
 namespace candi::bench {
 

@@ -24,9 +24,9 @@
 
 #include "core/rng.h"
 #include "io/point_io.h"
-#include "reconstruction/photogrammetry/multi_registration.h"
-#include "reconstruction/photogrammetry/registration.h"
-#include "reconstruction/photogrammetry/virtual_scanner.h"
+#include "reconstruction/photogrammetry/registration/multi_registration.h"
+#include "reconstruction/photogrammetry/registration/registration.h"
+#include "reconstruction/photogrammetry/scenes/virtual_scanner.h"
 #include "tests/util/scan_scene.h"
 
 namespace {

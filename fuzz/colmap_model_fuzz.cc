@@ -2,7 +2,7 @@
 
 #include "core/check.h"
 #include "fuzz/fuzz_util.h"
-#include "reconstruction/photogrammetry/colmap_model.h"
+#include "reconstruction/photogrammetry/sfm/colmap_model.h"
 
 namespace candi::fuzz {
 

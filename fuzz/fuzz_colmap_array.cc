@@ -1,8 +1,8 @@
 // COLMAP dense-workspace arrays (depth and normal maps, "W&H&C&" + float32):
-// ReadColmapArray of reconstruction/photogrammetry/colmap_model.h.
+// ReadColmapArray of reconstruction/photogrammetry/sfm/colmap_model.h.
 #include "core/check.h"
 #include "fuzz/fuzz_util.h"
-#include "reconstruction/photogrammetry/colmap_model.h"
+#include "reconstruction/photogrammetry/sfm/colmap_model.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = candi::fuzz::WriteScratchFile("input.bin", data, size);

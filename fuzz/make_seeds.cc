@@ -11,7 +11,7 @@
 #include "fuzz/fuzz_util.h"
 #include "io/ply/ply_io.h"
 #include "io/point_io.h"
-#include "reconstruction/photogrammetry/colmap_model.h"
+#include "reconstruction/photogrammetry/sfm/colmap_model.h"
 #include "tests/util/dxf_text.h"
 
 namespace {

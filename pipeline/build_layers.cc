@@ -17,7 +17,7 @@
 #include "pipeline/build_internal.h"
 #include "pipeline/foundation.h"
 #include "pipeline/photogrammetry.h"
-#include "reconstruction/photogrammetry/colmap_runner.h"
+#include "reconstruction/photogrammetry/sfm/colmap_runner.h"
 #include "reconstruction/relief/relief_place.h"
 
 namespace candi::pipeline {

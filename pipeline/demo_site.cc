@@ -14,7 +14,7 @@
 #include "core/transform.h"
 #include "io/point_io.h"
 #include "pipeline/relief.h"
-#include "reconstruction/photogrammetry/synthetic_views.h"
+#include "reconstruction/photogrammetry/scenes/synthetic_views.h"
 
 namespace candi::pipeline {
 

@@ -12,7 +12,7 @@
 #include "core/timer.h"
 #include "io/crs.h"
 #include "io/point_io.h"
-#include "reconstruction/photogrammetry/dense_workspace.h"
+#include "reconstruction/photogrammetry/mvs/dense_workspace.h"
 
 namespace candi::pipeline {
 

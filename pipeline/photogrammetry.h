@@ -16,12 +16,12 @@
 #include <nlohmann/json.hpp>
 
 #include "core/point_cloud.h"
-#include "reconstruction/photogrammetry/colmap_runner.h"
-#include "reconstruction/photogrammetry/fusion.h"
-#include "reconstruction/photogrammetry/georef.h"
-#include "reconstruction/photogrammetry/georef_colmap.h"
-#include "reconstruction/photogrammetry/patch_match.h"
-#include "reconstruction/photogrammetry/similarity_fit.h"
+#include "reconstruction/photogrammetry/georef/georef.h"
+#include "reconstruction/photogrammetry/georef/georef_colmap.h"
+#include "reconstruction/photogrammetry/georef/similarity_fit.h"
+#include "reconstruction/photogrammetry/mvs/fusion.h"
+#include "reconstruction/photogrammetry/mvs/patch_match.h"
+#include "reconstruction/photogrammetry/sfm/colmap_runner.h"
 
 namespace candi::pipeline {
 
@@ -77,7 +77,7 @@ nlohmann::json GeorefReport(const GeorefOptions& options, const photogrammetry::
 // What `candi georef` reads and writes.
 struct GeorefFiles {
   std::string input;    // a point file, or a COLMAP sparse model folder
-  std::string targets;  // the targets CSV (photogrammetry/georef.h)
+  std::string targets;  // the targets CSV (photogrammetry/georef/georef.h)
   std::string model;    // the COLMAP sparse model the picks are in ("": `input`, when it is a model)
   std::string picks;    // optional picks CSV: name,image,u,v
   std::string output;   // a point file (for a point file in) or a folder (for a model), and OUTPUT.georef.json

@@ -1,6 +1,6 @@
 // The photogrammetry stages a build shares with `candi dense` and `candi georef`: dense stereo on
 // a synthetic workspace, and georeferencing on surveyed targets. (Structure from motion runs
-// COLMAP: reconstruction/photogrammetry/sfm_dense_test.cc and tests/sfm_cli_test.cc.)
+// COLMAP: reconstruction/photogrammetry/mvs/sfm_dense_test.cc and tests/sfm_cli_test.cc.)
 #include "pipeline/photogrammetry.h"
 
 #include <gtest/gtest.h>
@@ -11,8 +11,9 @@
 
 #include "core/check.h"
 #include "io/point_io.h"
-#include "reconstruction/photogrammetry/dense_workspace.h"
-#include "reconstruction/photogrammetry/synthetic_views.h"
+#include "reconstruction/photogrammetry/mvs/dense_workspace.h"
+#include "reconstruction/photogrammetry/scenes/synthetic_views.h"
+#include "reconstruction/photogrammetry/scenes/synthetic_workspace.h"
 #include "tests/util/option_check.h"
 #include "tests/util/test_util.h"
 

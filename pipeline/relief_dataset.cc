@@ -15,7 +15,7 @@
 #include "core/progress.h"
 #include "core/text_format.h"
 #include "io/point_io.h"
-#include "reconstruction/photogrammetry/colmap_model.h"
+#include "reconstruction/photogrammetry/sfm/colmap_model.h"
 #include "reconstruction/relief/relief_image.h"
 #include "reconstruction/relief/relief_photo_pairs.h"
 

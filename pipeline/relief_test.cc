@@ -16,7 +16,7 @@
 #include "io/image/png_io.h"
 #include "io/point_io.h"
 #include "pipeline/relief_dataset.h"
-#include "reconstruction/photogrammetry/colmap_model.h"
+#include "reconstruction/photogrammetry/sfm/colmap_model.h"
 #include "reconstruction/relief/relief_photo_pairs.h"
 #include "tests/util/option_check.h"
 #include "tests/util/test_util.h"

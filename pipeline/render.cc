@@ -14,7 +14,7 @@
 #include "core/version.h"
 #include "io/point_io.h"
 #include "io/point_records.h"
-#include "reconstruction/photogrammetry/colmap_model.h"
+#include "reconstruction/photogrammetry/sfm/colmap_model.h"
 #include "render/archive_render.h"
 #include "render/legend.h"
 #include "render/spbr_stream.h"

@@ -14,10 +14,10 @@
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/text_format.h"
+#include "io/csv_table.h"
 #include "io/e57/e57_io.h"
 #include "io/point_io.h"
-#include "io/csv_table.h"
-#include "reconstruction/photogrammetry/local_points.h"
+#include "reconstruction/photogrammetry/registration/local_points.h"
 
 namespace candi::pipeline {
 

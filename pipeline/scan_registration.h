@@ -1,5 +1,5 @@
 // `candi register` and `candi register-scans`: scans registered from their files to the moved
-// files and the report (photogrammetry/registration.h, multi_registration.h).
+// files and the report (photogrammetry/registration/registration.h, multi_registration.h).
 //
 // RegisterPair: MOVING refined onto FIXED by ICP, from an optional initial transform (JSON), and
 // written moved, in its own format, precision and shift, with the transform and its figures as
@@ -20,9 +20,9 @@
 
 #include "core/task_progress.h"
 #include "core/transform.h"
-#include "reconstruction/photogrammetry/coarse_alignment.h"
-#include "reconstruction/photogrammetry/multi_registration.h"
-#include "reconstruction/photogrammetry/registration.h"
+#include "reconstruction/photogrammetry/registration/coarse_alignment.h"
+#include "reconstruction/photogrammetry/registration/multi_registration.h"
+#include "reconstruction/photogrammetry/registration/registration.h"
 
 namespace candi::pipeline {
 

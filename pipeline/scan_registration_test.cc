@@ -13,7 +13,7 @@
 #include "core/check.h"
 #include "io/e57/e57_writer.h"
 #include "io/point_io.h"
-#include "reconstruction/photogrammetry/virtual_scanner.h"
+#include "reconstruction/photogrammetry/scenes/virtual_scanner.h"
 #include "tests/util/option_check.h"
 #include "tests/util/rigid_json.h"
 #include "tests/util/scan_scene.h"

@@ -94,8 +94,8 @@
 #include "core/transform.h"
 #include "pipeline/copc_export.h"
 #include "pipeline/foundation.h"
-#include "reconstruction/photogrammetry/colmap_runner.h"
-#include "reconstruction/photogrammetry/patch_match.h"
+#include "reconstruction/photogrammetry/mvs/patch_match.h"
+#include "reconstruction/photogrammetry/sfm/colmap_runner.h"
 #include "reconstruction/relief/panel_size.h"
 #include "render/camera.h"
 

@@ -4,8 +4,9 @@
 
 #include "core/check.h"
 #include "pipeline/render.h"
-#include "reconstruction/photogrammetry/dense_workspace.h"
-#include "reconstruction/photogrammetry/synthetic_views.h"
+#include "reconstruction/photogrammetry/mvs/dense_workspace.h"
+#include "reconstruction/photogrammetry/scenes/synthetic_views.h"
+#include "reconstruction/photogrammetry/scenes/synthetic_workspace.h"
 #include "tests/util/test_util.h"
 
 namespace candi::pipeline {

@@ -1,5 +1,5 @@
 // `candi dense`: exit codes and messages for bad input. (The end-to-end run on the synthetic
-// workspace needs the COLMAP model reader; see reconstruction/photogrammetry/dense_workspace.h.)
+// workspace needs the COLMAP model reader; see reconstruction/photogrammetry/mvs/dense_workspace.h.)
 #include <gtest/gtest.h>
 
 #include <string>

@@ -29,7 +29,7 @@
 #include <Eigen/Core>
 
 #include "core/image.h"
-#include "reconstruction/photogrammetry/colmap_model.h"
+#include "reconstruction/photogrammetry/sfm/colmap_model.h"
 
 namespace candi::relief {
 

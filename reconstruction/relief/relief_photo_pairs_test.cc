@@ -11,7 +11,7 @@
 #include "core/check.h"
 #include "io/image/png_io.h"
 #include "io/point_io.h"
-#include "reconstruction/photogrammetry/colmap_model.h"
+#include "reconstruction/photogrammetry/sfm/colmap_model.h"
 #include "reconstruction/relief/relief_eval.h"
 #include "reconstruction/relief/relief_image.h"
 #include "reconstruction/relief/relief_metrics.h"

@@ -1,7 +1,7 @@
 // Relief panel placement: each panel's world_from_panel from correspondences between points of the
 // panel (its corners or edge points, in the panel frame) and their documented positions on the foot
 // wall (survey coordinates E, N, H). A robust rigid (default: the panel points are metric) or Sim3
-// fit per panel, solved by photogrammetry/similarity_fit.h (Umeyama start, Ceres with a robust loss,
+// fit per panel, solved by photogrammetry/georef/similarity_fit.h (Umeyama start, Ceres with a robust loss,
 // outlier flags, computed about the centroids so survey coordinates of 10^7 m keep mm detail).
 //
 // Frames: the panel frame is that of relief_points.h (metres; x along the wall from the panel's
@@ -40,7 +40,7 @@
 
 #include "core/local_frame.h"
 #include "core/transform.h"
-#include "reconstruction/photogrammetry/similarity_fit.h"
+#include "reconstruction/photogrammetry/georef/similarity_fit.h"
 
 namespace candi::relief {
 

@@ -18,7 +18,7 @@
 
 #include "core/transform.h"
 #include "core/tri_mesh.h"
-#include "reconstruction/photogrammetry/virtual_scanner.h"
+#include "reconstruction/photogrammetry/scenes/virtual_scanner.h"
 
 namespace candi::testing {
 

@@ -1,0 +1,353 @@
+#include "reconstruction/photogrammetry/sfm/colmap_runner.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+
+#include "core/check.h"
+#include "reconstruction/photogrammetry/sfm/colmap_model.h"
+#include "tests/util/test_util.h"
+
+namespace candi::photogrammetry {
+namespace {
+
+using candi::testing::FileExists;
+using candi::testing::ReadBytes;
+using candi::testing::RunCommand;
+using candi::testing::TempDir;
+using candi::testing::WriteBytes;
+
+// Writes a file, creating its folder.
+void Put(const std::string& path, const std::string& bytes) {
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  WriteBytes(path, bytes);
+}
+
+bool ColmapAvailable() { return RunCommand("colmap help").code == 0; }
+
+#define REQUIRE_COLMAP()                                                     \
+  if (!ColmapAvailable()) {                                                  \
+    GTEST_SKIP() << "COLMAP is not installed here (Debian: apt install colmap)"; \
+  }
+
+template <typename F>
+std::string InputErrorText(F f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError";
+  return "";
+}
+
+// A `w` x `h` binary PGM of uniform noise (no EXIF; PGM carries none).
+void WriteNoisePgm(const std::string& path, int w, int h, uint64_t seed) {
+  std::string bytes = "P5 " + std::to_string(w) + " " + std::to_string(h) + " 255\n";
+  uint64_t state = seed * 0x9E3779B97F4A7C15ull + 1;
+  for (int i = 0; i < w * h; ++i) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    bytes.push_back(static_cast<char>(state >> 56));
+  }
+  Put(path, bytes);
+}
+
+TEST(SfmOptions, DefaultsPassAndBadValuesNameTheField) {
+  SfmOptions o;
+  EXPECT_NO_THROW(o.Check());
+  o.max_features = 10;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = SfmOptions();
+  o.camera_model = "FISH";
+  try {
+    o.Check();
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("SfmOptions::camera_model = FISH"), std::string::npos);
+  }
+  o = SfmOptions();
+  o.threads = 0;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+}
+
+TEST(ColmapVersion, ParsesBanners) {
+  const ColmapVersion v = ParseColmapVersion(
+      "COLMAP 3.8 -- Structure-from-Motion and Multi-View Stereo\n"
+      "              (Commit Unknown on Unknown without CUDA)\n\nUsage:\n  colmap [command]\n");
+  EXPECT_EQ(v.version, "3.8");
+  EXPECT_FALSE(v.cuda);
+  const ColmapVersion w = ParseColmapVersion(
+      "COLMAP 3.9.1 -- Structure-from-Motion and Multi-View Stereo\n"
+      "              (Commit 0d9d4e8 on 2024-01-05 with CUDA)\n");
+  EXPECT_EQ(w.version, "3.9.1");
+  EXPECT_TRUE(w.cuda);
+  EXPECT_THROW(ParseColmapVersion("bash: colmap: command not found"), std::invalid_argument);
+}
+
+TEST(ColmapVersion, ParsesTheInstalledColmap) {
+  REQUIRE_COLMAP();
+  const ColmapVersion v = ParseColmapVersion(RunCommand("colmap help").output);
+  EXPECT_FALSE(v.version.empty());
+  EXPECT_TRUE(v.version[0] >= '3' && v.version[0] <= '9') << v.version;
+  // Debian's build has no CUDA (BUILD_NOTES.md): then the GPU must stay off.
+  if (RunCommand("colmap help").output.find("without CUDA") != std::string::npos) {
+    EXPECT_FALSE(v.cuda);
+  }
+}
+
+std::vector<std::string> Flags(const SfmStage& stage) {
+  std::vector<std::string> flags;
+  for (const std::string& a : stage.argv) {
+    if (a.rfind("--", 0) == 0) flags.push_back(a);
+  }
+  return flags;
+}
+
+std::string Value(const SfmStage& stage, const std::string& flag) {
+  for (size_t i = 0; i + 1 < stage.argv.size(); ++i) {
+    if (stage.argv[i] == flag) return stage.argv[i + 1];
+  }
+  return "<absent>";
+}
+
+TEST(BuildSfmStages, CpuArgvAndDeterministicMatching) {
+  SfmOptions o;
+  o.colmap = "/opt/colmap";
+  o.max_features = 2000;
+  o.max_image_size = 800;
+  const std::vector<SfmStage> stages = BuildSfmStages(o, "/w s", /*cuda=*/false);
+  ASSERT_EQ(stages.size(), 5u);
+  EXPECT_EQ(stages[0].argv[0], "/opt/colmap");
+  EXPECT_EQ(stages[0].argv[1], "feature_extractor");
+  EXPECT_EQ(Value(stages[0], "--SiftExtraction.use_gpu"), "0");
+  EXPECT_EQ(Value(stages[0], "--SiftExtraction.max_num_features"), "2000");
+  EXPECT_EQ(Value(stages[0], "--SiftExtraction.max_image_size"), "800");
+  EXPECT_EQ(Value(stages[0], "--ImageReader.single_camera"), "1");
+  EXPECT_EQ(Value(stages[0], "--image_path"), "/w s/images");  // one argv element, no quoting
+  // Matching is candi's own (no argv); COLMAP verifies the raw matches and maps on one thread.
+  EXPECT_EQ(stages[1].name, kMatchStage);
+  EXPECT_TRUE(stages[1].argv.empty());
+  EXPECT_EQ(stages[2].argv[1], "matches_importer");
+  EXPECT_EQ(Value(stages[2], "--match_type"), "raw");
+  EXPECT_EQ(Value(stages[2], "--match_list_path"), "/w s/matches.txt");
+  EXPECT_EQ(Value(stages[2], "--SiftMatching.num_threads"), "1");
+  EXPECT_EQ(stages[3].argv[1], "mapper");
+  EXPECT_EQ(Value(stages[3], "--Mapper.num_threads"), "1");
+  EXPECT_EQ(Value(stages[3], "--random_seed"), "0");
+  EXPECT_EQ(Value(stages[3], "--output_path"), "/w s/sparse");
+  EXPECT_EQ(Value(stages[4], "--output_path"), "/w s/dense");
+  EXPECT_EQ(Value(stages[4], "--max_image_size"), "800");
+  EXPECT_EQ(Value(BuildSfmStages(o, "/w", /*cuda=*/true)[0], "--SiftExtraction.use_gpu"), "1");
+}
+
+// Every option candi passes is one the installed COLMAP lists in `colmap <command> -h`.
+TEST(BuildSfmStages, OptionNamesAreAcceptedByTheInstalledColmap) {
+  REQUIRE_COLMAP();
+  for (const SfmStage& stage : BuildSfmStages(SfmOptions{}, "/w", false)) {
+    if (stage.argv.empty()) continue;  // candi's own stage
+    const std::string help = RunCommand("colmap " + stage.argv[1] + " -h").output;
+    ASSERT_NE(help.find("--help"), std::string::npos) << stage.name << ": " << help;
+    for (const std::string& flag : Flags(stage)) {
+      EXPECT_NE(help.find("  " + flag + " "), std::string::npos) << stage.name << " lacks " << flag;
+    }
+  }
+}
+
+TEST(ListImages, ImagesSortedOthersIgnored) {
+  TempDir dir;
+  for (const char* f : {"b.JPG", "a.jpg", "c.png", "d.TIFF", "notes.txt", "K.txt", "e.pgm"}) {
+    Put(dir.File(f), "x");
+  }
+  std::filesystem::create_directory(dir.File("sub.jpg"));  // a folder is not an image
+  std::vector<std::string> ignored;
+  const std::vector<std::string> images = ListImages(dir.path(), &ignored);
+  EXPECT_EQ(images, (std::vector<std::string>{"a.jpg", "b.JPG", "c.png", "d.TIFF", "e.pgm"}));
+  EXPECT_EQ(ignored, (std::vector<std::string>{"K.txt", "notes.txt"}));
+  EXPECT_NE(InputErrorText([&] { ListImages(dir.File("absent"), nullptr); }).find("no such folder"),
+            std::string::npos);
+  EXPECT_NE(InputErrorText([&] { ListImages(dir.File("a.jpg"), nullptr); }).find("not a folder"),
+            std::string::npos);
+}
+
+TEST(RunLogged, ExitCodeLogAndMissingExecutable) {
+  TempDir dir;
+  const std::string log = dir.File("x.log");
+  EXPECT_EQ(RunLogged({"sh", "-c", "echo out; echo err >&2; exit 3", "ignored"}, log), 3);
+  EXPECT_EQ(ReadBytes(log), "out\nerr\n");
+  // Arguments are not interpreted by a shell.
+  EXPECT_EQ(RunLogged({"echo", "$HOME;", "`x`"}, log), 0);
+  EXPECT_EQ(ReadBytes(log), "out\nerr\n$HOME; `x`\n");
+  const std::string text = InputErrorText([&] { RunLogged({dir.File("no-such-colmap"), "help"}, log); });
+  EXPECT_NE(text.find("no-such-colmap"), std::string::npos) << text;
+  EXPECT_NE(text.find("No such file"), std::string::npos) << text;
+}
+
+TEST(TailOfFile, KeepsTheLastLines) {
+  TempDir dir;
+  std::string text;
+  for (int i = 0; i < 30; ++i) text += "line " + std::to_string(i) + "\n";
+  Put(dir.File("l"), text);
+  const std::string tail = TailOfFile(dir.File("l"), 20);
+  EXPECT_EQ(tail.substr(0, 8), "line 10\n");
+  EXPECT_EQ(tail.substr(tail.size() - 8), "line 29\n");
+  EXPECT_EQ(TailOfFile(dir.File("absent"), 20), "");
+}
+
+TEST(ParseFeatureExtractionLog, FindsPhotosWithoutExifFocal) {
+  TempDir dir;
+  Put(dir.File("fe.log"),
+             "Processed file [1/2]\n  Name:            a.jpg\n  Dimensions:      2832 x 2128\n"
+             "  Focal Length:    2832.00px (Prior)\n  Features:        1706\n"
+             "Processed file [2/2]\n  Name:            b.png\n  Dimensions:      200 x 150\n"
+             "  Focal Length:    240.00px\n  Features:        94\n");
+  SfmSummary s;
+  ParseFeatureExtractionLog(dir.File("fe.log"), &s);
+  EXPECT_EQ(s.no_exif, std::vector<std::string>{"b.png"});
+  EXPECT_DOUBLE_EQ(s.default_focal_px, 240.0);
+}
+
+TEST(ParseFeatureExtractionLog, ListsThePhotosByNameWhateverOrderTheThreadsLogged) {
+  TempDir dir;
+  Put(dir.File("fe.log"),
+      "  Name:            d.png\n  Focal Length:    240.00px\n"
+      "  Name:            b.png\n  Focal Length:    240.00px\n"
+      "  Name:            c.png\nERROR: Failed to read image\n"
+      "  Name:            a.png\nERROR: Failed to read image\n");
+  SfmSummary s;
+  ParseFeatureExtractionLog(dir.File("fe.log"), &s);
+  EXPECT_EQ(s.no_exif, (std::vector<std::string>{"b.png", "d.png"}));
+  EXPECT_EQ(s.unreadable, (std::vector<std::string>{"a.png", "c.png"}));
+}
+
+TEST(RunSfm, ColmapAbsentSaysHowToInstall) {
+  TempDir dir;
+  for (const char* f : {"a.jpg", "b.jpg"}) Put(dir.File(std::string("in/") + f), "x");
+  SfmOptions o;
+  o.colmap = dir.File("missing/colmap");
+  const std::string text = InputErrorText([&] { RunSfm(o, dir.File("in"), dir.File("ws")); });
+  EXPECT_NE(text.find("COLMAP was not found"), std::string::npos) << text;
+  EXPECT_NE(text.find("apt install colmap"), std::string::npos) << text;
+  EXPECT_NE(text.find("--colmap"), std::string::npos) << text;
+}
+
+TEST(RunSfm, RefusesFoldersWithoutTwoImages) {
+  TempDir dir;
+  std::filesystem::create_directories(dir.File("empty"));
+  EXPECT_NE(InputErrorText([&] { RunSfm({}, dir.File("empty"), dir.File("ws")); }).find("no images"),
+            std::string::npos);
+  Put(dir.File("docs/readme.txt"), "x");
+  EXPECT_NE(InputErrorText([&] { RunSfm({}, dir.File("docs"), dir.File("ws")); }).find("no images"),
+            std::string::npos);
+  Put(dir.File("one/only.jpg"), "x");
+  const std::string one = InputErrorText([&] { RunSfm({}, dir.File("one"), dir.File("ws")); });
+  EXPECT_NE(one.find("only one image (only.jpg)"), std::string::npos) << one;
+  EXPECT_NE(one.find("at least 2"), std::string::npos) << one;
+  EXPECT_FALSE(FileExists(dir.File("ws/database.db")));
+}
+
+TEST(RunSfm, RefusesToOverwriteAPreviousRun) {
+  TempDir dir;
+  for (const char* f : {"a.jpg", "b.jpg"}) Put(dir.File(std::string("in/") + f), "x");
+  Put(dir.File("ws/database.db"), "precious");
+  SfmOptions o;
+  o.colmap = dir.File("missing/colmap");
+  const std::string text = InputErrorText([&] { RunSfm(o, dir.File("in"), dir.File("ws")); });
+  EXPECT_NE(text.find("--overwrite"), std::string::npos) << text;
+  EXPECT_EQ(ReadBytes(dir.File("ws/database.db")), "precious");
+}
+
+// Real COLMAP on two unrelated noise images (no EXIF, a non-image file beside them): the mapper
+// finds no model and the message says why. A few seconds.
+TEST(RunSfm, UnrelatedImagesGiveNoModelMessage) {
+  REQUIRE_COLMAP();
+  TempDir dir;
+  WriteNoisePgm(dir.File("in/n0.pgm"), 160, 120, 1);
+  WriteNoisePgm(dir.File("in/n1.pgm"), 160, 120, 2);
+  Put(dir.File("in/notes.txt"), "not an image");
+  SfmOptions o;
+  o.threads = 1;
+  std::vector<std::string> stages;
+  const std::string text = InputErrorText([&] {
+    RunSfm(o, dir.File("in"), dir.File("ws"),
+           [&](const std::string& stage, int, int, double, bool done) {
+             if (done) stages.push_back(stage);
+           });
+  });
+  EXPECT_NE(text.find("no model: the images may not overlap"), std::string::npos) << text;
+  EXPECT_EQ(stages, (std::vector<std::string>{"feature_extractor", kMatchStage, "matches_importer"}));
+  EXPECT_TRUE(FileExists(dir.File("ws/logs/mapper.log")));
+  EXPECT_TRUE(FileExists(dir.File("ws/images/n0.pgm")));
+  EXPECT_FALSE(FileExists(dir.File("ws/images/notes.txt")));
+}
+
+// Files with image names that COLMAP cannot decode: skipped with a warning; fewer than 2 left is
+// an error naming them.
+TEST(RunSfm, UnreadableImagesAreNamed) {
+  REQUIRE_COLMAP();
+  TempDir dir;
+  Put(dir.File("in/a.jpg"), "not a jpeg");
+  WriteNoisePgm(dir.File("in/n0.pgm"), 160, 120, 1);
+  SfmOptions o;
+  o.threads = 1;
+  const std::string text = InputErrorText([&] { RunSfm(o, dir.File("in"), dir.File("ws")); });
+  EXPECT_NE(text.find("could not read 1 of the 2 images (a.jpg)"), std::string::npos) << text;
+}
+
+// A real COLMAP stage failure (the matcher aborts on an empty database): exit status and the end
+// of the log, without the stack-trace frames.
+TEST(RunSfmStage, FailureReportsExitStatusAndLogTail) {
+  REQUIRE_COLMAP();
+  TempDir dir;
+  const SfmStage stage{"exhaustive_matcher",
+                       {"colmap", "exhaustive_matcher", "--database_path", dir.File("empty.db"),
+                        "--SiftMatching.use_gpu", "0"}};
+  int calls = 0;
+  const std::string text = InputErrorText([&] {
+    RunSfmStage(stage, dir.File("m.log"), 2, 4, [&](const std::string&, int, int, double, bool) { ++calls; });
+  });
+  EXPECT_NE(text.find("colmap exhaustive_matcher "), std::string::npos) << text;
+  EXPECT_TRUE(text.find("killed by signal") != std::string::npos ||
+              text.find("exit code") != std::string::npos) << text;
+  EXPECT_NE(text.find("m.log"), std::string::npos) << text;
+  EXPECT_EQ(text.find("    @ "), std::string::npos) << text;
+  EXPECT_EQ(calls, 1);  // started, never done
+  EXPECT_NE(ReadBytes(dir.File("m.log")).find("$ colmap exhaustive_matcher --database_path"),
+            std::string::npos);
+}
+
+// The Sceaux photos end to end, downscaled (slow: minutes on 2 cores).
+TEST(RunSfm, SceauxRegistersAlmostAllPhotos) {
+  CANDI_REQUIRE_SLOW_TESTS();
+  CANDI_REQUIRE_SHARED_DATA(photos, "photos/sceaux_castle");
+  REQUIRE_COLMAP();
+  TempDir dir;
+  SfmOptions o;
+  o.max_image_size = 800;
+  o.max_features = 2000;
+  const auto start = std::chrono::steady_clock::now();
+  const SfmSummary s = RunSfm(o, photos, dir.File("ws"));
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::fprintf(stderr, "Sceaux SfM at 800 px, 2000 features: %.1f s, %zu/%zu registered, %zu points, "
+               "%.3f px\n", seconds, s.registered.size(), s.images.size(), s.points,
+               s.mean_reprojection_error);
+  EXPECT_EQ(s.images.size(), 11u);
+  EXPECT_EQ(s.ignored, std::vector<std::string>{"K.txt"});
+  EXPECT_GE(s.registered.size(), 10u);
+  EXPECT_GT(s.points, 1000u);
+  EXPECT_LT(s.mean_reprojection_error, 1.5);
+  EXPECT_TRUE(s.no_exif.empty());
+  // A COLMAP dense workspace: undistorted images and a PINHOLE model that this reader reads.
+  const ColmapModel dense = ReadColmapModel(dir.File("ws/dense/sparse"));
+  EXPECT_EQ(dense.images.size(), s.registered.size());
+  EXPECT_EQ(dense.cameras.begin()->second.model, "PINHOLE");
+  EXPECT_LE(std::max(dense.cameras.begin()->second.width, dense.cameras.begin()->second.height), 800);
+  for (const auto& [id, image] : dense.images) {
+    EXPECT_TRUE(FileExists(dir.File("ws/dense/images/" + image.name))) << image.name;
+  }
+}
+
+}  // namespace
+}  // namespace candi::photogrammetry
