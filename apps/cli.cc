@@ -33,7 +33,7 @@ const std::vector<std::pair<std::string, std::vector<std::string>>>& CommandGrou
       {"Digitize", {"sfm", "dense", "georef", "register", "register-scans", "clean", "colorcorrect", "foundation", "relief"}},
       {"Assemble", {"build", "pack", "export"}},
       {"Look", {"render", "view", "publish", "section"}},
-      {"Other", {"opacity", "demo", "bench"}},
+      {"Other", {"opacity", "demo", "campaign", "bench"}},
   };
   return groups;
 }
@@ -239,6 +239,7 @@ int RunCli(int argc, char** argv) {
   AddSection(root);
   AddOpacity(root);
   AddDemo(root);
+  AddCampaign(root);
   AddBench(root);
   GroupCommands(app);
   AddGlobalFlags(app, verbose, quiet);

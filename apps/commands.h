@@ -31,11 +31,13 @@ void AddPack(Command& root);
 void AddExport(Command& root);
 // compare.cc: the deviation of one cloud from another, or from a mesh.
 void AddCompare(Command& root);
-// photogrammetry.cc: the building from photos (sfm, dense, georef) and colour-card correction.
+// photogrammetry.cc: the building from photos (sfm, dense, georef), colour-card correction, and a
+// synthetic photo campaign with its truth.
 void AddSfm(Command& root);
 void AddDense(Command& root);
 void AddGeoref(Command& root);
 void AddColorCorrect(Command& root);
+void AddCampaign(Command& root);
 // register.cc: scans registered and cleaned (run by register_run.cc, in candi-pcl).
 void AddRegister(Command& root);
 void AddRegisterScans(Command& root);

@@ -1,6 +1,7 @@
-// candi sfm, dense, georef, colorcorrect: the building from photos (pipeline/photogrammetry.h):
-// COLMAP structure from motion, CPU dense stereo, georeferencing on surveyed targets; and
-// colour-card correction (pipeline/color_correct.h).
+// candi sfm, dense, georef, colorcorrect, campaign: the building from photos
+// (pipeline/photogrammetry.h): COLMAP structure from motion, CPU dense stereo, georeferencing on
+// surveyed targets; colour-card correction (pipeline/color_correct.h); and a synthetic photo
+// campaign with its ground truth (reconstruction/photogrammetry/scenes/campaign.h).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +13,7 @@
 #include "io/point_io.h"
 #include "pipeline/color_correct.h"
 #include "pipeline/photogrammetry.h"
+#include "reconstruction/photogrammetry/scenes/campaign.h"
 
 namespace candi::apps {
 
@@ -22,11 +24,13 @@ namespace pg = candi::photogrammetry;
 struct SfmArgs {
   std::string images, workspace;
   pg::SfmOptions options;
+  std::string matching = "auto";
   std::string colmap;  // "" = $CANDI_COLMAP, else options.colmap
 };
 
 int RunSfm(const SfmArgs& a) {
   pg::SfmOptions o = a.options;
+  o.pairs.strategy = pg::ParsePairStrategy(a.matching);
   if (!a.colmap.empty()) {
     o.colmap = a.colmap;
   } else if (const char* env = std::getenv("CANDI_COLMAP"); env != nullptr && *env != '\0') {
@@ -36,7 +40,9 @@ int RunSfm(const SfmArgs& a) {
   const pg::SfmSummary s = pipeline::StructureFromMotion(o, a.images, a.workspace);
   double total = 0;
   for (const auto& [stage, seconds] : s.stage_seconds) total += seconds;
-  std::printf("COLMAP %s (%s), %s\n", s.colmap.version.c_str(), s.colmap.cuda ? "CUDA" : "CPU", s.matcher.c_str());
+  std::printf("COLMAP %s (%s), pairs by %s\n", s.colmap.version.c_str(), s.colmap.cuda ? "CUDA" : "CPU",
+              s.matcher.c_str());
+  std::printf("%-28s %zu / %zu\n", "pairs verified / matched", s.pairs_verified, s.pairs_tried);
   std::printf("%-28s %s\n", "images registered / total",
               (std::to_string(s.registered.size()) + " / " + std::to_string(s.images.size())).c_str());
   std::printf("%-28s %zu\n", "sparse points", s.points);
@@ -60,8 +66,17 @@ void AddSfm(Command& root) {
   c.Option("--max-image-size", o.max_image_size, "Longest side in pixels for SIFT and the dense images")
       .Range(64, 100000);
   c.Option("--max-features", o.max_features, "SIFT features per image").Range(64, 1000000);
-  c.Option("--exhaustive-max-images", o.exhaustive_max_images, "Exhaustive matching up to this many images, "
-           "sequential matching above").Range(2, 1000000);
+  c.Option("--matching", a.matching, "Pairs matched: auto (exhaustive up to --exhaustive-max-images, else "
+           "sequential + retrieval, + positions with --priors), exhaustive, sequential, retrieval, positional");
+  c.Option("--exhaustive-max-images", o.pairs.exhaustive_max_images, "Auto: every pair up to this many images")
+      .Range(2, 1000000);
+  c.Option("--sequential-overlap", o.pairs.sequential_overlap, "Sequential: each photo with the next N (name order)")
+      .Range(0, 100000);
+  c.Option("--retrieval-neighbours", o.pairs.retrieval_neighbours, "Retrieval: each photo with its N most similar "
+           "(a vocabulary tree trained on the photos' own features)").Range(0, 100000);
+  c.Option("--position-neighbours", o.pairs.position_neighbours, "Positions: each photo with its N nearest by the "
+           "priors").Range(0, 100000);
+  c.Option("--priors", o.priors, "Camera position priors, CSV name,E,N,H[,sigma] (candi campaign's priors.csv)");
   c.Option("--camera-model", o.camera_model, "COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
   c.FlagOff("--camera-per-image", o.single_camera, "Separate intrinsics per photo (default: one shared camera)");
   c.Option("--threads", o.threads, "Threads for feature extraction and matching (-1: all); COLMAP verifies and "
@@ -242,6 +257,55 @@ void AddColorCorrect(Command& root) {
   c.Option("--max-outliers", a.options.max_outliers, "Patches that may be left out").Range(0, 100);
   c.Run([&a] { return RunColorCorrect(a); });
   c.Footer("Example: candi colorcorrect photo.png -o photo_corrected.png --patches card.csv");
+}
+
+namespace {
+
+struct CampaignArgs {
+  std::string output;
+  pg::CampaignOptions options;
+  bool overwrite = false;
+};
+
+int RunCampaign(const CampaignArgs& a) {
+  a.options.Check();
+  ConsoleProgressOptions po;
+  po.unit = "photos";
+  ConsoleProgress progress("campaign", po);
+  Stopwatch timer;
+  const pg::Campaign c = pg::WriteCampaign(a.options, a.output, a.overwrite, progress.Callback());
+  progress.Finish();
+  std::printf("%s: %zu photos of %d x %d in %zu session(s), %zu terrace(s) (the lowest %.2f m across), "
+              "%zu carved panels, %zu targets, %.1f s\n",
+              a.output.c_str(), c.photos.size(), a.options.width, a.options.width * 3 / 4, c.chunks.size(),
+              c.terrace_half_sides.size(), 2 * c.terrace_half_sides.front(), c.scene.carvings.size(),
+              c.targets.size(), timer.Seconds());
+  return kOk;
+}
+
+}  // namespace
+
+void AddCampaign(Command& root) {
+  CampaignArgs& a = root.Keep<CampaignArgs>();
+  pg::CampaignOptions& o = a.options;
+  Command c = root.Add("campaign", "A synthetic photo campaign with its ground truth: a terraced temple stand-in with "
+                                   "carved panels, walked in sessions 2 m from its walls, painted survey targets, "
+                                   "true cameras and surface");
+  c.Option("output", a.output, "Folder to write (created)").Required();
+  c.Option("--photos", o.photos, "Photos in all (the building is sized to them)").Range(8, 5000);
+  c.Option("--size", o.width, "Long side of the photos, pixels (landscape 4:3)").Range(64, 8192);
+  c.Option("--chunks", o.chunks, "Sessions the walks are split into (sectors of the building)").Range(1, 64);
+  c.Option("--uav", o.uav_photos, "Of the photos, this many on a ring above (a session of its own)").Range(0, 5000);
+  c.Option("--heights", o.heights, "Camera rows along each wall").Range(1, 4);
+  c.Option("--distance", o.wall_distance, "Metres from the wall").Range(0.5, 10.0);
+  c.Option("--overlap", o.overlap, "Overlap of neighbouring photos in a row").Range(0.2, 0.9);
+  c.Option("--gps-sigma", o.gps_sigma, "Write GPS-like position priors with this noise, metres (0: none)");
+  c.Option("--noise", o.noise_sigma, "Sensor noise, grey levels (0-255)");
+  c.Option("--supersample", o.supersample, "Rays per pixel side").Range(1, 8);
+  c.Option("--seed", o.seed, "Seed of the texture, carvings, noise and survey errors");
+  c.Flag("--overwrite", a.overwrite, "Replace a campaign already in the folder");
+  c.Run([&a] { return RunCampaign(a); });
+  c.Footer("Example: candi campaign site --photos 60 --size 320 --chunks 3   (see docs/guide/campaign.md)");
 }
 
 }  // namespace candi::apps

@@ -46,6 +46,8 @@ json SfmReport(const pg::SfmSummary& s, const pg::SfmOptions& o) {
   j["mean_reprojection_error_px"] = s.mean_reprojection_error;
   j["mean_track_length"] = s.mean_track_length;
   j["matcher"] = "candi exact brute force, " + s.matcher;
+  j["pairs_matched"] = s.pairs_tried;
+  j["pairs_verified"] = s.pairs_verified;
   j["reproducibility"] = kSfmReproducibility;
   j["max_image_size"] = o.max_image_size;
   j["max_features"] = o.max_features;

@@ -61,7 +61,7 @@ TEST(Cli, HelpGroupsTheCommandsAlongTheUsersPath) {
        {"sfm", "dense", "georef", "register", "register-scans", "clean", "colorcorrect", "foundation", "relief"}},
       {"Assemble", {"build", "pack", "export"}},
       {"Look", {"render", "view", "publish", "section"}},
-      {"Other", {"opacity", "demo", "bench"}},
+      {"Other", {"opacity", "demo", "campaign", "bench"}},
   };
   const Result r = RunCandi("--help");
   ASSERT_EQ(r.code, 0);

@@ -57,6 +57,33 @@ TEST(SfmCli, BadOptionsAreUsageErrors) {
   const auto r = RunCandi("sfm " + dir.File("in") + " -o " + dir.File("ws") + " --camera-model FISH");
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_NE(r.output.find("camera_model = FISH"), std::string::npos) << r.output;
+  const auto m = RunCandi("sfm " + dir.File("in") + " -o " + dir.File("ws") + " --matching vocab");
+  EXPECT_EQ(m.code, 1) << m.output;
+  EXPECT_NE(m.output.find("auto, exhaustive, sequential, retrieval or positional"), std::string::npos) << m.output;
+  Put(dir.File("priors.csv"), "name,E,N\na.jpg,1,2\n");
+  const auto p = RunCandi("sfm " + dir.File("in") + " -o " + dir.File("ws2") + " --priors " + dir.File("priors.csv") +
+                          " --colmap " + dir.File("nowhere/colmap"));
+  EXPECT_EQ(p.code, 2) << p.output;
+}
+
+// `candi campaign`: writes a small campaign; refuses an occupied folder and bad counts.
+TEST(CampaignCli, WritesACampaignAndRefusesBadInput) {
+  TempDir dir;
+  const auto r = RunCandi("campaign " + dir.File("site") + " --photos 12 --size 64 --chunks 2 --supersample 1");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("12 photos of 64 x 48 in 2 session(s)"), std::string::npos) << r.output;
+  for (const char* f : {"s1/s1_0001.jpg", "s2/s2_0001.jpg", "targets.csv", "picks.csv", "truth/cameras.csv",
+                        "truth/surface.ply", "campaign.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir.File("site/") + f)) << f;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.File("site/priors.csv")));
+  const auto again = RunCandi("campaign " + dir.File("site") + " --photos 12 --size 64");
+  EXPECT_EQ(again.code, 2) << again.output;
+  EXPECT_NE(again.output.find("--overwrite"), std::string::npos) << again.output;
+  EXPECT_EQ(RunCandi("campaign " + dir.File("x") + " --photos 4").code, 1);
+  const auto uav = RunCandi("campaign " + dir.File("y") + " --photos 20 --chunks 3 --uav 10");
+  EXPECT_EQ(uav.code, 1) << uav.output;
+  EXPECT_NE(uav.output.find("uav_photos"), std::string::npos) << uav.output;
 }
 
 }  // namespace

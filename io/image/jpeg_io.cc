@@ -6,10 +6,15 @@
 #include <jpeglib.h>
 #include <jerror.h>
 
+#include <algorithm>
+#include <cmath>
 #include <csetjmp>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/atomic_file.h"
@@ -162,6 +167,107 @@ std::string EncodeJpeg(const Image8& image, int quality) {
   std::free(buffer);
   if (!ok) throw InputError(std::string("JPEG encoding failed: ") + err.message);
   return bytes;
+}
+
+namespace {
+
+// TIFF's little-endian fields, appended.
+void Put16(std::string* s, uint32_t v) {
+  s->push_back(static_cast<char>(v & 0xff));
+  s->push_back(static_cast<char>((v >> 8) & 0xff));
+}
+void Put32(std::string* s, uint32_t v) {
+  Put16(s, v & 0xffff);
+  Put16(s, v >> 16);
+}
+// A rational of 10^-4 steps (EXIF's RATIONAL: two unsigned 32-bit integers).
+std::pair<uint32_t, uint32_t> Rational(double v) {
+  return {static_cast<uint32_t>(std::llround(v * 10000.0)), 10000u};
+}
+
+// One IFD: entries of (tag, type, count, inline value or bytes stored after the IFD), written at
+// `offset` (from the TIFF header), followed by the next-IFD link (0) and the out-of-line bytes.
+struct IfdEntry {
+  uint16_t tag, type;
+  uint32_t count;
+  std::string data;  // little-endian value bytes
+};
+std::string WriteIfd(std::vector<IfdEntry> entries, uint32_t offset) {
+  std::sort(entries.begin(), entries.end(), [](const IfdEntry& a, const IfdEntry& b) { return a.tag < b.tag; });
+  std::string ifd, extra;
+  const uint32_t extra_at = offset + 2 + 12 * static_cast<uint32_t>(entries.size()) + 4;
+  Put16(&ifd, static_cast<uint32_t>(entries.size()));
+  for (const IfdEntry& e : entries) {
+    Put16(&ifd, e.tag);
+    Put16(&ifd, e.type);
+    Put32(&ifd, e.count);
+    if (e.data.size() <= 4) {
+      std::string value = e.data;
+      value.resize(4, '\0');
+      ifd += value;
+    } else {
+      Put32(&ifd, extra_at + static_cast<uint32_t>(extra.size()));
+      extra += e.data;
+      if (extra.size() % 2) extra.push_back('\0');  // word alignment
+    }
+  }
+  Put32(&ifd, 0);
+  return ifd + extra;
+}
+IfdEntry Ascii(uint16_t tag, const std::string& text) { return {tag, 2, static_cast<uint32_t>(text.size() + 1), text + '\0'}; }
+IfdEntry Short(uint16_t tag, uint32_t v) {
+  std::string d;
+  Put16(&d, v);
+  return {tag, 3, 1, d};
+}
+IfdEntry Long(uint16_t tag, uint32_t v) {
+  std::string d;
+  Put32(&d, v);
+  return {tag, 4, 1, d};
+}
+IfdEntry Rat(uint16_t tag, double v) {
+  const auto [num, den] = Rational(v);
+  std::string d;
+  Put32(&d, num);
+  Put32(&d, den);
+  return {tag, 5, 1, d};
+}
+
+}  // namespace
+
+double ExifFocalPixels(const JpegExif& exif, int width) { return exif.focal_mm / exif.sensor_width_mm * width; }
+
+std::string EncodeJpegWithExif(const Image8& image, const JpegExif& exif, int quality) {
+  if (!(exif.focal_mm > 0) || !(exif.sensor_width_mm > 0)) {
+    throw std::invalid_argument("EXIF: focal_mm and sensor_width_mm must be > 0");
+  }
+  const std::string jpeg = EncodeJpeg(image, quality);
+  // The TIFF structure: header, IFD0 (make, model, the Exif IFD's offset), the Exif IFD.
+  const double pixels_per_cm = image.width() / (exif.sensor_width_mm / 10.0);
+  std::vector<IfdEntry> exif_entries = {
+      Rat(0x920A, exif.focal_mm),        Long(0xA002, static_cast<uint32_t>(image.width())),
+      Long(0xA003, static_cast<uint32_t>(image.height())), Rat(0xA20E, pixels_per_cm),
+      Rat(0xA20F, pixels_per_cm),        Short(0xA210, 3)};
+  std::vector<IfdEntry> ifd0 = {Ascii(0x010F, exif.make), Ascii(0x0110, exif.model), Long(0x8769, 0)};
+  const std::string ifd0_bytes = WriteIfd(ifd0, 8);
+  ifd0.back() = Long(0x8769, 8 + static_cast<uint32_t>(ifd0_bytes.size()));
+  std::string tiff = "II";
+  Put16(&tiff, 42);
+  Put32(&tiff, 8);
+  tiff += WriteIfd(ifd0, 8);
+  tiff += WriteIfd(exif_entries, static_cast<uint32_t>(tiff.size()));
+  const std::string payload = std::string("Exif\0\0", 6) + tiff;
+  std::string segment = "\xFF\xE1";
+  Put16(&segment, 0);  // the length, big-endian, set below
+  segment[2] = static_cast<char>(((payload.size() + 2) >> 8) & 0xff);
+  segment[3] = static_cast<char>((payload.size() + 2) & 0xff);
+  segment += payload;
+  // After SOI and, when present, the JFIF APP0 segment libjpeg writes.
+  size_t at = 2;
+  if (jpeg.size() > 6 && static_cast<uint8_t>(jpeg[2]) == 0xFF && static_cast<uint8_t>(jpeg[3]) == 0xE0) {
+    at = 4 + ((static_cast<uint8_t>(jpeg[4]) << 8) | static_cast<uint8_t>(jpeg[5]));
+  }
+  return jpeg.substr(0, at) + segment + jpeg.substr(at);
 }
 
 void WriteJpeg(const std::string& path, const Image8& image, int quality) {

@@ -22,6 +22,22 @@ std::string EncodeJpeg(const Image8& image, int quality = 95);
 // EncodeJpeg's bytes, written atomically.
 void WriteJpeg(const std::string& path, const Image8& image, int quality = 95);
 
+// What a camera writes about its lens, as EXIF (an APP1 segment after the JFIF header): Make,
+// Model, FocalLength (mm), FocalPlaneX/YResolution (pixels per cm of the sensor, from its width),
+// FocalPlaneResolutionUnit (cm) and PixelX/YDimension. COLMAP's extractor turns them into a focal
+// prior in pixels: focal_mm / sensor_width_mm * max(width, height). Readers show FocalLength to
+// 0.1 mm, so a focal_mm on that grid keeps the prior exact.
+struct JpegExif {
+  std::string make = "candi", model = "synthetic";  // ASCII, no NUL
+  double focal_mm = 0;                               // > 0
+  double sensor_width_mm = 0;                        // > 0, the sensor's width along the image's x
+};
+// EncodeJpeg's bytes with the EXIF segment inserted. Throws std::invalid_argument for a
+// non-positive focal or sensor width.
+std::string EncodeJpegWithExif(const Image8& image, const JpegExif& exif, int quality = 95);
+// The focal length in pixels a reader derives from `exif` for an image `width` pixels wide.
+double ExifFocalPixels(const JpegExif& exif, int width);
+
 // A PNG or JPEG as 8-bit RGB: grey is replicated, alpha dropped, 16 bits scaled (v * 255 / 65535,
 // rounded). Other formats (TIFF, BMP, ...) fail with InputError naming the path and the format.
 Image8 ReadImageRgb8(const std::string& path);

@@ -28,6 +28,52 @@ struct Hit {
   int primitive = -1;
 };
 
+double SmoothStep(double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  return x * x * (3 - 2 * x);
+}
+
+// The carved surface's outward normal at (u, v): the face's normal tilted by Depth's gradient.
+Eigen::Vector3d CarvingNormal(const SyntheticCarving& c, double u, double v) {
+  const double e = 1e-3;
+  const double du = (c.Depth(u + e, v) - c.Depth(u - e, v)) / (2 * e);
+  const double dv = (c.Depth(u, v + e) - c.Depth(u, v - e)) / (2 * e);
+  return (c.u_axis.cross(c.v_axis) + du * c.u_axis + dv * c.v_axis).normalized();
+}
+
+// A hit on a carved face continues into the recess: marched in steps that change the depth behind
+// the face by at most depth/32 and move along it by at most 3 mm, then bisected to the surface.
+void EnterCarving(const SyntheticScene& scene, const Eigen::Vector3d& o, const Eigen::Vector3d& dir, Hit* hit) {
+  const Eigen::Vector3d x0 = o + hit->t * dir;
+  for (const SyntheticCarving& c : scene.carvings) {
+    if (c.solid != hit->primitive) continue;
+    const Eigen::Vector3d n = c.u_axis.cross(c.v_axis);
+    if (n.dot(hit->normal) < 0.999 || std::abs(n.dot(x0 - c.origin)) > 1e-6) continue;
+    const double u0 = c.u_axis.dot(x0 - c.origin), v0 = c.v_axis.dot(x0 - c.origin);
+    if (!(u0 > 0 && u0 < c.width && v0 > 0 && v0 < c.height)) continue;
+    const double inward = -n.dot(dir);  // depth gained per unit t, > 0 for a ray entering
+    if (!(inward > 0)) return;
+    const double lateral = (dir + inward * n).norm();
+    const double dt = std::min(c.depth / 32 / inward, lateral > 0 ? 0.003 / lateral : 1e300);
+    // Empty (in the recess) while the depth behind the face is below the carving's depth there.
+    const auto empty = [&](double t) {
+      const Eigen::Vector3d d = o + t * dir - c.origin;
+      return (t - hit->t) * inward < c.Depth(c.u_axis.dot(d), c.v_axis.dot(d));
+    };
+    double lo = hit->t, hi = hit->t;
+    while (empty(hi)) lo = hi, hi += dt;
+    if (hi == hit->t) return;  // on the frame: the face itself
+    for (int i = 0; i < 40; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (empty(mid) ? lo : hi) = mid;
+    }
+    const Eigen::Vector3d d = o + hi * dir - c.origin;
+    hit->t = hi;
+    hit->normal = CarvingNormal(c, c.u_axis.dot(d), c.v_axis.dot(d));
+    return;
+  }
+}
+
 // Cyrus-Beck clipping of the ray against each convex solid; the nearest entry wins.
 Hit CastRay(const SyntheticScene& scene, const Eigen::Vector3d& o, const Eigen::Vector3d& dir) {
   Hit best;
@@ -55,6 +101,7 @@ Hit CastRay(const SyntheticScene& scene, const Eigen::Vector3d& o, const Eigen::
       best.primitive = static_cast<int>(k);
     }
   }
+  if (best.t > 0 && !scene.carvings.empty()) EnterCarving(scene, o, dir, &best);
   return best;
 }
 
@@ -108,7 +155,14 @@ Eigen::Vector3d Shade(const SyntheticScene& scene, const SyntheticViewsOptions& 
     texture = 0.25 + 0.75 * (0.55 * ValueNoise(o.seed, p) + 0.3 * ValueNoise(o.seed + 1, p * 2.3) +
                              0.15 * ValueNoise(o.seed + 2, p * 0.37));
   }
-  const double lambert = 0.3 + 0.7 * std::max(0.0, hit.normal.dot(scene.light));
+  if (scene.block_size > 0) {  // stone blocks, each its own shade, courses offset by half a block
+    const double b = scene.block_size;
+    const int64_t row = static_cast<int64_t>(std::floor(x.z() / (0.5 * b)));
+    const double shift = (row & 1) ? 0.5 * b : 0.0;
+    texture *= 0.7 + 0.3 * LatticeValue(o.seed + 3, static_cast<int64_t>(std::floor((x.x() + shift) / b)),
+                                        static_cast<int64_t>(std::floor((x.y() + shift) / b)), row);
+  }
+  const double lambert = scene.ambient + (1 - scene.ambient) * std::max(0.0, hit.normal.dot(scene.light));
   return scene.solids[hit.primitive].albedo * (texture * lambert);
 }
 
@@ -207,6 +261,26 @@ SyntheticSolid SyntheticBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi
   return c;
 }
 
+double SyntheticCarving::Depth(double u, double v) const {
+  if (!(u > 0 && u < width && v > 0 && v < height)) return 0;
+  // The frame: the face at the border, ramping down to the background over `ramp`.
+  const double frame = std::min(0.06, 0.1 * std::min(width, height)), ramp = 0.5 * frame;
+  const double edge = std::min(std::min(u, width - u), std::min(v, height - v));
+  const double cut = SmoothStep((edge - frame) / ramp + 1.0);
+  if (cut == 0) return 0;
+  // Figures: about 3 a square metre, 0.07-0.15 m wide and twice as tall, in rows.
+  const int figures = std::max(1, static_cast<int>(std::lround(3.0 * width * height)));
+  double relief = 0;
+  for (int i = 0; i < figures; ++i) {
+    const double fu = frame + (width - 2 * frame) * ToUnit(HashIndex(seed, i, 0xf1));
+    const double fv = frame + (height - 2 * frame) * (0.3 + 0.4 * ToUnit(HashIndex(seed, i, 0xf2)));
+    const double su = 0.07 + 0.08 * ToUnit(HashIndex(seed, i, 0xf3)), sv = 2 * su;
+    const double q = (u - fu) * (u - fu) / (su * su) + (v - fv) * (v - fv) / (sv * sv);
+    if (q < 9) relief += std::exp(-0.5 * q);
+  }
+  return depth * cut * (1.0 - 0.85 * std::min(1.0, relief));
+}
+
 // The ground, two terraces, a ramp (its slanted face rises from x = 1.6 to the lower terrace's top
 // at x = 1).
 const SyntheticScene& TerracedBlockScene() {
@@ -261,6 +335,12 @@ std::vector<SyntheticView> RenderSyntheticViews(const SyntheticViewsOptions& opt
   std::vector<PinholeCamera> cameras;
   for (int k = 0; k < options.views; ++k) cameras.push_back(ArcCamera(options, k));
   return RenderSyntheticScene(TerracedBlockScene(), cameras, options);
+}
+
+SyntheticView RenderSyntheticView(const SyntheticScene& scene, const PinholeCamera& camera,
+                                  const SyntheticViewsOptions& options, int index) {
+  options.Check();
+  return RenderView(scene, options, camera, index);
 }
 
 std::vector<SyntheticView> RenderSyntheticScene(const SyntheticScene& scene,

@@ -54,10 +54,33 @@ struct SyntheticMarker {
   double radius = 0.1;
 };
 
+// A relief carved into a planar face of a solid: inside the rectangle [0, width] x [0, height] of
+// the face (u along `u_axis`, v along `v_axis`, from `origin`, a point on the face), the surface lies
+// Depth(u, v) behind the face, in [0, depth]: a background cut to `depth` with figures (seeded
+// blobs taller than wide) standing proud of it, and a frame that ramps to the face at the border,
+// so the carved surface is continuous. The outward normal of the face is u_axis x v_axis.
+// The carving must lie on an exposed face and its recess inside its solid (no other solid there).
+struct SyntheticCarving {
+  int solid = -1;                                     // index into SyntheticScene::solids
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();   // the rectangle's (0, 0), on the face
+  Eigen::Vector3d u_axis = Eigen::Vector3d::UnitX();  // unit, along the face
+  Eigen::Vector3d v_axis = Eigen::Vector3d::UnitZ();  // unit, along the face, across u_axis
+  double width = 1, height = 1, depth = 0.04;         // metres, > 0
+  uint64_t seed = 1;                                  // the figures
+  double Depth(double u, double v) const;             // metres behind the face, 0 outside
+};
+
 struct SyntheticScene {
   std::vector<SyntheticSolid> solids;               // their union is the scene
   Eigen::Vector3d light = Eigen::Vector3d(0.45, -0.55, 0.70).normalized();  // towards the light
   std::vector<SyntheticMarker> markers;
+  std::vector<SyntheticCarving> carvings;
+  // The light a surface facing away from the sun still gets (the sky's), of the full: shading is
+  // ambient + (1 - ambient) * max(0, n . light).
+  double ambient = 0.3;
+  // > 0: the albedo also varies by stone block, cells of this size (metres; half as tall), so
+  // that distant views (a UAV's) see texture the fine lattice averages away. 0: none.
+  double block_size = 0;
   // The distance along origin + t * direction (t in direction's units) to the first surface, or a
   // negative value when the ray misses.
   double RayHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const;
@@ -74,6 +97,10 @@ struct SyntheticView {
   ImageF depth;            // true camera-frame depth at each pixel centre, metres; 0 = no surface
 };
 
+// Renders one view of `scene` (of `options`, as RenderSyntheticScene uses them); `index` numbers
+// the view (its name, its noise).
+SyntheticView RenderSyntheticView(const SyntheticScene& scene, const PinholeCamera& camera,
+                                  const SyntheticViewsOptions& options, int index);
 // Renders the default scene's views (in arc order).
 std::vector<SyntheticView> RenderSyntheticViews(const SyntheticViewsOptions& options);
 // Renders `scene` from `cameras` (each with its own size); of `options`, only texture_cell,

@@ -70,6 +70,12 @@ int64_t Count(sqlite3* db, const std::string& path, const char* sql) {
 
 }  // namespace
 
+size_t CountVerifiedPairs(const std::string& path) {
+  Database db = Open(path, SQLITE_OPEN_READONLY);
+  return static_cast<size_t>(
+      Count(db.get(), path, "SELECT COUNT(*) FROM two_view_geometries WHERE rows > 0 AND config >= 2"));
+}
+
 bool RenumberImagesByName(const std::string& path) {
   Database db = Open(path, SQLITE_OPEN_READWRITE);
   if (Count(db.get(), path, "SELECT COUNT(*) FROM matches") > 0 ||

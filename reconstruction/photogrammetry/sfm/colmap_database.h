@@ -3,6 +3,7 @@
 // database the same on every run.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -32,5 +33,9 @@ std::vector<DatabaseImage> ReadColmapDescriptors(const std::string& database_pat
 // the ids. Only before matching: a database holding matches is an InputError, as is an image
 // naming a missing camera. Returns true when anything was renumbered.
 bool RenumberImagesByName(const std::string& database_path);
+
+// The image pairs COLMAP's geometric verification kept (two_view_geometries with inliers and a
+// configuration of CALIBRATED or better). InputError as ReadColmapDescriptors.
+size_t CountVerifiedPairs(const std::string& database_path);
 
 }  // namespace candi::photogrammetry

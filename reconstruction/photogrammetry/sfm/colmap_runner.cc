@@ -13,6 +13,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -92,6 +93,7 @@ void LinkImages(const std::string& images_dir, const std::vector<std::string>& n
   fs::create_directories(links);
   for (const std::string& name : names) {
     std::error_code ec;
+    fs::create_directories((links / name).parent_path(), ec);
     fs::create_symlink(target_dir / name, links / name, ec);
     if (ec) throw InputError((links / name).string(), "", "cannot create a link: " + ec.message());
   }
@@ -140,8 +142,7 @@ void SfmOptions::Check() const {
   CANDI_CHECK_OPTION_MSG(!colmap.empty(), colmap, "must name the COLMAP executable");
   CANDI_CHECK_OPTION_GE(max_image_size, 64);
   CANDI_CHECK_OPTION_GE(max_features, 64);
-  CANDI_CHECK_OPTION_GE(exhaustive_max_images, 2);
-  CANDI_CHECK_OPTION_GE(sequential_overlap, 1);
+  pairs.Check();
   CANDI_CHECK_OPTION(CameraModelId(camera_model) >= 0, camera_model,
                      "a COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
   CANDI_CHECK_OPTION(threads == -1 || threads >= 1, threads, "-1 (all) or >= 1");
@@ -195,23 +196,42 @@ std::vector<SfmStage> BuildSfmStages(const SfmOptions& options, const std::strin
   return stages;
 }
 
+namespace {
+
+// Image files directly in `dir` (names prefixed by `prefix`), other files to `ignored`.
+void ListFolder(const fs::path& dir, const std::string& prefix, std::vector<std::string>* images,
+                std::vector<std::string>* ignored, std::vector<std::string>* folders) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_directory()) {
+      if (folders != nullptr) folders->push_back(name);
+      continue;
+    }
+    if (!entry.is_regular_file()) continue;  // follows symlinks
+    if (IsImageName(name)) {
+      images->push_back(prefix + name);
+    } else if (ignored != nullptr) {
+      ignored->push_back(prefix + name);
+    }
+  }
+  if (ec) throw InputError(dir.string(), "", "cannot list the folder: " + ec.message());
+}
+
+}  // namespace
+
 std::vector<std::string> ListImages(const std::string& dir, std::vector<std::string>* ignored) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) {
     throw InputError(dir, "", fs::exists(dir, ec) ? "is not a folder (give the folder of photos)"
                                                   : "no such folder");
   }
-  std::vector<std::string> images;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    if (!entry.is_regular_file()) continue;  // follows symlinks; folders are not searched
-    const std::string name = entry.path().filename().string();
-    if (IsImageName(name)) {
-      images.push_back(name);
-    } else if (ignored != nullptr) {
-      ignored->push_back(name);
-    }
+  std::vector<std::string> images, folders;
+  ListFolder(dir, "", &images, ignored, &folders);
+  if (images.empty()) {  // a campaign: one folder a session
+    std::sort(folders.begin(), folders.end());
+    for (const std::string& folder : folders) ListFolder(fs::path(dir) / folder, folder + "/", &images, ignored, nullptr);
   }
-  if (ec) throw InputError(dir, "", "cannot list the folder: " + ec.message());
   std::sort(images.begin(), images.end());
   if (ignored != nullptr) std::sort(ignored->begin(), ignored->end());
   return images;
@@ -368,9 +388,23 @@ ColmapVersion DetectColmap(const std::string& colmap, const std::string& log_pat
   }
 }
 
-// candi's matching stage: every pair (exhaustive) or neighbours by name (sequential), matched
-// exactly from the database's descriptors into WORKSPACE/matches.txt; a summary in its log.
-double MatchFeatures(const SfmOptions& options, const std::string& workspace, bool exhaustive,
+// The priors by image name: a prior named by the file alone ("s1_0001.jpg") also names the image in
+// its session's folder ("s1/s1_0001.jpg").
+std::map<std::string, Eigen::Vector3d> PriorsByImage(const std::string& path, const std::vector<DatabaseImage>& images) {
+  std::map<std::string, Eigen::Vector3d> by_image;
+  if (path.empty()) return by_image;
+  const std::map<std::string, Eigen::Vector3d> priors = ReadPositionPriors(path);
+  for (const DatabaseImage& image : images) {
+    auto it = priors.find(image.name);
+    if (it == priors.end()) it = priors.find(fs::path(image.name).filename().string());
+    if (it != priors.end()) by_image[image.name] = it->second;
+  }
+  return by_image;
+}
+
+// candi's matching stage: the pairs pair_selection.h chooses, matched exactly from the database's
+// descriptors into WORKSPACE/matches.txt; a summary in its log.
+double MatchFeatures(const SfmOptions& options, const std::string& workspace, SfmSummary* summary,
                      const std::string& log_path, int index, int count, const SfmProgress& progress) {
   if (progress) progress(kMatchStage, index, count, 0.0, false);
   const auto start = std::chrono::steady_clock::now();
@@ -378,8 +412,10 @@ double MatchFeatures(const SfmOptions& options, const std::string& workspace, bo
   std::sort(images.begin(), images.end(),
             [](const DatabaseImage& a, const DatabaseImage& b) { return a.name < b.name; });
   const size_t cleared = ClearBorderDescriptors(&images);
-  const auto pairs = exhaustive ? ExhaustivePairs(images.size())
-                                : SequentialPairs(images.size(), options.sequential_overlap);
+  const PairSelection selection = SelectPairs(images, PriorsByImage(options.priors, images), options.pairs);
+  const auto& pairs = selection.pairs;
+  summary->matcher = selection.strategy;
+  summary->pairs_tried = pairs.size();
   double next_beat = kHeartbeatSeconds;
   const MatchListSummary matched = WriteMatchList(
       images, pairs, SiftMatchOptions{}, options.threads, Path(workspace, kMatchList), [&](size_t, size_t) {
@@ -390,8 +426,8 @@ double MatchFeatures(const SfmOptions& options, const std::string& workspace, bo
         }
       });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  WriteFileAtomic(log_path, std::string("candi's exact SIFT matcher (") + (exhaustive ? "exhaustive" : "sequential") +
-                                ", brute force, COLMAP's ratio 0.8, distance 0.7, cross-check)\n" +
+  WriteFileAtomic(log_path, "candi's exact SIFT matcher (" + selection.strategy +
+                                "; brute force, COLMAP's ratio 0.8, distance 0.7, cross-check)\n" +
                                 std::to_string(images.size()) + " images, " + std::to_string(matched.pairs) +
                                 " pairs, " + std::to_string(matched.pairs_written) + " with matches, " +
                                 std::to_string(matched.matches) + " matches; " + std::to_string(cleared) +
@@ -428,8 +464,6 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
   LinkImages(images_dir, summary.images, workspace);
   fs::create_directories(Path(workspace, "sparse"));
   std::vector<SfmStage> stages = BuildSfmStages(options, workspace, summary.colmap.cuda);
-  const bool exhaustive = summary.images.size() <= static_cast<size_t>(options.exhaustive_max_images);
-  summary.matcher = exhaustive ? "exhaustive" : "sequential (overlap " + std::to_string(options.sequential_overlap) + ")";
   const int count = static_cast<int>(stages.size());
   ColmapModel model;
   for (int i = 0; i < count; ++i) {
@@ -440,7 +474,7 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
     }
     try {
       const double seconds = stage.argv.empty()
-                                 ? MatchFeatures(options, workspace, exhaustive, log_path, i + 1, count, progress)
+                                 ? MatchFeatures(options, workspace, &summary, log_path, i + 1, count, progress)
                                  : RunSfmStage(stage, log_path, i + 1, count, progress);
       summary.stage_seconds.emplace_back(stage.name, seconds);
     } catch (const InputError& e) {
@@ -458,6 +492,7 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
       // COLMAP numbers the images in the order its threads finish; the mapper follows the ids.
       RenumberImagesByName(Path(workspace, "database.db"));
     }
+    if (stage.name == "matches_importer") summary.pairs_verified = CountVerifiedPairs(Path(workspace, "database.db"));
     if (stage.name == "mapper") {
       summary.model_dir = LargestModel(Path(workspace, "sparse"), &model);
       if (summary.model_dir.empty() || model.images.size() < 2) {

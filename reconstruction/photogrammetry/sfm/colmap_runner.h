@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "reconstruction/photogrammetry/sfm/pair_selection.h"
+
 namespace candi::photogrammetry {
 
 // What `colmap help` says about itself.
@@ -34,8 +36,8 @@ struct SfmOptions {
   std::string colmap = "colmap";      // the executable: a path, or a name looked up on PATH
   int max_image_size = 1600;          // pixels, the longest side for SIFT and the dense images, >= 64
   int max_features = 4096;            // SIFT features per image, >= 64
-  int exhaustive_max_images = 50;     // exhaustive matching up to this many images, else sequential, >= 2
-  int sequential_overlap = 10;        // sequential matching: neighbours matched per image, >= 1
+  PairSelectionOptions pairs;         // which pairs are matched (pair_selection.h)
+  std::string priors;                 // GPS-like camera positions (priors.csv, name,E,N,H); "" = none
   std::string camera_model = "SIMPLE_RADIAL";  // a COLMAP camera model name
   bool single_camera = true;          // one camera (intrinsics) shared by all photos
   int threads = -1;                   // feature extraction and matching threads; -1 = all cores, else >= 1
@@ -77,7 +79,9 @@ struct SfmSummary {
   size_t points = 0;                      // sparse points
   double mean_reprojection_error = 0;     // pixels, COLMAP's definition
   double mean_track_length = 0;           // observations per point
-  std::string matcher;                    // "exhaustive" | "sequential (overlap N)" (candi's matcher)
+  std::string matcher;                    // how pairs were chosen (PairSelection::strategy)
+  size_t pairs_tried = 0;                 // pairs matched
+  size_t pairs_verified = 0;              // pairs COLMAP's geometric verification kept
   std::string model_dir;                  // WORKSPACE/sparse/<k>, the largest model
   std::string dense_dir;                  // WORKSPACE/dense
   std::vector<std::pair<std::string, double>> stage_seconds;
@@ -89,7 +93,9 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
 
 // Lower-level pieces, exposed for tests.
 // Image files (by extension, case-insensitive: jpg jpeg png tif tiff bmp pgm ppm pnm) directly in
-// `dir`, sorted; other regular files go to `ignored`. Throws InputError for a missing folder.
+// `dir`, sorted; other regular files go to `ignored`. A folder that holds no image itself but
+// subfolders that do (a campaign's sessions) gives theirs, named "folder/file", in name order.
+// Throws InputError for a missing folder.
 std::vector<std::string> ListImages(const std::string& dir, std::vector<std::string>* ignored);
 // Runs argv with stdout and stderr appended to log_path; returns the exit code (128 + signal when
 // killed). Throws InputError naming argv[0] when it cannot be started (not found, not executable).
