@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <regex>
 #include <stdexcept>
 
 #include "core/atomic_file.h"
@@ -310,6 +311,14 @@ Campaign WriteCampaign(const CampaignOptions& options, const std::string& output
   std::error_code ec;
   if (fs::exists(out / "campaign.json") && !overwrite) {
     throw InputError(output_dir, "", "holds a campaign already (campaign.json); pass --overwrite to replace it");
+  }
+  // Replacing: the sessions the earlier campaign.json lists go first (no other folder is touched).
+  if (fs::exists(out / "campaign.json")) {
+    const std::string old = ReadFileToString((out / "campaign.json").string());
+    static const std::regex kSession(R"re(\{"name": "([a-z0-9]+)", "photos")re");
+    for (std::sregex_iterator it(old.begin(), old.end(), kSession), end; it != end; ++it) {
+      fs::remove_all(out / (*it)[1].str(), ec);
+    }
   }
   fs::create_directories(out / "truth", ec);
   if (ec) throw InputError(output_dir, "", "cannot create the folder: " + ec.message());

@@ -236,7 +236,15 @@ TEST(Campaign, WritesPhotosWithExifTargetsPicksPriorsAndTruthTheSameOnAnyThreadC
   EXPECT_GT(box.min.z(), kCampaignSurveyOrigin.z() - 1.01);
   // A second run into the same folder is refused unless told to overwrite.
   EXPECT_THROW(WriteCampaign(o, out.string()), InputError);
+  // Overwritten with fewer sessions: the old sessions' folders go, the user's files stay.
+  candi::testing::WriteBytes((out / "notes.txt").string(), "mine");
+  o.chunks = 1;
+  o.uav_photos = 0;
   EXPECT_NO_THROW(WriteCampaign(o, out.string(), true));
+  EXPECT_TRUE(fs::exists(out / "s1"));
+  EXPECT_FALSE(fs::exists(out / "s2"));
+  EXPECT_FALSE(fs::exists(out / "uav"));
+  EXPECT_TRUE(fs::exists(out / "notes.txt"));
 }
 
 }  // namespace

@@ -457,6 +457,7 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
     throw InputError(images_dir, "", "only one image (" + summary.images.front() +
                                          "): structure from motion needs at least 2 overlapping photos");
   }
+  if (!options.priors.empty()) ReadPositionPriors(options.priors);  // its errors before any work
   const std::string workspace = fs::absolute(workspace_in).lexically_normal().string();
   PrepareWorkspace(options, workspace, images_dir);
   fs::create_directories(Path(workspace, "logs"));
