@@ -7,22 +7,31 @@ function(candi_warnings target)
   endif()
 endfunction()
 
-# candi_precompile(<target>): a precompiled header of the standard and Eigen headers most of
+# candi_precompile(<target> [OWN]): a precompiled header of the standard and Eigen headers most of
 # candi's sources include (Eigen/Core and Eigen/Geometry alone cost ~2.5 s of parsing per
-# translation unit). Each target builds its own (~6 s), with its own flags, so it pays from about
-# four sources on; smaller targets do without. Measured 2026-11-27 on the 2-core VM, the library
-# targets from scratch at -j2: 1,150 s of CPU without, 934 s with (588 s and 479 s wall).
+# translation unit). It is built once, by candi_lib_pch (CMakeLists.txt), and shared by every
+# library whose flags match it; a target whose own flags reach those headers or GCC's check of a
+# header (-fPIC, -frounding-math from CGAL, render's -fno-math-errno) says OWN and builds its own
+# (~6 s), with its own flags, when it has five or more sources. Measured 2026-11-27 on the 2-core
+# VM, the library targets from scratch at -j2: 1,150 s of CPU without any, 934 s with one each
+# (588 s and 479 s wall); sharing one saves another ~6 s a target and gives it to the small ones.
+set(CANDI_LIB_PCH_HEADERS <Eigen/Core> <Eigen/Geometry> <algorithm> <cmath> <cstdint> <filesystem>
+    <functional> <memory> <string> <vector>)
 function(candi_precompile target)
+  cmake_parse_arguments(ARG "OWN" "" "" ${ARGN})
+  if(NOT ARG_OWN)
+    target_precompile_headers(${target} REUSE_FROM candi_lib_pch)
+    return()
+  endif()
   get_target_property(sources ${target} SOURCES)
   list(LENGTH sources count)
   if(count GREATER_EQUAL 5)
-    target_precompile_headers(${target} PRIVATE <Eigen/Core> <Eigen/Geometry> <algorithm> <cmath>
-                              <cstdint> <filesystem> <functional> <memory> <string> <vector>)
+    target_precompile_headers(${target} PRIVATE ${CANDI_LIB_PCH_HEADERS})
   endif()
 endfunction()
 
 function(candi_library folder)
-  cmake_parse_arguments(ARG "" "" "PUBLIC_DEPS;PRIVATE_DEPS;EXCLUDE" ${ARGN})
+  cmake_parse_arguments(ARG "OWN_PCH" "" "PUBLIC_DEPS;PRIVATE_DEPS;EXCLUDE" ${ARGN})
   file(GLOB_RECURSE sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cc)
   list(FILTER sources EXCLUDE REGEX "_test\\.cc$")
   foreach(pattern ${ARG_EXCLUDE})
@@ -34,7 +43,11 @@ function(candi_library folder)
     target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR})
     target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
     candi_warnings(${target})
-    candi_precompile(${target})
+    if(ARG_OWN_PCH)
+      candi_precompile(${target} OWN)
+    else()
+      candi_precompile(${target})
+    endif()
   else()
     add_library(${target} INTERFACE)
     target_include_directories(${target} INTERFACE ${PROJECT_SOURCE_DIR})
