@@ -49,6 +49,20 @@ int RunSfm(const SfmArgs& a) {
   std::printf("%-28s %.3f px\n", "mean reprojection error", s.mean_reprojection_error);
   std::printf("%-28s %.2f\n", "mean track length", s.mean_track_length);
   std::printf("%-28s %.1f s\n", "time", total);
+  if (!s.chunked.chunks.empty()) {
+    std::printf("chunks (survey frame minus the shift %s):\n", s.chunked.frame.ToString().c_str());
+    std::printf("  %-10s %7s %10s %8s %8s %12s %10s  %s\n", "chunk", "photos", "registered", "points", "control",
+                "control RMSE", "check RMSE", "");
+    for (const pg::ChunkResult& k : s.chunked.chunks) {
+      std::printf("  %-10s %7zu %10zu %8zu %8d %9.1f mm %7.1f mm  %s\n", k.name.c_str(), k.images, k.registered,
+                  k.points, k.control_used, 1e3 * k.control.d3, 1e3 * k.check.d3,
+                  k.tied ? "tied" : k.reason.c_str());
+    }
+    for (const pg::ChunkPairConsistency& p : s.chunked.pairs) {
+      std::printf("  %s and %s overlap in %zu sparse points: median %.1f mm, 90%% %.1f mm apart\n", p.a.c_str(),
+                  p.b.c_str(), p.overlap, 1e3 * p.median, 1e3 * p.p90);
+    }
+  }
   std::printf("model: %s\ndense workspace: %s\n", s.model_dir.c_str(), s.dense_dir.c_str());
   return kOk;
 }
@@ -77,6 +91,10 @@ void AddSfm(Command& root) {
   c.Option("--position-neighbours", o.pairs.position_neighbours, "Positions: each photo with its N nearest by the "
            "priors").Range(0, 100000);
   c.Option("--priors", o.priors, "Camera position priors, CSV name,E,N,H[,sigma] (candi campaign's priors.csv)");
+  c.Option("--targets", o.chunks.targets, "Map each session folder apart and tie the chunks on these surveyed "
+           "targets (georef's CSV); needs --picks");
+  c.Option("--picks", o.chunks.picks, "The targets' picks in the photos, CSV name,image,u,v");
+  c.Option("--chunk-parallel", o.chunks.parallel, "Chunk mappers run at once").Range(1, 256);
   c.Option("--camera-model", o.camera_model, "COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
   c.FlagOff("--camera-per-image", o.single_camera, "Separate intrinsics per photo (default: one shared camera)");
   c.Option("--threads", o.threads, "Threads for feature extraction and matching (-1: all); COLMAP verifies and "

@@ -48,6 +48,22 @@ json SfmReport(const pg::SfmSummary& s, const pg::SfmOptions& o) {
   j["matcher"] = "candi exact brute force, " + s.matcher;
   j["pairs_matched"] = s.pairs_tried;
   j["pairs_verified"] = s.pairs_verified;
+  if (!s.chunked.chunks.empty()) {
+    json chunks = json::array();
+    for (const pg::ChunkResult& k : s.chunked.chunks) {
+      chunks.push_back({{"name", k.name}, {"photos", k.images}, {"registered", k.registered}, {"points", k.points},
+                        {"tied", k.tied}, {"reason", k.reason}, {"control_targets", k.control_used},
+                        {"check_targets", k.check_used}, {"control_rmse_m", k.control.d3},
+                        {"check_rmse_m", k.check.d3}, {"unused_targets", k.unused_targets}});
+    }
+    json pairs = json::array();
+    for (const pg::ChunkPairConsistency& p : s.chunked.pairs) {
+      pairs.push_back({{"a", p.a}, {"b", p.b}, {"overlap_points", p.overlap}, {"median_m", p.median}, {"p90_m", p.p90}});
+    }
+    j["chunks"] = chunks;
+    j["chunk_consistency"] = pairs;
+    j["shift"] = {s.chunked.frame.origin.x(), s.chunked.frame.origin.y(), s.chunked.frame.origin.z()};
+  }
   j["reproducibility"] = kSfmReproducibility;
   j["max_image_size"] = o.max_image_size;
   j["max_features"] = o.max_features;

@@ -64,6 +64,9 @@ TEST(SfmCli, BadOptionsAreUsageErrors) {
   const auto p = RunCandi("sfm " + dir.File("in") + " -o " + dir.File("ws2") + " --priors " + dir.File("priors.csv") +
                           " --colmap " + dir.File("nowhere/colmap"));
   EXPECT_EQ(p.code, 2) << p.output;
+  const auto t = RunCandi("sfm " + dir.File("in") + " -o " + dir.File("ws3") + " --targets " + dir.File("t.csv"));
+  EXPECT_EQ(t.code, 1) << t.output;
+  EXPECT_NE(t.output.find("picks"), std::string::npos) << t.output;
 }
 
 // `candi campaign`: writes a small campaign; refuses an occupied folder and bad counts.

@@ -29,7 +29,9 @@ constexpr double kWallHeight = 2.6;     // each terrace's wall above its walk, m
 constexpr double kGalleryMargin = 1.0;  // the gallery is this much wider than the wall distance
 constexpr double kMinHalfSide = 1.5;    // the smallest terrace, metres
 constexpr double kPanelBottom = 0.4, kPanelHeight = 0.8, kPanelGap = 0.4, kPanelDepth = 0.04;
-constexpr double kTargetHeight = 1.55;  // wall targets above the walk's floor, metres
+// Wall targets above the walk's floor, metres, alternately: never all on one line, so that a
+// session whose targets are on one wall still fixes its rotation about that wall.
+constexpr double kTargetHeights[2] = {1.35, 2.0};
 constexpr int kTargetsPerChunk = 4;     // the third of each session's is a check target
 constexpr double kPickNoisePx = 0.3, kSurveyNoiseM = 0.001, kTargetAccuracyM = 0.002;
 constexpr double kSurfacePoints = 1.5e6;  // about this many truth points over the campaign
@@ -278,7 +280,7 @@ Campaign PlanCampaign(const CampaignOptions& options) {
       CampaignTarget target;
       target.name = name;
       target.chunk = c.chunks[s];
-      target.center = {on_wall.x(), on_wall.y(), c.terrace_floors[j] + kTargetHeight};
+      target.center = {on_wall.x(), on_wall.y(), c.terrace_floors[j] + kTargetHeights[i % 2]};
       target.normal = {n.x(), n.y(), 0};
       target.radius = std::clamp(0.04 * d, 0.05, 0.3);
       target.check = i == 2;

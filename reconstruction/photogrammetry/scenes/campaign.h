@@ -6,7 +6,7 @@
 // walks are split into `chunks` sessions, each a sector of the building (every terrace and row of
 // its part of the perimeter); sessions are photographed separately, so they share no photo, only
 // the stone at their borders. Survey targets (four-quadrant discs) are painted on the walls above
-// the panels, a few per session, and on the ground for the UAV ring.
+// the panels at two heights, four a session, and on the ground for the UAV ring.
 //
 // The building is sized from the count: the walks' length is what N photos at this step cover,
 // so 60 photos make a single terrace about 4 m across and 2,000 photos several terraces about

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -70,7 +71,8 @@ void PrepareWorkspace(const SfmOptions& options, const std::string& workspace,
                                      "(candi fills it with links); choose another workspace");
   }
   std::vector<std::string> previous;
-  for (const char* entry : {"database.db", kMatchList, "images", "sparse", "dense", "logs", "sfm_report.json"}) {
+  for (const char* entry : {"database.db", kMatchList, "images", "sparse", "dense", "logs", "sfm_report.json", "chunks",
+                            "sparse_chunks"}) {
     if (fs::exists(fs::symlink_status(Path(workspace, entry)))) previous.push_back(entry);
   }
   if (previous.empty()) return;
@@ -146,6 +148,7 @@ void SfmOptions::Check() const {
   CANDI_CHECK_OPTION(CameraModelId(camera_model) >= 0, camera_model,
                      "a COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
   CANDI_CHECK_OPTION(threads == -1 || threads >= 1, threads, "-1 (all) or >= 1");
+  chunks.Check();
 }
 
 ColmapVersion ParseColmapVersion(const std::string& help_output) {
@@ -437,6 +440,57 @@ double MatchFeatures(const SfmOptions& options, const std::string& workspace, Sf
   return seconds;
 }
 
+// The mapping stage in chunks: one mapper a chunk (its image list), `parallel` at once, then the
+// chunks tied on the targets and merged into WORKSPACE/sparse/merged.
+double MapInChunks(const SfmOptions& options, const SfmStage& mapper, const std::string& workspace, int index,
+                   int count, const SfmProgress& progress, SfmSummary* summary) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::map<std::string, std::vector<std::string>> chunks = ChunksByFolder(summary->images);
+  fs::create_directories(Path(workspace, "chunks"));
+  std::vector<std::string> names;
+  for (const auto& [name, images] : chunks) {
+    std::string list;
+    for (const std::string& image : images) list += image + "\n";
+    WriteFileAtomic(Path(workspace, "chunks/" + name + ".txt"), list);
+    fs::create_directories(Path(workspace, "sparse_chunks/" + name));
+    names.push_back(name);
+  }
+  if (progress) progress("mapper (" + std::to_string(names.size()) + " chunks)", index, count, 0.0, false);
+  std::vector<std::string> errors(names.size());
+  std::atomic<size_t> next{0};
+  std::vector<std::thread> workers;
+  for (int w = 0; w < std::min<int>(options.chunks.parallel, static_cast<int>(names.size())); ++w) {
+    workers.emplace_back([&] {
+      for (size_t k = next++; k < names.size(); k = next++) {
+        std::vector<std::string> argv = mapper.argv;
+        const auto out = std::find(argv.begin(), argv.end(), std::string("--output_path"));
+        *(out + 1) = Path(workspace, "sparse_chunks/" + names[k]);
+        argv.insert(argv.end(), {"--image_list_path", Path(workspace, "chunks/" + names[k] + ".txt")});
+        const std::string log = Path(workspace, "logs/mapper_" + names[k] + ".log");
+        try {
+          WriteFileAtomic(log, "$ " + ArgvText(argv) + "\n");
+          const int code = RunLogged(argv, log);
+          if (code != 0 && code > 128) errors[k] = "colmap mapper (chunk " + names[k] + ") was killed; see " + log;
+        } catch (const std::exception& e) {
+          errors[k] = e.what();
+        }
+      }
+    });
+  }
+  for (std::thread& t : workers) t.join();
+  for (const std::string& e : errors)
+    if (!e.empty()) throw InputError(e);
+  std::map<std::string, std::string> models;
+  for (const std::string& name : names) {
+    ColmapModel model;
+    models[name] = LargestModel(Path(workspace, "sparse_chunks/" + name), &model);
+  }
+  summary->chunked = TieChunks(models, chunks, options.chunks, Path(workspace, "sparse/merged"));
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (progress) progress("mapper (" + std::to_string(names.size()) + " chunks)", index, count, seconds, true);
+  return seconds;
+}
+
 }  // namespace
 
 SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
@@ -473,10 +527,12 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
     if (stage.name == "image_undistorter") {
       std::replace(stage.argv.begin(), stage.argv.end(), std::string(kModelPlaceholder), summary.model_dir);
     }
+    const bool chunked = stage.name == "mapper" && !options.chunks.targets.empty();
     try {
       const double seconds = stage.argv.empty()
                                  ? MatchFeatures(options, workspace, &summary, log_path, i + 1, count, progress)
-                                 : RunSfmStage(stage, log_path, i + 1, count, progress);
+                             : chunked ? MapInChunks(options, stage, workspace, i + 1, count, progress, &summary)
+                                       : RunSfmStage(stage, log_path, i + 1, count, progress);
       summary.stage_seconds.emplace_back(stage.name, seconds);
     } catch (const InputError& e) {
       // A mapper that ended by itself without a model found no overlap; a killed one is reported as such.
@@ -494,7 +550,11 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
       RenumberImagesByName(Path(workspace, "database.db"));
     }
     if (stage.name == "matches_importer") summary.pairs_verified = CountVerifiedPairs(Path(workspace, "database.db"));
-    if (stage.name == "mapper") {
+    if (chunked) {
+      summary.model_dir = summary.chunked.merged_dir;
+      model = ReadColmapModel(summary.model_dir);
+      Summarize(model, &summary);
+    } else if (stage.name == "mapper") {
       summary.model_dir = LargestModel(Path(workspace, "sparse"), &model);
       if (summary.model_dir.empty() || model.images.size() < 2) {
         throw InputError(log_path, "", "no model: the images may not overlap (COLMAP's mapper "

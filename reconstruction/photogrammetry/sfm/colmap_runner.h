@@ -3,6 +3,8 @@
 //
 // Layout of WORKSPACE after RunSfm:
 //   images/          symlinks to the input photos (COLMAP wants a folder holding only images)
+//   chunks/<c>.txt   mapped in chunks: each chunk's image list; sparse_chunks/<c>/ its models;
+//                    sparse/merged/ the tied chunks in the targets' local frame
 //   database.db      COLMAP's features and matches
 //   sparse/<k>/      the mapper's models (the largest is the result)
 //   dense/           COLMAP's dense workspace: images/ (undistorted), sparse/ (PINHOLE model),
@@ -19,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "reconstruction/photogrammetry/sfm/chunked_mapping.h"
 #include "reconstruction/photogrammetry/sfm/pair_selection.h"
 
 namespace candi::photogrammetry {
@@ -38,6 +41,7 @@ struct SfmOptions {
   int max_features = 4096;            // SIFT features per image, >= 64
   PairSelectionOptions pairs;         // which pairs are matched (pair_selection.h)
   std::string priors;                 // GPS-like camera positions (priors.csv, name,E,N,H); "" = none
+  ChunkedMappingOptions chunks;       // with targets: each session folder mapped apart, then tied
   std::string camera_model = "SIMPLE_RADIAL";  // a COLMAP camera model name
   bool single_camera = true;          // one camera (intrinsics) shared by all photos
   int threads = -1;                   // feature extraction and matching threads; -1 = all cores, else >= 1
@@ -82,7 +86,8 @@ struct SfmSummary {
   std::string matcher;                    // how pairs were chosen (PairSelection::strategy)
   size_t pairs_tried = 0;                 // pairs matched
   size_t pairs_verified = 0;              // pairs COLMAP's geometric verification kept
-  std::string model_dir;                  // WORKSPACE/sparse/<k>, the largest model
+  std::string model_dir;                  // WORKSPACE/sparse/<k>, the largest model (chunks: sparse/merged)
+  ChunkedMappingResult chunked;           // mapped in chunks: each chunk, their consistency, the shift
   std::string dense_dir;                  // WORKSPACE/dense
   std::vector<std::pair<std::string, double>> stage_seconds;
 };
