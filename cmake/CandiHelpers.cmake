@@ -55,9 +55,14 @@ function(candi_library folder)
   endif()
 endfunction()
 
-# Test code is compiled for build speed: -O1 (the code under test is in the -O3 libraries) and a
-# precompiled header of what every test includes (GoogleTest and Eigen cost ~8 s of parsing per
-# translation unit on the 2-core machines this is built on). The header is built once, by
+# Test code is compiled for build speed: -O1 (the code under test is in the -O3 libraries), in
+# unity batches of eight files (CMake's UNITY_BUILD: the headers and templates a target's tests share
+# are compiled once a batch, not once a file), and with a precompiled header of what every test
+# includes (GoogleTest and Eigen cost ~8 s of parsing per translation unit on the 2-core machines
+# this is built on). A batch is one translation unit, so the helpers in a test file's anonymous
+# namespace share it with seven other files': give a helper a name no other test of the target
+# gives a different meaning (the compiler names a clash; a helper that hides a library function of
+# the same name is the case it cannot always catch). The header is built once, by
 # candi_test_pch (CMakeLists.txt), and shared by every test target whose flags match it; a target
 # whose dependencies add definitions that reach those headers (libtorch's -D_GLIBCXX_USE_CXX11_ABI)
 # says OWN_PCH and builds its own when it has three or more sources.
@@ -66,6 +71,7 @@ set(CANDI_TEST_PCH_HEADERS <gtest/gtest.h> <Eigen/Core> <algorithm> <cmath> <cst
 function(candi_test_compile_options target)
   cmake_parse_arguments(ARG "OWN_PCH" "" "" ${ARGN})
   target_compile_options(${target} PRIVATE -O1)
+  set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 8)
   if(NOT ARG_OWN_PCH)
     target_precompile_headers(${target} REUSE_FROM candi_test_pch)
     return()

@@ -21,7 +21,6 @@
 namespace candi::compare {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kNoise = 0.001;                // survey noise along the panel normal, m
 constexpr double kShift = 0.010;                // the band's move out of the wall, m
 constexpr double kBandX0 = 1.0, kBandX1 = 1.6;  // the band that moves, m along the panel
@@ -99,7 +98,7 @@ Region Summarise(const DeviationResult& r, const PointCloud& compared, bool in_b
     ++s.n;
     s.mean += r.distance[i];
     s.significant_share += r.significant[i];
-    s.tilted_share += r.normals[i].z() < std::cos(10 * kPi / 180) ? 1 : 0;
+    s.tilted_share += r.normals[i].z() < std::cos(10 * M_PI / 180) ? 1 : 0;
   }
   s.mean /= s.n;
   s.significant_share /= s.n;
@@ -172,7 +171,7 @@ TEST(M3c2ReliefTest, CarvingRaisesTheLevelOfDetection) {
   const DeviationResult f = RunM3c2(Survey(flat, panel.PixelM(), 0.0, 71),
                                     Survey(flat, panel.PixelM(), 0.0, 72), kNormalScale);
   // Flat: noise only, n ~ pi (d/2)^2 / spacing^2 points a side, LoD95 = 1.96 sqrt(2 / n) sigma.
-  const double n = kPi * std::pow(kProjectionScale / 2 / kSpacing, 2);
+  const double n = M_PI * std::pow(kProjectionScale / 2 / kSpacing, 2);
   EXPECT_NEAR(MedianLod(f), 1.96 * std::sqrt(2 / n) * kNoise,
               0.1 * 1.96 * std::sqrt(2 / n) * kNoise);
   // Carved: the carving within d is roughness at that scale, and it dominates the noise.

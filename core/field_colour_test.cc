@@ -12,7 +12,7 @@
 namespace candi {
 namespace {
 
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
+const double kNoValue = std::numeric_limits<double>::quiet_NaN();
 
 PointCloud CloudWithField(const std::vector<double>& values, const std::string& name = "distance") {
   PointCloud cloud;
@@ -30,7 +30,7 @@ TEST(FieldColour, AutoDivergingRangeIsSymmetricAndCountsOutsideAndUndefined) {
   std::vector<double> v;
   for (int i = -500; i <= 500; ++i) v.push_back(i * 1e-5);  // +-5 mm
   v.push_back(0.5);                                         // one far outlier
-  v.push_back(kNaN);
+  v.push_back(kNoValue);
   const PointCloud cloud = CloudWithField(v);
   const std::vector<double> values = FieldValues(cloud, "distance", "a.ply");
   FieldColouring c;
@@ -44,7 +44,7 @@ TEST(FieldColour, AutoDivergingRangeIsSymmetricAndCountsOutsideAndUndefined) {
   EXPECT_GE(legend.outside, 1u);
   EXPECT_LE(legend.outside, 25u);
   EXPECT_TRUE(legend.Colour(0.5) == kOutOfRangeGrey);
-  EXPECT_TRUE(legend.Colour(kNaN) == kOutOfRangeGrey);
+  EXPECT_TRUE(legend.Colour(kNoValue) == kOutOfRangeGrey);
   EXPECT_TRUE(legend.Colour(0.0) == DivergingColour(0.0));
   // Negative is blue, positive red.
   EXPECT_GT(legend.Colour(-0.004).b, legend.Colour(-0.004).r);
@@ -98,7 +98,7 @@ TEST(FieldColour, ClassesArePaletteColoursWithThePresentClassesListed) {
 }
 
 TEST(FieldColour, ColourByFieldAddsColoursToACloudWithout) {
-  PointCloud cloud = CloudWithField({-1, 0, 1, kNaN});
+  PointCloud cloud = CloudWithField({-1, 0, 1, kNoValue});
   ASSERT_FALSE(cloud.schema.colors);
   const std::vector<double> v = FieldValues(cloud, "distance", "a.ply");
   FieldColouring c;
@@ -115,7 +115,7 @@ TEST(FieldColour, ColourByFieldAddsColoursToACloudWithout) {
 }
 
 TEST(FieldColour, DegenerateValuesGiveAUsableRange) {
-  for (const std::vector<double>& v : {std::vector<double>{}, std::vector<double>{kNaN, kNaN},
+  for (const std::vector<double>& v : {std::vector<double>{}, std::vector<double>{kNoValue, kNoValue},
                                        std::vector<double>{0, 0, 0}, std::vector<double>{7, 7}}) {
     FieldColouring c;
     c.field = "f";

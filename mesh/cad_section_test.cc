@@ -9,12 +9,12 @@ namespace candi::mesh {
 namespace {
 
 using V = Eigen::Vector2d;
-const SectionSource kSource{"drawing.dxf", "C"};
+const SectionSource kCadSource{"drawing.dxf", "C"};
 
 Polyline2 Open(std::vector<V> points) { return {std::move(points), false}; }
 
 std::string ErrorOf(const std::vector<Polyline2>& pieces) {
-  return testing::InputErrorMessage([&] { AssembleSection({}, pieces, kSource); });
+  return testing::InputErrorMessage([&] { AssembleSection({}, pieces, kCadSource); });
 }
 
 TEST(SectionOptions, DefaultsPassAndBadValuesThrow) {
@@ -29,7 +29,7 @@ TEST(AssembleSection, JoinsLinesGivenInAnyOrderAndDirection) {
   const Polyline2 s = AssembleSection({},
                                       {Open({V(2, 3), V(1, 1)}), Open({V(3, 2), V(4, 0)}),
                                        Open({V(0, 0), V(1, 1)}), Open({V(3, 2), V(2, 3)})},
-                                      kSource);
+                                      kCadSource);
   EXPECT_FALSE(s.closed);
   const std::vector<V> forward = {V(0, 0), V(1, 1), V(2, 3), V(3, 2), V(4, 0)};
   std::vector<V> backward(forward.rbegin(), forward.rend());
@@ -39,7 +39,7 @@ TEST(AssembleSection, JoinsLinesGivenInAnyOrderAndDirection) {
 TEST(AssembleSection, EndsWithinTheToleranceJoinAndALoopIsClosed) {
   const Polyline2 s = AssembleSection(
       {}, {Open({V(0, 0), V(1, 0)}), Open({V(1, 1e-8), V(0.5, 1)}), Open({V(0.5, 1), V(0, 0)})},
-      kSource);
+      kCadSource);
   EXPECT_TRUE(s.closed);
   EXPECT_EQ(s.points.size(), 3u);
 }

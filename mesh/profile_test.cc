@@ -11,15 +11,15 @@ namespace candi::mesh {
 namespace {
 
 using V = Eigen::Vector2d;
-const SectionSource kSource{"drawing.dxf", "B"};
+const SectionSource kProfileSource{"drawing.dxf", "B"};
 
 Profile Build(std::vector<V> points, int n = 101, bool closed = false, ProfileOptions o = {}) {
   o.samples_per_side = n;
-  return BuildProfile(o, {std::move(points), closed}, kSource);
+  return BuildProfile(o, {std::move(points), closed}, kProfileSource);
 }
 
 std::string ErrorOf(std::vector<V> points, ProfileOptions o = {}) {
-  return testing::InputErrorMessage([&] { BuildProfile(o, {points, false}, kSource); });
+  return testing::InputErrorMessage([&] { BuildProfile(o, {points, false}, kProfileSource); });
 }
 
 TEST(ProfileOptions, DefaultsPassAndBadValuesThrow) {

@@ -10,20 +10,20 @@ namespace candi::mesh {
 namespace {
 
 using V = Eigen::Vector2d;
-const SectionSource kSource{"drawing.dxf", "A"};
+const SectionSource kRevolveSource{"drawing.dxf", "A"};
 
 Profile Asymmetric(const V& shift = V::Zero(), int n = 200) {
   std::vector<V> pts = {V(-50, -10), V(-30, 2), V(-5, 9), V(4, 11), V(20, 3), V(60, -12)};
   for (V& p : pts) p += shift;
   ProfileOptions o;
   o.samples_per_side = n;
-  return BuildProfile(o, {pts, false}, kSource);
+  return BuildProfile(o, {pts, false}, kRevolveSource);
 }
 
 Profile Symmetric() {
   ProfileOptions o;
   o.samples_per_side = 50;
-  return BuildProfile(o, {{V(-10, 0), V(-4, 3), V(0, 5), V(4, 3), V(10, 0)}, false}, kSource);
+  return BuildProfile(o, {{V(-10, 0), V(-4, 3), V(0, 5), V(4, 3), V(10, 0)}, false}, kRevolveSource);
 }
 
 TEST(RevolveOptions, DefaultsPassAndBadValuesThrow) {

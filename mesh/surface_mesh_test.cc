@@ -12,14 +12,14 @@ namespace candi::mesh {
 namespace {
 
 using V = Eigen::Vector2d;
-const SectionSource kSource{"analytic", "shape"};
+const SectionSource kAnalyticSource{"analytic", "shape"};
 
 SurfaceGrid Revolve(const std::vector<V>& section, int n, int m, bool closed = false) {
   ProfileOptions po;
   po.samples_per_side = n;
   RevolveOptions ro;
   ro.angular_steps = m;
-  return RevolveProfile(ro, BuildProfile(po, {section, closed}, kSource));
+  return RevolveProfile(ro, BuildProfile(po, {section, closed}, kAnalyticSource));
 }
 
 // A cone of radius R and height H, apex up: the section (-R, 0) (0, H) (R, 0).

@@ -31,7 +31,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using testing::TempDir;
 
-const Eigen::Vector3d kSite(416000, 9168000, 250);  // UTM 49S, near Borobudur
+const Eigen::Vector3d kUtmSite(416000, 9168000, 250);  // UTM 49S, near Borobudur
 
 // A point as the COPC files hold it: millimetres about the origin, colour, layer.
 using Quantized = std::tuple<int64_t, int64_t, int64_t, uint8_t, uint8_t, uint8_t, int>;
@@ -56,8 +56,8 @@ class CopcBuild : public ::testing::Test {
     wide.precision = io::PositionPrecision::kFloat64;
     PointCloud ground = render::UniformRectangle(6000, 30, 20, 0, {150, 140, 120}, 4);
     PointCloud wall = render::UniformRectangle(2500, 4, 3, 0.5, {200, 60, 40}, 5);
-    for (Eigen::Vector3d& p : ground.positions) p += kSite + Eigen::Vector3d(0.0004, 0, 0);
-    for (Eigen::Vector3d& p : wall.positions) p += kSite + Eigen::Vector3d(3, 2, 0);
+    for (Eigen::Vector3d& p : ground.positions) p += kUtmSite + Eigen::Vector3d(0.0004, 0, 0);
+    for (Eigen::Vector3d& p : wall.positions) p += kUtmSite + Eigen::Vector3d(3, 2, 0);
     io::WritePointCloud(dir_.File("ground.ply"), ground, wide);
     io::WritePointCloud(dir_.File("wall.ply"), wall, wide);
   }

@@ -41,7 +41,7 @@ std::vector<std::string> WriteSheets(const TempDir& dir) {
   return files;
 }
 
-RenderOptions Small() {
+RenderOptions SmallRender() {
   RenderOptions o;
   o.image.width = 96;
   o.image.height = 64;
@@ -66,7 +66,7 @@ TEST(RenderOptions, DefaultsPassAndRulesAreChecked) {
 TEST(RenderClouds, EqualsRenderingTheirFiles) {
   TempDir dir;
   const std::vector<std::string> files = WriteSheets(dir);
-  RenderOptions o = Small();
+  RenderOptions o = SmallRender();
   o.alpha = {0.5, 0.8};
   const RenderedImage from_files = RenderPointFiles(o, files);
   const std::vector<PointCloud> clouds = Sheets();
@@ -89,7 +89,7 @@ TEST(RenderPointFiles, StreamModeReadsRecordsInPlaceAndHonoursMultiplicities) {
   io::PointWriteOptions las;
   files.push_back(dir.File("sheet.las"));
   io::WritePointCloud(files.back(), Sheets()[0], las);
-  RenderOptions o = Small();
+  RenderOptions o = SmallRender();
   o.mode = RenderMode::kStream;
   const RenderedImage in_place = RenderPointFiles(o, files);
   EXPECT_EQ(in_place.mode, "stream");
@@ -111,7 +111,7 @@ TEST(RenderPointFiles, StreamModeReadsRecordsInPlaceAndHonoursMultiplicities) {
     std::memcpy(&bytes[179], far_away, sizeof(far_away));
     const std::string liar = dir.File("liar.las");
     WriteFileAtomic(liar, bytes);
-    RenderOptions memory = Small();
+    RenderOptions memory = SmallRender();
     const RenderedImage m = RenderPointFiles(memory, {liar});
     const RenderedImage s = RenderPointFiles(o, {liar});
     EXPECT_EQ(s.mode, "stream");
@@ -131,8 +131,8 @@ TEST(RenderPointFiles, StreamModeReadsRecordsInPlaceAndHonoursMultiplicities) {
 TEST(RenderPointFiles, EmptyInputsAndBadFilesAreInputErrors) {
   TempDir dir;
   io::WritePointCloud(dir.File("empty.ply"), PointCloud());
-  EXPECT_THROW(RenderPointFiles(Small(), {dir.File("empty.ply")}), InputError);
-  EXPECT_THROW(RenderPointFiles(Small(), {dir.File("missing.ply")}), InputError);
+  EXPECT_THROW(RenderPointFiles(SmallRender(), {dir.File("empty.ply")}), InputError);
+  EXPECT_THROW(RenderPointFiles(SmallRender(), {dir.File("missing.ply")}), InputError);
 }
 
 // The MPI split: every rank's share of the ensembles adds up to the whole image.
@@ -141,7 +141,7 @@ TEST(RenderArchiveEnsembles, SharesAddUpToTheWhole) {
   const std::vector<std::string> files = WriteSheets(dir);
   render::PackFiles(render::PackOptions(), files, "", dir.File("archive"));
   const render::Archive archive(dir.File("archive"));
-  const RenderOptions o = Small();
+  const RenderOptions o = SmallRender();
   const RenderedImage whole = RenderArchiveEnsembles(o, archive, 0, 1);
   EXPECT_EQ(whole.mode, "archive");
   EXPECT_EQ(whole.result.ensembles, 8);
@@ -160,7 +160,7 @@ TEST(RenderArchiveEnsembles, SharesAddUpToTheWhole) {
 TEST(WriteRender, ThePngAndItsProvenanceAndTheViewToRepeatIt) {
   TempDir dir;
   const std::vector<std::string> files = WriteSheets(dir);
-  RenderOptions o = Small();
+  RenderOptions o = SmallRender();
   o.image.brightness = Brightness::Gain(1.25);
   const RenderedImage image = RenderPointFiles(o, files);
   RenderOutputs out;
@@ -176,7 +176,7 @@ TEST(WriteRender, ThePngAndItsProvenanceAndTheViewToRepeatIt) {
   EXPECT_EQ(png.text.at("candi:repeat_level"), "8");
   EXPECT_EQ(io::ReadPng(out.png16).bit_depth, 16);
   // The saved view renders the same image again.
-  RenderOptions again = Small();
+  RenderOptions again = SmallRender();
   again.image.brightness = Brightness::Gain(1.25);
   again.view = render::LoadView(out.save_view);
   EXPECT_TRUE(RenderPointFiles(again, files).result.sums == image.result.sums);
@@ -194,7 +194,7 @@ TEST(RenderPointFiles, ColouredByAFieldWithItsLegendInThePng) {
   sheet.scalars[k].Set(0, std::numeric_limits<double>::quiet_NaN());
   const std::string file = dir.File("sheet.ply");
   io::WritePointCloud(file, sheet);
-  RenderOptions o = Small();
+  RenderOptions o = SmallRender();
   o.image.width = 640;
   o.image.height = 480;
   o.image.spbr.opaque = true;

@@ -212,7 +212,7 @@ SpbrResult InMemory(const Scene& s, int L, uint64_t seed) {
   return RenderSpbr(SpbrOptions{}, camera, splats);
 }
 
-double Rmse(const SpbrResult& x, const SpbrResult& y) {
+double ResultRmse(const SpbrResult& x, const SpbrResult& y) {
   const ImageF a = AverageImage(x, {0, 0, 0}), b = AverageImage(y, {0, 0, 0});
   double sum = 0;
   for (size_t i = 0; i < a.values().size(); ++i) sum += std::pow(a.values()[i] - b.values()[i], 2);
@@ -225,9 +225,9 @@ TEST(SpbrStream, MatchesTheInMemoryRendererStatistically) {
   const Scene s = MakeScene(200000);
   const SpbrResult streamed = Stream(s, 64, 9, 50000, 0, uint64_t{1} << 30);
   const SpbrResult memory = InMemory(s, 64, 9), memory_other_seed = InMemory(s, 64, 10);
-  const double noise = Rmse(memory, memory_other_seed);
+  const double noise = ResultRmse(memory, memory_other_seed);
   EXPECT_GT(noise, 0.5) << "the scene is visible and noisy";
-  EXPECT_LT(Rmse(streamed, memory), 1.15 * noise);
+  EXPECT_LT(ResultRmse(streamed, memory), 1.15 * noise);
 }
 
 TEST(SpbrStream, NanPositionsAreAnErrorAndEmptyChunksAreFine) {

@@ -14,7 +14,6 @@
 namespace candi::sampling {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // ---- The law and its inverse ----
@@ -109,7 +108,7 @@ OpacityOptions ForRatio(double alpha, int repeat_level, double ratio) {
   o.density.radius = kRadius;
   const double k = kMaxPointAreaRatio;
   const double s = repeat_level * SpbrPointsPerEnsemble(alpha, k) * k / (kDensity * ratio);
-  EXPECT_GT(s, k * kPi * kRadius * kRadius) << "S is enlarged";
+  EXPECT_GT(s, k * M_PI * kRadius * kRadius) << "S is enlarged";
   o.image_size = 0;
   o.pixel_size = std::sqrt(s);
   return o;

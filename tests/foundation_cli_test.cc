@@ -13,13 +13,13 @@ namespace candi::testing {
 namespace {
 
 using Result = CommandResult;
-using V = Eigen::Vector2d;
+using V2 = Eigen::Vector2d;
 
 const char kExample[] = "examples/borobudur/foundation.dxf";
 const char kQuick[] = " --samples-per-side 120 --angular-steps 36";
 
 // The table row of a layer ("D        green ...").
-std::string Row(const std::string& out, const std::string& layer) {
+std::string LayerRow(const std::string& out, const std::string& layer) {
   const size_t at = out.find("\n" + layer + " ");
   if (at == std::string::npos) return "";
   return out.substr(at + 1, out.find('\n', at + 1) - at - 1);
@@ -31,7 +31,7 @@ TEST(FoundationCli, ExampleBuildsFourCheckedLayersWithExactCountAndLayerField) {
                             kQuick + " --count 40000 --layers A,B,C,D --mesh " + dir.File("m.obj"));
   ASSERT_EQ(r.code, 0) << r.output;
   for (const char* layer : {"A", "B", "C", "D"}) {
-    const std::string row = Row(r.out, layer);
+    const std::string row = LayerRow(r.out, layer);
     SCOPED_TRACE(row);
     ASSERT_FALSE(row.empty()) << r.out;
     EXPECT_NE(row.find(layer[0] == 'D' ? " yes " : " no "), std::string::npos) << "symmetric?";
@@ -39,8 +39,8 @@ TEST(FoundationCli, ExampleBuildsFourCheckedLayersWithExactCountAndLayerField) {
     EXPECT_NE(row.find("no self-intersections, outward oriented"), std::string::npos);
     EXPECT_TRUE(FileExists(dir.File(std::string("m_") + layer + ".obj")));
   }
-  EXPECT_NE(Row(r.out, "D").find("green"), std::string::npos);
-  EXPECT_NE(Row(r.out, "A").find("blue"), std::string::npos);
+  EXPECT_NE(LayerRow(r.out, "D").find("green"), std::string::npos);
+  EXPECT_NE(LayerRow(r.out, "A").find("blue"), std::string::npos);
   EXPECT_NE(r.out.find("units millimetre"), std::string::npos) << r.out;
   const PointCloud cloud = io::ReadPointCloud(dir.File("f.ply"));
   ASSERT_EQ(cloud.size(), 40000u);
@@ -68,14 +68,14 @@ TEST(FoundationCli, SplitWritesOnePointFilePerLayerAndModesCanBeForced) {
   EXPECT_TRUE(FileExists(dir.File("f_B.xyz")));
   EXPECT_TRUE(FileExists(dir.File("f_D.xyz")));
   EXPECT_FALSE(FileExists(dir.File("f.xyz")));
-  EXPECT_NE(Row(r.out, "B").find(" sweep "), std::string::npos) << r.out;
+  EXPECT_NE(LayerRow(r.out, "B").find(" sweep "), std::string::npos) << r.out;
 }
 
 TEST(FoundationCli, PaperModeAndSurveyCoordinatesKeepTheWorldPosition) {
   TempDir dir;
-  const V shift(712345.0, 9123456.0);
-  std::vector<V> pts = {V(-30, 0), V(-10, 6), V(0, 9), V(12, 5), V(35, -2)};
-  for (V& p : pts) p += shift;
+  const V2 shift(712345.0, 9123456.0);
+  std::vector<V2> pts = {V2(-30, 0), V2(-10, 6), V2(0, 9), V2(12, 5), V2(35, -2)};
+  for (V2& p : pts) p += shift;
   testing::WriteBytes(dir.File("s.dxf"), DxfText().LwPolyline("hill", pts).str());
   const Result r = RunCandi("foundation " + dir.File("s.dxf") + " -o " + dir.File("s.ply") +
                             kQuick + " --per-triangle 1");
@@ -117,12 +117,12 @@ TEST(FoundationCli, BadInputsAreExitTwoNamingFileAndLayer) {
   EXPECT_NE(r.output.find("layer 'Z': no such layer"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("(the drawing has: A, B, C, D)"), std::string::npos) << r.output;
   testing::WriteBytes(dir.File("x.dxf"),
-                      DxfText().Lines("L", {V(0, 0), V(2, 2), V(2, 0), V(0, 2)}).str());
+                      DxfText().Lines("L", {V2(0, 0), V2(2, 2), V2(2, 0), V2(0, 2)}).str());
   r = RunCandi("foundation " + dir.File("x.dxf") + out);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("layer 'L': the section crosses itself"), std::string::npos) << r.output;
   testing::WriteBytes(dir.File("g.dxf"),
-                      DxfText().Line("G", V(0, 0), V(1, 1)).Line("G", V(1.25, 1), V(2, 0)).str());
+                      DxfText().Line("G", V2(0, 0), V2(1, 1)).Line("G", V2(1.25, 1), V2(2, 0)).str());
   r = RunCandi("foundation " + dir.File("g.dxf") + out);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("smallest gap is 0.25 m"), std::string::npos) << r.output;

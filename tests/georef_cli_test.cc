@@ -70,7 +70,7 @@ void WriteChunk(const std::string& path, const Chunk& chunk) {
   io::WritePointCloud(path, cloud);
 }
 
-std::string Row(const std::string& out, const std::string& name) {
+std::string TargetRow(const std::string& out, const std::string& name) {
   const size_t at = out.find("\n" + name + " ");
   return at == std::string::npos ? "" : out.substr(at + 1, out.find('\n', at + 1) - at - 1);
 }
@@ -82,9 +82,9 @@ TEST(GeorefCli, FlagsTheBlunderAndWritesSurveyCoordinatesWithTheShift) {
   const Result r = RunCandi("georef " + dir.File("a.ply") + " --targets " + dir.File("t.csv") +
                             " -o " + dir.File("a_utm.ply"));
   ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_NE(Row(r.out, "P4").find("OUTLIER"), std::string::npos) << r.out;
-  EXPECT_NE(Row(r.out, "P3").find(" ok"), std::string::npos) << r.out;
-  EXPECT_NE(Row(r.out, "P10").find("check"), std::string::npos) << r.out;
+  EXPECT_NE(TargetRow(r.out, "P4").find("OUTLIER"), std::string::npos) << r.out;
+  EXPECT_NE(TargetRow(r.out, "P3").find(" ok"), std::string::npos) << r.out;
+  EXPECT_NE(TargetRow(r.out, "P10").find("check"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("control (outliers out)"), std::string::npos);
   const PointCloud out = io::ReadPointCloud(dir.File("a_utm.ply"));
   EXPECT_EQ(out.frame.origin, V(416000, 9168000, 300));

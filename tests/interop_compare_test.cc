@@ -22,7 +22,7 @@
 namespace candi::testing {
 namespace {
 
-const Eigen::Vector3d kSite(416000.0, 9168000.0, 100.0);
+const Eigen::Vector3d kCompareSite(416000.0, 9168000.0, 100.0);
 constexpr char kShift[] = "-GLOBAL_SHIFT -416000 -9168000 -100 ";
 
 double Height(double x, double y) { return 0.3 * std::sin(0.7 * x) + 0.2 * std::cos(0.9 * y); }
@@ -33,7 +33,7 @@ PointCloud Surface(int count, double size, double offset, double noise, uint64_t
   PointCloud c;
   for (int i = 0; i < count; ++i) {
     const double x = rng.Uniform(0, size), y = rng.Uniform(0, size);
-    c.positions.push_back(kSite + Eigen::Vector3d(x, y, Height(x, y) + offset +
+    c.positions.push_back(kCompareSite + Eigen::Vector3d(x, y, Height(x, y) + offset +
                                                            noise * (2 * rng.Uniform() - 1)));
   }
   return c;
@@ -126,7 +126,7 @@ TEST(InteropCompare, C2mEqualsCloudCompareWithinATenthOfAMillimetre) {
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
       const double x = 0.2 * i, y = 0.2 * j;
-      mesh.vertices.positions.push_back(kSite + Eigen::Vector3d(x, y, Height(x, y)));
+      mesh.vertices.positions.push_back(kCompareSite + Eigen::Vector3d(x, y, Height(x, y)));
     }
   }
   for (int i = 0; i + 1 < n; ++i) {

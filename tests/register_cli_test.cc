@@ -17,22 +17,22 @@ namespace {
 
 using Result = CommandResult;
 
-const Eigen::Vector3d kSite(416000.0, 9168000.0, 250.0);
+const Eigen::Vector3d kScanSite(416000.0, 9168000.0, 250.0);
 
 // The truth: 1.5 degrees about the vertical through the site's centre and a few centimetres.
 Rigid3 Truth() {
-  const Eigen::Vector3d centre = kSite + Eigen::Vector3d(5, 5, 0);
+  const Eigen::Vector3d centre = kScanSite + Eigen::Vector3d(5, 5, 0);
   const Eigen::Quaterniond q(Eigen::AngleAxisd(1.5 * M_PI / 180, Eigen::Vector3d::UnitZ()));
   return Rigid3(q, centre - q * centre + Eigen::Vector3d(0.07, -0.05, 0.03));
 }
 
-// fixed.ply (double, shift kSite) and moving.ply (float, its own shift), 8000 points each.
+// fixed.ply (double, shift kScanSite) and moving.ply (float, its own shift), 8000 points each.
 void WriteClouds(const TempDir& dir) {
   testing::SurfaceCloudSpec f, m;
   f.count = m.count = 8000;
   f.seed = 1;
   m.seed = 2;
-  f.origin = m.origin = kSite;
+  f.origin = m.origin = kScanSite;
   io::WritePointCloud(dir.File("fixed.ply"), testing::SurfaceCloud(f));
   PointCloud moving = testing::SurfaceCloud(m);
   const Rigid3 inverse = Truth().Inverse();
@@ -62,7 +62,7 @@ TEST(RegisterCli, RecoversTheMotionPrintsFiguresAndKeepsShiftAndPrecision) {
     for (int b = 0; b < 4; ++b) m(a, b) = j["fixed_from_moving"][a][b].get<double>();
   }
   const Eigen::Matrix4d truth = Truth().ToMatrix();
-  const Eigen::Vector4d x = (kSite + Eigen::Vector3d(10, 10, 0)).homogeneous();
+  const Eigen::Vector4d x = (kScanSite + Eigen::Vector3d(10, 10, 0)).homogeneous();
   EXPECT_LT((m * x - truth * x).norm(), 2e-3);
   EXPECT_LT(j["rms_after_m"].get<double>(), j["rms_before_m"].get<double>());
   EXPECT_GT(j["overlap_after"].get<double>(), 0.95);
@@ -116,7 +116,7 @@ TEST(RegisterCli, UnwritableOutputFolderAndNoOverlapAreExitTwo) {
   TempDir other;
   testing::SurfaceCloudSpec s;
   s.count = 500;
-  s.origin = kSite + Eigen::Vector3d(1000, 0, 0);
+  s.origin = kScanSite + Eigen::Vector3d(1000, 0, 0);
   io::WritePointCloud(other.File("away.ply"), testing::SurfaceCloud(s));
   const Result none = RunCandi("register " + other.File("away.ply") + " " + dir.File("fixed.ply") +
                                " -o " + dir.File("out2.ply"));

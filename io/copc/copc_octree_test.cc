@@ -31,7 +31,7 @@ namespace {
 namespace util = ::candi::testing;
 
 constexpr size_t kLength = 30;  // format 6
-const Eigen::Vector3d kScale = Eigen::Vector3d::Constant(0.001);
+const Eigen::Vector3d kOctreeScale = Eigen::Vector3d::Constant(0.001);
 const Eigen::Vector3d kOffset(500000.0, 4500000.0, 100.0);
 // The grid alone: no small nodes folded into their parents.
 const CopcOctreeOptions kGridOnly{0, 0};
@@ -53,7 +53,7 @@ std::vector<uint8_t> ClusteredRecords(size_t n, uint32_t seed) {
     }
     for (int k = 0; k < 3; ++k) {
       StoreLE<int32_t>(records.data() + i * kLength + 4 * k,
-                       static_cast<int32_t>(std::lround(p[k] / kScale[k])));
+                       static_cast<int32_t>(std::lround(p[k] / kOctreeScale[k])));
     }
     records[i * kLength + 12] = static_cast<uint8_t>(i);
   }
@@ -61,7 +61,7 @@ std::vector<uint8_t> ClusteredRecords(size_t n, uint32_t seed) {
 }
 
 Eigen::Vector3d World(const std::vector<uint8_t>& records, uint64_t i,
-                      const Eigen::Vector3d& scale = kScale,
+                      const Eigen::Vector3d& scale = kOctreeScale,
                       const Eigen::Vector3d& offset = kOffset) {
   Eigen::Vector3d w;
   for (int k = 0; k < 3; ++k) {
@@ -75,7 +75,7 @@ std::tuple<int, int, int, int> Tuple(const CopcKey& k) { return {k.level, k.x, k
 TEST(CopcOctree, EveryPointOnceInsideItsNodeOnePerCell) {
   const size_t n = 200000;
   const std::vector<uint8_t> records = ClusteredRecords(n, 3);
-  const CopcOctree tree = BuildCopcOctree(kGridOnly, records.data(), n, kLength, kScale, kOffset);
+  const CopcOctree tree = BuildCopcOctree(kGridOnly, records.data(), n, kLength, kOctreeScale, kOffset);
   EXPECT_NEAR(tree.halfsize, 30.0, 0.01);  // the floor's 60 m
   EXPECT_DOUBLE_EQ(tree.spacing, 2.0 * tree.halfsize / 128);
   std::vector<int> seen(n, 0);
@@ -106,7 +106,7 @@ TEST(CopcOctree, EveryPointOnceInsideItsNodeOnePerCell) {
       const Eigen::Vector3d u = (w - lo) / cell;
       const Eigen::Vector3d a = (u.array() - 1e-6 / cell).floor();
       const bool on_face = a != (u.array() + 1e-6 / cell).floor().matrix();
-      if (cell >= kScale.minCoeff() && !on_face) {
+      if (cell >= kOctreeScale.minCoeff() && !on_face) {
         const Eigen::Vector3d c = a.array().max(0.0).min(127.0);
         EXPECT_TRUE(cells.insert({int64_t(c.x()), int64_t(c.y()), int64_t(c.z())}).second)
             << "two points in a cell of node level " << node.key.level;
@@ -125,7 +125,7 @@ TEST(CopcOctree, KeepsThePointNearestTheCellCentre) {
   const int32_t xs[3] = {100, 450, 128000};  // 0.1 m, 0.45 m, 128 m
   for (int i = 0; i < 3; ++i) StoreLE<int32_t>(records.data() + i * kLength, xs[i]);
   const CopcOctree tree =
-      BuildCopcOctree(kGridOnly, records.data(), 3, kLength, kScale, Eigen::Vector3d::Zero());
+      BuildCopcOctree(kGridOnly, records.data(), 3, kLength, kOctreeScale, Eigen::Vector3d::Zero());
   ASSERT_EQ(tree.nodes.size(), 2u);
   EXPECT_EQ(tree.nodes[0].points, (std::vector<uint64_t>{1, 2}));
   EXPECT_EQ(tree.nodes[1].points, (std::vector<uint64_t>{0}));
@@ -138,8 +138,8 @@ TEST(CopcOctree, SameTreeOnOneAndTwoThreads) {
   CopcOctree a, b;
   tbb::task_arena one(1), two(2);
   const CopcOctreeOptions defaults;
-  one.execute([&] { a = BuildCopcOctree(defaults, records.data(), n, kLength, kScale, kOffset); });
-  two.execute([&] { b = BuildCopcOctree(defaults, records.data(), n, kLength, kScale, kOffset); });
+  one.execute([&] { a = BuildCopcOctree(defaults, records.data(), n, kLength, kOctreeScale, kOffset); });
+  two.execute([&] { b = BuildCopcOctree(defaults, records.data(), n, kLength, kOctreeScale, kOffset); });
   ASSERT_EQ(a.nodes.size(), b.nodes.size());
   for (size_t j = 0; j < a.nodes.size(); ++j) {
     EXPECT_TRUE(a.nodes[j].key == b.nodes[j].key);
@@ -151,8 +151,8 @@ TEST(CopcOctree, SmallNodesStayInTheirParentsAsInUntwine) {
   const size_t n = 200000;
   const std::vector<uint8_t> records = ClusteredRecords(n, 3);
   const CopcOctreeOptions defaults;
-  const CopcOctree grid = BuildCopcOctree(kGridOnly, records.data(), n, kLength, kScale, kOffset);
-  const CopcOctree tree = BuildCopcOctree(defaults, records.data(), n, kLength, kScale, kOffset);
+  const CopcOctree grid = BuildCopcOctree(kGridOnly, records.data(), n, kLength, kOctreeScale, kOffset);
+  const CopcOctree tree = BuildCopcOctree(defaults, records.data(), n, kLength, kOctreeScale, kOffset);
   std::map<std::tuple<int, int, int, int>, uint64_t> subtree;  // points at or below a node
   std::vector<int> seen(n, 0);
   for (auto it = tree.nodes.rbegin(); it != tree.nodes.rend(); ++it) {
@@ -181,7 +181,7 @@ TEST(CopcOctree, SmallNodesStayInTheirParentsAsInUntwine) {
 class ReferenceTree {
  public:
   ReferenceTree(const CopcOctreeOptions& options, const std::vector<uint8_t>& records, size_t n,
-                const CopcOctree& cube, const Eigen::Vector3d& scale = kScale,
+                const CopcOctree& cube, const Eigen::Vector3d& scale = kOctreeScale,
                 const Eigen::Vector3d& offset = kOffset)
       : options_(options), places_(n), min_scale_(scale.minCoeff()) {
     const Eigen::Vector3d min = cube.center.array() - cube.halfsize;
@@ -284,7 +284,7 @@ TEST(CopcOctree, TheMortonBuildGivesTheRulesTree) {
   const CopcOctreeOptions in_place{1500, 100, 0}, mixed{0, 0, 100};
   for (const CopcOctreeOptions& options : {kGridOnly, CopcOctreeOptions{}, in_place, mixed}) {
     SCOPED_TRACE(options.sort_scratch_points);
-    ExpectTheRulesTree(options, records, n, kScale, kOffset);
+    ExpectTheRulesTree(options, records, n, kOctreeScale, kOffset);
   }
 }
 
@@ -314,7 +314,7 @@ TEST(CopcOctree, LatticesOfBinaryFractionsGiveTheRulesTree) {
     const Eigen::Vector3d origin = Eigen::Vector3d::Zero();
     for (const CopcOctreeOptions& options : {kGridOnly, CopcOctreeOptions{}}) {
       SCOPED_TRACE(step);
-      EXPECT_GT(ExpectTheRulesTree(options, records, n, kScale, origin), 0);
+      EXPECT_GT(ExpectTheRulesTree(options, records, n, kOctreeScale, origin), 0);
     }
   }
 }
@@ -357,7 +357,7 @@ TEST(CopcOctree, TheRecordsIntegerBoundsGiveTheSameTreeAsTheirPass) {
   }
   const double cancel = -bounds[0][0] * 0.25;
   for (const auto& [scale, offset] :
-       {std::pair{kScale, kOffset},
+       {std::pair{kOctreeScale, kOffset},
         std::pair{Eigen::Vector3d(-0.001, 0.01, -0.25), Eigen::Vector3d(5e5, -3.0, 0.0)},
         std::pair{Eigen::Vector3d::Constant(0.25).eval(), Eigen::Vector3d(cancel, 0.0, -0.0)}}) {
     const CopcOctree pass = BuildCopcOctree({}, records.data(), n, kLength, scale, offset);
@@ -390,9 +390,9 @@ TEST(CopcOctreeOptions, DefaultsPassAndNegativeMinimumsAreRefused) {
 }
 
 TEST(CopcOctree, EmptyAndSinglePoint) {
-  EXPECT_TRUE(BuildCopcOctree({}, nullptr, 0, kLength, kScale, kOffset).nodes.empty());
+  EXPECT_TRUE(BuildCopcOctree({}, nullptr, 0, kLength, kOctreeScale, kOffset).nodes.empty());
   std::vector<uint8_t> one(kLength, 0);
-  const CopcOctree tree = BuildCopcOctree({}, one.data(), 1, kLength, kScale, kOffset);
+  const CopcOctree tree = BuildCopcOctree({}, one.data(), 1, kLength, kOctreeScale, kOffset);
   ASSERT_EQ(tree.nodes.size(), 1u);
   EXPECT_GT(tree.halfsize, 0.0);
 }
@@ -411,7 +411,7 @@ TEST(CopcOctree, AnyBucketSizeGivesTheRulesTree) {
       SCOPED_TRACE(::testing::Message()
                    << bucket << " points a bucket, minimums " << options.min_subtree_points << ", "
                    << options.min_octant_points);
-      ExpectTheRulesTree(options, records, n, kScale, kOffset);
+      ExpectTheRulesTree(options, records, n, kOctreeScale, kOffset);
     }
   }
 }
@@ -431,7 +431,7 @@ std::vector<uint8_t> FarClusterRecords(size_t n, size_t far) {
       p = Eigen::Vector3d::Constant(1000.0) + Eigen::Vector3d(u(rng), u(rng), u(rng));
     for (int k = 0; k < 3; ++k) {
       StoreLE<int32_t>(records.data() + i * kLength + 4 * k,
-                       static_cast<int32_t>(std::lround(p[k] / kScale[k])));
+                       static_cast<int32_t>(std::lround(p[k] / kOctreeScale[k])));
     }
   }
   return records;
@@ -448,9 +448,9 @@ TEST(CopcOctree, NodesAboveTheBucketsFoldTheirSubtreesAndOctants) {
     const std::vector<uint8_t> records = FarClusterRecords(n, far);
     CopcOctreeOptions options;
     options.bucket_points = 16;
-    ExpectTheRulesTree(options, records, n, kScale, Eigen::Vector3d::Zero());
+    ExpectTheRulesTree(options, records, n, kOctreeScale, Eigen::Vector3d::Zero());
     const CopcOctree tree =
-        BuildCopcOctree(options, records.data(), n, kLength, kScale, Eigen::Vector3d::Zero());
+        BuildCopcOctree(options, records.data(), n, kLength, kOctreeScale, Eigen::Vector3d::Zero());
     size_t in_far_octant = 0, below_it = 0;
     for (const CopcNode& node : tree.nodes) {
       if (node.key.level == 0) continue;
@@ -480,13 +480,13 @@ TEST(CopcOctree, TheNodesComeBucketByBucketThenTheNodesAbove) {
   CopcOctreeOptions options;
   options.bucket_points = 2000;
   const CopcOctree reference =
-      BuildCopcOctree(options, records.data(), n, kLength, kScale, kOffset);
+      BuildCopcOctree(options, records.data(), n, kLength, kOctreeScale, kOffset);
   std::map<std::tuple<int, int, int, int>, std::vector<uint64_t>> expected;
   for (const CopcNode& node : reference.nodes) expected[Tuple(node.key)] = node.points;
   std::vector<CopcKey> order;
   size_t encoded = 0;
   const CopcOctree tree = BuildCopcNodes(
-      options, records.data(), n, kLength, kScale, kOffset, nullptr,
+      options, records.data(), n, kLength, kOctreeScale, kOffset, nullptr,
       [&](const CopcKey& key, const uint8_t* node_records, const uint32_t* indices, size_t count,
           std::vector<uint8_t>* out) {
         EXPECT_TRUE(out->empty());
@@ -544,7 +544,7 @@ std::vector<std::tuple<int, int, int, int, uint64_t, std::vector<uint8_t>>> Hand
     const CopcOctreeOptions& options, const CopcRecords& input, const Eigen::Vector3d& offset) {
   std::vector<std::tuple<int, int, int, int, uint64_t, std::vector<uint8_t>>> out;
   BuildCopcNodes(
-      options, input, kScale, offset, nullptr,
+      options, input, kOctreeScale, offset, nullptr,
       [](const CopcKey&, const uint8_t* node_records, const uint32_t* indices, size_t count,
          std::vector<uint8_t>* bytes) {
         bytes->assign(node_records, node_records + count * kLength);

@@ -42,7 +42,7 @@ using util::LazRecords;
 using util::ReadBytes;
 using util::TempDir;
 
-std::string DataPath(const std::string& name) {
+std::string LazDataPath(const std::string& name) {
   return util::SourceDir() + "/tests/data/laz/" + name;
 }
 
@@ -384,7 +384,7 @@ TEST(LazChunk, LaszipWrittenChunksAreReencodedByteForByte) {
   // chunk table of the fixed-size ones too.
   for (const char* name : {"1815.laz", "extrabytes.laz", "simple.laz", "point-time-1.4.las.laz",
                            "append-bug.laz", "1_4_w_evlr.laz", "simple.copc.laz"}) {
-    const ReencodeResult r = Reencode(DataPath(name));
+    const ReencodeResult r = Reencode(LazDataPath(name));
     EXPECT_GT(r.chunks, 0u) << name;
     EXPECT_EQ(r.identical, r.chunks) << name << ": " << r.first_difference;
     if (std::string(name) != "simple.copc.laz") {
@@ -480,16 +480,16 @@ void ExpectPointDataOf(const std::string& las, const std::string& laz) {
 TEST(LazWrite, PointDataEqualsLaszipsForTheSameLasFile) {
   // (extrabytes.las is not among them: its undocumented and array extra bytes are not kept by
   // candi's points, so its LAS rewrite already differs; LazChunk tests cover its chunks.)
-  ExpectPointDataOf(DataPath("1815.las"), DataPath("1815.laz"));  // LAStools las2las, format 1
+  ExpectPointDataOf(LazDataPath("1815.las"), LazDataPath("1815.laz"));  // LAStools las2las, format 1
   CANDI_REQUIRE_SHARED_DATA(simple, "las/simple.las");
-  ExpectPointDataOf(simple, DataPath("simple.laz"));  // format 3
+  ExpectPointDataOf(simple, LazDataPath("simple.laz"));  // format 3
 }
 
 TEST(LazWrite, ConvertWritesLazWithTheCrsRecords) {
   // 1815.las states its CRS (NAD83(2011) / Texas Centric Lambert + NAVD88) in LASF_Projection
   // records; the LAZ keeps them, and a reprojection states the new CRS.
   TempDir dir;
-  const std::string source = DataPath("1815.las");
+  const std::string source = LazDataPath("1815.las");
   ConvertPointFile({}, source, dir.File("same.laz"));
   EXPECT_TRUE(LazRecords(dir.File("same.laz")) == LasPointRecords(ReadBytes(source)));
   EXPECT_EQ(OpenPointReader(dir.File("same.laz"))->info().meta.crs,

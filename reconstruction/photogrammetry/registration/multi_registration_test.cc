@@ -21,7 +21,7 @@ namespace {
 using testing::CourtyardScene;
 using testing::CourtyardStations;
 
-constexpr double kDeg = M_PI / 180.0;
+constexpr double kDegree = M_PI / 180.0;
 
 // Registration as the tests run it: thinned to 0.2 m (0.5 m for ICP), which keeps every test
 // well under 20 s on one core and still recovers the poses to a fraction of a millimetre.
@@ -53,7 +53,7 @@ ScanSet MakeScans(int count, const Eigen::Vector3d& origin = Eigen::Vector3d::Ze
     }
     Eigen::Vector3d dir(rng.Normal(), rng.Normal(), rng.Normal()),
         axis(rng.Normal(), rng.Normal(), rng.Normal());
-    const Eigen::Quaterniond turn(Eigen::AngleAxisd(5 * kDeg, axis.normalized()));
+    const Eigen::Quaterniond turn(Eigen::AngleAxisd(5 * kDegree, axis.normalized()));
     s.start.emplace_back(turn * s.truth[i].rotation,
                          s.truth[i].translation + 0.5 * dir.normalized());
   }
@@ -64,7 +64,7 @@ double TranslationError(const Rigid3& a, const Rigid3& b) {
   return (a.translation - b.translation).norm();
 }
 double RotationErrorDeg(const Rigid3& a, const Rigid3& b) {
-  return Eigen::AngleAxisd(a.rotation * b.rotation.conjugate()).angle() / kDeg;
+  return Eigen::AngleAxisd(a.rotation * b.rotation.conjugate()).angle() / kDegree;
 }
 
 struct Timed {
@@ -146,7 +146,7 @@ TEST(RegisterScans, RecoversARingOfPerturbedStationsAndClosesItsLoops) {
     }
   }
   const double ring_t = ring.translation.norm(),
-               ring_r = Eigen::AngleAxisd(ring.rotation).angle() / kDeg;
+               ring_r = Eigen::AngleAxisd(ring.rotation).angle() / kDegree;
   EXPECT_LT(ring_t, 0.003);
   EXPECT_LT(ring_r, 0.01);
   std::printf("[ring of 8] the ring's own loop (pairwise fits composed): %.3f mm %.5f deg\n",
@@ -199,7 +199,7 @@ TEST(RegisterScans, AScanWithoutOverlapIsReportedAndKeepsItsStartPose) {
 
 TEST(RegisterScans, ControlTargetsTieTheBlockToTheSurveyAndChecksVerifyIt) {
   ScanSet s = MakeScans(4);
-  s.start[0] = Rigid3(Eigen::Quaterniond(Eigen::AngleAxisd(3 * kDeg, Eigen::Vector3d::UnitZ())) *
+  s.start[0] = Rigid3(Eigen::Quaterniond(Eigen::AngleAxisd(3 * kDegree, Eigen::Vector3d::UnitZ())) *
                           s.truth[0].rotation,
                       s.truth[0].translation + Eigen::Vector3d(0.3, -0.2, 0.1));
   // Targets on the building's corners and the walls, seen from the scans that hold them (their
