@@ -1,5 +1,6 @@
 #include "apps/failure.h"
 
+#include <cstdio>
 #include <new>
 
 #include "apps/cli.h"
@@ -28,6 +29,18 @@ FailureReport DescribeFailure(std::exception_ptr failure) {
 std::pair<int, std::string> DescribeFailureForMpi(std::exception_ptr failure) {
   const FailureReport report = DescribeFailure(failure);
   return {report.exit_code, report.text};
+}
+
+pipeline::RanksReporting RankReporting(const std::string& outcome) {
+  return {DescribeFailureForMpi, [outcome](const std::vector<render::mpi::Session::Failure>& failures, int ranks) {
+            for (const auto& f : failures) {
+              const size_t skip = f.message.rfind("candi: ", 0) == 0 ? 7 : 0;  // the report's own prefix
+              std::fprintf(stderr, "candi: MPI rank %d of %d failed: %s\n", f.rank, ranks, f.message.c_str() + skip);
+            }
+            std::fprintf(stderr, "candi: every rank stopped because %s failed; %s\n",
+                         failures.size() == 1 && failures[0].rank != 0 ? "another rank" : "a rank", outcome.c_str());
+            std::fflush(stderr);
+          }};
 }
 
 }  // namespace candi::apps

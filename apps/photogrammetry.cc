@@ -1,5 +1,6 @@
 // candi sfm, dense, georef, colorcorrect, campaign: the building from photos
-// (pipeline/photogrammetry.h): COLMAP structure from motion, CPU dense stereo, georeferencing on
+// (pipeline/photogrammetry.h): COLMAP structure from motion (a campaign's chunk mappers shared
+// out over MPI ranks under mpirun, pipeline/sfm_ranks.h), CPU dense stereo, georeferencing on
 // surveyed targets; colour-card correction (pipeline/color_correct.h); and a synthetic photo
 // campaign with its ground truth (reconstruction/photogrammetry/scenes/campaign.h).
 #include <cmath>
@@ -9,10 +10,12 @@
 #include <utility>
 
 #include "apps/commands.h"
+#include "apps/failure.h"
 #include "core/timer.h"
 #include "io/point_io.h"
 #include "pipeline/color_correct.h"
 #include "pipeline/photogrammetry.h"
+#include "pipeline/sfm_ranks.h"
 #include "reconstruction/photogrammetry/scenes/campaign.h"
 
 namespace candi::apps {
@@ -37,7 +40,11 @@ int RunSfm(const SfmArgs& a) {
     o.colmap = env;
   }
   o.Check();
-  const pg::SfmSummary s = pipeline::StructureFromMotion(o, a.images, a.workspace);
+  const pipeline::RanksSfm r =
+      pipeline::StructureFromMotionOnRanks(o, a.images, a.workspace, RankReporting("no model written"));
+  if (!r.failures.empty()) throw ReportedFailure(r.failures.front().exit_code);
+  if (!r.root) return kOk;
+  const pg::SfmSummary& s = r.summary;
   double total = 0;
   for (const auto& [stage, seconds] : s.stage_seconds) total += seconds;
   std::printf("COLMAP %s (%s), pairs by %s\n", s.colmap.version.c_str(), s.colmap.cuda ? "CUDA" : "CPU",
@@ -94,12 +101,15 @@ void AddSfm(Command& root) {
   c.Option("--targets", o.chunks.targets, "Map each session folder apart and tie the chunks on these surveyed "
            "targets (georef's CSV); needs --picks");
   c.Option("--picks", o.chunks.picks, "The targets' picks in the photos, CSV name,image,u,v");
-  c.Option("--chunk-parallel", o.chunks.parallel, "Chunk mappers run at once").Range(1, 256);
+  c.Option("--chunk-parallel", o.chunks.parallel, "Chunk mappers run at once (under mpirun: on each rank, the "
+           "chunks shared out over the ranks)").Range(1, 256);
   c.Option("--camera-model", o.camera_model, "COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
   c.FlagOff("--camera-per-image", o.single_camera, "Separate intrinsics per photo (default: one shared camera)");
   c.Option("--threads", o.threads, "Threads for feature extraction and matching (-1: all); COLMAP verifies and "
            "maps on one thread, so the model is the same on every run");
   c.Flag("--overwrite", o.overwrite, "Replace a previous run in the workspace");
+  c.Flag("--resume", o.resume, "Continue a stopped run in the workspace: its finished stages and chunks are kept "
+         "(same photos and options)");
   c.Run([&a] { return RunSfm(a); });
   c.Footer("Example: candi sfm photos/ -o work --max-image-size 1600");
 }

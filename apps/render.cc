@@ -97,24 +97,13 @@ void PrintRender(const std::string& output, const pipeline::RenderedImage& image
               static_cast<unsigned long long>(r.copies), r.milliseconds, gain, static_cast<unsigned long long>(r.seed));
 }
 
-// Under mpirun, rank 0 prints every failed rank's report, before any process exits.
-void PrintRankFailures(const std::vector<render::mpi::Session::Failure>& failures, int ranks) {
-  for (const auto& f : failures) {
-    const size_t skip = f.message.rfind("candi: ", 0) == 0 ? 7 : 0;  // the report's own prefix
-    std::fprintf(stderr, "candi: MPI rank %d of %d failed: %s\n", f.rank, ranks, f.message.c_str() + skip);
-  }
-  std::fprintf(stderr, "candi: every rank stopped because %s failed; no image written\n",
-               failures.size() == 1 && failures[0].rank != 0 ? "another rank" : "a rank");
-  std::fflush(stderr);
-}
-
 // Renders an archive, under mpirun as one of the ranks (pipeline/render_ranks.h); rank 0 alone
 // writes the image (atomically). A failed rank makes every rank fail: no image.
 int RenderArchive(const RenderArgs& a, pipeline::RenderOptions o) {
   if (!o.alpha.empty()) throw std::invalid_argument("--alpha needs point files: an archive holds one copy per point");
   if (!(a.chunk_budget_mb > 0)) throw std::invalid_argument("--chunk-budget must be > 0 MB");
   o.chunk_budget = static_cast<uint64_t>(a.chunk_budget_mb * 1048576.0);
-  const pipeline::RanksRender r = pipeline::RenderArchiveOnRanks(o, a.inputs[0], {DescribeFailureForMpi, PrintRankFailures});
+  const pipeline::RanksRender r = pipeline::RenderArchiveOnRanks(o, a.inputs[0], RankReporting("no image written"));
   if (!r.failures.empty()) throw ReportedFailure(r.failures.front().exit_code);
   if (!r.root) return kOk;
   pipeline::RenderOutputs outputs = a.outputs;

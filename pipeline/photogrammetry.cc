@@ -21,12 +21,16 @@ namespace {
 namespace pg = photogrammetry;
 using nlohmann::json;
 
-// COLMAP's stages on stderr, one line each (they take seconds to minutes).
-void PrintSfmProgress(const std::string& stage, int index, int count, double seconds, bool done) {
+// The stages on stderr, a line each when they start and end and every few seconds between, with
+// how much is done and, from that, the time left in the stage.
+void PrintSfmProgress(const std::string& stage, int index, int count, double seconds, bool done, double fraction) {
   if (done) {
     std::fprintf(stderr, "[sfm %d/%d] %s done in %.1f s\n", index, count, stage.c_str(), seconds);
   } else if (seconds == 0) {
     std::fprintf(stderr, "[sfm %d/%d] %s ...\n", index, count, stage.c_str());
+  } else if (fraction > 0) {
+    std::fprintf(stderr, "[sfm %d/%d] %s running, %.0f s, %.0f %% (about %.0f s left)\n", index, count,
+                 stage.c_str(), seconds, 100 * fraction, seconds * (1 - fraction) / fraction);
   } else {
     std::fprintf(stderr, "[sfm %d/%d] %s running, %.0f s\n", index, count, stage.c_str(), seconds);
   }
@@ -41,6 +45,11 @@ json SfmReport(const pg::SfmSummary& s, const pg::SfmOptions& o) {
   j["registered"] = s.registered;
   j["ignored_files"] = s.ignored;
   j["images_without_exif"] = s.no_exif;
+  j["images_unreadable"] = s.unreadable;
+  j["images_other_size"] = s.other_size;
+  json duplicates = json::array();
+  for (const auto& [copy, kept] : s.duplicates) duplicates.push_back({{"left_out", copy}, {"same_as", kept}});
+  j["images_duplicate"] = duplicates;
   j["default_focal_px"] = s.default_focal_px;
   j["points"] = s.points;
   j["mean_reprojection_error_px"] = s.mean_reprojection_error;
@@ -105,8 +114,8 @@ void TransformTargets(const GeorefOptions& o, const std::string& targets_csv, st
 }  // namespace
 
 pg::SfmSummary StructureFromMotion(const pg::SfmOptions& options, const std::string& images,
-                                   const std::string& workspace) {
-  const pg::SfmSummary s = pg::RunSfm(options, images, workspace, PrintSfmProgress);
+                                   const std::string& workspace, const pg::ChunkMapperRunner& run_mappers) {
+  const pg::SfmSummary s = pg::RunSfm(options, images, workspace, PrintSfmProgress, run_mappers);
   if (!s.no_exif.empty()) {
     LogWarning(std::to_string(s.no_exif.size()) + " photo(s) without an EXIF focal length (e.g. " + s.no_exif.front() +
                "): COLMAP started from a guessed focal of " + std::to_string(static_cast<int>(s.default_focal_px)) +

@@ -34,8 +34,10 @@ inline constexpr const char* kSfmReproducibility =
 // COLMAP structure from motion of the photos in `images` into `workspace` (colmap_runner.h);
 // each stage's progress on stderr, warnings for photos without EXIF or not registered, and
 // WORKSPACE/sfm_report.json (what ran, the model's figures, the stage times).
+// `run_mappers`: who runs the chunk mappers (nullptr: this process; pipeline/sfm_ranks.h: the ranks).
 photogrammetry::SfmSummary StructureFromMotion(const photogrammetry::SfmOptions& options, const std::string& images,
-                                               const std::string& workspace);
+                                               const std::string& workspace,
+                                               const photogrammetry::ChunkMapperRunner& run_mappers = nullptr);
 
 struct DenseOptions {
   photogrammetry::PatchMatchOptions stereo;

@@ -41,12 +41,6 @@ std::vector<uint16_t> Pixels16(const std::string& path) {
   return std::vector<uint16_t>(im.data(), im.data() + size_t{3} * im.width() * im.height());
 }
 
-bool HaveMpirun() { return RunCommand("command -v mpirun").code == 0; }
-
-std::string Mpirun(int ranks) {
-  return "mpirun --oversubscribe --allow-run-as-root -np " + std::to_string(ranks) + " " CANDI_EXECUTABLE;
-}
-
 class ArchiveCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -81,21 +75,21 @@ TEST_F(ArchiveCli, PackReportsAndRenderDrawsTheScene) {
 }
 
 TEST_F(ArchiveCli, MpiRendersWithOneTwoThreeRanksAreBitIdenticalToOneProcess) {
-  if (!HaveMpirun()) GTEST_SKIP() << "mpirun not installed (Debian: openmpi-bin)";
+  if (!OnPath("mpirun")) GTEST_SKIP() << "mpirun not installed (Debian: openmpi-bin)";
   const std::string d = dir_->path();
   const testing::CommandResult base = RunCandi("render " + Render(d + "/arc", d + "/base"));
   ASSERT_EQ(base.code, 0) << base.output;
   const std::vector<uint16_t> expected = Pixels16(d + "/base16.png");
   for (int ranks : {1, 2, 3}) {
     const std::string out = d + "/np" + std::to_string(ranks);
-    const testing::CommandResult r = RunCommand(Mpirun(ranks) + " render " + Render(d + "/arc", out));
+    const testing::CommandResult r = RunCommand(MpirunCandi(ranks) + " render " + Render(d + "/arc", out));
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_TRUE(Pixels16(out + "16.png") == expected) << ranks << " ranks";
   }
 }
 
 TEST_F(ArchiveCli, FailedRankStopsAllRanksAndNoImageIsWritten) {
-  if (!HaveMpirun()) GTEST_SKIP() << "mpirun not installed (Debian: openmpi-bin)";
+  if (!OnPath("mpirun")) GTEST_SKIP() << "mpirun not installed (Debian: openmpi-bin)";
   const std::string d = dir_->path();
   // Rank 1 reads a copy of the archive with one corrupt chunk (MPMD launch: one program per rank).
   fs::copy(d + "/arc", d + "/bad", fs::copy_options::recursive | fs::copy_options::overwrite_existing);
@@ -135,8 +129,8 @@ TEST_F(ArchiveCli, DamagedArchivesAndTooSmallBudgetsAreClearErrors) {
   EXPECT_NE(r.output.find("chunk budget"), std::string::npos) << r.output;
   EXPECT_FALSE(FileExists(d + "/x.png"));
   // Point files under mpirun are refused (each rank would draw everything).
-  if (HaveMpirun()) {
-    r = RunCommand(Mpirun(2) + " render " + d + "/scene.ply -o " + d + "/y.png");
+  if (OnPath("mpirun")) {
+    r = RunCommand(MpirunCandi(2) + " render " + d + "/scene.ply -o " + d + "/y.png");
     EXPECT_NE(r.code, 0);
     EXPECT_NE(r.output.find("archive"), std::string::npos) << r.output;
   }

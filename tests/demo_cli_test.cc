@@ -174,7 +174,8 @@ TEST(DemoCli, TwoQuickDemosGiveTheSameBytesOnTwoCoresAndOne) {
   r = testing::RunCommand((taskset ? "taskset -c 0 " : "") + std::string(CANDI_EXECUTABLE) + args);
   ASSERT_EQ(r.code, 0) << r.output;
   const auto run_specific = [](const std::string& relative) {
-    for (const char* part : {"timings.json", "/checkpoints/", "/logs/", "database.db", "sfm_report.json"})
+    for (const char* part : {"timings.json", "/checkpoints/", "/logs/", "database.db", "sfm_report.json",
+                             "sfm_stages.txt"})
       if (relative.find(part) != std::string::npos) return true;
     return false;
   };

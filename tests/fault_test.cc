@@ -34,6 +34,8 @@
 
 #include "io/image/png_io.h"
 #include "io/point_io.h"
+#include "reconstruction/photogrammetry/scenes/synthetic_views.h"
+#include "tests/run_candi.h"
 #include "tests/util/test_util.h"
 
 namespace candi::testing {
@@ -266,13 +268,21 @@ pid_t FindChild(pid_t parent, const std::string& word) {
   return 0;
 }
 
-bool HaveColmap() { return std::system("command -v colmap >/dev/null 2>&1") == 0; }
+// A COLMAP that stops itself (SIGSTOP) when it is started for `stage` and is the real one for
+// the other stages: DIR/colmap-held, returned.
+std::string HeldColmap(const TempDir& dir, const std::string& stage) {
+  const std::string colmap = candi::testing::RunCommand("command -v colmap").output;
+  WriteBytes(dir.File("colmap-held"), "#!/bin/sh\nif [ \"$1\" = " + stage + " ]; then kill -STOP $$; fi\nexec " +
+                                          colmap.substr(0, colmap.find('\n')) + " \"$@\"\n");
+  fs::permissions(dir.File("colmap-held"), fs::perms::owner_all);
+  return dir.File("colmap-held");
+}
 
 // A COLMAP stage killed: its name, the signal and its log reach the user, exit 2. The stage is
 // held at its start (a wrapper stops itself with SIGSTOP before it runs the real COLMAP), so the
 // kill never races the stage's end, however loaded the machine.
 TEST(Fault, ColmapKilledMidStageIsReported) {
-  if (!HaveColmap()) GTEST_SKIP() << "COLMAP is not installed (scripts/deps.sh installs it)";
+  if (!OnPath("colmap")) GTEST_SKIP() << "COLMAP is not installed (scripts/deps.sh installs it)";
   TempDir dir;
   fs::create_directories(dir.File("photos"));
   std::mt19937 rng(5);
@@ -283,11 +293,8 @@ TEST(Fault, ColmapKilledMidStageIsReported) {
         for (int c = 0; c < 3; ++c) img.at(x, y, c) = static_cast<uint8_t>((((x + 7 * k) / 8 * 37 + y / 8 * 91 + c * 50) % 251) ^ (rng() & 31));
     io::WritePng(dir.File("photos/p" + std::to_string(k) + ".png"), img);
   }
-  const std::string colmap = candi::testing::RunCommand("command -v colmap").output;
-  WriteBytes(dir.File("colmap-held"), "#!/bin/sh\nif [ \"$1\" = matches_importer ]; then kill -STOP $$; fi\nexec " +
-                                          colmap.substr(0, colmap.find('\n')) + " \"$@\"\n");
-  fs::permissions(dir.File("colmap-held"), fs::perms::owner_all);
-  Process p({"sfm", dir.File("photos"), "-o", dir.File("ws"), "--colmap", dir.File("colmap-held")}, LogDir(dir));
+  Process p({"sfm", dir.File("photos"), "-o", dir.File("ws"), "--colmap", HeldColmap(dir, "matches_importer")},
+            LogDir(dir));
   pid_t victim = 0;
   while (victim == 0 && p.Running()) {  // ends: the stage waits, stopped, for this kill
     victim = FindChild(p.pid(), "matches_importer");
@@ -306,6 +313,66 @@ TEST(Fault, ColmapKilledMidStageIsReported) {
   EXPECT_TRUE(Contains(ReadBytes(dir.File("ws/logs/feature_extractor.log")), "Elapsed time"));
   EXPECT_GT(fs::file_size(dir.File("ws/matches.txt")), 0u);
   EXPECT_TRUE(Temporaries(dir.path()).empty());
+}
+
+// `candi sfm` interrupted (SIGINT) in the mapper, then `--resume`d: the finished stages are not
+// run again, the mapper starts again from nothing, and the model is the same bytes as one run
+// straight through. The mapper is held at its start (as above), so where the run stops is no
+// matter of timing. Eight synthetic photos of 400 x 300 on an 80-degree arc (as
+// SfmDense.SyntheticPhotosReconstructAccuratelyAndCompletely), about half a minute in all.
+TEST(Fault, AnInterruptedSfmResumesFromItsLastFinishedStage) {
+  if (!OnPath("colmap")) GTEST_SKIP() << "COLMAP is not installed (scripts/deps.sh installs it)";
+  TempDir dir;
+  photogrammetry::SyntheticViewsOptions scene;
+  scene.views = 8;
+  scene.width = 400;
+  scene.height = 300;
+  scene.arc_degrees = 80;
+  scene.supersample = 2;
+  scene.texture_cell = 0.03;
+  photogrammetry::WriteSyntheticImages(photogrammetry::RenderSyntheticViews(scene), dir.File("site"));
+  const auto [ref, ref_err] = RunToEnd({"sfm", dir.File("site"), "-o", dir.File("ref"), "--threads", "1"}, LogDir(dir));
+  ASSERT_EQ(ref, 0) << ref_err;
+
+  Process p({"sfm", dir.File("site"), "-o", dir.File("ws"), "--colmap", HeldColmap(dir, "mapper")}, LogDir(dir));
+  pid_t held = 0;
+  while (held == 0 && p.Running()) {
+    held = FindChild(p.pid(), "mapper");
+    if (held == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_NE(held, 0) << "COLMAP's mapper never started: " << p.Stderr();
+  kill(p.pid(), SIGINT);
+  const int status = p.Wait();
+  kill(held, SIGKILL);  // stopped, it cannot act on the SIGTERM candi sent it
+  ASSERT_TRUE(WIFSIGNALED(status)) << p.Stderr();
+  EXPECT_EQ(WTERMSIG(status), SIGINT);
+  const std::string record = ReadBytes(dir.File("ws/sfm_stages.txt"));
+  for (const char* stage : {"stage feature_extractor ", "stage match_features ", "stage matches_importer "})
+    EXPECT_TRUE(Contains(record, stage)) << stage << " is recorded as finished: " << record;
+  EXPECT_FALSE(Contains(record, "stage mapper")) << record;
+
+  // Without --resume the run is refused, naming both ways on.
+  const auto [again, again_err] = RunToEnd({"sfm", dir.File("site"), "-o", dir.File("ws")}, LogDir(dir));
+  EXPECT_EQ(again, 2);
+  EXPECT_TRUE(Contains(again_err, "--resume to continue it")) << again_err;
+  // Resumed with other options: refused, naming what differs.
+  const auto [other, other_err] =
+      RunToEnd({"sfm", dir.File("site"), "-o", dir.File("ws"), "--resume", "--max-features", "999"}, LogDir(dir));
+  EXPECT_EQ(other, 2);
+  EXPECT_TRUE(Contains(other_err, "max_features 4096, now max_features 999")) << other_err;
+
+  const std::string features = ReadBytes(dir.File("ws/logs/feature_extractor.log"));
+  const auto [resumed, resumed_err] =
+      RunToEnd({"sfm", dir.File("site"), "-o", dir.File("ws"), "--resume", "--threads", "2"}, LogDir(dir));
+  ASSERT_EQ(resumed, 0) << resumed_err;
+  EXPECT_TRUE(Contains(resumed_err, "feature_extractor (finished before)")) << resumed_err;
+  EXPECT_EQ(ReadBytes(dir.File("ws/logs/feature_extractor.log")), features) << "extraction did not run again";
+  for (const char* f : {"sparse/0/cameras.bin", "sparse/0/images.bin", "sparse/0/points3D.bin", "matches.txt"}) {
+    const std::string a = ReadBytes(dir.File(std::string("ref/") + f));
+    EXPECT_FALSE(a.empty()) << f;
+    EXPECT_TRUE(a == ReadBytes(dir.File(std::string("ws/") + f))) << f << " differs from the run straight through";
+  }
+  EXPECT_TRUE(Contains(ReadBytes(dir.File("ws/sfm_stages.txt")), "stage image_undistorter "));
 }
 
 TEST(Fault, AnInterruptedBuildLeavesFinishedFilesAndResumes) {

@@ -195,7 +195,8 @@ ChunkedMappingResult TieChunks(const std::map<std::string, std::string>& chunk_m
     const auto images = chunk_images.find(name);
     chunk.images = images == chunk_images.end() ? 0 : images->second.size();
     if (dir.empty()) {
-      chunk.reason = "its mapper found no model";
+      chunk.reason = chunk.images < 2 ? "a folder of one photo: a chunk is mapped from two or more"
+                                      : "its mapper found no model (logs/mapper_" + name + ".log)";
       failures += "\n  " + name + ": " + chunk.reason;
       result.chunks.push_back(chunk);
       continue;

@@ -75,7 +75,8 @@ std::map<std::string, std::vector<std::string>> ChunksByFolder(const std::vector
 // SIMPLE_RADIAL, RADIAL, OPENCV; others throw InputError naming the model.
 Eigen::Vector2d UndistortPixel(const ColmapCamera& camera, const Eigen::Vector2d& uv);
 
-// Ties the mapped chunks (name -> its model folder; "" for a chunk whose mapper found no model)
+// Ties the mapped chunks (name -> its model folder; "" for a chunk whose mapper found no model or
+// that holds one photo, which is not mapped)
 // and writes the merged model into `merged_dir` (binary). InputError for unreadable targets or
 // picks, or when no chunk can be tied (each chunk's reason in the message).
 ChunkedMappingResult TieChunks(const std::map<std::string, std::string>& chunk_models,

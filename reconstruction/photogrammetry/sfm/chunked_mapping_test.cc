@@ -137,12 +137,16 @@ TEST(ChunkedMapping, TiesChunksOnTheirTargetsAndNamesTheOneThatCannotBe) {
   EXPECT_EQ(merged.cameras.size(), 2u);
   for (const auto& [id, image] : merged.images) EXPECT_EQ(image.name.substr(0, 2) == "s3", false);
   // No chunk at all: the message names each chunk's reason.
-  std::map<std::string, std::string> none = {{"s1", ""}, {"s2", ""}};
+  // A folder of one photo is named as such.
+  std::map<std::string, std::string> none = {{"s1", ""}, {"s2", ""}, {"s9", ""}};
+  images["s9"] = {"s9/only.jpg"};
   try {
     TieChunks(none, images, options, dir.File("merged2"));
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("s2: its mapper found no model"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("s2: its mapper found no model (logs/mapper_s2.log)"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("s9: a folder of one photo"), std::string::npos) << e.what();
   }
 }
 

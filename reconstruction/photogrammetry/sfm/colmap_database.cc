@@ -3,6 +3,7 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -74,6 +75,11 @@ size_t CountVerifiedPairs(const std::string& path) {
   Database db = Open(path, SQLITE_OPEN_READONLY);
   return static_cast<size_t>(
       Count(db.get(), path, "SELECT COUNT(*) FROM two_view_geometries WHERE rows > 0 AND config >= 2"));
+}
+
+void ClearMatches(const std::string& path) {
+  Database db = Open(path, SQLITE_OPEN_READWRITE);
+  Execute(db.get(), path, "BEGIN IMMEDIATE; DELETE FROM matches; DELETE FROM two_view_geometries; COMMIT;");
 }
 
 bool RenumberImagesByName(const std::string& path) {
@@ -210,7 +216,16 @@ std::vector<DatabaseImage> ReadColmapDescriptors(const std::string& path) {
                                  const std::string& where) {
     if (rows > 0 && cols < 2) throw InputError(path, "", where + ": " + std::to_string(cols) + " columns, fewer than x, y");
     image->xy.resize(static_cast<size_t>(2 * rows));
-    for (int64_t r = 0; r < rows; ++r) std::memcpy(&image->xy[2 * r], data + 4 * r * cols, 2 * sizeof(float));
+    image->scale.assign(static_cast<size_t>(rows), 0.0f);
+    for (int64_t r = 0; r < rows; ++r) {
+      float f[6] = {0, 0, 0, 0, 0, 0};
+      std::memcpy(f, data + 4 * r * cols, static_cast<size_t>(std::min<int64_t>(cols, 6)) * sizeof(float));
+      image->xy[2 * r] = f[0];
+      image->xy[2 * r + 1] = f[1];
+      // COLMAP's keypoint rows: x y, x y scale orientation, or x y and the affine shape a11 a12 a21 a22.
+      if (cols == 4) image->scale[r] = f[2];
+      if (cols >= 6) image->scale[r] = std::sqrt(std::abs(f[2] * f[5] - f[3] * f[4]));
+    }
   });
   for (const auto& [id, image] : images) {
     if (image.xy.size() != static_cast<size_t>(2 * image.rows)) {

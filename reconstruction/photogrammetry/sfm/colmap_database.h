@@ -17,6 +17,7 @@ struct DatabaseImage {
   int64_t width = 0, height = 0;     // of its camera, pixels
   int64_t rows = 0;                  // features
   std::vector<float> xy;             // rows x 2: keypoint positions, pixels (COLMAP: 0.5 = first pixel's centre)
+  std::vector<float> scale;          // rows: keypoint scales (sigma), pixels; 0 where the table has only x, y
   std::vector<uint8_t> descriptors;  // rows x 128, row-major (COLMAP stores them as unsigned bytes)
 };
 
@@ -33,6 +34,10 @@ std::vector<DatabaseImage> ReadColmapDescriptors(const std::string& database_pat
 // the ids. Only before matching: a database holding matches is an InputError, as is an image
 // naming a missing camera. Returns true when anything was renumbered.
 bool RenumberImagesByName(const std::string& database_path);
+
+// Removes every match and verified pair (before COLMAP's verification runs again), in one
+// transaction. InputError as RenumberImagesByName.
+void ClearMatches(const std::string& database_path);
 
 // The image pairs COLMAP's geometric verification kept (two_view_geometries with inliers and a
 // configuration of CALIBRATED or better). InputError as ReadColmapDescriptors.

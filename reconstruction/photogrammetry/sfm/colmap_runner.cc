@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -25,6 +26,7 @@
 #include "core/check.h"
 #include "core/interrupt.h"
 #include "core/log.h"
+#include "core/sha256.h"
 #include "reconstruction/photogrammetry/sfm/colmap_database.h"
 #include "reconstruction/photogrammetry/sfm/colmap_model.h"
 #include "reconstruction/photogrammetry/sfm/sift_matching.h"
@@ -40,6 +42,10 @@ namespace {
 constexpr const char* kModelPlaceholder = "<model>";
 constexpr const char* kMatchList = "matches.txt";
 constexpr double kHeartbeatSeconds = 10.0;
+// What a run has finished, for --resume: "input ..." lines (what the outputs depend on), then a
+// "stage <name> <seconds> [<what it found>]" line a finished stage and "chunk <name>" a mapped
+// chunk. Written (atomically) after each.
+constexpr const char* kStageRecord = "sfm_stages.txt";
 constexpr int kLogTailLines = 20;
 
 std::string Lower(std::string s) {
@@ -72,15 +78,23 @@ void PrepareWorkspace(const SfmOptions& options, const std::string& workspace,
   }
   std::vector<std::string> previous;
   for (const char* entry : {"database.db", kMatchList, "images", "sparse", "dense", "logs", "sfm_report.json", "chunks",
-                            "sparse_chunks"}) {
+                            "sparse_chunks", kStageRecord}) {
     if (fs::exists(fs::symlink_status(Path(workspace, entry)))) previous.push_back(entry);
   }
   if (previous.empty()) return;
+  if (options.resume && fs::exists(Path(workspace, kStageRecord))) {
+    fs::remove_all(Path(workspace, "images"), ec);  // links only, made again
+    return;
+  }
   if (!options.overwrite) {
     std::string list;
     for (const std::string& p : previous) list += (list.empty() ? "" : ", ") + p;
-    throw InputError(workspace, "", "holds a previous run (" + list +
-                                        "); pass --overwrite to replace it, or choose another folder");
+    throw InputError(workspace, "", "holds a previous run (" + list + ")" +
+                                        (options.resume ? " without candi's record of its stages (" +
+                                                              std::string(kStageRecord) + ")" : "") +
+                                        "; pass --overwrite to replace it" +
+                                        (options.resume ? "" : ", --resume to continue it") +
+                                        ", or choose another folder");
   }
   for (const std::string& p : previous) {
     fs::remove_all(Path(workspace, p), ec);
@@ -148,6 +162,9 @@ void SfmOptions::Check() const {
   CANDI_CHECK_OPTION(CameraModelId(camera_model) >= 0, camera_model,
                      "a COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");
   CANDI_CHECK_OPTION(threads == -1 || threads >= 1, threads, "-1 (all) or >= 1");
+  CANDI_CHECK_OPTION(!(resume && overwrite), resume, "not with overwrite (resume keeps what overwrite removes)");
+  CANDI_CHECK_OPTION(pairs.strategy != PairStrategy::kPositional || !priors.empty(), priors,
+                     "a priors file: positional matching pairs photos by their prior positions");
   chunks.Check();
 }
 
@@ -302,24 +319,158 @@ void ParseFeatureExtractionLog(const std::string& log_path, SfmSummary* summary)
       summary->unreadable.push_back(name);
       continue;
     }
+    if (line.find("ERROR: Single camera specified, but images have different dimensions") != std::string::npos) {
+      summary->other_size.push_back(name);
+      continue;
+    }
     const size_t focal_at = line.find("Focal Length:");
-    if (focal_at == std::string::npos || line.find("(Prior)") != std::string::npos) continue;
-    summary->no_exif.push_back(name);
-    std::istringstream(line.substr(focal_at + 13)) >> summary->default_focal_px;
+    if (focal_at == std::string::npos) continue;
+    double focal = 0;
+    std::istringstream(line.substr(focal_at + 13)) >> focal;
+    if (line.find("(Prior)") != std::string::npos) {
+      summary->focal_priors.emplace_back(name, focal);
+    } else {
+      summary->no_exif.push_back(name);
+      summary->default_focal_px = focal;
+    }
   }
   // The extractor's threads log the photos in the order they finish: sorted, the lists are the
   // same bytes on every run.
   std::sort(summary->no_exif.begin(), summary->no_exif.end());
   std::sort(summary->unreadable.begin(), summary->unreadable.end());
+  std::sort(summary->other_size.begin(), summary->other_size.end());
+  std::sort(summary->focal_priors.begin(), summary->focal_priors.end());
 }
 
+std::vector<std::vector<std::string>> IdenticalFiles(const std::string& dir, const std::vector<std::string>& names) {
+  // Only files of one size can be the same; only those are read.
+  std::map<uintmax_t, std::vector<std::string>> by_size;
+  for (const std::string& name : names) by_size[fs::file_size(fs::path(dir) / name)].push_back(name);
+  std::vector<std::vector<std::string>> groups;
+  for (const auto& [size, same_size] : by_size) {
+    if (same_size.size() < 2) continue;
+    std::map<std::string, std::vector<std::string>> by_hash;
+    for (const std::string& name : same_size) by_hash[Sha256OfFile((fs::path(dir) / name).string())].push_back(name);
+    for (auto& [hash, group] : by_hash) {
+      if (group.size() < 2) continue;
+      std::sort(group.begin(), group.end());
+      groups.push_back(group);
+    }
+  }
+  std::sort(groups.begin(), groups.end());
+  return groups;
+}
+
+namespace {
+
+struct StageRecord {
+  std::string path;
+  std::vector<std::string> inputs;
+  std::map<std::string, std::pair<double, std::string>> stages;  // name -> seconds, what it found
+  std::set<std::string> chunks;
+
+  void Write() const {
+    std::string text = "# candi sfm: the inputs and the finished stages of this workspace (for --resume)\n";
+    for (const std::string& line : inputs) text += "input " + line + "\n";
+    for (const auto& [name, done] : stages) {
+      char seconds[32];
+      std::snprintf(seconds, sizeof(seconds), "%.3f", done.first);
+      text += "stage " + name + " " + seconds + (done.second.empty() ? "" : " " + done.second) + "\n";
+    }
+    for (const std::string& chunk : chunks) text += "chunk " + chunk + "\n";
+    WriteFileAtomic(path, text);
+  }
+  static StageRecord Read(const std::string& path) {
+    StageRecord r;
+    r.path = path;
+    std::ifstream in(path);
+    if (!in) throw InputError(path, "", "cannot read");
+    std::string line;
+    int number = 0;
+    while (std::getline(in, line)) {
+      ++number;
+      if (line.empty() || line[0] == '#') continue;
+      const size_t space = line.find(' ');
+      const std::string key = line.substr(0, space), rest = space == std::string::npos ? "" : line.substr(space + 1);
+      if (key == "input") {
+        r.inputs.push_back(rest);
+      } else if (key == "chunk" && !rest.empty()) {
+        r.chunks.insert(rest);
+      } else if (key == "stage") {
+        std::istringstream fields(rest);
+        std::string name;
+        double seconds = 0;
+        if (!(fields >> name >> seconds)) throw InputError(path, "line " + std::to_string(number), "a stage line: stage <name> <seconds>");
+        std::string found;
+        std::getline(fields >> std::ws, found);
+        r.stages[name] = {seconds, found};
+      } else {
+        throw InputError(path, "line " + std::to_string(number), "'" + key + "': expected input, stage or chunk");
+      }
+    }
+    return r;
+  }
+};
+
+std::string FileHash(const std::string& path) { return path.empty() ? "-" : Sha256OfFile(path); }
+
+// What the outputs depend on: the photos and every option but the thread counts (which change
+// no byte) and the COLMAP executable; the priors, targets and picks by their contents.
+std::vector<std::string> StageInputs(const SfmOptions& o, const std::vector<std::string>& images) {
+  const PairSelectionOptions& p = o.pairs;
+  std::vector<std::string> lines = {
+      "max_image_size " + std::to_string(o.max_image_size), "max_features " + std::to_string(o.max_features),
+      "camera_model " + o.camera_model, "single_camera " + std::to_string(o.single_camera),
+      "matching " + PairStrategyName(p.strategy) + " " + std::to_string(p.exhaustive_max_images) + " " +
+          std::to_string(p.sequential_overlap) + " " + std::to_string(p.retrieval_neighbours) + " " +
+          std::to_string(p.position_neighbours) + " " + std::to_string(p.branching) + " " + std::to_string(p.depth) +
+          " " + std::to_string(p.train_descriptors) + " " + std::to_string(p.kmeans_iterations) + " " +
+          std::to_string(p.seed),
+      "priors " + FileHash(o.priors), "targets " + FileHash(o.chunks.targets), "picks " + FileHash(o.chunks.picks)};
+  for (const std::string& image : images) lines.push_back("photo " + image);
+  return lines;
+}
+
+}  // namespace
+
+double FractionInLog(const std::string& text, size_t images) {
+  static const std::regex counted(R"(\[(\d+)/(\d+)\])"), registering(R"(Registering image #\d+ \((\d+)\))");
+  double fraction = -1;
+  std::ptrdiff_t at = -1;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), counted); it != std::sregex_iterator(); ++it) {
+    const double n = std::stod((*it)[2].str());
+    if (n > 0) fraction = std::stod((*it)[1].str()) / n, at = it->position();
+  }
+  if (images > 0) {
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), registering); it != std::sregex_iterator(); ++it) {
+      if (it->position() > at) fraction = std::stod((*it)[1].str()) / static_cast<double>(images), at = it->position();
+    }
+  }
+  return fraction < 0 ? -1.0 : std::min(fraction, 1.0);
+}
+
+namespace {
+// The last few kB of a log, where the newest counter is.
+std::string EndOfLog(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "";
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  const std::streamoff from = std::max<std::streamoff>(0, size - 4096);
+  in.seekg(from);
+  std::string text(static_cast<size_t>(size - from), '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  return text;
+}
+}  // namespace
+
 double RunSfmStage(const SfmStage& stage, const std::string& log_path, int index, int count,
-                const SfmProgress& progress) {
-  if (progress) progress(stage.name, index, count, 0.0, false);
+                   const SfmProgress& progress, size_t images) {
+  if (progress) progress(stage.name, index, count, 0.0, false, 0.0);
   WriteFileAtomic(log_path, "$ " + ArgvText(stage.argv) + "\n");
   const auto start = std::chrono::steady_clock::now();
   const int code = RunLogged(stage.argv, log_path, [&](double seconds) {
-    if (progress) progress(stage.name, index, count, seconds, false);
+    if (progress) progress(stage.name, index, count, seconds, false, FractionInLog(EndOfLog(log_path), images));
   });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (code != 0) {
@@ -328,7 +479,7 @@ double RunSfmStage(const SfmStage& stage, const std::string& log_path, int index
     throw InputError(log_path, "", "colmap " + stage.name + " " + how + "; the end of its log:\n" +
                                        TailOfFile(log_path, kLogTailLines));
   }
-  if (progress) progress(stage.name, index, count, seconds, true);
+  if (progress) progress(stage.name, index, count, seconds, true, 1.0);
   return seconds;
 }
 
@@ -352,20 +503,45 @@ std::string TailOfFile(const std::string& path, int lines) {
 
 namespace {
 
-// After feature extraction: photos COLMAP could not decode are skipped (a warning), unless fewer
-// than two remain.
-void CheckExtraction(const std::string& log_path, const std::string& images_dir, SfmSummary* summary) {
-  ParseFeatureExtractionLog(log_path, summary);
-  if (summary->unreadable.empty()) return;
+std::string ListText(const std::vector<std::string>& names, size_t most = 10) {
   std::string list;
-  for (const std::string& name : summary->unreadable) list += (list.empty() ? "" : ", ") + name;
-  if (summary->images.size() - summary->unreadable.size() < 2) {
-    throw InputError(images_dir, "", "COLMAP could not read " + std::to_string(summary->unreadable.size()) +
-                                         " of the " + std::to_string(summary->images.size()) +
-                                         " images (" + list + "): corrupt or not images; fewer than "
-                                         "2 usable photos remain (see " + log_path + ")");
+  for (size_t k = 0; k < names.size() && k < most; ++k) list += (k == 0 ? "" : ", ") + names[k];
+  if (names.size() > most) list += ", ... (" + std::to_string(names.size()) + " in all)";
+  return list;
+}
+
+// After feature extraction: photos COLMAP could not decode, and photos of another size than the
+// first when one camera is shared, are skipped (a warning each), unless fewer than two remain;
+// EXIF focal lengths that differ under one shared camera are warned of.
+void CheckExtraction(const std::string& log_path, const std::string& images_dir, bool single_camera,
+                     SfmSummary* summary) {
+  ParseFeatureExtractionLog(log_path, summary);
+  const size_t skipped = summary->unreadable.size() + summary->other_size.size();
+  if (summary->images.size() - skipped < 2) {
+    throw InputError(images_dir, "", "COLMAP could not use " + std::to_string(skipped) + " of the " +
+                                         std::to_string(summary->images.size()) + " images (" +
+                                         ListText(summary->unreadable.empty() ? summary->other_size
+                                                                              : summary->unreadable) +
+                                         (summary->unreadable.empty() ? "): other sizes than the first with one "
+                                                                        "camera shared (--camera-per-image)"
+                                                                      : "): corrupt or not images") +
+                                         "; fewer than 2 usable photos remain (see " + log_path + ")");
   }
-  LogWarning("COLMAP could not read (skipped): " + list);
+  if (!summary->unreadable.empty()) LogWarning("COLMAP could not read (skipped): " + ListText(summary->unreadable));
+  if (!summary->other_size.empty()) {
+    LogWarning(std::to_string(summary->other_size.size()) + " photo(s) skipped: their size differs from the first "
+               "photo's and one camera is shared (--camera-per-image gives each photo its own): " +
+               ListText(summary->other_size));
+  }
+  if (single_camera && !summary->focal_priors.empty()) {
+    const auto [lo, hi] = std::minmax_element(summary->focal_priors.begin(), summary->focal_priors.end(),
+                                              [](const auto& a, const auto& b) { return a.second < b.second; });
+    if (hi->second > 1.01 * lo->second) {
+      LogWarning("the photos' EXIF focal lengths differ (" + lo->first + ": " + std::to_string(lo->second) + " px, " +
+                 hi->first + ": " + std::to_string(hi->second) + " px) but one camera is shared: photos of several "
+                 "cameras or zoom settings want --camera-per-image");
+    }
+  }
 }
 
 ColmapVersion DetectColmap(const std::string& colmap, const std::string& log_path) {
@@ -409,22 +585,27 @@ std::map<std::string, Eigen::Vector3d> PriorsByImage(const std::string& path, co
 // descriptors into WORKSPACE/matches.txt; a summary in its log.
 double MatchFeatures(const SfmOptions& options, const std::string& workspace, SfmSummary* summary,
                      const std::string& log_path, int index, int count, const SfmProgress& progress) {
-  if (progress) progress(kMatchStage, index, count, 0.0, false);
+  if (progress) progress(kMatchStage, index, count, 0.0, false, 0.0);
   const auto start = std::chrono::steady_clock::now();
   std::vector<DatabaseImage> images = ReadColmapDescriptors(Path(workspace, "database.db"));
   std::sort(images.begin(), images.end(),
             [](const DatabaseImage& a, const DatabaseImage& b) { return a.name < b.name; });
   const size_t cleared = ClearBorderDescriptors(&images);
-  const PairSelection selection = SelectPairs(images, PriorsByImage(options.priors, images), options.pairs);
+  const std::map<std::string, Eigen::Vector3d> positions = PriorsByImage(options.priors, images);
+  if (!options.priors.empty() && positions.empty()) {
+    throw InputError(options.priors, "", "names none of the " + std::to_string(images.size()) +
+                                             " photos (e.g. " + images.front().name + ")");
+  }
+  const PairSelection selection = SelectPairs(images, positions, options.pairs);
   const auto& pairs = selection.pairs;
   summary->matcher = selection.strategy;
   summary->pairs_tried = pairs.size();
   double next_beat = kHeartbeatSeconds;
   const MatchListSummary matched = WriteMatchList(
-      images, pairs, SiftMatchOptions{}, options.threads, Path(workspace, kMatchList), [&](size_t, size_t) {
+      images, pairs, SiftMatchOptions{}, options.threads, Path(workspace, kMatchList), [&](size_t done, size_t total) {
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (progress && seconds >= next_beat) {
-          progress(kMatchStage, index, count, seconds, false);
+          progress(kMatchStage, index, count, seconds, false, total == 0 ? -1.0 : double(done) / double(total));
           next_beat += kHeartbeatSeconds;
         }
       });
@@ -436,65 +617,132 @@ double MatchFeatures(const SfmOptions& options, const std::string& workspace, Sf
                                 std::to_string(matched.matches) + " matches; " + std::to_string(cleared) +
                                 " features in the outermost pixel row or column left out (their descriptors "
                                 "differ from run to run)\n");
-  if (progress) progress(kMatchStage, index, count, seconds, true);
+  if (progress) progress(kMatchStage, index, count, seconds, true, 1.0);
   return seconds;
 }
 
-// The mapping stage in chunks: one mapper a chunk (its image list), `parallel` at once, then the
-// chunks tied on the targets and merged into WORKSPACE/sparse/merged.
+// The mapping stage in chunks: one mapper a chunk (its image list), run by `run_mappers` (nullptr:
+// `options.chunks.parallel` at once in this process), then the chunks tied on the targets and
+// merged into WORKSPACE/sparse/merged.
 double MapInChunks(const SfmOptions& options, const SfmStage& mapper, const std::string& workspace, int index,
-                   int count, const SfmProgress& progress, SfmSummary* summary) {
+                   int count, const SfmProgress& progress, const ChunkMapperRunner& run_mappers,
+                   StageRecord* record, SfmSummary* summary) {
   const auto start = std::chrono::steady_clock::now();
   const std::map<std::string, std::vector<std::string>> chunks = ChunksByFolder(summary->images);
   fs::create_directories(Path(workspace, "chunks"));
-  std::vector<std::string> names;
+  std::vector<ChunkMapperJob> jobs;
   for (const auto& [name, images] : chunks) {
+    if (images.size() < 2) continue;  // nothing to map: reported below
+    if (record->chunks.count(name)) continue;  // mapped by the run this one resumes
+    std::error_code ec;
+    fs::remove_all(Path(workspace, "sparse_chunks/" + name), ec);  // what an interrupted mapper left
     std::string list;
     for (const std::string& image : images) list += image + "\n";
     WriteFileAtomic(Path(workspace, "chunks/" + name + ".txt"), list);
     fs::create_directories(Path(workspace, "sparse_chunks/" + name));
-    names.push_back(name);
+    ChunkMapperJob job;
+    job.chunk = name;
+    job.argv = mapper.argv;
+    const auto out = std::find(job.argv.begin(), job.argv.end(), std::string("--output_path"));
+    *(out + 1) = Path(workspace, "sparse_chunks/" + name);
+    job.argv.insert(job.argv.end(), {"--image_list_path", Path(workspace, "chunks/" + name + ".txt")});
+    job.log = Path(workspace, "logs/mapper_" + name + ".log");
+    jobs.push_back(std::move(job));
   }
-  if (progress) progress("mapper (" + std::to_string(names.size()) + " chunks)", index, count, 0.0, false);
-  std::vector<std::string> errors(names.size());
-  std::atomic<size_t> next{0};
-  std::vector<std::thread> workers;
-  for (int w = 0; w < std::min<int>(options.chunks.parallel, static_cast<int>(names.size())); ++w) {
-    workers.emplace_back([&] {
-      for (size_t k = next++; k < names.size(); k = next++) {
-        std::vector<std::string> argv = mapper.argv;
-        const auto out = std::find(argv.begin(), argv.end(), std::string("--output_path"));
-        *(out + 1) = Path(workspace, "sparse_chunks/" + names[k]);
-        argv.insert(argv.end(), {"--image_list_path", Path(workspace, "chunks/" + names[k] + ".txt")});
-        const std::string log = Path(workspace, "logs/mapper_" + names[k] + ".log");
-        try {
-          WriteFileAtomic(log, "$ " + ArgvText(argv) + "\n");
-          const int code = RunLogged(argv, log);
-          if (code != 0 && code > 128) errors[k] = "colmap mapper (chunk " + names[k] + ") was killed; see " + log;
-        } catch (const std::exception& e) {
-          errors[k] = e.what();
-        }
-      }
-    });
-  }
-  for (std::thread& t : workers) t.join();
+  const std::string stage = "mapper (" + std::to_string(jobs.size()) + " chunks)";
+  if (progress) progress(stage, index, count, 0.0, false, 0.0);
+  const auto chunk_done = [&](size_t job, size_t finished) {
+    record->chunks.insert(jobs[job].chunk);  // a mapper that found no model is done too
+    record->Write();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (progress && finished < jobs.size()) progress(stage, index, count, seconds, false, double(finished) / jobs.size());
+  };
+  const std::vector<std::string> errors =
+      jobs.empty() ? std::vector<std::string>()
+      : run_mappers ? run_mappers(jobs)
+                    : RunChunkMappers(jobs, options.chunks.parallel, nullptr, "", chunk_done);
+  CANDI_CHECK_EQ(errors.size(), jobs.size());
+  for (size_t k = 0; k < jobs.size(); ++k)
+    if (errors[k].empty()) record->chunks.insert(jobs[k].chunk);
+  record->Write();
   for (const std::string& e : errors)
     if (!e.empty()) throw InputError(e);
   std::map<std::string, std::string> models;
-  for (const std::string& name : names) {
+  for (const auto& [name, images] : chunks) {
     ColmapModel model;
-    models[name] = LargestModel(Path(workspace, "sparse_chunks/" + name), &model);
+    models[name] = images.size() < 2 ? "" : LargestModel(Path(workspace, "sparse_chunks/" + name), &model);
   }
+  std::error_code ec;
+  fs::remove_all(Path(workspace, "sparse/merged"), ec);
   summary->chunked = TieChunks(models, chunks, options.chunks, Path(workspace, "sparse/merged"));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (progress) progress("mapper (" + std::to_string(names.size()) + " chunks)", index, count, seconds, true);
+  if (progress) progress(stage, index, count, seconds, true, 1.0);
   return seconds;
 }
 
 }  // namespace
 
+std::vector<std::string> RunChunkMappers(const std::vector<ChunkMapperJob>& jobs, int parallel,
+                                         const std::function<bool(size_t)>& mine, const std::string& by,
+                                         const std::function<void(size_t, size_t)>& finished) {
+  CANDI_CHECK(parallel >= 1);
+  std::vector<size_t> todo;
+  for (size_t k = 0; k < jobs.size(); ++k)
+    if (!mine || mine(k)) todo.push_back(k);
+  std::vector<std::string> errors(jobs.size());
+  std::atomic<size_t> next{0};
+  std::mutex finished_mutex;
+  size_t finished_count = 0;
+  std::vector<std::thread> workers;
+  for (int w = 0; w < std::min<int>(parallel, static_cast<int>(todo.size())); ++w) {
+    workers.emplace_back([&] {
+      for (size_t t = next++; t < todo.size(); t = next++) {
+        const ChunkMapperJob& job = jobs[todo[t]];
+        std::string& error = errors[todo[t]];
+        try {
+          WriteFileAtomic(job.log, (by.empty() ? "" : "# " + by + "\n") + "$ " + ArgvText(job.argv) + "\n");
+          const int code = RunLogged(job.argv, job.log);
+          // COLMAP's mapper exits 1 when it finds no model: that chunk is left untied, named.
+          if (code > 128) error = "colmap mapper (chunk " + job.chunk + ") was killed; see " + job.log;
+        } catch (const std::exception& e) {
+          error = e.what();
+        }
+        if (finished) {
+          const std::lock_guard<std::mutex> lock(finished_mutex);
+          finished(todo[t], ++finished_count);
+        }
+      }
+    });
+  }
+  for (std::thread& t : workers) t.join();
+  return errors;
+}
+
+namespace {
+// What a stage left when it was stopped, removed before it runs again from nothing (a resumed
+// extraction would give the remaining photos a camera of their own; the others would mix old and
+// new results).
+void ClearUnfinishedStage(const std::string& stage, const std::string& workspace) {
+  std::error_code ec;
+  if (stage == "feature_extractor") {
+    for (const char* f : {"database.db", "database.db-journal", "database.db-wal", "database.db-shm"})
+      fs::remove(Path(workspace, f), ec);
+  } else if (stage == "matches_importer" && fs::exists(Path(workspace, "database.db"))) {
+    ClearMatches(Path(workspace, "database.db"));
+  } else if (stage == "mapper") {
+    for (const auto& e : fs::directory_iterator(Path(workspace, "sparse"), ec)) {
+      // Chunked mapping keeps the chunks' own folders (sparse_chunks/) and rebuilds sparse/merged.
+      fs::remove_all(e.path(), ec);
+    }
+  } else if (stage == "image_undistorter") {
+    fs::remove_all(Path(workspace, "dense"), ec);
+  }
+}
+}  // namespace
+
 SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
-                  const std::string& workspace_in, const SfmProgress& progress) {
+                  const std::string& workspace_in, const SfmProgress& progress,
+                  const ChunkMapperRunner& run_mappers) {
   options.Check();
   SfmSummary summary;
   summary.images = ListImages(images_dir, &summary.ignored);
@@ -511,9 +759,41 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
     throw InputError(images_dir, "", "only one image (" + summary.images.front() +
                                          "): structure from motion needs at least 2 overlapping photos");
   }
+  for (const std::vector<std::string>& group : IdenticalFiles(images_dir, summary.images)) {
+    // The same photo twice gives a pair with no baseline: the first name is kept.
+    for (size_t k = 1; k < group.size(); ++k) summary.duplicates.emplace_back(group[k], group[0]);
+  }
+  if (!summary.duplicates.empty()) {
+    std::vector<std::string> dropped;
+    for (const auto& [copy, kept] : summary.duplicates) dropped.push_back(copy + " (= " + kept + ")");
+    LogWarning(std::to_string(dropped.size()) + " photo(s) are byte-for-byte copies of another and are left out: " +
+               ListText(dropped));
+    for (const auto& [copy, kept] : summary.duplicates)
+      summary.images.erase(std::find(summary.images.begin(), summary.images.end(), copy));
+    if (summary.images.size() < 2) {
+      throw InputError(images_dir, "", "only one distinct photo (" + summary.images.front() +
+                                           "; the others are copies of it): structure from motion needs at "
+                                           "least 2 overlapping photos");
+    }
+  }
   if (!options.priors.empty()) ReadPositionPriors(options.priors);  // its errors before any work
   const std::string workspace = fs::absolute(workspace_in).lexically_normal().string();
   PrepareWorkspace(options, workspace, images_dir);
+  StageRecord record;
+  const std::vector<std::string> inputs = StageInputs(options, summary.images);
+  if (options.resume && fs::exists(Path(workspace, kStageRecord))) {
+    record = StageRecord::Read(Path(workspace, kStageRecord));
+    const auto differ = std::mismatch(inputs.begin(), inputs.end(), record.inputs.begin(), record.inputs.end());
+    if (differ.first != inputs.end() || differ.second != record.inputs.end()) {
+      const std::string now = differ.first == inputs.end() ? "(none)" : *differ.first;
+      const std::string then = differ.second == record.inputs.end() ? "(none)" : *differ.second;
+      throw InputError(Path(workspace, kStageRecord), "", "the run to resume had other inputs (" + then +
+                                                              ", now " + now + "); --overwrite starts again");
+    }
+  }
+  record.path = Path(workspace, kStageRecord);
+  record.inputs = inputs;
+  record.Write();
   fs::create_directories(Path(workspace, "logs"));
   summary.colmap = DetectColmap(options.colmap, Path(workspace, "logs/colmap_help.log"));
   LinkImages(images_dir, summary.images, workspace);
@@ -528,15 +808,27 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
       std::replace(stage.argv.begin(), stage.argv.end(), std::string(kModelPlaceholder), summary.model_dir);
     }
     const bool chunked = stage.name == "mapper" && !options.chunks.targets.empty();
+    // A stage the resumed run finished is not run again (chunked mapping: the chunks it mapped);
+    // one it left unfinished starts again from nothing.
+    const auto finished = record.stages.find(stage.name);
+    const bool skip = finished != record.stages.end();
+    if (skip) {
+      if (progress) progress(stage.name + " (finished before)", i + 1, count, finished->second.first, true, 1.0);
+      summary.stage_seconds.emplace_back(stage.name, finished->second.first);
+    } else {
+      ClearUnfinishedStage(stage.name, workspace);
+    }
     try {
-      const double seconds = stage.argv.empty()
-                                 ? MatchFeatures(options, workspace, &summary, log_path, i + 1, count, progress)
-                             : chunked ? MapInChunks(options, stage, workspace, i + 1, count, progress, &summary)
-                                       : RunSfmStage(stage, log_path, i + 1, count, progress);
-      summary.stage_seconds.emplace_back(stage.name, seconds);
+      if (!skip) {
+        const double seconds =
+            stage.argv.empty() ? MatchFeatures(options, workspace, &summary, log_path, i + 1, count, progress)
+            : chunked ? MapInChunks(options, stage, workspace, i + 1, count, progress, run_mappers, &record, &summary)
+                      : RunSfmStage(stage, log_path, i + 1, count, progress, summary.images.size());
+        summary.stage_seconds.emplace_back(stage.name, seconds);
+      }
     } catch (const InputError& e) {
       // A mapper that ended by itself without a model found no overlap; a killed one is reported as such.
-      if (stage.name != "mapper" || std::string(e.what()).find("killed by signal") != std::string::npos ||
+      if (stage.name != "mapper" || chunked || std::string(e.what()).find("killed by signal") != std::string::npos ||
           !LargestModel(Path(workspace, "sparse"), &model).empty()) {
         throw;
       }
@@ -545,11 +837,21 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
                                          TailOfFile(log_path, kLogTailLines));
     }
     if (stage.name == "feature_extractor") {
-      CheckExtraction(log_path, images_dir, &summary);
+      CheckExtraction(log_path, images_dir, options.single_camera, &summary);
       // COLMAP numbers the images in the order its threads finish; the mapper follows the ids.
-      RenumberImagesByName(Path(workspace, "database.db"));
+      if (!skip) RenumberImagesByName(Path(workspace, "database.db"));
+    }
+    if (stage.name == kMatchStage && skip) {
+      std::istringstream found(finished->second.second);
+      found >> summary.pairs_tried >> summary.matcher;
     }
     if (stage.name == "matches_importer") summary.pairs_verified = CountVerifiedPairs(Path(workspace, "database.db"));
+    if (!skip && !chunked) {
+      record.stages[stage.name] = {summary.stage_seconds.back().second,
+                                   stage.name == kMatchStage ? std::to_string(summary.pairs_tried) + " " + summary.matcher
+                                                             : ""};
+      record.Write();
+    }
     if (chunked) {
       summary.model_dir = summary.chunked.merged_dir;
       model = ReadColmapModel(summary.model_dir);

@@ -10,6 +10,8 @@
 //   dense/           COLMAP's dense workspace: images/ (undistorted), sparse/ (PINHOLE model),
 //                    stereo/ (empty depth/normal folders), run scripts
 //   logs/<stage>.log stdout + stderr of each COLMAP stage
+//   sfm_stages.txt   what the outputs depend on and the stages (chunks) finished: --resume
+//                    continues from there, an unfinished stage started again from nothing
 //
 // COLMAP is started with an argv vector (posix_spawnp, never a shell), so paths with spaces or
 // shell characters are safe. Failure: InputError when COLMAP is missing, the input folder is
@@ -46,6 +48,7 @@ struct SfmOptions {
   bool single_camera = true;          // one camera (intrinsics) shared by all photos
   int threads = -1;                   // feature extraction and matching threads; -1 = all cores, else >= 1
   bool overwrite = false;             // replace a previous run's outputs in the workspace
+  bool resume = false;                // continue a stopped run: its finished stages and chunks are kept
   void Check() const;
 };
 
@@ -68,9 +71,11 @@ inline constexpr const char* kMatchStage = "match_features";
 std::vector<SfmStage> BuildSfmStages(const SfmOptions& options, const std::string& workspace, bool cuda);
 
 // Progress of a run: called when a stage starts (done = false, seconds = 0), every few seconds
-// while it runs (done = false) and when it ends (done = true). seconds = elapsed in the stage.
+// while it runs (done = false) and when it ends (done = true). seconds = elapsed in the stage;
+// fraction = how much of the stage is done, 0 to 1, from its own count (COLMAP's "[i/N]" and
+// "Registering image #k (n)" in its log, candi's pairs and chunks), -1 where it gives none.
 using SfmProgress = std::function<void(const std::string& stage, int index, int count,
-                                       double seconds, bool done)>;
+                                       double seconds, bool done, double fraction)>;
 
 struct SfmSummary {
   ColmapVersion colmap;
@@ -80,6 +85,9 @@ struct SfmSummary {
   std::vector<std::string> no_exif;       // photos whose focal length was guessed (no EXIF prior)
   double default_focal_px = 0;            // the guessed focal, pixels (0 when all had EXIF)
   std::vector<std::string> unreadable;    // files COLMAP could not decode (skipped)
+  std::vector<std::string> other_size;    // one camera shared: photos of another size than the first (skipped)
+  std::vector<std::pair<std::string, double>> focal_priors;  // photo, EXIF focal in pixels (sorted by name)
+  std::vector<std::pair<std::string, std::string>> duplicates;  // a photo left out, the same bytes as the kept one
   size_t points = 0;                      // sparse points
   double mean_reprojection_error = 0;     // pixels, COLMAP's definition
   double mean_track_length = 0;           // observations per point
@@ -92,9 +100,30 @@ struct SfmSummary {
   std::vector<std::pair<std::string, double>> stage_seconds;
 };
 
+// One chunk's COLMAP mapper (mapping in chunks): its argv and the log it writes.
+struct ChunkMapperJob {
+  std::string chunk;              // the session folder's name
+  std::vector<std::string> argv;  // argv[0] is COLMAP
+  std::string log;                // WORKSPACE/logs/mapper_<chunk>.log
+};
+// Runs the chunk mappers and returns one error text a job ("" when it ran; a mapper that found no
+// model ran: its chunk is reported untied). The default runs `parallel` at once in this process;
+// under mpirun the ranks share them (pipeline/sfm_ranks.h). Every job gives the same model bytes
+// whoever runs it.
+using ChunkMapperRunner = std::function<std::vector<std::string>(const std::vector<ChunkMapperJob>& jobs)>;
+// Runs the jobs for which `mine(index)` holds (all when nullptr), `parallel` at once; the errors
+// of the others stay "". `by` (e.g. "rank 1 of 2"), when given, heads each log; `finished` is
+// told which job ended and how many have, after each (one call at a time).
+std::vector<std::string> RunChunkMappers(const std::vector<ChunkMapperJob>& jobs, int parallel,
+                                         const std::function<bool(size_t)>& mine = nullptr,
+                                         const std::string& by = "",
+                                         const std::function<void(size_t job, size_t finished)>& finished = nullptr);
+
 // Runs feature extraction, matching, mapping and undistortion. See the file comment.
+// `run_mappers`: who runs the chunk mappers (nullptr: RunChunkMappers, options.chunks.parallel).
 SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
-                  const std::string& workspace, const SfmProgress& progress = nullptr);
+                  const std::string& workspace, const SfmProgress& progress = nullptr,
+                  const ChunkMapperRunner& run_mappers = nullptr);
 
 // Lower-level pieces, exposed for tests.
 // Image files (by extension, case-insensitive: jpg jpeg png tif tiff bmp pgm ppm pnm) directly in
@@ -106,14 +135,23 @@ std::vector<std::string> ListImages(const std::string& dir, std::vector<std::str
 // killed). Throws InputError naming argv[0] when it cannot be started (not found, not executable).
 int RunLogged(const std::vector<std::string>& argv, const std::string& log_path,
               const std::function<void(double seconds)>& heartbeat = nullptr);
-// Reads COLMAP's feature_extractor log into summary->no_exif / default_focal_px / unreadable:
-// COLMAP prints "Focal Length: <f>px (Prior)" for a focal from EXIF, no "(Prior)" for its default
-// guess, and "ERROR: Failed to read image" for a file it cannot decode. Both lists sorted by name.
+// Reads COLMAP's feature_extractor log into summary->no_exif / default_focal_px / focal_priors /
+// unreadable / other_size: COLMAP prints "Focal Length: <f>px (Prior)" for a focal from EXIF, no
+// "(Prior)" for its default guess, "ERROR: Failed to read image" for a file it cannot decode and
+// "ERROR: Single camera specified, but images have different dimensions" for a photo of another
+// size than the first when one camera is shared. The lists sorted by name.
 void ParseFeatureExtractionLog(const std::string& log_path, SfmSummary* summary);
-// Runs one stage with its output in log_path (replaced), reporting progress; returns its seconds.
-// A failure throws InputError naming the log, the exit code (or signal) and the log's last lines.
+// Groups of files in `dir` among `names` with the same bytes (each group sorted, groups in name
+// order); only files of equal size are read (SHA-256).
+std::vector<std::vector<std::string>> IdenticalFiles(const std::string& dir, const std::vector<std::string>& names);
+// Runs one stage with its output in log_path (replaced), reporting progress (the fraction from
+// the log's counters; `images`, when known, for the mapper's); returns its seconds. A failure
+// throws InputError naming the log, the exit code (or signal) and the log's last lines.
 double RunSfmStage(const SfmStage& stage, const std::string& log_path, int index, int count,
-                   const SfmProgress& progress);
+                   const SfmProgress& progress, size_t images = 0);
+// How far a COLMAP stage is, from its log's text: the last "[i/N]" (extraction, undistortion) or
+// "Registering image #k (n)" (the mapper: n of `images`), whichever comes later; -1 when none.
+double FractionInLog(const std::string& text, size_t images);
 // The last `lines` non-empty lines of a text file, glog stack-trace frames ("    @ 0x...") left
 // out ("" when unreadable).
 std::string TailOfFile(const std::string& path, int lines);

@@ -2,15 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 
 #include "core/check.h"
 #include "core/parallel.h"
 #include "core/rng.h"
+#include "io/csv_table.h"
 
 namespace candi::photogrammetry {
 
@@ -335,59 +334,13 @@ PairSelection SelectPairs(const std::vector<DatabaseImage>& images,
 }
 
 std::map<std::string, Eigen::Vector3d> ReadPositionPriors(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "cannot open the priors file");
-  std::string line;
-  int line_number = 0;
-  std::vector<std::string> header;
+  const io::CsvTable table = io::CsvTable::Read(path, {"name", "E", "N", "H"});
   std::map<std::string, Eigen::Vector3d> priors;
-  std::map<std::string, int> column;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty() || line[0] == '#') continue;
-    std::vector<std::string> fields;
-    std::stringstream s(line);
-    std::string f;
-    while (std::getline(s, f, ',')) fields.push_back(f);
-    if (column.empty()) {
-      for (size_t c = 0; c < fields.size(); ++c) {
-        std::string name;
-        for (char ch : fields[c]) if (!std::isspace(static_cast<unsigned char>(ch))) name += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-        column[name] = static_cast<int>(c);
-      }
-      for (const char* required : {"name", "e", "n", "h"}) {
-        if (!column.count(required)) {
-          throw InputError(path, "line " + std::to_string(line_number),
-                           std::string("the header lacks the column '") + required + "' (name,E,N,H[,sigma])");
-        }
-      }
-      continue;
-    }
-    const auto field = [&](const char* key, const char* shown) -> std::string {
-      const int c = column.at(key);
-      if (c >= static_cast<int>(fields.size())) {
-        throw InputError(path, "line " + std::to_string(line_number) + ", field '" + shown + "'", "missing");
-      }
-      return fields[c];
-    };
-    Eigen::Vector3d p;
-    const char* keys[3] = {"e", "n", "h"};
-    const char* shown[3] = {"E", "N", "H"};
-    for (int a = 0; a < 3; ++a) {
-      const std::string text = field(keys[a], shown[a]);
-      char* end = nullptr;
-      p[a] = std::strtod(text.c_str(), &end);
-      if (text.empty() || *end != '\0' || !std::isfinite(p[a])) {
-        throw InputError(path, "line " + std::to_string(line_number) + ", field '" + shown[a] + "'",
-                         "'" + text + "' is not a finite number");
-      }
-    }
-    const std::string name = field("name", "name");
-    if (name.empty()) throw InputError(path, "line " + std::to_string(line_number) + ", field 'name'", "empty");
-    if (!priors.emplace(name, p).second) {
-      throw InputError(path, "line " + std::to_string(line_number) + ", field 'name'", "'" + name + "' given twice");
-    }
+  for (const io::CsvTable::Row& row : table.rows()) {
+    const Eigen::Vector3d p(table.Number(row, "E"), table.Number(row, "N"), table.Number(row, "H"));
+    const std::string& name = table.Text(row, "name");
+    if (name.empty()) table.Fail(row, "name", "empty");
+    if (!priors.emplace(name, p).second) table.Fail(row, "name", "'" + name + "' given twice");
   }
   return priors;
 }

@@ -155,11 +155,13 @@ TEST(PairSelection, PriorsFileErrorsNameTheLineAndField) {
   const auto priors = ReadPositionPriors(dir.File("ok.csv"));
   ASSERT_EQ(priors.size(), 2u);
   EXPECT_DOUBLE_EQ(priors.at("a.jpg").x(), 410000.5);
-  EXPECT_NE(error("name,E,N\na,1,2\n").find("'h'"), std::string::npos);
-  EXPECT_NE(error("name,E,N,H\na,1,x,3\n").find("line 2, field 'N'"), std::string::npos);
+  EXPECT_NE(error("name,E,N\na,1,2\n").find("lacks the column 'H'"), std::string::npos);
+  EXPECT_NE(error("name,E,N,H\na,1,x,3\n").find("line 2: field 'N'"), std::string::npos);
   EXPECT_NE(error("name,E,N,H\na,1,nan,3\n").find("field 'N'"), std::string::npos);
-  EXPECT_NE(error("name,E,N,H\na,1,2,3\na,4,5,6\n").find("line 3, field 'name'"), std::string::npos);
-  EXPECT_NE(error("name,E,N,H\na,1,2\n").find("field 'H'"), std::string::npos);
+  EXPECT_NE(error("name,E,N,H\na,1,2,3\na,4,5,6\n").find("line 3: field 'name': 'a' given twice"),
+            std::string::npos);
+  EXPECT_NE(error("name,E,N,H\na,1,2\n").find("line 2: 3 fields; the header has 4"), std::string::npos);
+  EXPECT_NE(error("name,E,N,H\n,1,2,3\n").find("field 'name': empty"), std::string::npos);
   EXPECT_THROW(ReadPositionPriors(dir.File("absent.csv")), InputError);
 }
 

@@ -122,9 +122,13 @@ size_t ClearBorderDescriptors(std::vector<DatabaseImage>* images, double margin)
   size_t cleared = 0;
   for (DatabaseImage& image : *images) {
     CANDI_CHECK(image.xy.size() == static_cast<size_t>(2 * image.rows));
+    const bool scaled = image.scale.size() == static_cast<size_t>(image.rows);
     for (int64_t r = 0; r < image.rows; ++r) {
-      const double x = image.xy[2 * r], y = image.xy[2 * r + 1];
-      if (x >= margin && y >= margin && x <= image.width - margin && y <= image.height - margin) continue;
+      const double x = image.xy[2 * r], y = image.xy[2 * r + 1], sigma = scaled ? image.scale[r] : 0.0;
+      if (x >= margin && y >= margin && x <= image.width - margin - kBorderColumnsPerSigma * sigma &&
+          y <= image.height - margin - kBorderRowsPerSigma * sigma) {
+        continue;
+      }
       std::fill_n(image.descriptors.begin() + r * kDimensions, kDimensions, uint8_t{0});
       ++cleared;
     }

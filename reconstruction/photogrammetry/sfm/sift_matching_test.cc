@@ -229,6 +229,22 @@ TEST(ClearBorderDescriptors, ClearsTheOutermostPixelsOnly) {
   EXPECT_EQ(row_sum(4), 7 * 128) << "(98.9, 79.0) is inside the last pixel's centre line";
 }
 
+// With scales, the bottom rows and right columns VLFeat leaves without a descriptor at a
+// keypoint's octave: within 1 + 1.2 sigma of the bottom, 1 + 0.4 sigma of the right edge.
+TEST(ClearBorderDescriptors, ClearsWhatTheKeypointsOctaveLeavesUnwritten) {
+  DatabaseImage im;
+  im.width = 320, im.height = 240, im.rows = 6;
+  // (x, y, sigma): the campaign's three that differed between thread counts, and their neighbours.
+  im.xy = {179.29f, 238.45f, 226.02f, 236.05f, 226.02f, 236.05f, 100, 230, 317.5f, 100, 315, 100};
+  im.scale = {1.0f, 4.0f, 1.5f, 8.0f, 5.0f, 5.0f};
+  im.descriptors.assign(6 * 128, 7);
+  std::vector<DatabaseImage> images = {im};
+  EXPECT_EQ(ClearBorderDescriptors(&images), 4u);
+  std::vector<bool> cleared;
+  for (int r = 0; r < 6; ++r) cleared.push_back(images[0].descriptors[r * 128] == 0);
+  EXPECT_EQ(cleared, (std::vector<bool>{true, true, false, true, true, false}));
+}
+
 std::string ErrorOf(const std::string& path) {
   return testing::InputErrorMessage([&] { ReadColmapDescriptors(path); });
 }
