@@ -135,6 +135,24 @@ void AddReliefBench(Command& bench) {
            "          candi bench relief --parts left --parts centre --parts right --finetune-seconds 180");
 }
 
+void AddCampaignBench(Command& bench) {
+  bench::CampaignBenchOptions& a = bench.Keep<bench::CampaignBenchOptions>();
+  Command c = bench.Add("campaign", "candi sfm on generated photo campaigns of N photos: seconds a stage, pairs, "
+                                    "registered, camera centres against the truth, memory; the fitted law; retrieval "
+                                    "recall against exhaustive matching and COLMAP's vocabulary-tree matcher");
+  c.Option("--sizes", a.sizes, "Photo counts, comma separated");
+  c.Option("--size", a.size, "The photos' long side, pixels").Range(64, 8192);
+  c.Option("--chunks", a.chunks, "Sessions of each campaign").Range(1, 64);
+  c.Option("--threads", a.threads, "Extraction and matching threads (-1: all)");
+  c.Option("--recall-at", a.recall_at, "At this photo count, also match exhaustively for the recall row (0: none)");
+  c.FlagOff("--no-colmap-matcher", a.colmap_side, "Do not run COLMAP's vocab_tree_matcher at --recall-at");
+  c.Option("--work-dir", a.work_dir, "Folder for the campaigns and workspaces (deleted afterwards)");
+  c.Flag("--keep", a.keep, "Keep the campaigns and workspaces");
+  c.Option("--seed", a.seed, "Seed of the campaigns");
+  c.Run([&a] { return bench::RunCampaignBench(a); });
+  c.Footer("Example: candi bench campaign --sizes 50,100,200,400 --size 800 --recall-at 200");
+}
+
 }  // namespace
 
 void AddBench(Command& root) {
@@ -146,6 +164,7 @@ void AddBench(Command& root) {
   AddPublishBench(bench);
   AddCompareBench(bench);
   AddReliefBench(bench);
+  AddCampaignBench(bench);
 }
 
 }  // namespace candi::apps

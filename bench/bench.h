@@ -110,6 +110,25 @@ struct CompareBenchOptions {
 };
 int RunCompareBench(const CompareBenchOptions& options);
 
+// `candi bench campaign`: candi sfm on generated campaigns (scenes/campaign.h) of N photos: seconds
+// a stage, pairs matched and verified, photos registered, camera centres against the truth after
+// one similarity, peak memory (candi's, COLMAP's children's); the fitted law seconds = a N^b; at
+// `recall_at` photos the chosen pairs' recall of those exhaustive matching verifies, and with
+// `colmap_side` COLMAP's vocab_tree_builder + vocab_tree_matcher on the same features.
+struct CampaignBenchOptions {
+  std::string sizes = "50,100,200,400";  // photo counts, each [8, 5000]
+  int size = 800;                      // the photos' long side, pixels, [64, 8192]
+  int chunks = 3;                      // sessions, [1, 64]
+  int threads = -1;                    // extraction and matching threads, -1 = all
+  int recall_at = 200;                 // 0: no recall row
+  bool colmap_side = true;             // COLMAP's vocabulary-tree matcher beside, at recall_at
+  std::string work_dir = "candi-bench-campaign";
+  bool keep = false;                   // keep the campaigns and workspaces
+  uint64_t seed = 1;
+  void Check() const;
+};
+int RunCampaignBench(const CampaignBenchOptions& options);
+
 // `candi bench relief` (candi_bench_relief): network width x training time -> accuracy, training
 // and prediction seconds; or, on real photos, fine-tuning seconds -> accuracy.
 struct ReliefBenchOptions {

@@ -141,6 +141,8 @@ LayerResult Photogrammetry(const BuildOptions& options, const Scene& scene, cons
   std::string workspace = l.workspace;
   LayerResult r;
   r.method = "scanned: photogrammetry (dense multi-view stereo)";
+  bool chunked = false;  // mapped in chunks: the model is in the targets' frame already
+  LocalFrame chunked_frame;
   if (!l.images.empty()) {
     photogrammetry::SfmOptions sfm = l.sfm;
     sfm.colmap = ColmapExecutable(sfm.colmap);
@@ -154,6 +156,16 @@ LayerResult Photogrammetry(const BuildOptions& options, const Scene& scene, cons
                            {"colmap_version", report.colmap.version},
                            {"matcher", "candi exact brute force, " + report.matcher},
                            {"reproducibility", kSfmReproducibility}};
+    if (!sfm.chunks.targets.empty()) {
+      json chunks = json::array();
+      for (const photogrammetry::ChunkResult& k : report.chunked.chunks) {
+        chunks.push_back({{"name", k.name}, {"registered", k.registered}, {"photos", k.images}, {"tied", k.tied},
+                          {"reason", k.reason}, {"control_rmse_m", k.control.d3}, {"check_rmse_m", k.check.d3}});
+      }
+      r.parameters["sfm"]["chunks"] = chunks;
+      chunked_frame = report.chunked.frame;
+      chunked = true;
+    }
   }
   if (!workspace.empty()) {
     DenseOptions d;
@@ -169,7 +181,12 @@ LayerResult Photogrammetry(const BuildOptions& options, const Scene& scene, cons
   } else {
     r.cloud = io::ReadPointCloud(l.dense);
   }
-  if (!l.targets.empty()) {
+  if (chunked) {
+    // The merged model is the survey frame less its shift: the points need no second fit.
+    r.cloud.frame = chunked_frame;
+    r.parameters["georeferenced_by"] = l.targets;
+    r.parameters["picks"] = l.picks;
+  } else if (!l.targets.empty()) {
     GeorefOptions g;
     g.crs = scene.crs;
     g.targets_crs = l.targets_crs;

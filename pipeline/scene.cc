@@ -192,7 +192,7 @@ SceneLayer ParseLayer(const Node& n) {
     case LayerKind::kRelief: known.insert({"panels", "model", "placement", "width_m"}); break;
     case LayerKind::kPhotogrammetry:
       known.insert({"dense", "workspace", "images", "targets", "targets_crs", "picks", "max_image_size",
-                     "max_features", "resolution_scale", "iterations"});
+                     "max_features", "resolution_scale", "iterations", "chunks", "matching", "priors"});
       break;
   }
   n.ExpectObject(known);
@@ -289,8 +289,23 @@ SceneLayer ParseLayer(const Node& n) {
         if (n.Has("dense")) n["picks"].Fail("picks need the cameras: give \"images\" or \"workspace\", not \"dense\"");
         l.picks = n["picks"].Path(true);
       }
-      for (const char* key : {"max_image_size", "max_features"})
+      for (const char* key : {"max_image_size", "max_features", "chunks", "matching", "priors"})
         if (n.Has(key) && !n.Has("images")) n[key].Fail("only with \"images\" (it sets structure from motion)");
+      if (n.Has("chunks") && n["chunks"].Bool()) {
+        // A campaign: each session folder mapped apart and tied by the targets it sees.
+        if (!n.Has("picks")) n["chunks"].Fail("mapping in chunks ties them by \"targets\" and their \"picks\"");
+        if (n.Has("targets_crs")) n["targets_crs"].Fail("not with \"chunks\": the chunks are tied in the targets' own CRS");
+        l.sfm.chunks.targets = l.targets;
+        l.sfm.chunks.picks = l.picks;
+      }
+      if (n.Has("matching")) {
+        try {
+          l.sfm.pairs.strategy = photogrammetry::ParsePairStrategy(n["matching"].String());
+        } catch (const std::invalid_argument& e) {
+          n["matching"].Fail(e.what());
+        }
+      }
+      if (n.Has("priors")) l.sfm.priors = n["priors"].Path(true);
       if (n.Has("max_image_size"))
         l.sfm.max_image_size = static_cast<int>(n["max_image_size"].Integer(64, 100000));
       if (n.Has("max_features"))

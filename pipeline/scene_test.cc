@@ -495,6 +495,40 @@ TEST_F(SceneFile, PhotogrammetryErrors) {
   ExpectError(l, "/layers/0/resolution_scale", "out of range");
 }
 
+// A campaign as a photogrammetry layer: the sessions mapped apart and tied by the targets and
+// picks (SfmOptions::chunks), the matching and the priors of candi sfm.
+TEST_F(SceneFile, ACampaignLayerMapsInChunks) {
+  WriteBytes(dir_.File("priors.csv"), "name,E,N,H\n");
+  json j = Minimal();
+  j["layers"][0] = {{"name", "temple"}, {"kind", "photogrammetry"}, {"images", "photos"}, {"targets", "targets.csv"},
+                    {"picks", "picks.csv"}, {"chunks", true}, {"matching", "retrieval"}, {"priors", "priors.csv"}};
+  const Scene s = Load(j);
+  const photogrammetry::SfmOptions& sfm = s.layers[0].sfm;
+  EXPECT_EQ(sfm.chunks.targets, Path("targets.csv"));
+  EXPECT_EQ(sfm.chunks.picks, Path("picks.csv"));
+  EXPECT_EQ(sfm.pairs.strategy, photogrammetry::PairStrategy::kRetrieval);
+  EXPECT_EQ(sfm.priors, Path("priors.csv"));
+  j["layers"][0]["chunks"] = false;
+  EXPECT_TRUE(Load(j).layers[0].sfm.chunks.targets.empty()) << "one piece, georeferenced afterwards";
+  json l = j;
+  l["layers"][0]["chunks"] = true;
+  l["layers"][0].erase("picks");
+  ExpectError(l, "/layers/0/chunks", "ties them by \"targets\" and their \"picks\"");
+  l = j;
+  l["crs"] = "EPSG:32749";
+  l["layers"][0]["chunks"] = true;
+  l["layers"][0]["targets_crs"] = "EPSG:4979";
+  ExpectError(l, "/layers/0/targets_crs", "not with \"chunks\"");
+  l = j;
+  l["layers"][0]["matching"] = "vocab";
+  ExpectError(l, "/layers/0/matching", "auto, exhaustive, sequential, retrieval or positional");
+  l = j;
+  l["layers"][0].erase("images");
+  l["layers"][0].erase("picks");
+  l["layers"][0]["dense"] = "dense.ply";
+  ExpectError(l, "/layers/0/chunks", "only with \"images\"");
+}
+
 TEST_F(SceneFile, ViewErrors) {
   json j = Minimal();
   auto view = [&](const json& v) {

@@ -77,6 +77,29 @@ size_t CountVerifiedPairs(const std::string& path) {
       Count(db.get(), path, "SELECT COUNT(*) FROM two_view_geometries WHERE rows > 0 AND config >= 2"));
 }
 
+std::set<std::pair<std::string, std::string>> VerifiedPairNames(const std::string& path) {
+  Database db = Open(path, SQLITE_OPEN_READONLY);
+  std::map<int64_t, std::string> names;
+  {
+    Statement s = Prepare(db.get(), path, "SELECT image_id, name FROM images");
+    while (Step(db.get(), s.get(), path)) {
+      const unsigned char* name = sqlite3_column_text(s.get(), 1);
+      names[sqlite3_column_int64(s.get(), 0)] = name != nullptr ? reinterpret_cast<const char*>(name) : "";
+    }
+  }
+  // COLMAP's pair id: image_id1 * 2147483647 + image_id2, image_id1 < image_id2.
+  constexpr int64_t kMaxImages = 2147483647;
+  std::set<std::pair<std::string, std::string>> pairs;
+  Statement s = Prepare(db.get(), path, "SELECT pair_id FROM two_view_geometries WHERE rows > 0 AND config >= 2");
+  while (Step(db.get(), s.get(), path)) {
+    const int64_t id = sqlite3_column_int64(s.get(), 0);
+    std::string a = names[id / kMaxImages], b = names[id % kMaxImages];
+    if (b < a) std::swap(a, b);
+    pairs.insert({a, b});
+  }
+  return pairs;
+}
+
 void ClearMatches(const std::string& path) {
   Database db = Open(path, SQLITE_OPEN_READWRITE);
   Execute(db.get(), path, "BEGIN IMMEDIATE; DELETE FROM matches; DELETE FROM two_view_geometries; COMMIT;");

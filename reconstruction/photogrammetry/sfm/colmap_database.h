@@ -5,7 +5,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace candi::photogrammetry {
@@ -38,6 +40,10 @@ bool RenumberImagesByName(const std::string& database_path);
 // Removes every match and verified pair (before COLMAP's verification runs again), in one
 // transaction. InputError as RenumberImagesByName.
 void ClearMatches(const std::string& database_path);
+
+// The names of the image pairs COLMAP's geometric verification kept (as CountVerifiedPairs), each
+// pair in name order. InputError as ReadColmapDescriptors.
+std::set<std::pair<std::string, std::string>> VerifiedPairNames(const std::string& database_path);
 
 // The image pairs COLMAP's geometric verification kept (two_view_geometries with inliers and a
 // configuration of CALIBRATED or better). InputError as ReadColmapDescriptors.
