@@ -67,6 +67,7 @@ void WriteInputs(const TempDir& dir) {
   io::WritePng(dir.File("img.png"), rgb);
   fs::create_directories(dir.File("photos"));
   io::WritePng(dir.File("photos/a.png"), rgb);
+  rgb.at(0, 0, 0) = 7;  // not a copy of a.png (candi sfm leaves copies out)
   io::WritePng(dir.File("photos/b.png"), rgb);
   testing::WriteBytes(dir.File("card.csv"),
                       "patch,measured_r,measured_g,measured_b,reference_r,reference_g,reference_b\n"

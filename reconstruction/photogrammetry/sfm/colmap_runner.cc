@@ -842,8 +842,9 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
       if (!skip) RenumberImagesByName(Path(workspace, "database.db"));
     }
     if (stage.name == kMatchStage && skip) {
-      std::istringstream found(finished->second.second);
-      found >> summary.pairs_tried >> summary.matcher;
+      std::istringstream found(finished->second.second);  // "<pairs> <how they were chosen, spaces and all>"
+      found >> summary.pairs_tried;
+      std::getline(found >> std::ws, summary.matcher);
     }
     if (stage.name == "matches_importer") summary.pairs_verified = CountVerifiedPairs(Path(workspace, "database.db"));
     if (!skip && !chunked) {
