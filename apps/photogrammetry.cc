@@ -66,8 +66,18 @@ int RunSfm(const SfmArgs& a) {
                   k.tied ? "tied" : k.reason.c_str());
     }
     for (const pg::ChunkPairConsistency& p : s.chunked.pairs) {
-      std::printf("  %s and %s overlap in %zu sparse points: median %.1f mm, 90%% %.1f mm apart\n", p.a.c_str(),
-                  p.b.c_str(), p.overlap, 1e3 * p.median, 1e3 * p.p90);
+      std::printf("  %s and %s overlap in %zu sparse points: median %.1f mm, 90%% %.1f mm apart as tied\n",
+                  p.a.c_str(), p.b.c_str(), p.overlap, 1e3 * p.median, 1e3 * p.p90);
+    }
+    const pg::JointAdjustmentResult& j = s.chunked.joint;
+    if (j.ran) {
+      std::printf("  adjusted as one: %zu links joined %zu points across chunks, %zu observations added in other "
+                  "chunks' photos (%zu refused); reprojection RMS %.3f -> %.3f px; control RMSE %.1f mm, check "
+                  "%.1f mm (%d checks); %d iterations, %.1f s\n",
+                  j.links, j.joined_points, j.extended, j.links_rejected, j.rms_before_px, j.rms_after_px,
+                  1e3 * j.control.d3, 1e3 * j.check.d3, j.check.count, j.iterations, j.seconds);
+    } else if (!j.reason.empty()) {
+      std::printf("  not adjusted as one: %s\n", j.reason.c_str());
     }
   }
   std::printf("model: %s\ndense workspace: %s\n", s.model_dir.c_str(), s.dense_dir.c_str());
@@ -101,6 +111,9 @@ void AddSfm(Command& root) {
   c.Option("--targets", o.chunks.targets, "Map each session folder apart and tie the chunks on these surveyed "
            "targets (georef's CSV); needs --picks");
   c.Option("--picks", o.chunks.picks, "The targets' picks in the photos, CSV name,image,u,v");
+  c.FlagOff("--no-joint-adjustment", o.chunks.joint.enabled,
+         "Chunks: keep each chunk as its targets tied it (default: then adjust all chunks as one, their points "
+         "joined where matches link them, the control targets held to the survey)");
   c.Option("--chunk-parallel", o.chunks.parallel, "Chunk mappers run at once (under mpirun: on each rank, the "
            "chunks shared out over the ranks)").Range(1, 256);
   c.Option("--camera-model", o.camera_model, "COLMAP camera model (SIMPLE_RADIAL, OPENCV, ...)");

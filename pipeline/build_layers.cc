@@ -163,6 +163,10 @@ LayerResult Photogrammetry(const BuildOptions& options, const Scene& scene, cons
                           {"reason", k.reason}, {"control_rmse_m", k.control.d3}, {"check_rmse_m", k.check.d3}});
       }
       r.parameters["sfm"]["chunks"] = chunks;
+      const photogrammetry::JointAdjustmentResult& j = report.chunked.joint;
+      r.parameters["sfm"]["joint_adjustment"] = {{"ran", j.ran}, {"reason", j.reason}, {"links", j.links},
+                                                 {"observations_added", j.extended},
+                                                 {"control_rmse_m", j.control.d3}, {"check_rmse_m", j.check.d3}};
       chunked_frame = report.chunked.frame;
       chunked = true;
     }

@@ -69,6 +69,22 @@ json SfmReport(const pg::SfmSummary& s, const pg::SfmOptions& o) {
     for (const pg::ChunkPairConsistency& p : s.chunked.pairs) {
       pairs.push_back({{"a", p.a}, {"b", p.b}, {"overlap_points", p.overlap}, {"median_m", p.median}, {"p90_m", p.p90}});
     }
+    const pg::JointAdjustmentResult& ja = s.chunked.joint;
+    j["joint_adjustment"] = {{"ran", ja.ran},
+                             {"reason", ja.reason},
+                             {"links", ja.links},
+                             {"observations_added", ja.extended},
+                             {"links_refused", ja.links_rejected},
+                             {"joined_points", ja.joined_points},
+                             {"observations", ja.observations},
+                             {"reprojection_rms_before_px", ja.rms_before_px},
+                             {"reprojection_rms_after_px", ja.rms_after_px},
+                             {"control_rmse_m", ja.control.d3},
+                             {"check_rmse_m", ja.check.d3},
+                             {"check_targets", ja.check.count},
+                             {"iterations", ja.iterations},
+                             {"converged", ja.converged},
+                             {"seconds", ja.seconds}};
     j["chunks"] = chunks;
     j["chunk_consistency"] = pairs;
     j["shift"] = {s.chunked.frame.origin.x(), s.chunked.frame.origin.y(), s.chunked.frame.origin.z()};

@@ -102,6 +102,13 @@ void Finish(Rmse* r) {
 
 }  // namespace
 
+Rmse RmseOf(const std::vector<Eigen::Vector3d>& residuals) {
+  Rmse r;
+  for (const Eigen::Vector3d& d : residuals) Accumulate(d, &r);
+  Finish(&r);
+  return r;
+}
+
 std::string TargetRoleName(TargetRole role) {
   return role == TargetRole::kControl ? "control" : "check";
 }

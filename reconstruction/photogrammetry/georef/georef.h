@@ -91,6 +91,8 @@ struct Rmse {
   int count = 0;
   double x = 0, y = 0, z = 0, xy = 0, d3 = 0;  // metres
 };
+// The RMSE of residual vectors per axis, horizontally and in 3D (count 0 and zeros for none).
+Rmse RmseOf(const std::vector<Eigen::Vector3d>& residuals);
 
 struct GeorefResult {
   Sim3 survey_from_model;                    // survey = T * model (world coordinates)

@@ -20,6 +20,7 @@ constexpr int kMinNeighbours = 5;
 
 std::string FileName(const std::string& name) { return fs::path(name).filename().string(); }
 
+
 // The camera's focal lengths and principal point, and where its distortion parameters start.
 void PinholePart(const ColmapCamera& c, double* fx, double* fy, double* cx, double* cy, size_t* distortion) {
   const std::vector<double>& p = c.params;
@@ -151,18 +152,21 @@ double Quantile(std::vector<double> v, double q) {
 
 void ChunkedMappingOptions::Check() const {
   fit.Check();
+  joint.Check();
   CANDI_CHECK_OPTION_GE(parallel, 1);
   CANDI_CHECK_OPTION(overlap_radius > 0 && std::isfinite(overlap_radius), overlap_radius, "> 0");
   CANDI_CHECK_OPTION(targets.empty() || !picks.empty(), picks, "a picks file with the targets (the chunks' "
                      "models have their own coordinates: targets are found by their picks)");
 }
 
+std::string ChunkOfName(const std::string& name) {
+  const size_t slash = name.rfind('/');
+  return slash == std::string::npos ? "all" : name.substr(0, slash);
+}
+
 std::map<std::string, std::vector<std::string>> ChunksByFolder(const std::vector<std::string>& names) {
   std::map<std::string, std::vector<std::string>> chunks;
-  for (const std::string& name : names) {
-    const size_t slash = name.rfind('/');
-    chunks[slash == std::string::npos ? "all" : name.substr(0, slash)].push_back(name);
-  }
+  for (const std::string& name : names) chunks[ChunkOfName(name)].push_back(name);
   return chunks;
 }
 
@@ -176,9 +180,37 @@ Eigen::Vector2d UndistortPixel(const ColmapCamera& camera, const Eigen::Vector2d
   return {fx * x.x() + cx, fy * x.y() + cy};
 }
 
+int TriangulateTargetsInModel(const ColmapModel& model, const std::vector<ImagePick>& picks,
+                               const std::string& picks_path, std::vector<SurveyTarget>* targets) {
+  // The model's cameras as pinhole projections by file name, and the picks undistorted.
+  std::map<std::string, ProjectionMatrix> cameras;
+  std::map<std::string, const ColmapCamera*> camera_of;
+  for (const auto& [id, image] : model.images) {
+    const ColmapCamera& camera = model.cameras.at(image.camera_id);
+    double fx = 0, fy = 0, cx = 0, cy = 0;
+    size_t from = 0;
+    PinholePart(camera, &fx, &fy, &cx, &cy, &from);
+    Eigen::Matrix3d k;
+    k << fx, 0, cx, 0, fy, cy, 0, 0, 1;
+    ProjectionMatrix rt;
+    rt << image.cam_from_world_rotation.toRotationMatrix(), image.cam_from_world_translation;
+    cameras[FileName(image.name)] = k * rt;
+    camera_of[FileName(image.name)] = &camera;
+  }
+  std::vector<ImagePick> undistorted;
+  for (ImagePick p : picks) {
+    p.image = FileName(p.image);
+    const auto c = camera_of.find(p.image);
+    if (c != camera_of.end()) p.uv = UndistortPixel(*c->second, p.uv);
+    undistorted.push_back(p);
+  }
+  return TriangulateTargets(undistorted, picks_path, cameras, targets);
+}
+
 ChunkedMappingResult TieChunks(const std::map<std::string, std::string>& chunk_models,
                                const std::map<std::string, std::vector<std::string>>& chunk_images,
-                               const ChunkedMappingOptions& options, const std::string& merged_dir) {
+                               const std::vector<PairMatches>& matches, const ChunkedMappingOptions& options,
+                               const std::string& merged_dir) {
   options.Check();
   const std::vector<SurveyTarget> surveyed = ReadSurveyTargets(options.targets);
   const std::vector<ImagePick> all_picks = ReadImagePicks(options.picks);
@@ -204,30 +236,8 @@ ChunkedMappingResult TieChunks(const std::map<std::string, std::string>& chunk_m
     ColmapModel model = ReadColmapModel(dir);
     chunk.registered = model.images.size();
     chunk.points = model.points3d.size();
-    // The chunk's cameras as pinhole projections by file name, and its picks undistorted.
-    std::map<std::string, ProjectionMatrix> cameras;
-    std::map<std::string, const ColmapCamera*> camera_of;
-    for (const auto& [id, image] : model.images) {
-      const ColmapCamera& camera = model.cameras.at(image.camera_id);
-      double fx = 0, fy = 0, cx = 0, cy = 0;
-      size_t from = 0;
-      PinholePart(camera, &fx, &fy, &cx, &cy, &from);
-      Eigen::Matrix3d k;
-      k << fx, 0, cx, 0, fy, cy, 0, 0, 1;
-      ProjectionMatrix rt;
-      rt << image.cam_from_world_rotation.toRotationMatrix(), image.cam_from_world_translation;
-      cameras[FileName(image.name)] = k * rt;
-      camera_of[FileName(image.name)] = &camera;
-    }
-    std::vector<ImagePick> picks;
-    for (ImagePick p : all_picks) {
-      p.image = FileName(p.image);
-      const auto c = camera_of.find(p.image);
-      if (c != camera_of.end()) p.uv = UndistortPixel(*c->second, p.uv);
-      picks.push_back(p);
-    }
     std::vector<SurveyTarget> targets = surveyed;
-    TriangulateTargets(picks, options.picks, cameras, &targets);
+    TriangulateTargetsInModel(model, all_picks, options.picks, &targets);
     try {
       const GeorefResult g = Georeference(options.fit, targets, options.targets);
       if (have_frame && g.frame != result.frame) throw InputError(options.targets, "", "frames differ between chunks");
@@ -260,7 +270,16 @@ ChunkedMappingResult TieChunks(const std::map<std::string, std::string>& chunk_m
   if (tied.empty()) {
     throw InputError(options.targets, "", "no chunk could be tied to the targets:" + failures);
   }
-  const ColmapModel merged = Merge(tied);
+  ColmapModel merged = Merge(tied);
+  if (options.joint.enabled && tied.size() >= 2) {
+    std::vector<SurveyTarget> local = surveyed;
+    for (SurveyTarget& t : local) t.survey -= result.frame.origin;
+    try {
+      result.joint = AdjustJointly(&merged, matches, local, all_picks, options.joint);
+    } catch (const InputError& e) {
+      result.joint.reason = e.what();
+    }
+  }
   WriteColmapModelBinary(merged, merged_dir);
   result.merged_dir = merged_dir;
   result.merged_images = merged.images.size();

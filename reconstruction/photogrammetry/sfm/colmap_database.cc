@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -69,15 +70,10 @@ int64_t Count(sqlite3* db, const std::string& path, const char* sql) {
   return Step(db, s.get(), path) ? sqlite3_column_int64(s.get(), 0) : 0;
 }
 
-}  // namespace
-
-size_t CountVerifiedPairs(const std::string& path) {
-  Database db = Open(path, SQLITE_OPEN_READONLY);
-  return static_cast<size_t>(
-      Count(db.get(), path, "SELECT COUNT(*) FROM two_view_geometries WHERE rows > 0 AND config >= 2"));
-}
-
-std::set<std::pair<std::string, std::string>> VerifiedPairNames(const std::string& path) {
+// Calls `visit(name1, name2, inliers, rows)` for every pair COLMAP's verification kept, by pair id
+// (image_id1 < image_id2; inliers are rows x 2 keypoint indices, nullptr unless `with_data`).
+void ForEachVerifiedPair(const std::string& path, bool with_data,
+                         const std::function<void(const std::string&, const std::string&, const uint32_t*, int64_t)>& visit) {
   Database db = Open(path, SQLITE_OPEN_READONLY);
   std::map<int64_t, std::string> names;
   {
@@ -89,14 +85,58 @@ std::set<std::pair<std::string, std::string>> VerifiedPairNames(const std::strin
   }
   // COLMAP's pair id: image_id1 * 2147483647 + image_id2, image_id1 < image_id2.
   constexpr int64_t kMaxImages = 2147483647;
-  std::set<std::pair<std::string, std::string>> pairs;
-  Statement s = Prepare(db.get(), path, "SELECT pair_id FROM two_view_geometries WHERE rows > 0 AND config >= 2");
+  Statement s = Prepare(db.get(), path, with_data ? "SELECT pair_id, rows, cols, data FROM two_view_geometries "
+                                                    "WHERE rows > 0 AND config >= 2 ORDER BY pair_id"
+                                                  : "SELECT pair_id FROM two_view_geometries "
+                                                    "WHERE rows > 0 AND config >= 2 ORDER BY pair_id");
+  std::vector<uint32_t> data;
   while (Step(db.get(), s.get(), path)) {
     const int64_t id = sqlite3_column_int64(s.get(), 0);
-    std::string a = names[id / kMaxImages], b = names[id % kMaxImages];
-    if (b < a) std::swap(a, b);
-    pairs.insert({a, b});
+    const std::string& a = names[id / kMaxImages];
+    const std::string& b = names[id % kMaxImages];
+    if (!with_data) {
+      visit(a, b, nullptr, 0);
+      continue;
+    }
+    const int64_t rows = sqlite3_column_int64(s.get(), 1), cols = sqlite3_column_int64(s.get(), 2);
+    const void* blob = sqlite3_column_blob(s.get(), 3);
+    const int64_t bytes = sqlite3_column_bytes(s.get(), 3);
+    if (cols != 2 || bytes != rows * cols * 4 || blob == nullptr) {
+      throw InputError(path, "", "two_view_geometries pair " + std::to_string(id) + ": " + std::to_string(rows) + " x " +
+                                     std::to_string(cols) + " inliers in a blob of " + std::to_string(bytes) + " bytes");
+    }
+    data.resize(static_cast<size_t>(rows * 2));
+    std::memcpy(data.data(), blob, static_cast<size_t>(bytes));
+    visit(a, b, data.data(), rows);
   }
+}
+
+}  // namespace
+
+size_t CountVerifiedPairs(const std::string& path) {
+  Database db = Open(path, SQLITE_OPEN_READONLY);
+  return static_cast<size_t>(
+      Count(db.get(), path, "SELECT COUNT(*) FROM two_view_geometries WHERE rows > 0 AND config >= 2"));
+}
+
+std::set<std::pair<std::string, std::string>> VerifiedPairNames(const std::string& path) {
+  std::set<std::pair<std::string, std::string>> pairs;
+  ForEachVerifiedPair(path, false, [&](const std::string& a, const std::string& b, const uint32_t*, int64_t) {
+    pairs.insert(b < a ? std::make_pair(b, a) : std::make_pair(a, b));
+  });
+  return pairs;
+}
+
+std::vector<PairMatches> ReadVerifiedMatches(const std::string& path,
+                                             const std::function<bool(const std::string&, const std::string&)>& want) {
+  std::vector<PairMatches> pairs;
+  ForEachVerifiedPair(path, true, [&](const std::string& a, const std::string& b, const uint32_t* data, int64_t rows) {
+    if (want && !want(a, b)) return;
+    PairMatches m{a, b, {}};
+    m.matches.reserve(static_cast<size_t>(rows));
+    for (int64_t r = 0; r < rows; ++r) m.matches.push_back({data[2 * r], data[2 * r + 1]});
+    pairs.push_back(std::move(m));
+  });
   return pairs;
 }
 

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <set>
 #include <string>
 #include <utility>
@@ -44,6 +45,19 @@ void ClearMatches(const std::string& database_path);
 // The names of the image pairs COLMAP's geometric verification kept (as CountVerifiedPairs), each
 // pair in name order. InputError as ReadColmapDescriptors.
 std::set<std::pair<std::string, std::string>> VerifiedPairNames(const std::string& database_path);
+
+// A verified photo pair's inlier matches: keypoint index in image_a, keypoint index in image_b.
+struct PairMatches {
+  std::string image_a, image_b;
+  std::vector<std::pair<uint32_t, uint32_t>> matches;
+};
+
+// The inlier matches of the image pairs COLMAP's verification kept (as VerifiedPairNames), by pair
+// id, each as (the lower image id's name, the other's) with keypoint index pairs; `want(a, b)`, when
+// given, picks the pairs to read. InputError as ReadColmapDescriptors, or for a malformed blob.
+std::vector<PairMatches> ReadVerifiedMatches(
+    const std::string& database_path,
+    const std::function<bool(const std::string&, const std::string&)>& want = nullptr);
 
 // The image pairs COLMAP's geometric verification kept (two_view_geometries with inliers and a
 // configuration of CALIBRATED or better). InputError as ReadColmapDescriptors.

@@ -13,6 +13,7 @@
 
 #include "core/atomic_file.h"
 #include "core/check.h"
+#include "reconstruction/photogrammetry/sfm/camera_projection.h"
 
 namespace candi::photogrammetry {
 
@@ -634,26 +635,8 @@ Eigen::Vector2d ProjectToImage(const ColmapCamera& camera, const ColmapImage& im
                                 " (" + camera.model + ") has " + std::to_string(p.size()) +
                                 " parameters");
   }
-  const double u2 = u * u, v2 = v * v, uv = u * v, r2 = u2 + v2;
-  if (camera.model == "SIMPLE_PINHOLE") return {p[0] * u + p[1], p[0] * v + p[2]};
-  if (camera.model == "PINHOLE") return {p[0] * u + p[2], p[1] * v + p[3]};
-  if (camera.model == "SIMPLE_RADIAL" || camera.model == "RADIAL") {
-    const double radial = camera.model == "RADIAL" ? p[3] * r2 + p[4] * r2 * r2 : p[3] * r2;
-    return {p[0] * (u + u * radial) + p[1], p[0] * (v + v * radial) + p[2]};
-  }
-  if (camera.model == "OPENCV") {
-    const double radial = p[4] * r2 + p[5] * r2 * r2;
-    const double du = u * radial + 2 * p[6] * uv + p[7] * (r2 + 2 * u2);
-    const double dv = v * radial + 2 * p[7] * uv + p[6] * (r2 + 2 * v2);
-    return {p[0] * (u + du) + p[2], p[1] * (v + dv) + p[3]};
-  }
-  if (camera.model == "FULL_OPENCV") {
-    const double r4 = r2 * r2, r6 = r4 * r2;
-    const double radial = (1 + p[4] * r2 + p[5] * r4 + p[8] * r6) / (1 + p[9] * r2 + p[10] * r4 + p[11] * r6);
-    const double du = u * radial + 2 * p[6] * uv + p[7] * (r2 + 2 * u2) - u;
-    const double dv = v * radial + 2 * p[7] * uv + p[6] * (r2 + 2 * v2) - v;
-    return {p[0] * (u + du) + p[2], p[1] * (v + dv) + p[3]};
-  }
+  Eigen::Vector2d pixel;
+  if (PixelFromNormalized(ProjectionModelOf(camera.model), p.data(), u, v, &pixel.x(), &pixel.y())) return pixel;
   throw std::invalid_argument("ProjectToImage: camera model " + camera.model +
                               " is not supported (pinhole, radial and OpenCV models are)");
 }

@@ -30,6 +30,7 @@
 #include "reconstruction/photogrammetry/sfm/colmap_database.h"
 #include "reconstruction/photogrammetry/sfm/colmap_model.h"
 #include "reconstruction/photogrammetry/sfm/sift_matching.h"
+#include "reconstruction/photogrammetry/sfm/stage_record.h"
 
 extern char** environ;
 
@@ -361,78 +362,6 @@ std::vector<std::vector<std::string>> IdenticalFiles(const std::string& dir, con
   return groups;
 }
 
-namespace {
-
-struct StageRecord {
-  std::string path;
-  std::vector<std::string> inputs;
-  std::map<std::string, std::pair<double, std::string>> stages;  // name -> seconds, what it found
-  std::set<std::string> chunks;
-
-  void Write() const {
-    std::string text = "# candi sfm: the inputs and the finished stages of this workspace (for --resume)\n";
-    for (const std::string& line : inputs) text += "input " + line + "\n";
-    for (const auto& [name, done] : stages) {
-      char seconds[32];
-      std::snprintf(seconds, sizeof(seconds), "%.3f", done.first);
-      text += "stage " + name + " " + seconds + (done.second.empty() ? "" : " " + done.second) + "\n";
-    }
-    for (const std::string& chunk : chunks) text += "chunk " + chunk + "\n";
-    WriteFileAtomic(path, text);
-  }
-  static StageRecord Read(const std::string& path) {
-    StageRecord r;
-    r.path = path;
-    std::ifstream in(path);
-    if (!in) throw InputError(path, "", "cannot read");
-    std::string line;
-    int number = 0;
-    while (std::getline(in, line)) {
-      ++number;
-      if (line.empty() || line[0] == '#') continue;
-      const size_t space = line.find(' ');
-      const std::string key = line.substr(0, space), rest = space == std::string::npos ? "" : line.substr(space + 1);
-      if (key == "input") {
-        r.inputs.push_back(rest);
-      } else if (key == "chunk" && !rest.empty()) {
-        r.chunks.insert(rest);
-      } else if (key == "stage") {
-        std::istringstream fields(rest);
-        std::string name;
-        double seconds = 0;
-        if (!(fields >> name >> seconds)) throw InputError(path, "line " + std::to_string(number), "a stage line: stage <name> <seconds>");
-        std::string found;
-        std::getline(fields >> std::ws, found);
-        r.stages[name] = {seconds, found};
-      } else {
-        throw InputError(path, "line " + std::to_string(number), "'" + key + "': expected input, stage or chunk");
-      }
-    }
-    return r;
-  }
-};
-
-std::string FileHash(const std::string& path) { return path.empty() ? "-" : Sha256OfFile(path); }
-
-// What the outputs depend on: the photos and every option but the thread counts (which change
-// no byte) and the COLMAP executable; the priors, targets and picks by their contents.
-std::vector<std::string> StageInputs(const SfmOptions& o, const std::vector<std::string>& images) {
-  const PairSelectionOptions& p = o.pairs;
-  std::vector<std::string> lines = {
-      "max_image_size " + std::to_string(o.max_image_size), "max_features " + std::to_string(o.max_features),
-      "camera_model " + o.camera_model, "single_camera " + std::to_string(o.single_camera),
-      "matching " + PairStrategyName(p.strategy) + " " + std::to_string(p.exhaustive_max_images) + " " +
-          std::to_string(p.sequential_overlap) + " " + std::to_string(p.retrieval_neighbours) + " " +
-          std::to_string(p.position_neighbours) + " " + std::to_string(p.branching) + " " + std::to_string(p.depth) +
-          " " + std::to_string(p.train_descriptors) + " " + std::to_string(p.kmeans_iterations) + " " +
-          std::to_string(p.seed),
-      "priors " + FileHash(o.priors), "targets " + FileHash(o.chunks.targets), "picks " + FileHash(o.chunks.picks)};
-  for (const std::string& image : images) lines.push_back("photo " + image);
-  return lines;
-}
-
-}  // namespace
-
 double FractionInLog(const std::string& text, size_t images) {
   static const std::regex counted(R"(\[(\d+)/(\d+)\])"), registering(R"(Registering image #\d+ \((\d+)\))");
   double fraction = -1;
@@ -674,7 +603,15 @@ double MapInChunks(const SfmOptions& options, const SfmStage& mapper, const std:
   }
   std::error_code ec;
   fs::remove_all(Path(workspace, "sparse/merged"), ec);
-  summary->chunked = TieChunks(models, chunks, options.chunks, Path(workspace, "sparse/merged"));
+  // The verified matches between two chunks' photos join their points in the joint adjustment.
+  const std::vector<PairMatches> across =
+      options.chunks.joint.enabled
+          ? ReadVerifiedMatches(Path(workspace, "database.db"),
+                                [](const std::string& a, const std::string& b) { return ChunkOfName(a) != ChunkOfName(b); })
+          : std::vector<PairMatches>();
+  ChunkedMappingOptions tie = options.chunks;
+  tie.joint.one_camera = options.single_camera;  // every chunk holds a copy of the one camera
+  summary->chunked = TieChunks(models, chunks, across, tie, Path(workspace, "sparse/merged"));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (progress) progress(stage, index, count, seconds, true, 1.0);
   return seconds;
@@ -717,28 +654,6 @@ std::vector<std::string> RunChunkMappers(const std::vector<ChunkMapperJob>& jobs
   for (std::thread& t : workers) t.join();
   return errors;
 }
-
-namespace {
-// What a stage left when it was stopped, removed before it runs again from nothing (a resumed
-// extraction would give the remaining photos a camera of their own; the others would mix old and
-// new results).
-void ClearUnfinishedStage(const std::string& stage, const std::string& workspace) {
-  std::error_code ec;
-  if (stage == "feature_extractor") {
-    for (const char* f : {"database.db", "database.db-journal", "database.db-wal", "database.db-shm"})
-      fs::remove(Path(workspace, f), ec);
-  } else if (stage == "matches_importer" && fs::exists(Path(workspace, "database.db"))) {
-    ClearMatches(Path(workspace, "database.db"));
-  } else if (stage == "mapper") {
-    for (const auto& e : fs::directory_iterator(Path(workspace, "sparse"), ec)) {
-      // Chunked mapping keeps the chunks' own folders (sparse_chunks/) and rebuilds sparse/merged.
-      fs::remove_all(e.path(), ec);
-    }
-  } else if (stage == "image_undistorter") {
-    fs::remove_all(Path(workspace, "dense"), ec);
-  }
-}
-}  // namespace
 
 SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
                   const std::string& workspace_in, const SfmProgress& progress,

@@ -297,12 +297,22 @@ PairSelection SelectPairs(const std::vector<DatabaseImage>& images,
     text = "sequential " + std::to_string(options.sequential_overlap);
   }
   if (use_retrieval && options.retrieval_neighbours > 0) {
+    // Each photo's most similar ones beyond those the sequence pairs it with already: on a walk
+    // its sequence neighbours are also its most similar, and would use up the retrieval's share.
     const VocabularyTree tree = TrainVocabularyTree(images, options);
-    const auto neighbours = RetrieveNeighbours(tree, images, options.retrieval_neighbours);
+    const int sequence_pairs = use_sequence ? 2 * options.sequential_overlap : 0;
+    const auto neighbours = RetrieveNeighbours(tree, images, options.retrieval_neighbours + sequence_pairs);
     for (size_t i = 0; i < n; ++i) {
+      int added = 0;
       for (const auto& [j, score] : neighbours[i]) {
+        if (added == options.retrieval_neighbours) break;
+        if (use_sequence && pairs.count({std::min(i, j), std::max(i, j)}) && (j > i ? j - i : i - j) <=
+                                static_cast<size_t>(options.sequential_overlap)) {
+          continue;  // its sequence neighbour
+        }
         AddPair(i, j, &pairs);
         ++out.retrieval;
+        ++added;
       }
     }
     text += (text.empty() ? "" : " + ") + std::string("retrieval ") + std::to_string(options.retrieval_neighbours) +

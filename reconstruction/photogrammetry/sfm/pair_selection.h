@@ -2,7 +2,9 @@
 // vocabulary tree, trained on the campaign's own descriptors), by sequence (each photo with the
 // next ones of its folder, in name order), and by position (each photo with its nearest by the
 // GPS-like priors). The pairs grow as k N, not N^2; retrieval closes the loops that sequences
-// leave open (a walk that returns to its start, the borders of separately taken sessions).
+// leave open (a walk that returns to its start, the borders of separately taken sessions, the row
+// above on the same wall). With the sequence, a photo's retrieval neighbours are counted beyond its
+// sequence neighbours, which on a walk are also its most similar.
 //
 // The vocabulary tree: hierarchical k-means (k-means++ seeding from a seeded generator, Lloyd
 // iterations) of a sample of the descriptors, `branching` children a node, `depth` levels; each
@@ -34,7 +36,8 @@ struct PairSelectionOptions {
   PairStrategy strategy = PairStrategy::kAuto;
   int exhaustive_max_images = 50;  // auto: every pair up to this many images, >= 2
   int sequential_overlap = 10;     // sequence: each photo with the next this many of its folder, >= 0
-  int retrieval_neighbours = 20;   // retrieval: each photo with its this many most similar, >= 0
+  int retrieval_neighbours = 20;   // retrieval: each photo with its this many most similar (beyond its
+                                   // sequence neighbours, when the sequence is used too), >= 0
   int position_neighbours = 10;    // positions: each photo with its this many nearest, >= 0
   int branching = 10;              // vocabulary tree children a node, [2, 64]
   int depth = 4;                   // vocabulary tree levels, [1, 8]
