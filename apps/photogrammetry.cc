@@ -107,6 +107,10 @@ void AddSfm(Command& root) {
            "(a vocabulary tree trained on the photos' own features)").Range(0, 100000);
   c.Option("--position-neighbours", o.pairs.position_neighbours, "Positions: each photo with its N nearest by the "
            "priors").Range(0, 100000);
+  c.Option("--transitive-rounds", o.pairs.transitive_rounds, "After verification (not after exhaustive matching): "
+           "rounds matching the photos that share verified neighbours, never tried; 0: none").Range(0, 100);
+  c.Option("--transitive-neighbours", o.pairs.transitive_neighbours, "Transitive: a photo's new pairs a round at most, "
+           "most shared neighbours first").Range(1, 100000);
   c.Option("--priors", o.priors, "Camera position priors, CSV name,E,N,H[,sigma] (candi campaign's priors.csv)");
   c.Option("--targets", o.chunks.targets, "Map each session folder apart and tie the chunks on these surveyed "
            "targets (georef's CSV); needs --picks");

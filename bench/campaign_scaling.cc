@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <set>
 #include <string>
@@ -23,6 +22,7 @@
 #include "reconstruction/photogrammetry/sfm/colmap_database.h"
 #include "reconstruction/photogrammetry/sfm/colmap_model.h"
 #include "reconstruction/photogrammetry/sfm/colmap_runner.h"
+#include "reconstruction/photogrammetry/sfm/sift_matching.h"
 
 namespace candi::bench {
 
@@ -71,31 +71,10 @@ double CentreRms(const pg::ColmapModel& model, const pg::Campaign& campaign) {
   return std::sqrt(sum / source.size());
 }
 
-// The pairs of a match list (candi's matches.txt: a "name name" line, index lines, a blank line).
-std::set<std::pair<std::string, std::string>> MatchedPairs(const std::string& path) {
-  std::set<std::pair<std::string, std::string>> pairs;
-  std::ifstream in(path);
-  std::string line;
-  bool header = true;
-  while (std::getline(in, line)) {
-    if (line.empty()) {
-      header = true;
-      continue;
-    }
-    if (!header) continue;
-    header = false;
-    const size_t space = line.find(' ');
-    std::string a = line.substr(0, space), b = line.substr(space + 1);
-    if (b < a) std::swap(a, b);
-    pairs.insert({a, b});
-  }
-  return pairs;
-}
-
 struct Row {
   int photos = 0;
   size_t registered = 0, pairs = 0, verified = 0;
-  double extract = 0, match = 0, verify = 0, map = 0, undistort = 0, total = 0, rms = 0;
+  double extract = 0, match = 0, verify = 0, transitive = 0, map = 0, undistort = 0, total = 0, rms = 0;
   double candi_mb = 0, colmap_mb = 0;
 };
 
@@ -125,8 +104,8 @@ int RunCampaignBench(const CampaignBenchOptions& o) {
   std::vector<Row> rows;
   std::printf("candi bench campaign: candi sfm (auto matching, one piece) on campaigns of %d px photos in %d "
               "sessions\n", o.size, o.chunks);
-  std::printf("%6s %10s %7s %8s %8s %8s %8s %8s %8s %8s %8s %9s %9s %9s\n", "photos", "registered", "pairs",
-              "verified", "extract", "match", "verify", "map", "undist", "total s", "s/photo", "centre mm",
+  std::printf("%6s %10s %7s %8s %8s %8s %8s %8s %8s %8s %8s %8s %9s %9s %9s\n", "photos", "registered", "pairs",
+              "verified", "extract", "match", "verify", "transit", "map", "undist", "total s", "s/photo", "centre mm",
               "candi MB", "COLMAP MB");
   for (int n : sizes) {
     pg::CampaignOptions c;
@@ -146,31 +125,37 @@ int RunCampaignBench(const CampaignBenchOptions& o) {
     r.extract = StageSeconds(s, "feature_extractor");
     r.match = StageSeconds(s, pg::kMatchStage);
     r.verify = StageSeconds(s, "matches_importer");
+    r.transitive = StageSeconds(s, pg::kTransitiveStage);
     r.map = StageSeconds(s, "mapper");
     r.undistort = StageSeconds(s, "image_undistorter");
-    r.total = r.extract + r.match + r.verify + r.map + r.undistort;
+    r.total = r.extract + r.match + r.verify + r.transitive + r.map + r.undistort;
     r.rms = CentreRms(pg::ReadColmapModel(s.model_dir), campaign);
     r.candi_mb = PeakMb(RUSAGE_SELF);
     r.colmap_mb = PeakMb(RUSAGE_CHILDREN);
     rows.push_back(r);
-    std::printf("%6d %9.1f%% %7zu %8zu %8.1f %8.1f %8.1f %8.1f %8.1f %8.1f %8.3f %9.1f %9.0f %9.0f\n", n,
-                100.0 * r.registered / n, r.pairs, r.verified, r.extract, r.match, r.verify, r.map, r.undistort,
-                r.total, r.total / n, 1e3 * r.rms, r.candi_mb, r.colmap_mb);
+    std::printf("%6d %9.1f%% %7zu %8zu %8.1f %8.1f %8.1f %8.1f %8.1f %8.1f %8.1f %8.3f %9.1f %9.0f %9.0f\n", n,
+                100.0 * r.registered / n, r.pairs, r.verified, r.extract, r.match, r.verify, r.transitive, r.map,
+                r.undistort, r.total, r.total / n, 1e3 * r.rms, r.candi_mb, r.colmap_mb);
     std::fflush(stdout);
 
     if (n == o.recall_at) {
       // The pairs exhaustive matching verifies, and how many of them the chosen pairs hold.
       const std::string work = o.work_dir + "/sfm_" + std::to_string(n) + "_exhaustive";
       const pg::SfmSummary e = RunOne(o, site, work, pg::PairStrategy::kExhaustive);
-      const auto chosen = MatchedPairs(o.work_dir + "/sfm_" + std::to_string(n) + "/matches.txt");
+      // The pairs with matches: before transitive matching (matches.txt), and in all (the database).
+      const std::string chosen_dir = o.work_dir + "/sfm_" + std::to_string(n);
+      const auto first = pg::MatchListPairs(chosen_dir + "/matches.txt");
+      const auto chosen = pg::MatchedPairNames(chosen_dir + "/database.db");
       const auto verified = pg::VerifiedPairNames(work + "/database.db");
-      size_t found = 0;
-      for (const auto& p : verified) found += chosen.count(p);
+      size_t found = 0, found_first = 0;
+      for (const auto& p : verified) found += chosen.count(p), found_first += first.count(p);
+      const auto percent = [&](size_t k) { return verified.empty() ? 0.0 : 100.0 * k / verified.size(); };
       std::printf("  recall at %d photos: the %zu chosen pairs with matches hold %zu of the %zu that exhaustive matching "
-                  "(%zu pairs) verifies: %.1f%%; exhaustive matching + verification %.1f s, chosen %.1f s\n",
-                  n, chosen.size(), found, verified.size(), e.pairs_tried,
-                  verified.empty() ? 0.0 : 100.0 * found / verified.size(),
-                  StageSeconds(e, pg::kMatchStage) + StageSeconds(e, "matches_importer"), r.match + r.verify);
+                  "(%zu pairs) verifies: %.1f%% (%.1f%% before transitive matching, %zu pairs); exhaustive matching + "
+                  "verification %.1f s, chosen %.1f s\n",
+                  n, chosen.size(), found, verified.size(), e.pairs_tried, percent(found), percent(found_first),
+                  first.size(), StageSeconds(e, pg::kMatchStage) + StageSeconds(e, "matches_importer"),
+                  r.match + r.verify + r.transitive);
       if (o.colmap_side) {
         // COLMAP's own retrieval on the same features: a tree trained on them, 20 neighbours.
         const std::string db = work + "/colmap_vocab.db";

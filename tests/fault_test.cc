@@ -268,12 +268,13 @@ pid_t FindChild(pid_t parent, const std::string& word) {
   return 0;
 }
 
-// A COLMAP that stops itself (SIGSTOP) when it is started for `stage` and is the real one for
-// the other stages: DIR/colmap-held, returned.
-std::string HeldColmap(const TempDir& dir, const std::string& stage) {
+// A COLMAP that stops itself (SIGSTOP) when it is started for `stage` (with an argument holding
+// `argument`, when given) and is the real one otherwise: DIR/colmap-held, returned.
+std::string HeldColmap(const TempDir& dir, const std::string& stage, const std::string& argument = "") {
   const std::string colmap = candi::testing::RunCommand("command -v colmap").output;
-  WriteBytes(dir.File("colmap-held"), "#!/bin/sh\nif [ \"$1\" = " + stage + " ]; then kill -STOP $$; fi\nexec " +
-                                          colmap.substr(0, colmap.find('\n')) + " \"$@\"\n");
+  WriteBytes(dir.File("colmap-held"), "#!/bin/sh\nif [ \"$1\" = " + stage + " ]; then case \"$*\" in *" + argument +
+                                          "*) kill -STOP $$;; esac; fi\nexec " + colmap.substr(0, colmap.find('\n')) +
+                                          " \"$@\"\n");
   fs::permissions(dir.File("colmap-held"), fs::perms::owner_all);
   return dir.File("colmap-held");
 }
@@ -315,14 +316,9 @@ TEST(Fault, ColmapKilledMidStageIsReported) {
   EXPECT_TRUE(Temporaries(dir.path()).empty());
 }
 
-// `candi sfm` interrupted (SIGINT) in the mapper, then `--resume`d: the finished stages are not
-// run again, the mapper starts again from nothing, and the model is the same bytes as one run
-// straight through. The mapper is held at its start (as above), so where the run stops is no
-// matter of timing. Eight synthetic photos of 400 x 300 on an 80-degree arc (as
-// SfmDense.SyntheticPhotosReconstructAccuratelyAndCompletely), about half a minute in all.
-TEST(Fault, AnInterruptedSfmResumesFromItsLastFinishedStage) {
-  if (!OnPath("colmap")) GTEST_SKIP() << "COLMAP is not installed (scripts/deps.sh installs it)";
-  TempDir dir;
+// Eight synthetic photos of 400 x 300 on an 80-degree arc (as
+// SfmDense.SyntheticPhotosReconstructAccuratelyAndCompletely) in `folder`.
+void WriteEightSyntheticPhotos(const std::string& folder) {
   photogrammetry::SyntheticViewsOptions scene;
   scene.views = 8;
   scene.width = 400;
@@ -330,7 +326,17 @@ TEST(Fault, AnInterruptedSfmResumesFromItsLastFinishedStage) {
   scene.arc_degrees = 80;
   scene.supersample = 2;
   scene.texture_cell = 0.03;
-  photogrammetry::WriteSyntheticImages(photogrammetry::RenderSyntheticViews(scene), dir.File("site"));
+  photogrammetry::WriteSyntheticImages(photogrammetry::RenderSyntheticViews(scene), folder);
+}
+
+// `candi sfm` interrupted (SIGINT) in the mapper, then `--resume`d: the finished stages are not
+// run again, the mapper starts again from nothing, and the model is the same bytes as one run
+// straight through. The mapper is held at its start (as above), so where the run stops is no
+// matter of timing. Eight synthetic photos, about half a minute in all.
+TEST(Fault, AnInterruptedSfmResumesFromItsLastFinishedStage) {
+  if (!OnPath("colmap")) GTEST_SKIP() << "COLMAP is not installed (scripts/deps.sh installs it)";
+  TempDir dir;
+  WriteEightSyntheticPhotos(dir.File("site"));
   const auto [ref, ref_err] = RunToEnd({"sfm", dir.File("site"), "-o", dir.File("ref"), "--threads", "1"}, LogDir(dir));
   ASSERT_EQ(ref, 0) << ref_err;
 
@@ -347,7 +353,8 @@ TEST(Fault, AnInterruptedSfmResumesFromItsLastFinishedStage) {
   ASSERT_TRUE(WIFSIGNALED(status)) << p.Stderr();
   EXPECT_EQ(WTERMSIG(status), SIGINT);
   const std::string record = ReadBytes(dir.File("ws/sfm_stages.txt"));
-  for (const char* stage : {"stage feature_extractor ", "stage match_features ", "stage matches_importer "})
+  for (const char* stage : {"stage feature_extractor ", "stage match_features ", "stage matches_importer ",
+                            "stage transitive_matching "})
     EXPECT_TRUE(Contains(record, stage)) << stage << " is recorded as finished: " << record;
   EXPECT_FALSE(Contains(record, "stage mapper")) << record;
 
@@ -373,6 +380,55 @@ TEST(Fault, AnInterruptedSfmResumesFromItsLastFinishedStage) {
     EXPECT_TRUE(a == ReadBytes(dir.File(std::string("ws/") + f))) << f << " differs from the run straight through";
   }
   EXPECT_TRUE(Contains(ReadBytes(dir.File("ws/sfm_stages.txt")), "stage image_undistorter "));
+}
+
+// Interrupted in transitive matching's second round (COLMAP verifying it, held at its start):
+// the resumed run takes the first round's pairs out of the database again and gives the same
+// matches and model as a run straight through. Eight photos matched one along the sequence, so
+// that the rounds have pairs to add (exhaustive matching leaves none).
+TEST(Fault, AnSfmInterruptedInTransitiveMatchingResumesToTheSameBytes) {
+  if (!OnPath("colmap")) GTEST_SKIP() << "COLMAP is not installed (scripts/deps.sh installs it)";
+  TempDir dir;
+  WriteEightSyntheticPhotos(dir.File("site"));
+  const std::vector<std::string> sequence = {"--matching", "sequential", "--sequential-overlap", "1"};
+  std::vector<std::string> ref_args = {"sfm", dir.File("site"), "-o", dir.File("ref"), "--threads", "1"};
+  ref_args.insert(ref_args.end(), sequence.begin(), sequence.end());
+  const auto [ref, ref_err] = RunToEnd(ref_args, LogDir(dir));
+  ASSERT_EQ(ref, 0) << ref_err;
+  const std::string log = ReadBytes(dir.File("ref/logs/transitive_matching.log"));
+  ASSERT_TRUE(Contains(log, "round 2: ")) << "the second round had pairs to add: " << log;
+
+  std::vector<std::string> args = {"sfm", dir.File("site"), "-o", dir.File("ws"), "--colmap",
+                                   HeldColmap(dir, "matches_importer", "round_2")};
+  args.insert(args.end(), sequence.begin(), sequence.end());
+  Process p(args, LogDir(dir));
+  pid_t held = 0;
+  while (held == 0 && p.Running()) {
+    held = FindChild(p.pid(), "transitive_matches/round_2");
+    if (held == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_NE(held, 0) << "the second round's verification never started: " << p.Stderr();
+  kill(p.pid(), SIGINT);
+  const int status = p.Wait();
+  kill(held, SIGKILL);
+  ASSERT_TRUE(WIFSIGNALED(status)) << p.Stderr();
+  const std::string record = ReadBytes(dir.File("ws/sfm_stages.txt"));
+  EXPECT_TRUE(Contains(record, "stage matches_importer ")) << record;
+  EXPECT_FALSE(Contains(record, "stage transitive_matching")) << record;
+  EXPECT_TRUE(fs::exists(dir.File("ws/transitive_matches/round_1.txt")));
+
+  args = {"sfm", dir.File("site"), "-o", dir.File("ws"), "--resume", "--threads", "2"};
+  args.insert(args.end(), sequence.begin(), sequence.end());
+  const auto [resumed, resumed_err] = RunToEnd(args, LogDir(dir));
+  ASSERT_EQ(resumed, 0) << resumed_err;
+  EXPECT_TRUE(Contains(resumed_err, "matches_importer (finished before)")) << resumed_err;
+  EXPECT_EQ(ReadBytes(dir.File("ws/logs/transitive_matching.log")), log);
+  for (const char* f : {"matches.txt", "transitive_matches/round_1.txt", "transitive_matches/round_2.txt",
+                        "sparse/0/cameras.bin", "sparse/0/images.bin", "sparse/0/points3D.bin"}) {
+    const std::string a = ReadBytes(dir.File(std::string("ref/") + f));
+    EXPECT_FALSE(a.empty()) << f;
+    EXPECT_TRUE(a == ReadBytes(dir.File(std::string("ws/") + f))) << f << " differs from the run straight through";
+  }
 }
 
 TEST(Fault, AnInterruptedBuildLeavesFinishedFilesAndResumes) {

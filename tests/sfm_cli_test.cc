@@ -125,7 +125,8 @@ TEST(SfmCli, AChunkedCampaignIsTheSameBytesOnOneAndTwoThreadsAndRanks) {
   }
   for (const char* f : {"sparse/merged/cameras.bin", "sparse/merged/images.bin", "sparse/merged/points3D.bin",
                         "sparse_chunks/s1/0/images.bin", "sparse_chunks/s2/0/points3D.bin",
-                        "sparse_chunks/s3/0/images.bin", "matches.txt"}) {
+                        "sparse_chunks/s3/0/images.bin", "matches.txt",
+                        "transitive_matches/round_1.txt"}) {
     const std::string a = ReadBytes(dir.File(std::string("one/") + f));
     EXPECT_FALSE(a.empty()) << f;
     EXPECT_TRUE(a == ReadBytes(dir.File(std::string("two/") + f))) << f << " differs between the runs";

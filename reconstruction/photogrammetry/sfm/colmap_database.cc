@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <functional>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 
@@ -70,21 +70,25 @@ int64_t Count(sqlite3* db, const std::string& path, const char* sql) {
   return Step(db, s.get(), path) ? sqlite3_column_int64(s.get(), 0) : 0;
 }
 
+// COLMAP's pair id: image_id1 * 2147483647 + image_id2, image_id1 < image_id2.
+constexpr int64_t kMaxImages = 2147483647;
+
+std::map<int64_t, std::string> ImageNames(sqlite3* db, const std::string& path) {
+  std::map<int64_t, std::string> names;
+  Statement s = Prepare(db, path, "SELECT image_id, name FROM images");
+  while (Step(db, s.get(), path)) {
+    const unsigned char* name = sqlite3_column_text(s.get(), 1);
+    names[sqlite3_column_int64(s.get(), 0)] = name != nullptr ? reinterpret_cast<const char*>(name) : "";
+  }
+  return names;
+}
+
 // Calls `visit(name1, name2, inliers, rows)` for every pair COLMAP's verification kept, by pair id
 // (image_id1 < image_id2; inliers are rows x 2 keypoint indices, nullptr unless `with_data`).
 void ForEachVerifiedPair(const std::string& path, bool with_data,
                          const std::function<void(const std::string&, const std::string&, const uint32_t*, int64_t)>& visit) {
   Database db = Open(path, SQLITE_OPEN_READONLY);
-  std::map<int64_t, std::string> names;
-  {
-    Statement s = Prepare(db.get(), path, "SELECT image_id, name FROM images");
-    while (Step(db.get(), s.get(), path)) {
-      const unsigned char* name = sqlite3_column_text(s.get(), 1);
-      names[sqlite3_column_int64(s.get(), 0)] = name != nullptr ? reinterpret_cast<const char*>(name) : "";
-    }
-  }
-  // COLMAP's pair id: image_id1 * 2147483647 + image_id2, image_id1 < image_id2.
-  constexpr int64_t kMaxImages = 2147483647;
+  std::map<int64_t, std::string> names = ImageNames(db.get(), path);
   Statement s = Prepare(db.get(), path, with_data ? "SELECT pair_id, rows, cols, data FROM two_view_geometries "
                                                     "WHERE rows > 0 AND config >= 2 ORDER BY pair_id"
                                                   : "SELECT pair_id FROM two_view_geometries "
@@ -125,6 +129,45 @@ std::set<std::pair<std::string, std::string>> VerifiedPairNames(const std::strin
     pairs.insert(b < a ? std::make_pair(b, a) : std::make_pair(a, b));
   });
   return pairs;
+}
+
+std::set<std::pair<std::string, std::string>> MatchedPairNames(const std::string& path) {
+  Database db = Open(path, SQLITE_OPEN_READONLY);
+  std::map<int64_t, std::string> names = ImageNames(db.get(), path);
+  std::set<std::pair<std::string, std::string>> pairs;
+  Statement s = Prepare(db.get(), path, "SELECT pair_id FROM matches");
+  while (Step(db.get(), s.get(), path)) {
+    const int64_t id = sqlite3_column_int64(s.get(), 0);
+    const std::string& a = names[id / kMaxImages];
+    const std::string& b = names[id % kMaxImages];
+    pairs.insert(b < a ? std::make_pair(b, a) : std::make_pair(a, b));
+  }
+  return pairs;
+}
+
+void RemoveMatches(const std::string& path, const std::set<std::pair<std::string, std::string>>& pairs) {
+  Database db = Open(path, SQLITE_OPEN_READWRITE);
+  std::map<std::string, int64_t> ids;
+  for (const auto& [id, name] : ImageNames(db.get(), path)) ids[name] = id;
+  Execute(db.get(), path, "BEGIN IMMEDIATE");
+  try {
+    Statement matches = Prepare(db.get(), path, "DELETE FROM matches WHERE pair_id = ?");
+    Statement geometries = Prepare(db.get(), path, "DELETE FROM two_view_geometries WHERE pair_id = ?");
+    for (const auto& [a, b] : pairs) {
+      const auto ia = ids.find(a), ib = ids.find(b);
+      if (ia == ids.end() || ib == ids.end() || ia->second == ib->second) continue;
+      const int64_t lo = std::min(ia->second, ib->second), hi = std::max(ia->second, ib->second);
+      for (sqlite3_stmt* statement : {matches.get(), geometries.get()}) {
+        sqlite3_bind_int64(statement, 1, lo * kMaxImages + hi);
+        Step(db.get(), statement, path);
+        sqlite3_reset(statement);
+      }
+    }
+  } catch (...) {
+    sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+  Execute(db.get(), path, "COMMIT");
 }
 
 std::vector<PairMatches> ReadVerifiedMatches(const std::string& path,

@@ -42,6 +42,14 @@ bool RenumberImagesByName(const std::string& database_path);
 // transaction. InputError as RenumberImagesByName.
 void ClearMatches(const std::string& database_path);
 
+// The names of every image pair matched (the database's matches, verified or not), each pair in
+// name order. InputError as ReadColmapDescriptors.
+std::set<std::pair<std::string, std::string>> MatchedPairNames(const std::string& database_path);
+
+// Removes the matches and verification of the named pairs (either order; pairs the database does
+// not hold are passed over), in one transaction. InputError as RenumberImagesByName.
+void RemoveMatches(const std::string& database_path, const std::set<std::pair<std::string, std::string>>& pairs);
+
 // The names of the image pairs COLMAP's geometric verification kept (as CountVerifiedPairs), each
 // pair in name order. InputError as ReadColmapDescriptors.
 std::set<std::pair<std::string, std::string>> VerifiedPairNames(const std::string& database_path);

@@ -78,7 +78,7 @@ void PrepareWorkspace(const SfmOptions& options, const std::string& workspace,
                                      "(candi fills it with links); choose another workspace");
   }
   std::vector<std::string> previous;
-  for (const char* entry : {"database.db", kMatchList, "images", "sparse", "dense", "logs", "sfm_report.json", "chunks",
+  for (const char* entry : {"database.db", kMatchList, kTransitiveFolder, "images", "sparse", "dense", "logs", "sfm_report.json", "chunks",
                             "sparse_chunks", kStageRecord}) {
     if (fs::exists(fs::symlink_status(Path(workspace, entry)))) previous.push_back(entry);
   }
@@ -184,6 +184,16 @@ ColmapVersion ParseColmapVersion(const std::string& help_output) {
   return version;
 }
 
+namespace {
+// COLMAP's geometric verification of a raw match list (one thread, in the list's order).
+std::vector<std::string> VerifyArgv(const SfmOptions& options, const std::string& workspace,
+                                    const std::string& match_list) {
+  return {options.colmap, "matches_importer", "--database_path", Path(workspace, "database.db"), "--match_list_path",
+          match_list, "--match_type", "raw", "--SiftMatching.use_gpu", "0", "--SiftMatching.num_threads", "1",
+          "--random_seed", "0"};
+}
+}  // namespace
+
 std::vector<SfmStage> BuildSfmStages(const SfmOptions& options, const std::string& workspace, bool cuda) {
   options.Check();
   const std::string& exe = options.colmap;
@@ -202,10 +212,8 @@ std::vector<SfmStage> BuildSfmStages(const SfmOptions& options, const std::strin
   // matches (one thread, in the list's order) and maps with one thread and its PRNG seeded, so
   // the same photos give the same model on every run.
   stages.push_back({kMatchStage, {}});
-  stages.push_back({"matches_importer",
-                    {exe, "matches_importer", "--database_path", database, "--match_list_path",
-                     Path(workspace, kMatchList), "--match_type", "raw", "--SiftMatching.use_gpu", "0",
-                     "--SiftMatching.num_threads", "1", "--random_seed", "0"}});
+  stages.push_back({"matches_importer", VerifyArgv(options, workspace, Path(workspace, kMatchList))});
+  stages.push_back({kTransitiveStage, {}});
   stages.push_back({"mapper",
                     {exe, "mapper", "--database_path", database, "--image_path", images,
                      "--output_path", Path(workspace, "sparse"), "--Mapper.num_threads", "1",
@@ -510,16 +518,24 @@ std::map<std::string, Eigen::Vector3d> PriorsByImage(const std::string& path, co
   return by_image;
 }
 
+// The database's images in name order, their unstable border descriptors cleared (`cleared` of
+// them; sift_matching.h).
+std::vector<DatabaseImage> ImagesToMatch(const std::string& workspace, size_t* cleared) {
+  std::vector<DatabaseImage> images = ReadColmapDescriptors(Path(workspace, "database.db"));
+  std::sort(images.begin(), images.end(),
+            [](const DatabaseImage& a, const DatabaseImage& b) { return a.name < b.name; });
+  *cleared = ClearBorderDescriptors(&images);
+  return images;
+}
+
 // candi's matching stage: the pairs pair_selection.h chooses, matched exactly from the database's
 // descriptors into WORKSPACE/matches.txt; a summary in its log.
 double MatchFeatures(const SfmOptions& options, const std::string& workspace, SfmSummary* summary,
                      const std::string& log_path, int index, int count, const SfmProgress& progress) {
   if (progress) progress(kMatchStage, index, count, 0.0, false, 0.0);
   const auto start = std::chrono::steady_clock::now();
-  std::vector<DatabaseImage> images = ReadColmapDescriptors(Path(workspace, "database.db"));
-  std::sort(images.begin(), images.end(),
-            [](const DatabaseImage& a, const DatabaseImage& b) { return a.name < b.name; });
-  const size_t cleared = ClearBorderDescriptors(&images);
+  size_t cleared = 0;
+  const std::vector<DatabaseImage> images = ImagesToMatch(workspace, &cleared);
   const std::map<std::string, Eigen::Vector3d> positions = PriorsByImage(options.priors, images);
   if (!options.priors.empty() && positions.empty()) {
     throw InputError(options.priors, "", "names none of the " + std::to_string(images.size()) +
@@ -547,6 +563,85 @@ double MatchFeatures(const SfmOptions& options, const std::string& workspace, Sf
                                 " features in the outermost pixel row or column left out (their descriptors "
                                 "differ from run to run)\n");
   if (progress) progress(kMatchStage, index, count, seconds, true, 1.0);
+  return seconds;
+}
+
+// candi's transitive matching stage (kTransitiveStage): `transitive_rounds` rounds, each matching
+// the pairs TransitivePairs proposes from the pairs verified so far and never tried, then having
+// COLMAP verify them. A summary in its log; what it added in `summary`.
+double MatchTransitively(const SfmOptions& options, const std::string& workspace, SfmSummary* summary,
+                         const std::string& log_path, int index, int count, const SfmProgress& progress) {
+  if (progress) progress(kTransitiveStage, index, count, 0.0, false, 0.0);
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  const PairSelectionOptions& p = options.pairs;
+  std::string log = "candi's transitive matching (" + std::to_string(p.transitive_rounds) + " rounds, " +
+                    std::to_string(p.transitive_neighbours) + " new pairs a photo a round at most)\n";
+  if (p.transitive_rounds == 0 || summary->matcher == "exhaustive") {
+    log += p.transitive_rounds == 0 ? "no rounds asked for\n" : "nothing to add: every pair was matched\n";
+  } else {
+    size_t cleared = 0;
+    const std::vector<DatabaseImage> images = ImagesToMatch(workspace, &cleared);
+    std::map<std::string, size_t> index_of;
+    for (size_t i = 0; i < images.size(); ++i) index_of[images[i].name] = i;
+    const auto indices = [&](const std::set<std::pair<std::string, std::string>>& names) {
+      std::vector<std::pair<size_t, size_t>> pairs;
+      for (const auto& [a, b] : names) {
+        const auto ia = index_of.find(a), ib = index_of.find(b);
+        if (ia != index_of.end() && ib != index_of.end() && ia->second != ib->second)
+          pairs.push_back({std::min(ia->second, ib->second), std::max(ia->second, ib->second)});
+      }
+      return pairs;
+    };
+    const std::string database = Path(workspace, "database.db");
+    const std::vector<std::pair<size_t, size_t>> matched = indices(MatchedPairNames(database));
+    std::set<std::pair<size_t, size_t>> tried(matched.begin(), matched.end());
+    fs::create_directories(Path(workspace, kTransitiveFolder));
+    size_t added = 0;
+    double next_beat = kHeartbeatSeconds;
+    for (int round = 1; round <= p.transitive_rounds; ++round) {
+      const auto pairs =
+          TransitivePairs(images.size(), indices(VerifiedPairNames(database)), tried, p.transitive_neighbours);
+      const size_t before = CountVerifiedPairs(database);
+      log += "round " + std::to_string(round) + ": " + std::to_string(pairs.size()) + " pairs";
+      if (pairs.empty()) {
+        log += "\n";
+        break;
+      }
+      tried.insert(pairs.begin(), pairs.end());
+      added += pairs.size();
+      const std::string list = Path(workspace, std::string(kTransitiveFolder) + "/round_" + std::to_string(round) + ".txt");
+      const MatchListSummary written = WriteMatchList(
+          images, pairs, SiftMatchOptions{}, options.threads, list, [&](size_t done, size_t total) {
+            if (progress && elapsed() >= next_beat) {
+              progress(kTransitiveStage, index, count, elapsed(), false,
+                       (round - 1 + 0.9 * double(done) / double(std::max<size_t>(total, 1))) / p.transitive_rounds);
+              next_beat += kHeartbeatSeconds;
+            }
+          });
+      if (written.pairs_written > 0) {
+        // COLMAP's heartbeats, as this stage's (its pairs' share, 0.9 of the round, is done).
+        const SfmProgress verifying = [&](const std::string&, int, int, double, bool, double fraction) {
+          if (progress) {
+            progress(kTransitiveStage, index, count, elapsed(), false,
+                     (round - 1 + 0.9 + 0.1 * std::max(0.0, fraction)) / p.transitive_rounds);
+          }
+        };
+        RunSfmStage({"matches_importer", VerifyArgv(options, workspace, list)},
+                    Path(workspace, "logs/" + std::string(kTransitiveStage) + "_" + std::to_string(round) + ".log"),
+                    index, count, verifying, images.size());
+      }
+      log += ", " + std::to_string(written.pairs_written) + " with matches, " +
+             std::to_string(CountVerifiedPairs(database) - before) + " verified\n";
+      if (progress) progress(kTransitiveStage, index, count, elapsed(), false, double(round) / p.transitive_rounds);
+    }
+    summary->pairs_tried += added;
+    summary->matcher += " + transitive " + std::to_string(p.transitive_rounds) + " x " +
+                        std::to_string(p.transitive_neighbours);
+  }
+  const double seconds = elapsed();
+  WriteFileAtomic(log_path, log);
+  if (progress) progress(kTransitiveStage, index, count, seconds, true, 1.0);
   return seconds;
 }
 
@@ -736,7 +831,9 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
     try {
       if (!skip) {
         const double seconds =
-            stage.argv.empty() ? MatchFeatures(options, workspace, &summary, log_path, i + 1, count, progress)
+            stage.name == kMatchStage ? MatchFeatures(options, workspace, &summary, log_path, i + 1, count, progress)
+            : stage.name == kTransitiveStage
+                ? MatchTransitively(options, workspace, &summary, log_path, i + 1, count, progress)
             : chunked ? MapInChunks(options, stage, workspace, i + 1, count, progress, run_mappers, &record, &summary)
                       : RunSfmStage(stage, log_path, i + 1, count, progress, summary.images.size());
         summary.stage_seconds.emplace_back(stage.name, seconds);
@@ -756,16 +853,19 @@ SfmSummary RunSfm(const SfmOptions& options, const std::string& images_dir,
       // COLMAP numbers the images in the order its threads finish; the mapper follows the ids.
       if (!skip) RenumberImagesByName(Path(workspace, "database.db"));
     }
-    if (stage.name == kMatchStage && skip) {
+    // The matching stages record the pairs tried so far and how they were chosen.
+    const bool matching = stage.name == kMatchStage || stage.name == kTransitiveStage;
+    if (matching && skip) {
       std::istringstream found(finished->second.second);  // "<pairs> <how they were chosen, spaces and all>"
       found >> summary.pairs_tried;
       std::getline(found >> std::ws, summary.matcher);
     }
-    if (stage.name == "matches_importer") summary.pairs_verified = CountVerifiedPairs(Path(workspace, "database.db"));
+    if (stage.name == "matches_importer" || stage.name == kTransitiveStage) {
+      summary.pairs_verified = CountVerifiedPairs(Path(workspace, "database.db"));
+    }
     if (!skip && !chunked) {
       record.stages[stage.name] = {summary.stage_seconds.back().second,
-                                   stage.name == kMatchStage ? std::to_string(summary.pairs_tried) + " " + summary.matcher
-                                                             : ""};
+                                   matching ? std::to_string(summary.pairs_tried) + " " + summary.matcher : ""};
       record.Write();
     }
     if (chunked) {

@@ -61,10 +61,15 @@ struct SfmStage {
 // The stage run in candi itself, not by COLMAP (its argv is empty): exact matching of the
 // extracted features into WORKSPACE/matches.txt (sift_matching.h).
 inline constexpr const char* kMatchStage = "match_features";
+// candi's second in-process stage, after COLMAP's verification: rounds of transitive matching
+// (pair_selection.h), each round's pairs matched into WORKSPACE/transitive_matches/round_<r>.txt
+// and verified by COLMAP as the first pairs were. Nothing to do after exhaustive matching.
+inline constexpr const char* kTransitiveStage = "transitive_matching";
+inline constexpr const char* kTransitiveFolder = "transitive_matches";
 
 // The stages for a workspace (absolute paths inside it): feature_extractor, match_features
 // (candi's), matches_importer (COLMAP's geometric verification of those matches, one thread),
-// mapper (one thread, seeded) and image_undistorter, whose --input_path is a placeholder
+// transitive_matching (candi's, with COLMAP's verification), mapper (one thread, seeded) and image_undistorter, whose --input_path is a placeholder
 // (`<model>`) that RunSfm replaces with the largest model's folder. `cuda` keeps the GPU on for
 // SIFT extraction. Everything after extraction runs on one thread or exactly, so the same photos
 // and options give the same model bytes (README, "Reproducibility").

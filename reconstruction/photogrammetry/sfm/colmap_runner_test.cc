@@ -11,6 +11,7 @@
 #include "core/check.h"
 #include "reconstruction/photogrammetry/georef/similarity_fit.h"
 #include "reconstruction/photogrammetry/scenes/campaign.h"
+#include "reconstruction/photogrammetry/sfm/colmap_database.h"
 #include "reconstruction/photogrammetry/sfm/colmap_model.h"
 #include "tests/util/test_util.h"
 
@@ -132,7 +133,7 @@ TEST(BuildSfmStages, CpuArgvAndDeterministicMatching) {
   o.max_features = 2000;
   o.max_image_size = 800;
   const std::vector<SfmStage> stages = BuildSfmStages(o, "/w s", /*cuda=*/false);
-  ASSERT_EQ(stages.size(), 5u);
+  ASSERT_EQ(stages.size(), 6u);
   EXPECT_EQ(stages[0].argv[0], "/opt/colmap");
   EXPECT_EQ(stages[0].argv[1], "feature_extractor");
   EXPECT_EQ(Value(stages[0], "--SiftExtraction.use_gpu"), "0");
@@ -147,12 +148,15 @@ TEST(BuildSfmStages, CpuArgvAndDeterministicMatching) {
   EXPECT_EQ(Value(stages[2], "--match_type"), "raw");
   EXPECT_EQ(Value(stages[2], "--match_list_path"), "/w s/matches.txt");
   EXPECT_EQ(Value(stages[2], "--SiftMatching.num_threads"), "1");
-  EXPECT_EQ(stages[3].argv[1], "mapper");
-  EXPECT_EQ(Value(stages[3], "--Mapper.num_threads"), "1");
-  EXPECT_EQ(Value(stages[3], "--random_seed"), "0");
-  EXPECT_EQ(Value(stages[3], "--output_path"), "/w s/sparse");
-  EXPECT_EQ(Value(stages[4], "--output_path"), "/w s/dense");
-  EXPECT_EQ(Value(stages[4], "--max_image_size"), "800");
+  // Transitive matching is candi's too (it runs COLMAP's verification itself).
+  EXPECT_EQ(stages[3].name, kTransitiveStage);
+  EXPECT_TRUE(stages[3].argv.empty());
+  EXPECT_EQ(stages[4].argv[1], "mapper");
+  EXPECT_EQ(Value(stages[4], "--Mapper.num_threads"), "1");
+  EXPECT_EQ(Value(stages[4], "--random_seed"), "0");
+  EXPECT_EQ(Value(stages[4], "--output_path"), "/w s/sparse");
+  EXPECT_EQ(Value(stages[5], "--output_path"), "/w s/dense");
+  EXPECT_EQ(Value(stages[5], "--max_image_size"), "800");
   EXPECT_EQ(Value(BuildSfmStages(o, "/w", /*cuda=*/true)[0], "--SiftExtraction.use_gpu"), "1");
 }
 
@@ -352,7 +356,7 @@ TEST(RunSfm, UnrelatedImagesGiveNoModelMessage) {
            });
   });
   EXPECT_NE(text.find("no model: the images may not overlap"), std::string::npos) << text;
-  EXPECT_EQ(stages, (std::vector<std::string>{"feature_extractor", kMatchStage, "matches_importer"}));
+  EXPECT_EQ(stages, (std::vector<std::string>{"feature_extractor", kMatchStage, "matches_importer", kTransitiveStage}));
   EXPECT_TRUE(FileExists(dir.File("ws/logs/mapper.log")));
   EXPECT_TRUE(FileExists(dir.File("ws/images/n0.pgm")));
   EXPECT_FALSE(FileExists(dir.File("ws/images/notes.txt")));
@@ -487,7 +491,13 @@ TEST(RunSfm, ACampaignOfSixtyPhotosInThreeSessionsRegistersAndClosesItsLoop) {
   EXPECT_EQ(s.registered.size(), 60u);
   EXPECT_NE(s.matcher.find("retrieval"), std::string::npos) << s.matcher;
   EXPECT_NE(s.matcher.find("positions"), std::string::npos) << s.matcher;
+  EXPECT_NE(s.matcher.find("transitive"), std::string::npos) << s.matcher;
   EXPECT_LT(s.pairs_tried, 60u * 59 / 2);
+  // Transitive matching tried pairs beyond the first ones, and COLMAP verified them (its rounds'
+  // lists are there and every pair of the database was matched by one list or the other).
+  const std::set<std::pair<std::string, std::string>> matched = MatchedPairNames(dir.File("work/database.db"));
+  EXPECT_GT(std::filesystem::file_size(dir.File("work/transitive_matches/round_1.txt")), 0u);
+  EXPECT_LE(matched.size(), s.pairs_tried);
   EXPECT_GT(s.pairs_verified, 120u);
   // Camera centres against the truth, after the similarity that fits them best.
   std::map<std::string, Eigen::Vector3d> estimated = CentresByFile(ReadColmapModel(s.model_dir));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 #include <stdexcept>
 
@@ -137,6 +138,8 @@ void PairSelectionOptions::Check() const {
   CANDI_CHECK_OPTION_GE(sequential_overlap, 0);
   CANDI_CHECK_OPTION_GE(retrieval_neighbours, 0);
   CANDI_CHECK_OPTION_GE(position_neighbours, 0);
+  CANDI_CHECK_OPTION_GE(transitive_rounds, 0);
+  CANDI_CHECK_OPTION_GE(transitive_neighbours, 1);
   CANDI_CHECK_OPTION_IN(branching, 2, 64);
   CANDI_CHECK_OPTION_IN(depth, 1, 8);
   CANDI_CHECK_OPTION(std::pow(static_cast<double>(branching), depth) <= 1e7, depth,
@@ -306,8 +309,7 @@ PairSelection SelectPairs(const std::vector<DatabaseImage>& images,
       int added = 0;
       for (const auto& [j, score] : neighbours[i]) {
         if (added == options.retrieval_neighbours) break;
-        if (use_sequence && pairs.count({std::min(i, j), std::max(i, j)}) && (j > i ? j - i : i - j) <=
-                                static_cast<size_t>(options.sequential_overlap)) {
+        if (use_sequence && (j > i ? j - i : i - j) <= static_cast<size_t>(options.sequential_overlap)) {
           continue;  // its sequence neighbour
         }
         AddPair(i, j, &pairs);
@@ -341,6 +343,40 @@ PairSelection SelectPairs(const std::vector<DatabaseImage>& images,
   out.pairs.assign(pairs.begin(), pairs.end());
   out.strategy = text.empty() ? "none" : text;
   return out;
+}
+
+std::vector<std::pair<size_t, size_t>> TransitivePairs(size_t n, const std::vector<std::pair<size_t, size_t>>& verified,
+                                                       const std::set<std::pair<size_t, size_t>>& tried,
+                                                       int neighbours) {
+  CANDI_CHECK_LE(1, neighbours);
+  std::vector<std::vector<size_t>> adjacent(n);
+  for (const auto& [a, b] : verified) {
+    CANDI_CHECK(a < n && b < n && a != b) << "verified pair (" << a << ", " << b << ") of " << n << " images";
+    adjacent[a].push_back(b);
+    adjacent[b].push_back(a);
+  }
+  for (auto& list : adjacent) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  // Image a's candidates: c two steps away, counted once a shared neighbour b.
+  std::vector<std::vector<size_t>> proposed(n);
+  ParallelFor(size_t{0}, n, [&](size_t a) {
+    std::map<size_t, int> shared;
+    for (size_t b : adjacent[a])
+      for (size_t c : adjacent[b])
+        if (c != a && !tried.count({std::min(a, c), std::max(a, c)})) ++shared[c];
+    std::vector<std::pair<int, size_t>> ranked;  // (-shared, c): most shared first, ties by index
+    ranked.reserve(shared.size());
+    for (const auto& [c, count] : shared) ranked.push_back({-count, c});
+    const size_t keep = std::min<size_t>(ranked.size(), static_cast<size_t>(neighbours));
+    std::partial_sort(ranked.begin(), ranked.begin() + keep, ranked.end());
+    for (size_t k = 0; k < keep; ++k) proposed[a].push_back(ranked[k].second);
+  });
+  std::set<std::pair<size_t, size_t>> pairs;
+  for (size_t a = 0; a < n; ++a)
+    for (size_t c : proposed[a]) AddPair(a, c, &pairs);
+  return {pairs.begin(), pairs.end()};
 }
 
 std::map<std::string, Eigen::Vector3d> ReadPositionPriors(const std::string& path) {

@@ -4,7 +4,10 @@
 // GPS-like priors). The pairs grow as k N, not N^2; retrieval closes the loops that sequences
 // leave open (a walk that returns to its start, the borders of separately taken sessions, the row
 // above on the same wall). With the sequence, a photo's retrieval neighbours are counted beyond its
-// sequence neighbours, which on a walk are also its most similar.
+// sequence neighbours, which on a walk are also its most similar. After verification, rounds of
+// transitive matching add the pairs whose photos share verified neighbours (a-b and b-c verified,
+// a-c never tried), as COLMAP's transitive_matcher does: the weak pairs between rows and terraces
+// that no photo's nearest neighbours reach, at most `transitive_neighbours` a photo a round.
 //
 // The vocabulary tree: hierarchical k-means (k-means++ seeding from a seeded generator, Lloyd
 // iterations) of a sample of the descriptors, `branching` children a node, `depth` levels; each
@@ -17,6 +20,7 @@
 
 #include <cstdint>
 #include <map>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,6 +43,10 @@ struct PairSelectionOptions {
   int retrieval_neighbours = 20;   // retrieval: each photo with its this many most similar (beyond its
                                    // sequence neighbours, when the sequence is used too), >= 0
   int position_neighbours = 10;    // positions: each photo with its this many nearest, >= 0
+  int transitive_rounds = 2;       // after verification, rounds of transitive matching (not after
+                                   // exhaustive matching), >= 0
+  int transitive_neighbours = 15;  // transitive: a photo's new pairs a round, most shared verified
+                                   // neighbours first, >= 1
   int branching = 10;              // vocabulary tree children a node, [2, 64]
   int depth = 4;                   // vocabulary tree levels, [1, 8]
   int train_descriptors = 200000;  // descriptors sampled to train the tree, >= 1000
@@ -79,6 +87,14 @@ struct PairSelection {
 PairSelection SelectPairs(const std::vector<DatabaseImage>& images,
                           const std::map<std::string, Eigen::Vector3d>& positions,
                           const PairSelectionOptions& options);
+
+// The pairs a round of transitive matching adds among `n` images: (a, c) never `tried` where a-b
+// and b-c are `verified` for some b. Each image proposes its `neighbours` candidates with the most
+// such b (ties by the lower index); a pair is added when either of its images proposes it. i < j,
+// sorted, unique; at most n * neighbours.
+std::vector<std::pair<size_t, size_t>> TransitivePairs(size_t n, const std::vector<std::pair<size_t, size_t>>& verified,
+                                                       const std::set<std::pair<size_t, size_t>>& tried,
+                                                       int neighbours);
 
 // Reads priors.csv (name,E,N,H[,sigma], header required, '#' comments): image name -> position.
 // InputError naming the file, line and field for a bad row or a name given twice.

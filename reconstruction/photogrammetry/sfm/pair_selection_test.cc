@@ -140,6 +140,44 @@ TEST(PairSelection, PositionsPairEachPhotoWithItsNearest) {
   EXPECT_TRUE(SelectPairs(images, {}, o).pairs.empty());
 }
 
+TEST(PairSelection, TransitivePairsJoinPhotosThatShareVerifiedNeighbours) {
+  // Two rows of photos: 0-1-2-3 along the lower row, 4-5-6-7 along the upper; each upper photo
+  // verified with the lower one below it, and the rows' sequence pairs tried and verified. The
+  // diagonals (0-5, 1-4, ...) were never tried: each shares two verified neighbours.
+  std::vector<std::pair<size_t, size_t>> verified = {{0, 1}, {1, 2}, {2, 3}, {4, 5}, {5, 6}, {6, 7},
+                                                     {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+  std::set<std::pair<size_t, size_t>> tried(verified.begin(), verified.end());
+  tried.insert({0, 2});  // tried and refused: never proposed again
+  const auto all = TransitivePairs(8, verified, tried, 100);
+  const std::set<std::pair<size_t, size_t>> got(all.begin(), all.end());
+  EXPECT_EQ(got.size(), all.size());
+  for (const auto& p : all) {
+    EXPECT_LT(p.first, p.second);
+    EXPECT_FALSE(tried.count(p)) << p.first << "-" << p.second;
+  }
+  for (const std::pair<size_t, size_t>& diagonal : {std::pair<size_t, size_t>{0, 5}, {1, 4}, {1, 6}, {2, 5}, {2, 7}, {3, 6}})
+    EXPECT_TRUE(got.count(diagonal)) << diagonal.first << "-" << diagonal.second;
+  EXPECT_TRUE(got.count({1, 3}));   // two along the row, through 2
+  EXPECT_FALSE(got.count({0, 2}));  // tried
+  EXPECT_FALSE(got.count({0, 3}));  // three steps
+  EXPECT_FALSE(got.count({0, 6}));
+  // One a photo: each proposes its candidate with the most shared neighbours (the diagonals share
+  // two; 1-3 shares one), ties to the lower index.
+  const auto one = TransitivePairs(8, verified, tried, 1);
+  EXPECT_LE(one.size(), 8u);
+  const std::set<std::pair<size_t, size_t>> best(one.begin(), one.end());
+  EXPECT_TRUE(best.count({0, 5}));  // 0's only candidate with two
+  EXPECT_TRUE(best.count({1, 4}));  // 1: 4 and 6 share two; 4 is lower
+  EXPECT_FALSE(best.count({1, 3}));
+  // Nothing verified, nothing proposed; a pair naming an image beyond n is a misuse.
+  EXPECT_TRUE(TransitivePairs(8, {}, {}, 5).empty());
+  EXPECT_THROW(TransitivePairs(4, verified, tried, 5), InternalError);
+  EXPECT_THROW(TransitivePairs(8, verified, tried, 0), InternalError);
+  PairSelectionOptions o;
+  o.transitive_rounds = -1;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+}
+
 TEST(PairSelection, PriorsFileErrorsNameTheLineAndField) {
   TempDir dir;
   const auto error = [&](const std::string& text) {

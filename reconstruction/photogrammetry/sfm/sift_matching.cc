@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
@@ -177,6 +179,26 @@ MatchListSummary WriteMatchList(const std::vector<DatabaseImage>& images,
   }
   WriteFileAtomic(path, text);
   return summary;
+}
+
+std::set<std::pair<std::string, std::string>> MatchListPairs(const std::string& path) {
+  std::set<std::pair<std::string, std::string>> pairs;
+  std::ifstream in(path);
+  std::string line;
+  bool header = true;  // blocks end with an empty line
+  while (std::getline(in, line)) {
+    if (line.empty()) {
+      header = true;
+      continue;
+    }
+    if (header) {
+      std::istringstream fields(line);
+      std::string a, b;
+      if (fields >> a >> b) pairs.insert(b < a ? std::make_pair(b, a) : std::make_pair(a, b));
+    }
+    header = false;
+  }
+  return pairs;
 }
 
 }  // namespace candi::photogrammetry

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -67,5 +68,9 @@ MatchListSummary WriteMatchList(const std::vector<DatabaseImage>& images,
                                 const std::vector<std::pair<size_t, size_t>>& pairs,
                                 const SiftMatchOptions& options, int threads, const std::string& path,
                                 const std::function<void(size_t done, size_t total)>& progress = nullptr);
+
+// The pairs of a match list WriteMatchList wrote (each block's first line), each pair in name
+// order; none for a missing file.
+std::set<std::pair<std::string, std::string>> MatchListPairs(const std::string& path);
 
 }  // namespace candi::photogrammetry

@@ -1,12 +1,14 @@
 #include "reconstruction/photogrammetry/sfm/sift_matching.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <random>
+#include <set>
 #include <stdexcept>
 
 #include "core/check.h"
@@ -336,20 +338,56 @@ TEST(RenumberImagesByName, IdsFollowNamesAndDataFollowsIds) {
   for (int k = 0; k < 3; ++k) EXPECT_EQ(after[k].camera_id, k + 1) << after[k].name;
 }
 
+// DIR/d.db: two shifted patterns extracted and matched by the installed COLMAP; false on a failure.
+bool WriteMatchedDatabase(const TempDir& dir) {
+  WriteShiftedPatterns(dir.File("img"), 160, 120, 8);
+  return RunCommand("colmap feature_extractor --database_path " + dir.File("d.db") + " --image_path " + dir.File("img") +
+                    " --SiftExtraction.use_gpu 0 >/dev/null 2>&1").code == 0 &&
+         RunCommand("colmap exhaustive_matcher --database_path " + dir.File("d.db") +
+                    " --SiftMatching.use_gpu 0 >/dev/null 2>&1").code == 0;
+}
+
 TEST(RenumberImagesByName, RefusesADatabaseWithMatches) {
   if (RunCommand("colmap help").code != 0) GTEST_SKIP() << "COLMAP is not installed here (Debian: apt install colmap)";
   TempDir dir;
-  WriteShiftedPatterns(dir.File("img"), 160, 120, 8);
-  ASSERT_EQ(RunCommand("colmap feature_extractor --database_path " + dir.File("d.db") + " --image_path " +
-                       dir.File("img") + " --SiftExtraction.use_gpu 0 >/dev/null 2>&1").code, 0);
-  ASSERT_EQ(RunCommand("colmap exhaustive_matcher --database_path " + dir.File("d.db") +
-                       " --SiftMatching.use_gpu 0 >/dev/null 2>&1").code, 0);
+  ASSERT_TRUE(WriteMatchedDatabase(dir));
   try {
     RenumberImagesByName(dir.File("d.db"));
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("holds matches already"), std::string::npos) << e.what();
   }
+}
+
+// The pairs matched and verified, read back by name; removed by name in either order; a
+// verification blob that does not hold its rows is refused, naming the pair.
+TEST(ColmapDatabase, MatchedPairsAreReadAndRemovedByName) {
+  if (RunCommand("colmap help").code != 0) GTEST_SKIP() << "COLMAP is not installed here (Debian: apt install colmap)";
+  TempDir dir;
+  ASSERT_TRUE(WriteMatchedDatabase(dir));
+  const std::set<std::pair<std::string, std::string>> one = {{"v0.pgm", "v1.pgm"}};
+  EXPECT_EQ(MatchedPairNames(dir.File("d.db")), one);
+  ASSERT_EQ(VerifiedPairNames(dir.File("d.db")), one);
+  const std::vector<PairMatches> inliers = ReadVerifiedMatches(dir.File("d.db"));
+  ASSERT_EQ(inliers.size(), 1u);
+  EXPECT_GT(inliers[0].matches.size(), 10u);
+  EXPECT_TRUE(ReadVerifiedMatches(dir.File("d.db"), [](const std::string&, const std::string&) { return false; }).empty());
+  // A blob shorter than its rows.
+  std::filesystem::copy_file(dir.File("d.db"), dir.File("bad.db"));
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(dir.File("bad.db").c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, "UPDATE two_view_geometries SET rows = rows + 1", nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(db);
+  }
+  const std::string e = testing::InputErrorMessage([&] { ReadVerifiedMatches(dir.File("bad.db")); });
+  EXPECT_NE(e.find("bad.db"), std::string::npos) << e;
+  EXPECT_NE(e.find("inliers in a blob of"), std::string::npos) << e;
+  // Removed by name (the other order, and a pair the database does not hold, passed over).
+  RemoveMatches(dir.File("d.db"), {{"v1.pgm", "v0.pgm"}, {"v0.pgm", "none.pgm"}});
+  EXPECT_TRUE(MatchedPairNames(dir.File("d.db")).empty());
+  EXPECT_EQ(CountVerifiedPairs(dir.File("d.db")), 0u);
+  EXPECT_EQ(ReadColmapDescriptors(dir.File("d.db")).size(), 2u) << "the images stay";
 }
 
 }  // namespace

@@ -3,12 +3,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "core/atomic_file.h"
 #include "core/check.h"
 #include "core/sha256.h"
 #include "reconstruction/photogrammetry/sfm/colmap_database.h"
+#include "reconstruction/photogrammetry/sfm/sift_matching.h"
 
 namespace candi::photogrammetry {
 
@@ -17,6 +19,17 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string FileHash(const std::string& path) { return path.empty() ? "-" : Sha256OfFile(path); }
+
+// The pairs of the match lists in `folder`.
+std::set<std::pair<std::string, std::string>> PairsOfMatchLists(const std::string& folder) {
+  std::set<std::pair<std::string, std::string>> pairs;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const auto list = MatchListPairs(entry.path().string());
+    pairs.insert(list.begin(), list.end());
+  }
+  return pairs;
+}
 
 }  // namespace
 
@@ -81,6 +94,7 @@ std::vector<std::string> StageInputs(const SfmOptions& o, const std::vector<std:
           " " + std::to_string(p.branching) + " " + std::to_string(p.depth) + " " +
           std::to_string(p.train_descriptors) + " " + std::to_string(p.kmeans_iterations) + " " +
           std::to_string(p.seed),
+      "transitive_matching " + std::to_string(p.transitive_rounds) + " " + std::to_string(p.transitive_neighbours),
       "priors " + FileHash(o.priors),
       "targets " + FileHash(o.chunks.targets),
       "picks " + FileHash(o.chunks.picks),
@@ -101,8 +115,14 @@ void ClearUnfinishedStage(const std::string& stage, const std::string& workspace
     for (const char* f :
          {"database.db", "database.db-journal", "database.db-wal", "database.db-shm"})
       fs::remove(Path(f), ec);
-  } else if (stage == "matches_importer" && fs::exists(Path("database.db"))) {
-    ClearMatches(Path("database.db"));
+  } else if (stage == "matches_importer") {
+    if (fs::exists(Path("database.db"))) ClearMatches(Path("database.db"));
+    fs::remove_all(Path(kTransitiveFolder), ec);
+  } else if (stage == kTransitiveStage) {
+    // The rounds' pairs leave the database, then their lists (a list is written whole before
+    // COLMAP verifies it).
+    if (fs::exists(Path("database.db"))) RemoveMatches(Path("database.db"), PairsOfMatchLists(Path(kTransitiveFolder)));
+    fs::remove_all(Path(kTransitiveFolder), ec);
   } else if (stage == "mapper") {
     for (const auto& e : fs::directory_iterator(Path("sparse"), ec)) {
       // Chunked mapping keeps the chunks' own folders (sparse_chunks/) and rebuilds sparse/merged.
