@@ -1,6 +1,7 @@
 // candi sfm, dense, georef, colorcorrect, campaign: the building from photos
 // (pipeline/photogrammetry.h): COLMAP structure from motion (a campaign's chunk mappers shared
-// out over MPI ranks under mpirun, pipeline/sfm_ranks.h), CPU dense stereo, georeferencing on
+// out over MPI ranks under mpirun, pipeline/sfm_ranks.h), CPU dense stereo (photos and fusion cells
+// shared out over MPI ranks, pipeline/dense_ranks.h), georeferencing on
 // surveyed targets; colour-card correction (pipeline/color_correct.h); and a synthetic photo
 // campaign with its ground truth (reconstruction/photogrammetry/scenes/campaign.h).
 #include <cmath>
@@ -15,6 +16,7 @@
 #include "io/point_io.h"
 #include "pipeline/color_correct.h"
 #include "pipeline/photogrammetry.h"
+#include "pipeline/dense_ranks.h"
 #include "pipeline/sfm_ranks.h"
 #include "reconstruction/photogrammetry/scenes/campaign.h"
 
@@ -136,24 +138,36 @@ namespace {
 struct DenseArgs {
   std::string workspace, output;
   pipeline::DenseOptions options;
+  double max_memory_mb = 0;
 };
 
 int RunDense(const DenseArgs& a) {
   pipeline::DenseOptions o = a.options;
   o.stereo.window_step = o.stereo.window_radius >= 3 ? 2 : 1;
+  if (!(a.max_memory_mb >= 0)) throw std::invalid_argument("--max-memory must be >= 0 MB (0: a quarter of the machine's)");
+  o.max_memory = static_cast<uint64_t>(a.max_memory_mb * 1048576.0);
   o.Check();
   io::OutputPointFormat(a.output);  // an unknown extension fails before the work
   const Stopwatch watch;
-  pipeline::DenseCloud dense = pipeline::DenseStereo(o, a.workspace);
-  std::printf("workspace %s: %zu images, %zu sparse points\n", a.workspace.c_str(), dense.images, dense.sparse_points);
+  const pipeline::RanksDense r = pipeline::DenseStereoOnRanks(o, a.workspace, RankReporting("no points written"));
+  if (!r.failures.empty()) throw ReportedFailure(r.failures.front().exit_code);
+  if (!r.root) return kOk;
+  const pipeline::DenseCloud& dense = r.dense;
+  std::printf("workspace %s: %zu images, %zu sparse points, sources from %s\n", a.workspace.c_str(), dense.images,
+              dense.sparse_points, dense.sources_from_tracks ? "the tracks" : "the camera geometry (no tracks)");
   io::WritePointCloud(a.output, dense.cloud);
   const double total_s = watch.Seconds();
-  std::printf("depth maps: %llu of %llu pixels valid (%.1f %%)\n", static_cast<unsigned long long>(dense.valid_pixels),
-              static_cast<unsigned long long>(dense.total_pixels),
-              dense.total_pixels ? 100.0 * dense.valid_pixels / dense.total_pixels : 0.0);
+  std::printf("stereo: %zu depth maps made, %zu found finished, %.2f s; image cache peak %.1f MB of %.0f MB\n",
+              dense.maps_made, dense.maps_found, dense.stereo_seconds, dense.peak_cache_bytes / 1048576.0,
+              dense.max_memory / 2 / 1048576.0);
+  std::printf("filter: %llu of %llu pixels valid (%.1f %%), %zu photos without depth, %.2f s\n",
+              static_cast<unsigned long long>(dense.valid_pixels), static_cast<unsigned long long>(dense.total_pixels),
+              dense.total_pixels ? 100.0 * dense.valid_pixels / dense.total_pixels : 0.0, dense.empty_maps.size(),
+              dense.filter_seconds);
+  std::printf("fusion: %zu cells (%zu found finished), %.2f s\n", dense.tiles, dense.tiles_found, dense.fusion_seconds);
   std::printf("fused points: %zu -> %s\n", dense.cloud.size(), a.output.c_str());
-  std::printf("time: %.2f s (reading and PatchMatch %.2f s), %.0f points/s\n", total_s, dense.stereo_seconds,
-              total_s > 0 ? dense.cloud.size() / total_s : 0.0);
+  std::printf("time: %.2f s, %.0f points/s, peak memory %.0f MB\n", total_s, total_s > 0 ? dense.cloud.size() / total_s : 0.0,
+              PeakMemoryMb());
   return kOk;
 }
 
@@ -173,11 +187,14 @@ void AddDense(Command& root) {
   c.Option("--views", s.num_source_views, "Source views per reference image");
   c.Option("--min-consistent", s.min_consistent_views, "Source views that must agree geometrically");
   c.Option("--min-views", a.options.fusion.min_views, "Fusion: views per point");
-  c.FlagOff("--no-maps", a.options.write_maps, "Do not write stereo/{depth,normal}_maps");
+  c.Option("--max-memory", a.max_memory_mb, "MB of images and maps held at once (0: a quarter of the machine's)");
+  c.FlagOff("--no-maps", a.options.write_maps, "Remove stereo/'s depth and normal maps once the run has finished "
+                                                "(they are the resume point until then)");
   c.Option("--seed", s.seed, "Random seed");
   c.Option("--threads", s.threads, "Threads (0: all)").Range(0, 256);
   c.Run([&a] { return RunDense(a); });
-  c.Footer("Example: candi dense workspace -o dense.ply --resolution-scale 0.5 --iterations 3");
+  c.Footer("Run again after an interruption, the same command keeps the depth maps and fusion cells already made.\n"
+           "Example: candi dense workspace -o dense.ply --resolution-scale 0.5 --iterations 3");
 }
 
 namespace {

@@ -61,6 +61,11 @@ std::string ConsoleProgress::Render(uint64_t done, uint64_t total, bool final) c
     text += pct;
   }
   text += tail;
+  if (!final && total > 0 && done > 0 && done < total && elapsed >= 1) {
+    char left[48];
+    std::snprintf(left, sizeof(left), ", ~%.0f s left", elapsed * static_cast<double>(total - done) / done);
+    text += left;
+  }
   if (final) text += " done";
   return text;
 }

@@ -2,6 +2,8 @@
 // in an output that must be the same bytes on every run). Not thread-safe (one owner).
 #pragma once
 
+#include <sys/resource.h>
+
 #include <chrono>
 
 namespace candi {
@@ -26,5 +28,12 @@ class Stopwatch {
   }
   std::chrono::steady_clock::time_point start_, lap_;
 };
+
+// The peak resident memory of this process so far, MB (for reports, beside the seconds).
+inline double PeakMemoryMb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;
+}
 
 }  // namespace candi

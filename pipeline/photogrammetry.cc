@@ -150,34 +150,18 @@ void DenseOptions::Check() const {
   fusion.Check();
 }
 
-DenseCloud DenseStereo(const DenseOptions& options, const std::string& workspace) {
+DenseCloud DenseStereo(const DenseOptions& options, const std::string& workspace, const DenseRankShare& share) {
   options.Check();
-  Stopwatch watch;
-  const pg::StereoInput input = pg::ReadDenseWorkspace(workspace);
-  DenseCloud out;
-  out.images = input.images.size();
-  out.sparse_points = input.sparse_points.size();
-  pg::PatchMatchResult stereo;
-  {
-    ConsoleProgressOptions p;
-    p.unit = "pixel sweeps";
-    ConsoleProgress progress("dense: PatchMatch", p);
-    stereo = pg::RunPatchMatch(options.stereo, input, progress.Callback());
-  }
-  out.stereo_seconds = watch.Seconds();
-  out.valid_pixels = stereo.valid_pixels;
-  out.total_pixels = stereo.total_pixels;
-  if (options.write_maps) {
-    std::vector<std::string> names;
-    for (const pg::StereoImage& image : input.images) names.push_back(image.name);
-    pg::WriteDepthNormalMaps(stereo.maps, names, workspace);
-  }
-  {
-    ConsoleProgressOptions p;
-    p.unit = "pixels";
-    ConsoleProgress progress("dense: fusion", p);
-    out.cloud = pg::FuseDepthMaps(options.fusion, stereo.maps, progress.Callback());
-  }
+  pg::DenseStreamOptions o;
+  o.stereo = options.stereo;
+  o.fusion = options.fusion;
+  o.max_memory = options.max_memory;
+  o.keep_maps = options.write_maps;
+  o.rank = share.rank;
+  o.ranks = share.ranks;
+  o.all_gather = share.all_gather;
+  DenseCloud out = pg::RunDenseStream(o, workspace);
+  if (share.rank != 0) return out;
   out.cloud.meta.comments.push_back("candi dense " + workspace);
   if (out.cloud.empty()) LogWarning("dense: no points (textureless images, no overlap, or too strict filters)");
   return out;

@@ -19,6 +19,7 @@
 #include "reconstruction/photogrammetry/georef/georef.h"
 #include "reconstruction/photogrammetry/georef/georef_colmap.h"
 #include "reconstruction/photogrammetry/georef/similarity_fit.h"
+#include "reconstruction/photogrammetry/mvs/dense_stream.h"
 #include "reconstruction/photogrammetry/mvs/fusion.h"
 #include "reconstruction/photogrammetry/mvs/patch_match.h"
 #include "reconstruction/photogrammetry/sfm/colmap_runner.h"
@@ -42,19 +43,24 @@ photogrammetry::SfmSummary StructureFromMotion(const photogrammetry::SfmOptions&
 struct DenseOptions {
   photogrammetry::PatchMatchOptions stereo;
   photogrammetry::FusionOptions fusion;
-  bool write_maps = true;  // depth and normal maps into WORKSPACE/stereo/ (for COLMAP's stereo_fusion)
+  uint64_t max_memory = 0;  // bytes of images and maps held at once; 0 = a quarter of the machine's
+  // Depth and normal maps stay in WORKSPACE/stereo/ (COLMAP's arrays for its stereo_fusion, and
+  // candi's resume files); false: they are removed once the run has finished.
+  bool write_maps = true;
   void Check() const;
 };
 
-struct DenseCloud {
-  PointCloud cloud;        // fused points with colours and normals, the model's frame
-  size_t images = 0, sparse_points = 0;
-  uint64_t valid_pixels = 0, total_pixels = 0;
-  double stereo_seconds = 0;  // reading the workspace and PatchMatch
+using DenseCloud = photogrammetry::DenseStreamResult;
+
+// This process's share under mpirun (pipeline/dense_ranks.h); the default is the whole run.
+struct DenseRankShare {
+  int rank = 0, ranks = 1;
+  std::function<std::vector<std::string>(const std::string&)> all_gather;  // collective
 };
 
-// PatchMatch stereo on a COLMAP dense workspace (images/ + sparse/, PINHOLE cameras) and fusion.
-DenseCloud DenseStereo(const DenseOptions& options, const std::string& workspace);
+// PatchMatch stereo on a COLMAP dense workspace (images/ + sparse/, PINHOLE cameras) and fusion,
+// streamed and resumable (photogrammetry/mvs/dense_stream.h).
+DenseCloud DenseStereo(const DenseOptions& options, const std::string& workspace, const DenseRankShare& share = {});
 
 struct GeorefOptions {
   photogrammetry::SimilarityFitOptions fit;

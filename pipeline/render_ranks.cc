@@ -9,6 +9,18 @@
 
 namespace candi::pipeline {
 
+std::vector<render::mpi::Session::Failure> GatherRankFailures(const render::mpi::Session& session,
+                                                              std::exception_ptr failure,
+                                                              const RanksReporting& reporting) {
+  const std::pair<int, std::string> mine = failure ? reporting.describe(failure) : std::pair<int, std::string>();
+  std::vector<render::mpi::Session::Failure> failures = session.GatherFailures(mine.first, mine.second);
+  if (!failures.empty()) {
+    if (session.rank() == 0 && reporting.failed) reporting.failed(failures, session.size());
+    session.Barrier();
+  }
+  return failures;
+}
+
 RanksRender RenderArchiveOnRanks(const RenderOptions& options, const std::string& archive_dir,
                                  const RanksReporting& reporting) {
   std::unique_ptr<render::mpi::Session> session;
@@ -28,16 +40,8 @@ RanksRender RenderArchiveOnRanks(const RenderOptions& options, const std::string
     if (failure) std::rethrow_exception(failure);
     return out;
   }
-  // Every rank learns every failure; rank 0 is given them all before any rank returns, and the
-  // barrier holds every rank until it has them.
-  const std::pair<int, std::string> mine =
-      failure ? reporting.describe(failure) : std::pair<int, std::string>();
-  out.failures = session->GatherFailures(mine.first, mine.second);
-  if (!out.failures.empty()) {
-    if (rank == 0 && reporting.failed) reporting.failed(out.failures, ranks);
-    session->Barrier();
-    return out;
-  }
+  out.failures = GatherRankFailures(*session, failure, reporting);
+  if (!out.failures.empty()) return out;
   session->ReduceToRoot(&out.image.result);
   return out;
 }

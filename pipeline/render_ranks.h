@@ -10,6 +10,7 @@
 // (MPI), linked only by the command line.
 #pragma once
 
+#include <exception>
 #include <functional>
 #include <string>
 #include <vector>
@@ -27,6 +28,12 @@ struct RanksReporting {
   // ranks, called before any rank returns.
   std::function<void(const std::vector<render::mpi::Session::Failure>& failures, int ranks)> failed;
 };
+
+// Ends a run on every rank: each rank's failure (none: a null `failure`) goes to every rank; rank
+// 0 gives them to `reporting.failed` before any rank returns (the barrier holds the others).
+std::vector<render::mpi::Session::Failure> GatherRankFailures(const render::mpi::Session& session,
+                                                              std::exception_ptr failure,
+                                                              const RanksReporting& reporting);
 
 struct RanksRender {
   bool root = true;  // rank 0, or no mpirun: `image` holds the sums of every rank

@@ -68,7 +68,7 @@ RanksSfm StructureFromMotionOnRanks(const pg::SfmOptions& options, const std::st
     return out;
   }
   const render::mpi::Session session;
-  const int rank = session.rank(), ranks = session.size();
+  const int rank = session.rank();
   out.root = rank == 0;
   std::exception_ptr failure;
   if (rank == 0) {
@@ -98,10 +98,8 @@ RanksSfm StructureFromMotionOnRanks(const pg::SfmOptions& options, const std::st
       failure = std::current_exception();
     }
   }
-  const std::pair<int, std::string> mine = failure ? reporting.describe(failure) : std::pair<int, std::string>();
-  out.failures = session.GatherFailures(mine.first, mine.second);
-  if (!out.failures.empty() && rank == 0 && reporting.failed) reporting.failed(out.failures, ranks);
-  session.Barrier();
+  out.failures = GatherRankFailures(session, failure, reporting);
+  if (out.failures.empty()) session.Barrier();
   return out;
 }
 

@@ -44,26 +44,36 @@ Session::Session(bool serialized) {
 
 Session::~Session() { MPI_Finalize(); }
 
-std::vector<Session::Failure> Session::GatherFailures(int exit_code, const std::string& message) const {
-  // Codes and message lengths first, then the messages of every rank (one Allgatherv).
-  const int mine[2] = {exit_code, exit_code == 0 ? 0 : static_cast<int>(std::min<size_t>(message.size(), 1 << 16))};
-  std::vector<int> heads(2 * static_cast<size_t>(size_));
-  Check(MPI_Allgather(mine, 2, MPI_INT, heads.data(), 2, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
+std::vector<std::string> Session::AllGather(const std::string& mine) const {
+  CANDI_CHECK(mine.size() < (size_t{1} << 30)) << "all-gather of " << mine.size() << " bytes";
+  const int length = static_cast<int>(mine.size());
   std::vector<int> lengths(size_), offsets(size_);
-  int total = 0;
+  Check(MPI_Allgather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
+  int64_t total = 0;
   for (int r = 0; r < size_; ++r) {
-    lengths[r] = heads[2 * r + 1];
-    offsets[r] = total;
+    offsets[r] = static_cast<int>(total);
     total += lengths[r];
   }
+  CANDI_CHECK(total < (int64_t{1} << 31)) << "all-gather of " << total << " bytes";
   std::string all(static_cast<size_t>(total), '\0');
-  Check(MPI_Allgatherv(message.data(), mine[1], MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR,
+  Check(MPI_Allgatherv(mine.data(), length, MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR,
                        MPI_COMM_WORLD),
         "MPI_Allgatherv");
+  std::vector<std::string> out;
+  for (int r = 0; r < size_; ++r) out.push_back(all.substr(offsets[r], lengths[r]));
+  return out;
+}
+
+std::vector<Session::Failure> Session::GatherFailures(int exit_code, const std::string& message) const {
+  // "code message" from a rank that failed, "" from one that did not.
+  const std::string mine =
+      exit_code == 0 ? std::string() : std::to_string(exit_code) + " " + message.substr(0, size_t{1} << 16);
+  const std::vector<std::string> all = AllGather(mine);
   std::vector<Failure> failures;
   for (int r = 0; r < size_; ++r) {
-    if (heads[2 * r] == 0) continue;
-    failures.push_back({r, heads[2 * r], all.substr(offsets[r], lengths[r])});
+    if (all[r].empty()) continue;
+    const size_t space = all[r].find(' ');
+    failures.push_back({r, std::stoi(all[r].substr(0, space)), all[r].substr(space + 1)});
   }
   return failures;
 }

@@ -37,6 +37,8 @@ class Session {
     std::string message;
   };
   std::vector<Failure> GatherFailures(int exit_code, const std::string& message) const;
+  // Collective: every rank's bytes to every rank, in rank order (under 1 GiB in all).
+  std::vector<std::string> AllGather(const std::string& mine) const;
   // Collective: rank 0's bytes to every rank.
   void Broadcast(std::string* bytes) const;
   // Collective: returns when every rank has called it.

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -27,14 +28,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// One input image at the working resolution.
-struct View {
-  PinholeCamera camera;
-  Image8 color;              // RGB
-  std::vector<float> grey;   // [0, 1], row-major
-  Eigen::Matrix3d K, K_inv;
-};
-
 Image8 ToRgb(const Image8& in) {
   if (in.channels() == 3) return in;
   Image8 out(in.width(), in.height(), 3);
@@ -44,14 +37,16 @@ Image8 ToRgb(const Image8& in) {
   return out;
 }
 
-View PrepareView(const StereoImage& in, double scale) {
+}  // namespace
+
+StereoView PrepareStereoView(const StereoImage& in, double scale) {
   CANDI_CHECK(in.camera.Valid() && in.camera.rotation.allFinite() && in.camera.translation.allFinite() &&
               std::isfinite(in.camera.cx) && std::isfinite(in.camera.cy))
       << in.name << ": invalid camera";
   CANDI_CHECK(in.image.width() == in.camera.width && in.image.height() == in.camera.height)
       << in.name << ": image " << in.image.width() << "x" << in.image.height() << " vs camera "
       << in.camera.width << "x" << in.camera.height;
-  View v;
+  StereoView v;
   v.camera = scale == 1.0 ? in.camera : in.camera.Scaled(scale);
   const Image8 rgb = ToRgb(in.image);
   v.color = scale == 1.0 ? rgb : ResampleArea(rgb, v.camera.width, v.camera.height);
@@ -65,9 +60,12 @@ View PrepareView(const StereoImage& in, double scale) {
   return v;
 }
 
-// Depth range of a view from the sparse points in front of it and inside it (2nd and 98th
-// percentiles, widened), or from all points in front when too few fall inside.
-std::pair<double, double> DepthRange(const PatchMatchOptions& o, const PinholeCamera& cam,
+size_t StereoView::Bytes() const {
+  return color.values().size() + grey.size() * sizeof(float) + sizeof(StereoView);
+}
+
+
+std::pair<double, double> StereoDepthRange(const PatchMatchOptions& o, const PinholeCamera& cam,
                                      const std::vector<Eigen::Vector3d>& points) {
   if (o.depth_min > 0 && o.depth_max > 0) return {o.depth_min, o.depth_max};
   std::vector<double> inside, front;
@@ -88,30 +86,7 @@ std::pair<double, double> DepthRange(const PatchMatchOptions& o, const PinholeCa
   return {0.75 * lo, 1.25 * hi};
 }
 
-// Source views for reference r: triangulation angle at the point on r's optical axis at the
-// middle of its depth range; angles near 15 degrees preferred, below the minimum or above 75 out.
-std::vector<int> SelectSources(const PatchMatchOptions& o, const std::vector<View>& views, int r,
-                               double depth) {
-  const PinholeCamera& ref = views[r].camera;
-  const Eigen::Vector3d p = ref.ToWorld(Eigen::Vector3d(0, 0, depth));
-  std::vector<std::pair<double, int>> scored;
-  for (int s = 0; s < static_cast<int>(views.size()); ++s) {
-    if (s == r) continue;
-    const PinholeCamera& src = views[s].camera;
-    const Eigen::Vector3d a = ref.Center() - p, b = src.Center() - p;
-    const double angle = std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / kPi;
-    const Eigen::Vector3d c = src.ToCamera(p);
-    if (!(c.z() > 0) || angle < o.min_triangulation_angle_deg || angle > 75) continue;
-    const Eigen::Vector2d uv = src.Project(c);
-    if (uv.x() < 0 || uv.y() < 0 || uv.x() >= src.width || uv.y() >= src.height) continue;
-    scored.push_back({std::abs(angle - 15.0), s});
-  }
-  std::sort(scored.begin(), scored.end());
-  std::vector<int> out;
-  for (size_t k = 0; k < scored.size() && static_cast<int>(k) < o.num_source_views; ++k)
-    out.push_back(scored[k].second);
-  return out;
-}
+namespace {
 
 struct Plane {
   double depth = 0;
@@ -177,19 +152,19 @@ bool WindowSums(const float* hm, const float* us_in, const float* vs_in, const f
 
 class ReferenceMatcher {
  public:
-  ReferenceMatcher(const PatchMatchOptions& o, const std::vector<View>& views, int ref,
-                   std::vector<int> sources, double dmin, double dmax)
-      : o_(o), views_(views), ref_(views[ref]), ref_index_(ref), sources_(std::move(sources)),
-        dmin_(dmin), dmax_(dmax) {
+  ReferenceMatcher(const PatchMatchOptions& o, const StereoView& ref, int ref_index,
+                   std::vector<const StereoView*> sources, std::vector<int> source_indices, double dmin, double dmax)
+      : o_(o), sources_(std::move(sources)), ref_(ref), ref_index_(ref_index),
+        source_indices_(std::move(source_indices)), dmin_(dmin), dmax_(dmax) {
     const int w = ref_.camera.width, h = ref_.camera.height;
     planes_.assign(static_cast<size_t>(w) * h, Plane());
     cost_.assign(planes_.size(), 2.0f);
-    for (int s : sources_) {
-      const PinholeCamera& src = views_[s].camera;
+    for (const StereoView* s : sources_) {
+      const PinholeCamera& src = s->camera;
       const Eigen::Matrix3d R = src.rotation * ref_.camera.rotation.transpose();
       // The plane-induced homography K_s (R + t n^T / rho) K_r^-1 = A + B m^T with m = K_r^-T n / rho.
-      A_.push_back(views_[s].K * R * ref_.K_inv);
-      B_.push_back(views_[s].K * (src.translation - R * ref_.camera.translation));
+      A_.push_back(s->K * R * ref_.K_inv);
+      B_.push_back(s->K * (src.translation - R * ref_.camera.translation));
     }
     const double sigma_s = o_.bilateral_sigma_spatial > 0 ? o_.bilateral_sigma_spatial : o_.window_radius;
     for (int y = -o_.window_radius; y <= o_.window_radius; y += o_.window_step) {
@@ -262,7 +237,7 @@ class ReferenceMatcher {
   // not visible.
   // Float arithmetic: image coordinates stay below 2^14, where float keeps 1e-3 px.
   double SourceCost(int k, const RefWindow& win, const float hm[9]) const {
-    const View& src = views_[sources_[k]];
+    const StereoView& src = *sources_[k];
     double sums[4];
     if (!WindowSums(hm, win.u.data(), win.v.data(), win.weight.data(), win.value.data(), win.u.size(),
                     src.grey.data(), src.camera.width, src.camera.height, sums))
@@ -363,7 +338,7 @@ class ReferenceMatcher {
     m.normal = ImageF(w, h, 3, 0.0f);
     m.cost = ImageF(w, h, 1, 2.0f);
     m.color = ref_.color;
-    m.source_views = sources_;
+    m.source_views = source_indices_;
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
         const Plane& p = planes_[static_cast<size_t>(y) * w + x];
@@ -378,10 +353,10 @@ class ReferenceMatcher {
 
  private:
   const PatchMatchOptions& o_;
-  const std::vector<View>& views_;
-  const View& ref_;
+  std::vector<const StereoView*> sources_;
+  const StereoView& ref_;
   int ref_index_;
-  std::vector<int> sources_;
+  std::vector<int> source_indices_;
   double dmin_, dmax_;
   std::vector<Eigen::Matrix3d> A_;
   std::vector<Eigen::Vector3d> B_;
@@ -401,75 +376,6 @@ void ForRows(int height, const F& f) {
   });
 }
 
-DepthNormalMap MatchReference(const PatchMatchOptions& o, const std::vector<View>& views, int r,
-                              const std::vector<Eigen::Vector3d>& sparse, uint64_t* done,
-                              uint64_t total, const ProgressCallback& progress) {
-  const auto [dmin, dmax] = DepthRange(o, views[r].camera, sparse);
-  ReferenceMatcher m(o, views, r, SelectSources(o, views, r, std::sqrt(dmin * dmax)), dmin, dmax);
-  const int h = views[r].camera.height;
-  const uint64_t pixels = static_cast<uint64_t>(views[r].camera.width) * h;
-  if (!m.HasSources()) {
-    *done += pixels * (2 * o.iterations + 1);
-    if (progress) progress(*done, total);
-    DepthNormalMap empty = m.Result();
-    empty.depth = ImageF(views[r].camera.width, h, 1, 0.0f);
-    empty.normal = ImageF(views[r].camera.width, h, 3, 0.0f);
-    return empty;
-  }
-  ForRows(h, [&](int y, RefWindow* win) { m.Initialise(y, win); });
-  *done += pixels;
-  if (progress) progress(*done, total);
-  for (int round = 0; round < o.iterations; ++round) {
-    for (int colour = 0; colour < 2; ++colour) {
-      ForRows(h, [&](int y, RefWindow* win) { m.SweepRow(y, round, colour, win); });
-      *done += pixels;
-      if (progress) progress(*done, total);
-    }
-  }
-  return m.Result();
-}
-
-// Geometric consistency and cost filter: a pixel stays when enough other views' depth maps see
-// its point back at the same pixel (forward-backward reprojection) and depth.
-void FilterMaps(const PatchMatchOptions& o, std::vector<DepthNormalMap>* maps) {
-  const std::vector<DepthNormalMap> raw = *maps;  // read-only snapshot: order-independent
-  ParallelFor(size_t{0}, maps->size(), [&](size_t r) {
-    DepthNormalMap& m = (*maps)[r];
-    const PinholeCamera& cam = m.camera;
-    for (int y = 0; y < cam.height; ++y) {
-      for (int x = 0; x < cam.width; ++x) {
-        const double d = m.depth.at(x, y);
-        if (!(d > 0)) continue;
-        int consistent = 0;
-        if (m.cost.at(x, y) <= o.max_cost && o.min_consistent_views > 0) {
-          const Eigen::Vector3d X = cam.ToWorld(d * cam.Ray(x + 0.5, y + 0.5));
-          for (size_t s = 0; s < raw.size() && consistent < o.min_consistent_views; ++s) {
-            if (s == r) continue;
-            const PinholeCamera& sc = raw[s].camera;
-            const Eigen::Vector3d c = sc.ToCamera(X);
-            if (!(c.z() > 0)) continue;
-            const Eigen::Vector2d uv = sc.Project(c);
-            if (!(uv.x() >= 0 && uv.y() >= 0 && uv.x() < sc.width && uv.y() < sc.height)) continue;
-            const int sx = static_cast<int>(uv.x()), sy = static_cast<int>(uv.y());
-            const double ds = raw[s].depth.at(sx, sy);
-            if (!(ds > 0)) continue;
-            const Eigen::Vector3d back = cam.ToCamera(sc.ToWorld(ds * sc.Ray(sx + 0.5, sy + 0.5)));
-            if (!(back.z() > 0)) continue;
-            const double err = (cam.Project(back) - Eigen::Vector2d(x + 0.5, y + 0.5)).norm();
-            if (err <= o.max_reprojection_error_px && std::abs(back.z() - d) <= o.max_depth_error * d)
-              ++consistent;
-          }
-        }
-        const bool keep = m.cost.at(x, y) <= o.max_cost && consistent >= o.min_consistent_views;
-        if (!keep) {
-          m.depth.at(x, y) = 0;
-          for (int c = 0; c < 3; ++c) m.normal.at(x, y, c) = 0;
-        }
-      }
-    }
-  });
-}
-
 }  // namespace
 
 Image8 ResampleArea(const Image8& rgb, int width, int height) {
@@ -486,6 +392,7 @@ void PatchMatchOptions::Check() const {
   CANDI_CHECK_OPTION_IN(window_step, 1, window_radius);
   CANDI_CHECK_OPTION_IN(iterations, 1, 50);
   CANDI_CHECK_OPTION_IN(num_source_views, 1, 32);
+  CANDI_CHECK_OPTION_IN(num_check_views, num_source_views, 64);
   CANDI_CHECK_OPTION(resolution_scale > 0 && resolution_scale <= 1, resolution_scale, "in (0, 1]");
   // The rule names depth_min when the range is set and depth_min is not > 0, else depth_max.
   const bool range_set = depth_min != 0 || depth_max != 0;
@@ -504,21 +411,135 @@ void PatchMatchOptions::Check() const {
   CANDI_CHECK_OPTION_GT(max_depth_error, 0);
   CANDI_CHECK_OPTION_IN(min_consistent_views, 0, 32);
   CANDI_CHECK_OPTION_GE(threads, 0);
+  Sources().Check();
+}
+
+DepthNormalMap MatchReference(const PatchMatchOptions& o, const StereoView& ref, int ref_index,
+                              const std::vector<const StereoView*>& sources, const std::vector<int>& source_indices,
+                              std::pair<double, double> depth_range, const std::function<void(uint64_t)>& swept) {
+  CANDI_CHECK(sources.size() == source_indices.size()) << sources.size() << " vs " << source_indices.size();
+  const auto [dmin, dmax] = depth_range;
+  ReferenceMatcher m(o, ref, ref_index, sources, source_indices, dmin, dmax);
+  const int h = ref.camera.height;
+  const uint64_t pixels = static_cast<uint64_t>(ref.camera.width) * h;
+  if (!m.HasSources()) {
+    if (swept) swept(pixels * (2 * o.iterations + 1));
+    return m.Result();  // every plane unset: no depth
+  }
+  ForRows(h, [&](int y, RefWindow* win) { m.Initialise(y, win); });
+  if (swept) swept(pixels);
+  for (int round = 0; round < o.iterations; ++round) {
+    for (int colour = 0; colour < 2; ++colour) {
+      ForRows(h, [&](int y, RefWindow* win) { m.SweepRow(y, round, colour, win); });
+      if (swept) swept(pixels);
+    }
+  }
+  return m.Result();
+}
+
+void FilterDepthMap(const PatchMatchOptions& o, const std::vector<const DepthNormalMap*>& sources, DepthNormalMap* m) {
+  const PinholeCamera& cam = m->camera;
+  ParallelFor(tbb::blocked_range<int>(0, cam.height, 8), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int x = 0; x < cam.width; ++x) {
+        const double d = m->depth.at(x, y);
+        if (!(d > 0)) continue;
+        int consistent = 0;
+        if (m->cost.at(x, y) <= o.max_cost && o.min_consistent_views > 0) {
+          const Eigen::Vector3d X = cam.ToWorld(d * cam.Ray(x + 0.5, y + 0.5));
+          for (size_t s = 0; s < sources.size() && consistent < o.min_consistent_views; ++s) {
+            const PinholeCamera& sc = sources[s]->camera;
+            const Eigen::Vector3d c = sc.ToCamera(X);
+            if (!(c.z() > 0)) continue;
+            const Eigen::Vector2d uv = sc.Project(c);
+            if (!(uv.x() >= 0 && uv.y() >= 0 && uv.x() < sc.width && uv.y() < sc.height)) continue;
+            const int sx = static_cast<int>(uv.x()), sy = static_cast<int>(uv.y());
+            const double ds = sources[s]->depth.at(sx, sy);
+            if (!(ds > 0)) continue;
+            const Eigen::Vector3d back = cam.ToCamera(sc.ToWorld(ds * sc.Ray(sx + 0.5, sy + 0.5)));
+            if (!(back.z() > 0)) continue;
+            const double err = (cam.Project(back) - Eigen::Vector2d(x + 0.5, y + 0.5)).norm();
+            if (err <= o.max_reprojection_error_px && std::abs(back.z() - d) <= o.max_depth_error * d) ++consistent;
+          }
+        }
+        if (!(m->cost.at(x, y) <= o.max_cost && consistent >= o.min_consistent_views)) {
+          m->depth.at(x, y) = 0;
+          for (int c = 0; c < 3; ++c) m->normal.at(x, y, c) = 0;
+        }
+      }
+    }
+  });
+}
+
+SourceViewOptions PatchMatchOptions::Sources() const {
+  SourceViewOptions s;
+  s.num_sources = num_source_views;
+  s.num_check_views = num_check_views;
+  s.min_triangulation_angle_deg = min_triangulation_angle_deg;
+  s.max_distance_ratio = max_distance_ratio;
+  return s;
+}
+
+std::vector<std::pair<double, double>> StereoDepthRanges(const PatchMatchOptions& o, const StereoInput& input) {
+  std::vector<std::vector<Eigen::Vector3d>> seen(input.images.size());
+  if (!input.point_views.empty()) {
+    CANDI_CHECK(input.point_views.size() == input.sparse_points.size())
+        << input.point_views.size() << " tracks, " << input.sparse_points.size() << " points";
+    for (size_t k = 0; k < input.sparse_points.size(); ++k)
+      for (int v : input.point_views[k])
+        if (v >= 0 && static_cast<size_t>(v) < seen.size()) seen[v].push_back(input.sparse_points[k]);
+  }
+  std::vector<std::pair<double, double>> out;
+  for (size_t r = 0; r < input.images.size(); ++r) {
+    // The points a photo observes, when there are enough; else every point (projected).
+    const PinholeCamera cam = input.images[r].camera;
+    out.push_back(StereoDepthRange(o, cam, seen[r].size() >= 8 ? seen[r] : input.sparse_points));
+  }
+  return out;
+}
+
+std::vector<ViewLinks> StereoSources(const PatchMatchOptions& o, const StereoInput& input,
+                                     const std::vector<std::pair<double, double>>& ranges) {
+  std::vector<PinholeCamera> cameras;
+  for (const StereoImage& image : input.images) cameras.push_back(image.camera);
+  if (!input.point_views.empty())
+    return SelectSourceViewsFromTracks(o.Sources(), cameras, input.sparse_points, input.point_views);
+  std::vector<ViewLinks> out;
+  for (size_t r = 0; r < cameras.size(); ++r)
+    out.push_back(SelectSourceViewsByAngle(o.Sources(), cameras, static_cast<int>(r),
+                                           std::sqrt(ranges[r].first * ranges[r].second)));
+  return out;
 }
 
 PatchMatchResult RunPatchMatch(const PatchMatchOptions& options, const StereoInput& input,
                                const ProgressCallback& progress) {
   options.Check();
   PatchMatchResult result;
-  std::vector<View> views;
-  for (const StereoImage& image : input.images) views.push_back(PrepareView(image, options.resolution_scale));
+  std::vector<StereoView> views;
+  for (const StereoImage& image : input.images) views.push_back(PrepareStereoView(image, options.resolution_scale));
   uint64_t total = 0, done = 0;
-  for (const View& v : views)
+  for (const StereoView& v : views)
     total += static_cast<uint64_t>(v.camera.width) * v.camera.height * (2 * options.iterations + 1);
   auto run = [&] {
-    for (int r = 0; r < static_cast<int>(views.size()); ++r)
-      result.maps.push_back(MatchReference(options, views, r, input.sparse_points, &done, total, progress));
-    FilterMaps(options, &result.maps);
+    const std::vector<std::pair<double, double>> ranges = StereoDepthRanges(options, input);
+    const std::vector<ViewLinks> links = StereoSources(options, input, ranges);
+    for (size_t r = 0; r < views.size(); ++r) {
+      std::vector<const StereoView*> src;
+      for (int s : links[r].sources) src.push_back(&views[s]);
+      result.maps.push_back(MatchReference(options, views[r], static_cast<int>(r), src, links[r].sources, ranges[r],
+                                           [&](uint64_t n) {
+                                             done += n;
+                                             if (progress) progress(done, total);
+                                           }));
+      result.maps.back().check_views = links[r].checks;
+    }
+    const std::vector<DepthNormalMap> raw = result.maps;  // read-only: the filter is order-independent
+    const std::vector<std::vector<int>> neighbours = NeighbourViews(links);
+    for (size_t r = 0; r < views.size(); ++r) {
+      std::vector<const DepthNormalMap*> near;
+      for (int s : neighbours[r]) near.push_back(&raw[s]);
+      FilterDepthMap(options, near, &result.maps[r]);
+    }
   };
   if (options.threads > 0) {
     tbb::task_arena arena(options.threads);

@@ -3,7 +3,8 @@
 // Per reference view (Galliani et al., "Massively Parallel Multiview Stereopsis by Surface Normal
 // Diffusion" (Gipuma), ICCV 2015; Schönberger et al., "Pixelwise View Selection for Unstructured
 // Multi-View Stereo" (COLMAP), ECCV 2016):
-//  1. source views chosen by triangulation angle at the scene in front of the reference camera;
+//  1. source views from the sparse model's shared points (source_views.h), or, without tracks, by
+//     triangulation angle at the scene in front of the reference camera;
 //  2. random initialisation of depth (inverse-depth uniform in the range) and normal (facing the
 //     camera);
 //  3. `iterations` rounds of red-black (checkerboard) sweeps: each pixel of one colour takes the
@@ -12,8 +13,9 @@
 //     (refinement, shrinking each round). The cost of a plane is 1 - NCC between the reference
 //     window (bilateral weights, optionally) and its plane-induced homography into each source
 //     view, averaged over the best half of the sources (occlusion robustness);
-//  4. a geometric-consistency filter against the other views' depth maps: a pixel is kept when at
-//     least `min_consistent_views` sources see it back at the same place (forward-backward
+//  4. a geometric-consistency filter against the neighbours' depth maps (its sources and the
+//     views that have it as a source): a pixel is kept when at least `min_consistent_views`
+//     neighbours see it back at the same place (forward-backward
 //     reprojection error in pixels) and depth (relative), and its cost is below `max_cost`.
 //
 // Determinism: every random draw is HashIndex(seed, pixel, stream(view, round, colour)) and a
@@ -23,13 +25,16 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "core/image.h"
 #include "core/progress.h"
+#include "reconstruction/photogrammetry/mvs/source_views.h"
 #include "reconstruction/photogrammetry/pinhole_camera.h"
 
 namespace candi::photogrammetry {
@@ -39,10 +44,12 @@ struct PatchMatchOptions {
   int window_step = 2;              // sample every step-th pixel of the window, [1, window_radius]
   int iterations = 3;               // red-black rounds (propagation + refinement), [1, 50]
   int num_source_views = 4;         // source views per reference, [1, 32]
+  int num_check_views = 12;         // views the filter and fusion check a depth against, [sources, 64]
   double resolution_scale = 1.0;    // images resampled by this factor first, (0, 1]
   double depth_min = 0;             // depth range, model units; 0 and 0: from the sparse points
   double depth_max = 0;             //   (percentiles, widened) or the option when set, 0 < min < max
   double min_triangulation_angle_deg = 2;  // source views with a smaller angle are skipped, [0, 60)
+  double max_distance_ratio = 2;    // source views: median distance ratio to the shared points, >= 1
   double bilateral_sigma_color = 0.15;     // bilateral weight, grey in [0,1]; 0 = plain NCC
   double bilateral_sigma_spatial = 0;      // pixels; 0 = window_radius
   double min_texture = 0.01;        // reference window grey std-dev below this: no depth, >= 0
@@ -52,6 +59,7 @@ struct PatchMatchOptions {
   int min_consistent_views = 2;     // geometric consistency: sources agreeing, [0, 32]; 0 = off
   uint64_t seed = 1;
   int threads = 0;                  // 0 = all cores
+  SourceViewOptions Sources() const;  // the views, the angle and the distance ratio
   void Check() const;
 };
 
@@ -64,6 +72,10 @@ struct StereoImage {
 struct StereoInput {
   std::vector<StereoImage> images;
   std::vector<Eigen::Vector3d> sparse_points;  // model frame; depth ranges when not set in options
+  // Per sparse point, the images that observe it (indices into `images`): the sources come from
+  // the tracks and a photo's depth range from the points it observes. Empty: no tracks (the
+  // geometric source rule; depth ranges from every point projected).
+  std::vector<std::vector<int>> point_views;
 };
 
 struct DepthNormalMap {
@@ -73,7 +85,21 @@ struct DepthNormalMap {
   ImageF cost;                       // 1 channel, 1 - NCC of the final plane
   Image8 color;                      // RGB at the working resolution (for fusion)
   std::vector<int> source_views;     // indices into the input images
+  std::vector<int> check_views;      // the filter's and fusion's (source_views.h); not in map files
 };
+
+// An image at the working resolution, ready to match: RGB and grey in [0, 1].
+struct StereoView {
+  PinholeCamera camera;
+  Image8 color;              // RGB
+  std::vector<float> grey;   // row-major
+  Eigen::Matrix3d K, K_inv;
+  size_t Bytes() const;
+};
+
+// The image resampled by `scale` (ResampleArea); InternalError for an invalid camera or an image
+// whose size differs from its camera.
+StereoView PrepareStereoView(const StereoImage& image, double scale);
 
 struct PatchMatchResult {
   std::vector<DepthNormalMap> maps;  // one per input image, same order
@@ -84,6 +110,28 @@ struct PatchMatchResult {
 // An RGB image resampled to width x height by area averaging (OpenCV's INTER_AREA), as PatchMatch
 // resamples its inputs for resolution_scale < 1.
 Image8 ResampleArea(const Image8& rgb, int width, int height);
+
+// The depth range of a camera from the sparse points in front of it and inside it (2nd and 98th
+// percentiles, widened by 0.75 and 1.25), or from all points in front when fewer than 8 fall
+// inside; the options' range when set. std::invalid_argument when no point is in front.
+std::pair<double, double> StereoDepthRange(const PatchMatchOptions& options, const PinholeCamera& camera,
+                                           const std::vector<Eigen::Vector3d>& points);
+// Every image's depth range (from the points it observes when the input has tracks) and views.
+std::vector<std::pair<double, double>> StereoDepthRanges(const PatchMatchOptions& options, const StereoInput& input);
+std::vector<ViewLinks> StereoSources(const PatchMatchOptions& options, const StereoInput& input,
+                                     const std::vector<std::pair<double, double>>& ranges);
+
+// PatchMatch for one reference (`ref_index` numbers it in the campaign: its random streams)
+// against its sources; the map before the consistency filter. `swept(n)` reports n more pixel
+// sweeps. A reference without sources gets an empty map (no depth anywhere).
+DepthNormalMap MatchReference(const PatchMatchOptions& options, const StereoView& ref, int ref_index,
+                              const std::vector<const StereoView*>& sources, const std::vector<int>& source_indices,
+                              std::pair<double, double> depth_range, const std::function<void(uint64_t)>& swept);
+
+// The consistency and cost filter of one map against its neighbours' maps before their filter
+// (NeighbourViews; any order); pixels that fail lose their depth and normal.
+void FilterDepthMap(const PatchMatchOptions& options, const std::vector<const DepthNormalMap*>& neighbours,
+                    DepthNormalMap* map);
 
 // Runs PatchMatch on every image as reference, then the consistency filter. Throws
 // std::invalid_argument for bad options, InputError-free (inputs come from the caller); an image

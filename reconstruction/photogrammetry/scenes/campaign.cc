@@ -306,6 +306,25 @@ Campaign PlanCampaign(const CampaignOptions& options) {
   return c;
 }
 
+SyntheticViewsOptions CampaignRenderOptions(const CampaignOptions& options) {
+  SyntheticViewsOptions render;
+  render.texture_cell = 0.03;
+  render.supersample = options.supersample;
+  render.noise_sigma = options.noise_sigma;
+  render.seed = options.seed;
+  return render;
+}
+
+std::vector<SyntheticView> RenderCampaignViews(const Campaign& campaign) {
+  const SyntheticViewsOptions render = CampaignRenderOptions(campaign.options);
+  std::vector<SyntheticView> views(campaign.photos.size());
+  ParallelFor(size_t{0}, views.size(), [&](size_t i) {
+    views[i] = RenderSyntheticView(campaign.scene, campaign.photos[i].camera, render, static_cast<int>(i));
+    views[i].name = fs::path(campaign.photos[i].name).replace_extension(".png").string();
+  });
+  return views;
+}
+
 Campaign WriteCampaign(const CampaignOptions& options, const std::string& output_dir, bool overwrite,
                        const ProgressCallback& progress) {
   const Campaign c = PlanCampaign(options);
@@ -331,11 +350,7 @@ Campaign WriteCampaign(const CampaignOptions& options, const std::string& output
   }
   // The photos, rendered and written as they are done; the truth surface a sample of each one's
   // true depth.
-  SyntheticViewsOptions render;
-  render.texture_cell = 0.03;
-  render.supersample = options.supersample;
-  render.noise_sigma = options.noise_sigma;
-  render.seed = options.seed;
+  const SyntheticViewsOptions render = CampaignRenderOptions(options);
   io::JpegExif exif;
   exif.focal_mm = options.focal_mm;
   const PinholeCamera& first = c.photos.front().camera;

@@ -93,6 +93,13 @@ struct Campaign {
 // The campaign's geometry (no rendering). Throws std::invalid_argument for invalid options.
 Campaign PlanCampaign(const CampaignOptions& options);
 
+// How the photos are rendered (texture, supersampling, noise, seed).
+SyntheticViewsOptions CampaignRenderOptions(const CampaignOptions& options);
+// The photos in memory, with their true depth (world frame, no file written), named as the
+// campaign names them but ".png" (WriteSyntheticImages writes PNG); the pixels WriteCampaign
+// encodes as JPEG. In parallel.
+std::vector<SyntheticView> RenderCampaignViews(const Campaign& campaign);
+
 // Renders every photo (in parallel, each written as it is done) and writes the files listed in
 // the file comment into `output_dir` (created; an existing campaign there is refused unless
 // `overwrite`). Progress counts photos. Returns the plan. InputError when OUT cannot be written.

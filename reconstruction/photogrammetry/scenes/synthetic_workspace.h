@@ -11,7 +11,8 @@
 namespace candi::photogrammetry {
 
 // A model with one PINHOLE camera per view, image ids 1..N in order, and `points` as points3D
-// (no tracks; grey colour).
+// (grey), each with a track of the views where it is the visible surface (in the image, within
+// 1 % of the view's true depth there), as SfM would have observed it.
 ColmapModel ToColmapModel(const std::vector<SyntheticView>& views,
                           const std::vector<Eigen::Vector3d>& points);
 
