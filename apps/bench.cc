@@ -29,10 +29,20 @@ void AddBenchCommand(Command& root) {
   c.Option("--threads", a.threads, "Threads (0: all)").Range(0, 256);
   c.Option("--data", a.data, "dense: the shared data folder; runs candi dense on its Sceaux photos against its "
            "OpenMVS cloud instead of the synthetic table");
-  c.Option("--scale", a.scale, "dense --data: resolution scale").Range(0.05, 1.0);
-  c.Option("--iterations", a.iterations, "dense --data: PatchMatch rounds").Range(1, 50);
+  c.Option("--scale", a.scale, "dense --data, --campaign: resolution scale").Range(0.05, 1.0);
+  c.Option("--iterations", a.iterations, "dense --data, --campaign: PatchMatch rounds").Range(1, 50);
+  c.Option("--campaign", a.campaign, "dense: photo counts, comma separated; candi dense (streamed) on generated "
+           "campaigns, scored against the true surface at 1, 2 and 5 cm");
+  c.Option("--campaign-size", a.campaign_size, "dense --campaign: the photos' long side, pixels").Range(64, 8192);
+  c.Option("--views", a.views, "dense --campaign: source views").Range(1, 32);
+  c.Option("--grid-at", a.grid_at, "dense --campaign: at this photo count, the table of resolution scale x rounds x "
+           "source views (0: none)");
+  c.Option("--max-memory", a.max_memory_mb, "dense --campaign: candi dense --max-memory, MB (0: its default)");
+  c.Option("--work-dir", a.work_dir, "dense --campaign: folder for the workspaces (deleted afterwards)");
+  c.Flag("--keep", a.keep, "dense --campaign: keep the workspaces");
   c.Run([&a] { return bench::RunBench(a); });
-  c.Footer("Example: candi bench render --points 1000000; candi bench dense --data ../shared/data --threads 2");
+  c.Footer("Examples: candi bench render --points 1000000; candi bench dense --data ../shared/data --threads 2\n"
+           "          candi bench dense --campaign 50,100,200,400 --campaign-size 800 --threads 2");
 }
 
 void AddScaleBench(Command& bench) {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <utility>
 
@@ -149,13 +150,25 @@ int RunDense(const DenseArgs& a) {
   o.Check();
   io::OutputPointFormat(a.output);  // an unknown extension fails before the work
   const Stopwatch watch;
-  const pipeline::RanksDense r = pipeline::DenseStereoOnRanks(o, a.workspace, RankReporting("no points written"));
+  // The points go to the file cell by cell, as rank 0 reads them back: never all held.
+  std::unique_ptr<io::PointWriter> writer;
+  const auto cells_out = [&](const PointCloud& cell) {
+    if (!writer) {
+      io::PointWriteSpec spec;
+      spec.schema = cell.schema;
+      spec.meta.comments.push_back(pipeline::DenseComment(a.workspace));
+      writer = io::OpenPointWriter(a.output, spec);
+    }
+    writer->Write(cell);
+  };
+  const pipeline::RanksDense r =
+      pipeline::DenseStereoOnRanks(o, a.workspace, RankReporting("no points written"), cells_out);
   if (!r.failures.empty()) throw ReportedFailure(r.failures.front().exit_code);
   if (!r.root) return kOk;
   const pipeline::DenseCloud& dense = r.dense;
+  writer->Close();
   std::printf("workspace %s: %zu images, %zu sparse points, sources from %s\n", a.workspace.c_str(), dense.images,
               dense.sparse_points, dense.sources_from_tracks ? "the tracks" : "the camera geometry (no tracks)");
-  io::WritePointCloud(a.output, dense.cloud);
   const double total_s = watch.Seconds();
   std::printf("stereo: %zu depth maps made, %zu found finished, %.2f s; image cache peak %.1f MB of %.0f MB\n",
               dense.maps_made, dense.maps_found, dense.stereo_seconds, dense.peak_cache_bytes / 1048576.0,
@@ -165,8 +178,8 @@ int RunDense(const DenseArgs& a) {
               dense.total_pixels ? 100.0 * dense.valid_pixels / dense.total_pixels : 0.0, dense.empty_maps.size(),
               dense.filter_seconds);
   std::printf("fusion: %zu cells (%zu found finished), %.2f s\n", dense.tiles, dense.tiles_found, dense.fusion_seconds);
-  std::printf("fused points: %zu -> %s\n", dense.cloud.size(), a.output.c_str());
-  std::printf("time: %.2f s, %.0f points/s, peak memory %.0f MB\n", total_s, total_s > 0 ? dense.cloud.size() / total_s : 0.0,
+  std::printf("fused points: %zu -> %s\n", dense.points, a.output.c_str());
+  std::printf("time: %.2f s, %.0f points/s, peak memory %.0f MB\n", total_s, total_s > 0 ? dense.points / total_s : 0.0,
               PeakMemoryMb());
   return kOk;
 }

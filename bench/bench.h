@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace candi::bench {
@@ -20,10 +21,22 @@ struct BenchOptions {
   int threads = 1;                    // [0, 256], 0 = all
   std::string data;                   // dense: ../shared/data -> the Sceaux comparison with OpenMVS
   double scale = 0.5;                 // dense --data: PatchMatch resolution scale, [0.05, 1]
-  int iterations = 3;                 // dense --data: PatchMatch rounds, [1, 50]
+  int iterations = 3;                 // dense --data, --campaign: PatchMatch rounds, [1, 50]
+  // dense --campaign: the streaming run (a child `candi dense`) on generated campaigns of these
+  // photo counts (e.g. "50,100,200,400") at `campaign_size` px; "" none.
+  std::string campaign;
+  int campaign_size = 800;            // [64, 8192]
+  int views = 4;                      // dense --campaign: source views
+  int grid_at = 0;                    // dense --campaign: scale x rounds x views table at this count
+  uint64_t max_memory_mb = 0;         // dense --campaign: candi dense --max-memory (0: its default)
+  std::string work_dir = "candi-bench-dense";
+  bool keep = false;                  // keep the campaigns' workspaces
   void Check() const;
 };
 int RunBench(const BenchOptions& options);
+// candi dense on generated campaigns: seconds a photo, peak memory, points, accuracy and
+// completeness at 1, 2 and 5 cm against the true surface; the fitted law; the accuracy grid.
+int RunDenseCampaign(const BenchOptions& options);
 // SPBR accuracy against time: RMSE against depth-sorted blending for L = 1 ... 1024.
 int RunRenderAccuracy(const BenchOptions& options);
 // Foundation from sections: accuracy against time of N and M, and the paper-scale run.
@@ -128,6 +141,8 @@ struct CampaignBenchOptions {
   void Check() const;
 };
 int RunCampaignBench(const CampaignBenchOptions& options);
+// seconds = a N^b fitted in logs (least squares): {a, b}. At least two distinct N.
+std::pair<double, double> FitPowerLaw(const std::vector<double>& n, const std::vector<double>& seconds);
 
 // `candi bench relief` (candi_bench_relief): network width x training time -> accuracy, training
 // and prediction seconds; or, on real photos, fine-tuning seconds -> accuracy.

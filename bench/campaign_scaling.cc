@@ -93,6 +93,18 @@ pg::SfmSummary RunOne(const CampaignBenchOptions& o, const std::string& site, co
 
 }  // namespace
 
+std::pair<double, double> FitPowerLaw(const std::vector<double>& n, const std::vector<double>& seconds) {
+  // Least squares in logs.
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (size_t k = 0; k < n.size(); ++k) {
+    const double x = std::log(n[k]), y = std::log(seconds[k]);
+    sx += x, sy += y, sxx += x * x, sxy += x * y;
+  }
+  const double m = static_cast<double>(n.size());
+  const double b = (m * sxy - sx * sy) / (m * sxx - sx * sx);
+  return {std::exp((sy - b * sx) / m), b};
+}
+
 int RunCampaignBench(const CampaignBenchOptions& o) {
   o.Check();
   std::vector<int> sizes;
@@ -188,14 +200,9 @@ int RunCampaignBench(const CampaignBenchOptions& o) {
     }
   }
   if (rows.size() >= 2) {
-    // seconds = a N^b, least squares in logs.
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (const Row& r : rows) {
-      const double x = std::log(r.photos), y = std::log(r.total);
-      sx += x, sy += y, sxx += x * x, sxy += x * y;
-    }
-    const double m = static_cast<double>(rows.size());
-    const double b = (m * sxy - sx * sy) / (m * sxx - sx * sx), a = std::exp((sy - b * sx) / m);
+    std::vector<double> n, seconds;
+    for (const Row& r : rows) n.push_back(r.photos), seconds.push_back(r.total);
+    const auto [a, b] = FitPowerLaw(n, seconds);
     std::printf("fitted: total seconds = %.3g x N^%.2f; seconds a photo at %d photos / at %d: %.2f (goal <= 1.5)\n", a,
                 b, rows.back().photos, rows.front().photos,
                 (rows.back().total / rows.back().photos) / (rows.front().total / rows.front().photos));

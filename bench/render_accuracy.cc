@@ -23,11 +23,15 @@ void BenchOptions::Check() const {
   CANDI_CHECK_OPTION_IN(threads, 0, 256);
   CANDI_CHECK_OPTION_IN(scale, 0.05, 1.0);
   CANDI_CHECK_OPTION_IN(iterations, 1, 50);
+  CANDI_CHECK_OPTION_IN(campaign_size, 64, 8192);
+  CANDI_CHECK_OPTION_IN(views, 1, 32);
+  CANDI_CHECK_OPTION_GE(grid_at, 0);
 }
 
 int RunBench(const BenchOptions& args) {
   args.Check();
   if (args.what == "foundation") return RunFoundationAccuracy();
+  if (args.what == "dense" && !args.campaign.empty()) return RunDenseCampaign(args);
   if (args.what == "dense") return args.data.empty() ? RunDenseAccuracy(args) : RunDenseSceaux(args);
   return RunRenderAccuracy(args);
 }

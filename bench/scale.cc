@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "bench/archives.h"
+#include "bench/child_run.h"
 #include "bench/bench.h"
 #include "core/check.h"
 #include "core/interrupt.h"
@@ -35,61 +36,6 @@ namespace candi::bench {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct ChildRun {
-  int code = -1;
-  double seconds = 0;
-  double peak_mb = 0;  // the largest resident set of the child or any of its descendants
-  double cpu_seconds = 0;  // user + system CPU of the child and its descendants
-  std::string out;     // stdout
-};
-
-// Runs argv (PATH lookup), capturing stdout; stderr passes through.
-ChildRun Run(const std::vector<std::string>& argv) {
-  int pipe_fd[2];
-  CANDI_CHECK(pipe(pipe_fd) == 0) << "pipe";
-  const auto start = std::chrono::steady_clock::now();
-  const pid_t pid = fork();
-  CANDI_CHECK(pid >= 0) << "fork";
-  if (pid == 0) {
-    sigset_t mask;  // candi's interrupt handler blocks these signals; the child handles its own
-    ChildSignalMask(&mask);
-    sigprocmask(SIG_SETMASK, &mask, nullptr);
-    dup2(pipe_fd[1], 1);
-    close(pipe_fd[0]);
-    close(pipe_fd[1]);
-    std::vector<char*> args;
-    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    execvp(args[0], args.data());
-    std::fprintf(stderr, "cannot run %s: %s\n", args[0], std::strerror(errno));
-    _exit(127);
-  }
-  close(pipe_fd[1]);
-  const int registered = RegisterChild(pid);  // stopped if candi is interrupted
-  ChildRun r;
-  char buffer[4096];
-  ssize_t n;
-  while ((n = read(pipe_fd[0], buffer, sizeof(buffer))) > 0) r.out.append(buffer, static_cast<size_t>(n));
-  close(pipe_fd[0]);
-  int status = 0;
-  struct rusage usage {};
-  wait4(pid, &status, 0, &usage);
-  UnregisterChild(registered);
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.peak_mb = usage.ru_maxrss / 1024.0;
-  r.cpu_seconds = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  return r;
-}
-
-std::string SelfPath() {
-  char self[4096];
-  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
-  CANDI_CHECK(n > 0) << "/proc/self/exe";
-  self[n] = '\0';
-  return self;
-}
 
 // The render's own time ("..., 1234 ms, ...") from `candi render`'s summary line.
 double RenderMs(const std::string& out) {
@@ -162,7 +108,7 @@ int RunScaleBench(const ScaleBenchOptions& args) {
     }
     ChildRun packed;
     if (n <= 200000000ULL) {
-      packed = Run(pack);
+      packed = RunChild(pack);
     } else {
       // 1e9: pack in this process straight from the generator (a PLY would take 15 GB).
       const auto start = std::chrono::steady_clock::now();
@@ -193,7 +139,7 @@ int RunScaleBench(const ScaleBenchOptions& args) {
                                              "--memory-budget", budget};
     std::vector<std::string> one = {self, "-q"};
     one.insert(one.end(), render.begin(), render.end());
-    const ChildRun r1 = Run(one);
+    const ChildRun r1 = RunChild(one);
     ChildRun rk;
     bool same = false;
     if (args.ranks > 0) {
@@ -207,7 +153,7 @@ int RunScaleBench(const ScaleBenchOptions& args) {
       mpi.insert(mpi.end(), rr.begin(), rr.end());
       mpi.push_back("--threads");
       mpi.push_back(std::to_string(std::max<long>(1, cores / args.ranks)));
-      rk = Run(mpi);
+      rk = RunChild(mpi);
       same = r1.code == 0 && rk.code == 0 && SamePixels(dir + "/one16.png", dir + "/np16.png");
     }
     const double s1 = RenderMs(r1.out) / 1000, sk = RenderMs(rk.out) / 1000;

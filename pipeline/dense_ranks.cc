@@ -8,10 +8,13 @@
 namespace candi::pipeline {
 
 RanksDense DenseStereoOnRanks(const DenseOptions& options, const std::string& workspace,
-                              const RanksReporting& reporting) {
+                              const RanksReporting& reporting,
+                              const std::function<void(const PointCloud& cell)>& cells_out) {
   RanksDense out;
   if (!render::mpi::LaunchedByMpi()) {
-    out.dense = DenseStereo(options, workspace);
+    DenseRankShare one;
+    one.cells_out = cells_out;
+    out.dense = DenseStereo(options, workspace, one);
     return out;
   }
   const render::mpi::Session session;
@@ -24,6 +27,7 @@ RanksDense DenseStereoOnRanks(const DenseOptions& options, const std::string& wo
     share.rank = rank;
     share.ranks = ranks;
     share.all_gather = [&session](const std::string& mine) { return session.AllGather(mine); };
+    share.cells_out = cells_out;
     out.dense = DenseStereo(options, workspace, share);
   } catch (...) {
     failure = std::current_exception();

@@ -22,7 +22,9 @@ struct RanksDense {
   std::vector<render::mpi::Session::Failure> failures;  // under mpirun, in rank order
 };
 
+// `cells_out`: as DenseRankShare's (called on rank 0 only).
 RanksDense DenseStereoOnRanks(const DenseOptions& options, const std::string& workspace,
-                              const RanksReporting& reporting);
+                              const RanksReporting& reporting,
+                              const std::function<void(const PointCloud& cell)>& cells_out = nullptr);
 
 }  // namespace candi::pipeline

@@ -150,6 +150,8 @@ void DenseOptions::Check() const {
   fusion.Check();
 }
 
+std::string DenseComment(const std::string& workspace) { return "candi dense " + workspace; }
+
 DenseCloud DenseStereo(const DenseOptions& options, const std::string& workspace, const DenseRankShare& share) {
   options.Check();
   pg::DenseStreamOptions o;
@@ -160,10 +162,11 @@ DenseCloud DenseStereo(const DenseOptions& options, const std::string& workspace
   o.rank = share.rank;
   o.ranks = share.ranks;
   o.all_gather = share.all_gather;
+  o.cells_out = share.cells_out;
   DenseCloud out = pg::RunDenseStream(o, workspace);
   if (share.rank != 0) return out;
-  out.cloud.meta.comments.push_back("candi dense " + workspace);
-  if (out.cloud.empty()) LogWarning("dense: no points (textureless images, no overlap, or too strict filters)");
+  out.cloud.meta.comments.push_back(DenseComment(workspace));
+  if (out.points == 0) LogWarning("dense: no points (textureless images, no overlap, or too strict filters)");
   return out;
 }
 

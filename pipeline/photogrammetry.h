@@ -56,7 +56,12 @@ using DenseCloud = photogrammetry::DenseStreamResult;
 struct DenseRankShare {
   int rank = 0, ranks = 1;
   std::function<std::vector<std::string>(const std::string&)> all_gather;  // collective
+  // Rank 0's points, cell by cell, instead of the result's cloud (DenseStreamOptions::cells_out).
+  std::function<void(const PointCloud& cell)> cells_out;
 };
+
+// The comment a dense cloud carries: "candi dense WORKSPACE".
+std::string DenseComment(const std::string& workspace);
 
 // PatchMatch stereo on a COLMAP dense workspace (images/ + sparse/, PINHOLE cameras) and fusion,
 // streamed and resumable (photogrammetry/mvs/dense_stream.h).

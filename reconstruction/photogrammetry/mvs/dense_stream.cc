@@ -281,8 +281,9 @@ DenseStreamResult RunDenseStream(const DenseStreamOptions& options, const std::s
   std::vector<PinholeCamera> cameras;  // at the working resolution
   for (const StereoImage& image : model.images)
     cameras.push_back(so.resolution_scale == 1.0 ? image.camera : image.camera.Scaled(so.resolution_scale));
-  const std::vector<std::pair<double, double>> ranges = StereoDepthRanges(so, model);
-  const std::vector<ViewLinks> links = StereoSources(so, model, ranges);
+  const StereoPlan plan = PlanStereo(so, model);
+  const std::vector<std::pair<double, double>>& ranges = plan.ranges;
+  const std::vector<ViewLinks>& links = plan.links;
   const std::vector<std::vector<int>> neighbours = NeighbourViews(links);
 
   // Ends a stage on every rank: the first failure anywhere fails every rank, and the ranks' counts
@@ -522,7 +523,17 @@ DenseStreamResult RunDenseStream(const DenseStreamOptions& options, const std::s
     out.empty_maps = empty_maps;
     if (rank == 0) {
       out.cloud = FusedCloud();
-      for (int t = 0; t < tiles.count(); ++t) AppendTileFile(layout.Tile(t), &out.cloud);
+      for (int t = 0; t < tiles.count(); ++t) {
+        if (!options.cells_out) {
+          AppendTileFile(layout.Tile(t), &out.cloud);
+          continue;
+        }
+        PointCloud cell = FusedCloud();
+        AppendTileFile(layout.Tile(t), &cell);
+        out.points += cell.size();
+        options.cells_out(cell);
+      }
+      if (!options.cells_out) out.points = out.cloud.size();
     }
     out.fusion_seconds = watch.Seconds();
   };

@@ -49,11 +49,15 @@ struct DenseStreamOptions {
   // settings and gathers the cells into the cloud; the others return no points.
   int rank = 0, ranks = 1;
   std::function<std::vector<std::string>(const std::string&)> all_gather;
+  // When set, rank 0 hands the points over cell by cell, in cell order, as it reads them back (a
+  // point file's writer), and the result's cloud stays empty: the points are never all held.
+  std::function<void(const PointCloud& cell)> cells_out;
   void Check() const;
 };
 
 struct DenseStreamResult {
   PointCloud cloud;                      // fused points with colours and normals, the model's frame
+  size_t points = 0;                     // fused points (in `cloud`, or handed to cells_out)
   size_t images = 0, sparse_points = 0;
   bool sources_from_tracks = false;      // false: the model has no tracks (the geometric rule)
   // Counts over every rank (under mpirun: added up at the end of each stage).

@@ -95,8 +95,24 @@ TEST(DenseStream, ARunStoppedInAnyStageResumesToTheSameBytes) {
   TempDir dir;
   DenseStreamOptions o = StreamOptions();
   o.fusion.max_tile_views = 3;  // several fusion cells
-  const DenseStreamResult whole = RunDenseStream(o, StreamWorkspace(dir, "whole"));
+  const std::string whole_ws = StreamWorkspace(dir, "whole");
+  const DenseStreamResult whole = RunDenseStream(o, whole_ws);
   ASSERT_GT(whole.tiles, 2);
+  EXPECT_EQ(whole.points, whole.cloud.size());
+  // Handed over cell by cell (a point file's writer): the same points, in the same order, and
+  // none held in the result.
+  DenseStreamOptions streamed = o;
+  PointCloud cells = FusedCloud();
+  int handed = 0;
+  streamed.cells_out = [&](const PointCloud& cell) {
+    cells.Append(cell);
+    ++handed;
+  };
+  const DenseStreamResult by_cell = RunDenseStream(streamed, whole_ws);
+  EXPECT_EQ(handed, whole.tiles);
+  EXPECT_TRUE(by_cell.cloud.empty());
+  EXPECT_EQ(by_cell.points, whole.cloud.size());
+  ExpectSameCloud(cells, whole.cloud);
   const struct {
     const char* stage;
     size_t after;

@@ -480,35 +480,45 @@ SourceViewOptions PatchMatchOptions::Sources() const {
   return s;
 }
 
-std::vector<std::pair<double, double>> StereoDepthRanges(const PatchMatchOptions& o, const StereoInput& input) {
-  std::vector<std::vector<Eigen::Vector3d>> seen(input.images.size());
-  if (!input.point_views.empty()) {
-    CANDI_CHECK(input.point_views.size() == input.sparse_points.size())
-        << input.point_views.size() << " tracks, " << input.sparse_points.size() << " points";
-    for (size_t k = 0; k < input.sparse_points.size(); ++k)
-      for (int v : input.point_views[k])
-        if (v >= 0 && static_cast<size_t>(v) < seen.size()) seen[v].push_back(input.sparse_points[k]);
-  }
-  std::vector<std::pair<double, double>> out;
-  for (size_t r = 0; r < input.images.size(); ++r) {
-    // The points a photo observes, when there are enough; else every point (projected).
-    const PinholeCamera cam = input.images[r].camera;
-    out.push_back(StereoDepthRange(o, cam, seen[r].size() >= 8 ? seen[r] : input.sparse_points));
-  }
-  return out;
-}
-
-std::vector<ViewLinks> StereoSources(const PatchMatchOptions& o, const StereoInput& input,
-                                     const std::vector<std::pair<double, double>>& ranges) {
+StereoPlan PlanStereo(const PatchMatchOptions& o, const StereoInput& input) {
+  StereoPlan plan;
   std::vector<PinholeCamera> cameras;
   for (const StereoImage& image : input.images) cameras.push_back(image.camera);
-  if (!input.point_views.empty())
-    return SelectSourceViewsFromTracks(o.Sources(), cameras, input.sparse_points, input.point_views);
-  std::vector<ViewLinks> out;
-  for (size_t r = 0; r < cameras.size(); ++r)
-    out.push_back(SelectSourceViewsByAngle(o.Sources(), cameras, static_cast<int>(r),
-                                           std::sqrt(ranges[r].first * ranges[r].second)));
-  return out;
+  if (input.point_views.empty()) {
+    // No tracks: every point for every range, then the geometric rule at the range's middle.
+    for (const PinholeCamera& cam : cameras) plan.ranges.push_back(StereoDepthRange(o, cam, input.sparse_points));
+    for (size_t r = 0; r < cameras.size(); ++r)
+      plan.links.push_back(SelectSourceViewsByAngle(o.Sources(), cameras, static_cast<int>(r),
+                                                    std::sqrt(plan.ranges[r].first * plan.ranges[r].second)));
+    return plan;
+  }
+  CANDI_CHECK(input.point_views.size() == input.sparse_points.size())
+      << input.point_views.size() << " tracks, " << input.sparse_points.size() << " points";
+  plan.links = SelectSourceViewsFromTracks(o.Sources(), cameras, input.sparse_points, input.point_views);
+  // A photo's range: the points that it or its neighbours observe (those in its image count), so
+  // the surface its neighbours see beyond its own tracks is in range too, at a cost bounded by
+  // the neighbours, not the campaign.
+  std::vector<std::vector<int>> observed(cameras.size());
+  for (size_t k = 0; k < input.point_views.size(); ++k)
+    for (int v : input.point_views[k])
+      if (v >= 0 && static_cast<size_t>(v) < cameras.size() && (observed[v].empty() || observed[v].back() != static_cast<int>(k)))
+        observed[v].push_back(static_cast<int>(k));
+  const std::vector<std::vector<int>> neighbours = NeighbourViews(plan.links);
+  std::vector<uint8_t> mark(input.sparse_points.size(), 0);
+  for (size_t r = 0; r < cameras.size(); ++r) {
+    std::vector<int> ids;
+    auto add = [&](int v) {
+      for (int k : observed[v])
+        if (!mark[k]) mark[k] = 1, ids.push_back(k);
+    };
+    add(static_cast<int>(r));
+    for (int v : neighbours[r]) add(v);
+    std::sort(ids.begin(), ids.end());  // point order, as the rule without tracks reads them
+    std::vector<Eigen::Vector3d> points;
+    for (int k : ids) points.push_back(input.sparse_points[k]), mark[k] = 0;
+    plan.ranges.push_back(StereoDepthRange(o, cameras[r], points.empty() ? input.sparse_points : points));
+  }
+  return plan;
 }
 
 PatchMatchResult RunPatchMatch(const PatchMatchOptions& options, const StereoInput& input,
@@ -521,8 +531,9 @@ PatchMatchResult RunPatchMatch(const PatchMatchOptions& options, const StereoInp
   for (const StereoView& v : views)
     total += static_cast<uint64_t>(v.camera.width) * v.camera.height * (2 * options.iterations + 1);
   auto run = [&] {
-    const std::vector<std::pair<double, double>> ranges = StereoDepthRanges(options, input);
-    const std::vector<ViewLinks> links = StereoSources(options, input, ranges);
+    const StereoPlan plan = PlanStereo(options, input);
+    const std::vector<std::pair<double, double>>& ranges = plan.ranges;
+    const std::vector<ViewLinks>& links = plan.links;
     for (size_t r = 0; r < views.size(); ++r) {
       std::vector<const StereoView*> src;
       for (int s : links[r].sources) src.push_back(&views[s]);

@@ -116,10 +116,13 @@ Image8 ResampleArea(const Image8& rgb, int width, int height);
 // inside; the options' range when set. std::invalid_argument when no point is in front.
 std::pair<double, double> StereoDepthRange(const PatchMatchOptions& options, const PinholeCamera& camera,
                                            const std::vector<Eigen::Vector3d>& points);
-// Every image's depth range (from the points it observes when the input has tracks) and views.
-std::vector<std::pair<double, double>> StereoDepthRanges(const PatchMatchOptions& options, const StereoInput& input);
-std::vector<ViewLinks> StereoSources(const PatchMatchOptions& options, const StereoInput& input,
-                                     const std::vector<std::pair<double, double>>& ranges);
+// Every image's views (source_views.h) and depth range (StereoDepthRange over the points it and
+// its neighbours observe when the input has tracks, else over every point).
+struct StereoPlan {
+  std::vector<ViewLinks> links;
+  std::vector<std::pair<double, double>> ranges;
+};
+StereoPlan PlanStereo(const PatchMatchOptions& options, const StereoInput& input);
 
 // PatchMatch for one reference (`ref_index` numbers it in the campaign: its random streams)
 // against its sources; the map before the consistency filter. `swept(n)` reports n more pixel
