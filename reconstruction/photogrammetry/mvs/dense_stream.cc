@@ -450,8 +450,8 @@ DenseStreamResult RunDenseStream(const DenseStreamOptions& options, const std::s
         if (valid == 0) {
           out.empty_maps.push_back(name);
           LogWarning(who + name + " has no depth (" +
-                     (links[r].sources.empty() ? std::string("no source views: no photo shares enough sparse points with it "
-                                                       "at a usable angle")
+                     (links[r].sources.empty() ? std::string("no source views: no sparse point in front of it, or none that "
+                                                             "another photo shares at a usable angle")
                                          : std::string("textureless, or its sources disagree")) +
                      "); fusion goes on without it");
         }

@@ -1,5 +1,7 @@
 #include "reconstruction/photogrammetry/mvs/dense_stream.h"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -211,6 +213,37 @@ TEST(DenseStream, AFolderThatCannotBeWrittenIsNamed) {
   }
   EXPECT_FALSE(fs::exists(ws + "/stereo/candi/fused"));
   EXPECT_THROW(RunDenseStream(StreamOptions(), dir.File("nowhere")), InputError);
+}
+
+TEST(FusionTiles, PointsOnAWallAreCutIntoCellsOfFewViews) {
+  // 2,000 points on the plane x = 0 and 1,000 on y = 5 (a wall shares one coordinate, where a
+  // median split cannot cut), every ten points seen by a view of their own.
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::vector<int>> views;
+  for (int k = 0; k < 3000; ++k) {
+    const double u = (k % 50) * 0.2, v = (k / 50 % 40) * 0.1;
+    points.push_back(k < 2000 ? Eigen::Vector3d(0, u, v) : Eigen::Vector3d(u, 5, v));
+    views.push_back({k / 10});
+  }
+  const FusionTiles tiles(points, views, 16, 64);
+  EXPECT_GE(tiles.count(), 16);
+  std::vector<std::vector<int>> seen(tiles.count());
+  for (size_t k = 0; k < points.size(); ++k) seen[tiles.Leaf(points[k])].push_back(views[k][0]);
+  for (std::vector<int>& cell : seen) {
+    std::sort(cell.begin(), cell.end());
+    cell.erase(std::unique(cell.begin(), cell.end()), cell.end());
+    EXPECT_LE(cell.size(), 16u + 64u / 10);  // at most the cap, or a cell too small to cut
+  }
+  // The same cells on a second build; a NaN point still has one.
+  const FusionTiles again(points, views, 16, 64);
+  EXPECT_EQ(again.count(), tiles.count());
+  for (size_t k = 0; k < points.size(); k += 97) EXPECT_EQ(again.Leaf(points[k]), tiles.Leaf(points[k]));
+  const int nan_cell = tiles.Leaf(Eigen::Vector3d(NAN, NAN, NAN));
+  EXPECT_TRUE(nan_cell >= 0 && nan_cell < tiles.count());
+  // One cell when every point is the same.
+  const FusionTiles same(std::vector<Eigen::Vector3d>(500, Eigen::Vector3d(1, 2, 3)),
+                         std::vector<std::vector<int>>(views.begin(), views.begin() + 500), 4, 64);
+  EXPECT_EQ(same.count(), 1);
 }
 
 }  // namespace

@@ -79,20 +79,33 @@ int FusionTiles::Build(std::vector<int>* idx, size_t lo, size_t hi, const std::v
   }
   std::sort(views.begin(), views.end());
   const size_t distinct = std::unique(views.begin(), views.end()) - views.begin();
-  int axis = 0;
-  if (hi > lo) (hi_corner - lo_corner).maxCoeff(&axis);
-  const size_t mid = lo + (hi - lo) / 2;
   if (static_cast<int>(distinct) > max_views && hi - lo >= min_points) {
-    auto less = [&](int a, int b) {
-      return points[a][axis] != points[b][axis] ? points[a][axis] < points[b][axis] : a < b;
-    };
-    std::nth_element(idx->begin() + lo, idx->begin() + mid, idx->begin() + hi, less);
-    const double split = points[(*idx)[mid]][axis];
-    // Points equal to the split go right: the first half is everything below it.
-    size_t cut = lo;
-    for (size_t k = lo; k < hi; ++k)
-      if (points[(*idx)[k]][axis] < split) std::swap((*idx)[k], (*idx)[cut++]);
-    if (cut > lo && cut < hi) {
+    // The longest side first; where its median cannot split the points (walls are planes: many
+    // share one coordinate), the split moves to the next larger value, then to the other sides.
+    int axes[3] = {0, 1, 2};
+    const Eigen::Vector3d extent = hi_corner - lo_corner;
+    std::sort(axes, axes + 3, [&](int a, int b) { return extent[a] != extent[b] ? extent[a] > extent[b] : a < b; });
+    const size_t mid = lo + (hi - lo) / 2;
+    for (int axis : axes) {
+      auto less = [&](int a, int b) {
+        return points[a][axis] != points[b][axis] ? points[a][axis] < points[b][axis] : a < b;
+      };
+      std::nth_element(idx->begin() + lo, idx->begin() + mid, idx->begin() + hi, less);
+      double split = points[(*idx)[mid]][axis];
+      size_t below = 0;
+      double above = INFINITY;  // the least value above the median
+      for (size_t k = lo; k < hi; ++k) {
+        const double v = points[(*idx)[k]][axis];
+        below += v < split;
+        if (v > split) above = std::min(above, v);
+      }
+      if (below == 0) split = above;  // everything below is nothing: the median is the least value
+      if (!std::isfinite(split)) continue;  // all equal on this side
+      // Points below the split go first.
+      size_t cut = lo;
+      for (size_t k = lo; k < hi; ++k)
+        if (points[(*idx)[k]][axis] < split) std::swap((*idx)[k], (*idx)[cut++]);
+      if (cut == lo || cut == hi) continue;
       std::sort(idx->begin() + lo, idx->begin() + cut);  // a fixed order whatever nth_element did
       std::sort(idx->begin() + cut, idx->begin() + hi);
       nodes_[node].axis = axis;

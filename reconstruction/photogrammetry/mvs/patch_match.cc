@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -484,13 +485,33 @@ StereoPlan PlanStereo(const PatchMatchOptions& o, const StereoInput& input) {
   StereoPlan plan;
   std::vector<PinholeCamera> cameras;
   for (const StereoImage& image : input.images) cameras.push_back(image.camera);
+  // A photo with no sparse point in front of it has no range: it gets no sources (an empty map,
+  // reported), unless no photo has one, which is an error naming the fix.
+  std::vector<uint8_t> no_range(cameras.size(), 0);
+  std::exception_ptr first_failure;
+  auto range = [&](size_t r, const std::vector<Eigen::Vector3d>& points) {
+    try {
+      return StereoDepthRange(o, cameras[r], points);
+    } catch (const std::invalid_argument&) {
+      if (!first_failure) first_failure = std::current_exception();
+      no_range[r] = 1;
+      return std::pair<double, double>(1, 2);  // never used: the photo has no sources
+    }
+  };
+  auto finish = [&] {
+    if (!cameras.empty() && std::count(no_range.begin(), no_range.end(), 1) == static_cast<long>(cameras.size()))
+      std::rethrow_exception(first_failure);
+    for (size_t r = 0; r < cameras.size(); ++r)
+      if (no_range[r]) plan.links[r].sources.clear();
+    return plan;
+  };
   if (input.point_views.empty()) {
     // No tracks: every point for every range, then the geometric rule at the range's middle.
-    for (const PinholeCamera& cam : cameras) plan.ranges.push_back(StereoDepthRange(o, cam, input.sparse_points));
+    for (size_t r = 0; r < cameras.size(); ++r) plan.ranges.push_back(range(r, input.sparse_points));
     for (size_t r = 0; r < cameras.size(); ++r)
       plan.links.push_back(SelectSourceViewsByAngle(o.Sources(), cameras, static_cast<int>(r),
                                                     std::sqrt(plan.ranges[r].first * plan.ranges[r].second)));
-    return plan;
+    return finish();
   }
   CANDI_CHECK(input.point_views.size() == input.sparse_points.size())
       << input.point_views.size() << " tracks, " << input.sparse_points.size() << " points";
@@ -516,9 +537,9 @@ StereoPlan PlanStereo(const PatchMatchOptions& o, const StereoInput& input) {
     std::sort(ids.begin(), ids.end());  // point order, as the rule without tracks reads them
     std::vector<Eigen::Vector3d> points;
     for (int k : ids) points.push_back(input.sparse_points[k]), mark[k] = 0;
-    plan.ranges.push_back(StereoDepthRange(o, cameras[r], points.empty() ? input.sparse_points : points));
+    plan.ranges.push_back(range(r, points.empty() ? input.sparse_points : points));
   }
-  return plan;
+  return finish();
 }
 
 PatchMatchResult RunPatchMatch(const PatchMatchOptions& options, const StereoInput& input,

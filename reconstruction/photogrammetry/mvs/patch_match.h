@@ -117,7 +117,8 @@ Image8 ResampleArea(const Image8& rgb, int width, int height);
 std::pair<double, double> StereoDepthRange(const PatchMatchOptions& options, const PinholeCamera& camera,
                                            const std::vector<Eigen::Vector3d>& points);
 // Every image's views (source_views.h) and depth range (StereoDepthRange over the points it and
-// its neighbours observe when the input has tracks, else over every point).
+// its neighbours observe when the input has tracks, else over every point). An image with no
+// point in front of it gets no sources (an empty map); std::invalid_argument when none has one.
 struct StereoPlan {
   std::vector<ViewLinks> links;
   std::vector<std::pair<double, double>> ranges;

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include "core/check.h"
 #include "reconstruction/photogrammetry/mvs/fusion.h"
 #include "reconstruction/photogrammetry/scenes/synthetic_views.h"
@@ -218,6 +220,19 @@ TEST(PatchMatch, EmptySingleAndNonFiniteInputs) {
   PatchMatchOptions ranged = Fast();
   ranged.depth_min = 2, ranged.depth_max = 12;
   EXPECT_EQ(RunPatchMatch(ranged, nan).maps.size(), 3u);
+  // A camera turned away from every sparse point: no range, no sources, an empty map; the others
+  // still match.
+  StereoInput away = Input(views);
+  PinholeCamera& turned = away.images[2].camera;
+  const Eigen::Vector3d centre = turned.Center();
+  turned.rotation = Eigen::AngleAxisd(3.14159265358979323846, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                    turned.rotation;
+  turned.translation = -turned.rotation * centre;
+  const PatchMatchResult some = RunPatchMatch(Fast(), away);
+  ASSERT_EQ(some.maps.size(), 3u);
+  EXPECT_TRUE(some.maps[2].source_views.empty());
+  for (float d : some.maps[2].depth.values()) ASSERT_EQ(d, 0.0f);
+  EXPECT_FALSE(some.maps[0].source_views.empty());
   // A NaN camera or a size mismatch is a misuse: InternalError.
   StereoInput bad = Input(views);
   bad.images[1].camera.translation.x() = std::numeric_limits<double>::quiet_NaN();
