@@ -166,7 +166,7 @@ int RunDense(const DenseArgs& a) {
   if (!r.failures.empty()) throw ReportedFailure(r.failures.front().exit_code);
   if (!r.root) return kOk;
   const pipeline::DenseCloud& dense = r.dense;
-  writer->Close();
+  if (writer) writer->Close();  // rank 0 hands over at least one cell; a guard all the same
   std::printf("workspace %s: %zu images, %zu sparse points, sources from %s\n", a.workspace.c_str(), dense.images,
               dense.sparse_points, dense.sources_from_tracks ? "the tracks" : "the camera geometry (no tracks)");
   const double total_s = watch.Seconds();
